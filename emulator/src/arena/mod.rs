@@ -1,0 +1,1 @@
+//! Arenas from files: CiberRato lab XML, micromouse maze text, ROS map_server PGM+YAML, ASCII grid.

@@ -1,0 +1,5 @@
+//! The robot emulator: the unchanged robot firmware driven by a simulated world.
+#![deny(unsafe_code)]
+
+pub mod arena;
+pub mod geometry;

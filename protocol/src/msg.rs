@@ -1,0 +1,514 @@
+//! The message set: every payload that crosses the link, for the whole product.
+//!
+//! Layer: wire types only, no I/O. Each message is one postcard payload; its kind travels in the
+//! frame header (see `frame.rs`), and `Message` ties kinds to payload types. The order of the
+//! `Message` variants IS the kind numbering, and the whole enum is hashed into the schema
+//! fingerprint, so adding, removing, reordering or retyping anything here changes the
+//! fingerprint and two builds that disagree refuse each other at handshake.
+//!
+//! Units are integers wherever the robot measures in integers: millimetres, milliradians,
+//! decidegrees, millivolts, microseconds. That keeps telemetry small (postcard varints) and
+//! makes the firmware's arithmetic exact.
+
+use postcard_schema::Schema;
+use serde::{Deserialize, Serialize};
+
+use crate::packed::Packed10x8;
+
+/// Length of the schema fingerprint exchanged at handshake.
+pub const FINGERPRINT_LEN: usize = 8;
+/// Longest text in a `Log` message, in bytes of UTF-8.
+pub const MAX_LOG_TEXT: usize = 200;
+/// Longest name string in `Hello`/`HelloReply`, in bytes of UTF-8.
+pub const MAX_NAME: usize = 32;
+/// Largest data slice in one `TransferChunk`.
+pub const MAX_CHUNK: usize = 224;
+
+/// Station -> robot, first frame of a session. Layout frozen across protocol versions:
+/// `fingerprint` and `protocol` come first so that even a peer built from a different message
+/// set can read them and refuse with a clear message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Hello<'a> {
+    pub fingerprint: [u8; FINGERPRINT_LEN],
+    pub protocol: u8,
+    /// A nonce chosen by the station per session, echoed in `HelloReply`, so a reply from an
+    /// earlier session cannot be mistaken for this one.
+    pub session: u32,
+    pub station: &'a str,
+}
+
+/// Robot -> station, the answer to `Hello`. Layout frozen like `Hello`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct HelloReply<'a> {
+    pub fingerprint: [u8; FINGERPRINT_LEN],
+    pub protocol: u8,
+    pub session: u32,
+    /// False when the robot refused the station's fingerprint or protocol version.
+    pub accepted: bool,
+    pub firmware: &'a str,
+    pub firmware_version: &'a str,
+    pub profile: ProfileId,
+    /// `caps::*` bits: which sensors and features this robot has.
+    pub capabilities: u32,
+    pub map_capacity: MapCapacity,
+    /// Current telemetry rate; 0 means off.
+    pub telemetry_hz: u8,
+    /// The robot's failsafe time in manual mode.
+    pub failsafe_ms: u16,
+}
+
+/// Which robot this is; selects the station's sensor layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub enum ProfileId {
+    Khepera,
+    MicroRato,
+}
+
+/// Capability bits carried in `HelloReply::capabilities`.
+pub mod caps {
+    pub const ENCODERS: u32 = 1 << 0;
+    pub const IR_PROXIMITY: u32 = 1 << 1;
+    pub const AMBIENT_LIGHT: u32 = 1 << 2;
+    pub const COMPASS: u32 = 1 << 3;
+    pub const GROUND_SENSOR: u32 = 1 << 4;
+    pub const LINE_SENSOR: u32 = 1 << 5;
+    pub const BEACON: u32 = 1 << 6;
+    pub const BATTERY: u32 = 1 << 7;
+    pub const GRIPPER: u32 = 1 << 8;
+    /// The robot can segment its map and plan on it (seed 004 §6).
+    pub const ONBOARD_PLANNING: u32 = 1 << 9;
+    /// The robot accepts map and plan transfers.
+    pub const TRANSFERS: u32 = 1 << 10;
+    /// The peer is the emulator and sends `EmuTruth`.
+    pub const EMULATED: u32 = 1 << 31;
+}
+
+/// Largest map the robot can hold, in cells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct MapCapacity {
+    pub width: u16,
+    pub height: u16,
+}
+
+/// Either side, periodically; keeps the link and the robot's failsafe alive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Heartbeat {
+    /// The sender's monotonic clock, milliseconds, wrapping.
+    pub time_ms: u32,
+}
+
+/// What the robot is doing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub enum Mode {
+    /// Motors off, nothing runs.
+    #[default]
+    Idle,
+    /// Teleop velocity from the station; the failsafe stops the motors on link silence.
+    Manual,
+    /// Drive to a point (seed 000 §4 drift + avoidance, or seed 004 guided motion).
+    GoTo,
+    /// Braitenberg obstacle avoidance only (seed 000 §4.1).
+    Wander,
+    /// Follow the wall on the left (seed 000 §4.2).
+    EdgeFollowLeft,
+    /// Follow the wall on the right.
+    EdgeFollowRight,
+    /// Drive to the brightest light (seed 000 §4, Braitenberg IIIa).
+    SeekLight,
+    /// Reactive goal search that maps as it goes (seed 004 §5, Fig. 4).
+    Explore,
+    /// Follow the installed plan's waypoints (seed 004 §7).
+    ExecutePlan,
+}
+
+/// Robot pose estimate in the map frame: x right, y up, heading counter-clockwise from +x.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Pose {
+    pub x_mm: i32,
+    pub y_mm: i32,
+    pub heading_mrad: i16,
+}
+
+/// One-sigma uncertainty of the pose estimate.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct PoseSigma {
+    pub xy_mm: u16,
+    pub heading_mrad: u16,
+}
+
+/// Wheel state. Encoder counts wrap at 2^16; the station unwraps them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Wheels {
+    /// Measured (encoders) or estimated (no encoders) speed, left then right.
+    pub speed_mm_s: [i16; 2],
+    /// Cumulative encoder pulses, left then right; zero on robots without encoders.
+    pub encoders: [u16; 2],
+}
+
+/// Beacon sensor reading (seed 004 §3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Beacon {
+    /// Bearing of the beacon relative to the robot's heading, decidegrees, positive to the left.
+    pub bearing_ddeg: i16,
+    /// Signal strength 0..=255; 0 means not seen.
+    pub strength: u8,
+}
+
+/// Bits of `Telemetry::flags`.
+pub mod flags {
+    /// Ground sensor sees the goal area (seed 004 §3).
+    pub const GROUND: u8 = 1 << 0;
+    /// Floor line sensor is over a line (seed 003).
+    pub const LINE: u8 = 1 << 1;
+    /// The robot's bumper or a wall contact was detected this cycle.
+    pub const CONTACT: u8 = 1 << 2;
+    /// The failsafe has stopped the motors.
+    pub const FAILSAFE: u8 = 1 << 3;
+    /// The current mode's goal was reached.
+    pub const ARRIVED: u8 = 1 << 4;
+    /// The robot holds a map.
+    pub const HAS_MAP: u8 = 1 << 5;
+    /// The robot holds a plan.
+    pub const HAS_PLAN: u8 = 1 << 6;
+}
+
+/// Bits of `BehaviourOut::active` (seed 000 §4).
+pub mod behaviours {
+    pub const AVOID: u8 = 1 << 0;
+    pub const EDGE: u8 = 1 << 1;
+    pub const DRIFT: u8 = 1 << 2;
+    pub const TURN: u8 = 1 << 3;
+    pub const LIGHT: u8 = 1 << 4;
+    pub const WALL_FOLLOW: u8 = 1 << 5;
+    pub const GUIDED: u8 = 1 << 6;
+}
+
+/// What the behaviour arbitration produced this cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct BehaviourOut {
+    /// `behaviours::*` bits of the behaviours that contributed.
+    pub active: u8,
+    /// The motor command sent, left then right, mm/s.
+    pub motor_mm_s: [i16; 2],
+}
+
+/// Control-cycle timing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct CycleTiming {
+    /// Time between the last two cycle starts.
+    pub period_us: u32,
+    /// Time the last cycle spent computing.
+    pub busy_us: u32,
+    /// Cycles that overran their period, wrapping.
+    pub overruns: u8,
+}
+
+/// Robot -> station at the rate the station sets. Fields a profile lacks are zero; the
+/// `HelloReply` capabilities say which are meaningful.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Telemetry {
+    pub time_ms: u32,
+    pub mode: Mode,
+    pub pose: Pose,
+    pub sigma: PoseSigma,
+    pub wheels: Wheels,
+    /// IR proximity S0..S7, 10-bit (seed 000 §1.1); micro-rato uses S0..S2.
+    pub ir: Packed10x8,
+    /// Ambient light S0..S7, 10-bit, inverted: lower is brighter (seed 000 §4).
+    pub light: Packed10x8,
+    /// Compass heading, decidegrees 0..3599, counter-clockwise from the map's +x axis.
+    pub compass_ddeg: u16,
+    /// `flags::*` bits.
+    pub flags: u8,
+    /// Floor lines crossed so far, wrapping.
+    pub line_events: u8,
+    pub beacon: Beacon,
+    pub battery_mv: u16,
+    pub behaviour: BehaviourOut,
+    pub cycle: CycleTiming,
+}
+
+/// Parameters settable over the link. Values travel as f32 in the parameter's unit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct ParamId(pub u16);
+
+/// Map-frame point in millimetres.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct PointMm {
+    pub x_mm: i32,
+    pub y_mm: i32,
+}
+
+/// Station -> robot. Every command is answered by `Ack` or `Nack` carrying its frame's
+/// sequence number; a retry reuses that number and is executed once.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Schema)]
+pub enum Command {
+    SetMode(Mode),
+    /// Manual mode velocity: forward speed and turn rate (counter-clockwise positive).
+    Teleop { v_mm_s: i16, w_mrad_s: i16 },
+    /// Stop the motors and switch to `Mode::Idle`.
+    Stop,
+    /// Drive to a point (switches to `Mode::GoTo`).
+    GoTo(PointMm),
+    SetParam { id: ParamId, value: f32 },
+    GetParam { id: ParamId },
+    /// Reactive goal search with mapping (switches to `Mode::Explore`).
+    StartExploration,
+    /// Execute the installed plan with this object id (switches to `Mode::ExecutePlan`).
+    ExecutePlan { plan_id: u32 },
+    /// Segment the robot's map; the regions become object `ObjectKind::Regions`.
+    Segment,
+    /// Plan on the robot from `from` (default: current pose) to `to` (default: the goal);
+    /// the result becomes object `ObjectKind::Plan`.
+    Plan { from: Option<PointMm>, to: Option<PointMm> },
+    /// Telemetry rate in Hz; 0 stops telemetry.
+    SetTelemetryRate { hz: u8 },
+    /// Ask the robot to send an object, starting at `offset` (non-zero to resume).
+    Download { object: ObjectKind, offset: u32 },
+    /// Overwrite the pose estimate.
+    SetPose { pose: Pose },
+}
+
+/// Robot -> station: the command in frame `cmd_seq` was accepted.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Schema)]
+pub struct Ack {
+    pub cmd_seq: u16,
+    pub info: AckInfo,
+}
+
+/// Data an `Ack` carries back.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Schema)]
+pub enum AckInfo {
+    Done,
+    /// Reply to `GetParam` and `SetParam`: the value now in force.
+    Param { id: ParamId, value: f32 },
+    /// Reply to `Download`: the object that will follow in `TransferBegin` + chunks.
+    Object { object: ObjectKind, id: u32, len: u32, crc: u32 },
+}
+
+/// Robot -> station: the command in frame `cmd_seq` was refused and changed nothing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Nack {
+    pub cmd_seq: u16,
+    pub reason: NackReason,
+}
+
+/// Why a command was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub enum NackReason {
+    /// No valid handshake yet: the robot executes nothing before `Hello` is accepted.
+    NoHandshake,
+    /// The robot lacks the hardware or feature (see `caps`).
+    Unsupported,
+    UnknownParam,
+    /// A value outside the parameter's range, or a non-finite number.
+    OutOfRange,
+    /// Not allowed in the current mode or state.
+    BadState,
+    NoMap,
+    NoPlan,
+    /// `ExecutePlan` named a plan id the robot does not hold.
+    PlanIdMismatch,
+    /// The start or goal lies outside the map or in an obstacle.
+    BadPoint,
+    Unreachable,
+    /// The robot's fixed capacity (map cells, regions, plan length) is too small.
+    CapacityExceeded,
+    /// Another transfer is in progress.
+    Busy,
+}
+
+/// The objects that move by chunked transfer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub enum ObjectKind {
+    Map,
+    Plan,
+    Regions,
+}
+
+/// Sender -> receiver: an object of `len` bytes with CRC-32C `crc` follows in chunks.
+/// `id` names the content (the station uses its CRC-32C of the content) so a receiver that
+/// already holds it answers `AlreadyHave` and nothing is sent again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct TransferBegin {
+    pub object: ObjectKind,
+    pub id: u32,
+    pub len: u32,
+    pub crc: u32,
+}
+
+/// Sender -> receiver: `data` belongs at `offset` of object `id`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct TransferChunk<'a> {
+    pub id: u32,
+    pub offset: u32,
+    pub data: &'a [u8],
+}
+
+/// Receiver -> sender: every byte before `next` of object `id` is held (cumulative ack).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct TransferAck {
+    pub id: u32,
+    pub next: u32,
+    pub status: TransferStatus,
+}
+
+/// State of a transfer at the receiver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub enum TransferStatus {
+    /// Send from `next` on.
+    Receiving,
+    /// All bytes arrived, the CRC matched and the object is installed.
+    Complete,
+    /// The receiver already holds this id; nothing to send.
+    AlreadyHave,
+    /// All bytes arrived but the CRC did not match; the old object is kept. Start again.
+    CrcMismatch,
+    /// The object is larger than the receiver can hold, or malformed.
+    Rejected,
+    /// A chunk or ack named an id that is not the transfer in progress.
+    UnknownId,
+}
+
+/// Robot -> station: something happened.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Event {
+    pub code: EventCode,
+    pub value: i32,
+}
+
+/// What happened.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub enum EventCode {
+    ModeChanged,
+    GoalReached,
+    /// Manual-mode failsafe stopped the motors; value = ms of silence.
+    FailsafeStop,
+    Collision,
+    /// A floor line was crossed (seed 003); value = line events so far.
+    LineCrossed,
+    /// The pose was corrected; value = correction in mm.
+    PoseCorrected,
+    /// A beacon calibration ran (seed 004 §4); value = confidence xi in thousandths.
+    BeaconCalibration,
+    MapUpdated,
+    PlanInstalled,
+    PlanFinished,
+    /// A plan step failed; value = waypoint index.
+    PlanAborted,
+    /// The station's fingerprint or version did not match; value = protocol version seen.
+    HandshakeRefused,
+    /// A parameter changed; value = parameter id.
+    ParamChanged,
+}
+
+/// Log severity.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize, Schema)]
+pub enum LogLevel {
+    Debug,
+    Info,
+    Warn,
+    Error,
+}
+
+/// Robot -> station: a line of log text.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Log<'a> {
+    pub level: LogLevel,
+    pub text: &'a str,
+}
+
+/// EMULATOR ONLY. The simulated world's ground truth, for the station's true-versus-believed
+/// views. A real robot never sends it, and the emulator never feeds it to the firmware.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct EmuTruth {
+    pub time_ms: u32,
+    pub pose: Pose,
+    pub collisions: u32,
+}
+
+/// Every message, in kind order: variant index == the header's kind byte.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Schema)]
+pub enum Message<'a> {
+    #[serde(borrow)]
+    Hello(Hello<'a>),
+    #[serde(borrow)]
+    HelloReply(HelloReply<'a>),
+    Heartbeat(Heartbeat),
+    Telemetry(Telemetry),
+    Command(Command),
+    Ack(Ack),
+    Nack(Nack),
+    TransferBegin(TransferBegin),
+    #[serde(borrow)]
+    TransferChunk(TransferChunk<'a>),
+    TransferAck(TransferAck),
+    Event(Event),
+    #[serde(borrow)]
+    Log(Log<'a>),
+    EmuTruth(EmuTruth),
+}
+
+/// The header's kind byte for each message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Kind {
+    Hello = 0,
+    HelloReply = 1,
+    Heartbeat = 2,
+    Telemetry = 3,
+    Command = 4,
+    Ack = 5,
+    Nack = 6,
+    TransferBegin = 7,
+    TransferChunk = 8,
+    TransferAck = 9,
+    Event = 10,
+    Log = 11,
+    EmuTruth = 12,
+}
+
+impl Kind {
+    /// Every kind, in numeric order.
+    pub const ALL: [Kind; 13] = [
+        Kind::Hello,
+        Kind::HelloReply,
+        Kind::Heartbeat,
+        Kind::Telemetry,
+        Kind::Command,
+        Kind::Ack,
+        Kind::Nack,
+        Kind::TransferBegin,
+        Kind::TransferChunk,
+        Kind::TransferAck,
+        Kind::Event,
+        Kind::Log,
+        Kind::EmuTruth,
+    ];
+
+    /// The kind for a header byte, or `None` for an unknown kind.
+    pub fn from_u8(b: u8) -> Option<Kind> {
+        Kind::ALL.get(usize::from(b)).copied()
+    }
+}
+
+impl Message<'_> {
+    /// The header kind byte for this message.
+    pub fn kind(&self) -> Kind {
+        match self {
+            Message::Hello(_) => Kind::Hello,
+            Message::HelloReply(_) => Kind::HelloReply,
+            Message::Heartbeat(_) => Kind::Heartbeat,
+            Message::Telemetry(_) => Kind::Telemetry,
+            Message::Command(_) => Kind::Command,
+            Message::Ack(_) => Kind::Ack,
+            Message::Nack(_) => Kind::Nack,
+            Message::TransferBegin(_) => Kind::TransferBegin,
+            Message::TransferChunk(_) => Kind::TransferChunk,
+            Message::TransferAck(_) => Kind::TransferAck,
+            Message::Event(_) => Kind::Event,
+            Message::Log(_) => Kind::Log,
+            Message::EmuTruth(_) => Kind::EmuTruth,
+        }
+    }
+}

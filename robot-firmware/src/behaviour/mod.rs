@@ -1,0 +1,1 @@
+//! Reflexive behaviours and their arbitration (seed 000 §4).

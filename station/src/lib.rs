@@ -1,0 +1,1 @@
+//! The station: terminal UI and command line for a robot on a serial link.
