@@ -87,7 +87,7 @@ pub enum PayloadError {
     Truncated,
     /// A varint longer than its type allows.
     BadVarint,
-    /// An enum discriminant with no variant.
+    /// An enum discriminant with no variant (serde's derive reports it as a custom error).
     BadEnum,
     /// A bool byte other than 0 or 1.
     BadBool,
@@ -107,7 +107,7 @@ impl PayloadError {
         match e {
             P::DeserializeUnexpectedEnd => PayloadError::Truncated,
             P::DeserializeBadVarint => PayloadError::BadVarint,
-            P::DeserializeBadEnum => PayloadError::BadEnum,
+            P::DeserializeBadEnum | P::SerdeDeCustom => PayloadError::BadEnum,
             P::DeserializeBadBool => PayloadError::BadBool,
             P::DeserializeBadUtf8 | P::DeserializeBadChar => PayloadError::BadUtf8,
             P::DeserializeBadOption => PayloadError::BadOption,
@@ -432,7 +432,10 @@ impl FrameDecoder {
         self.stats.bytes_in += bytes.len() as u64;
         let room = MAX_ENCODED.saturating_sub(self.len);
         let take = bytes.len().min(room);
-        if let (Some(dst), Some(src)) = (self.buf.get_mut(self.len..self.len + take), bytes.get(..take)) {
+        if let (Some(dst), Some(src)) = (
+            self.buf.get_mut(self.len..self.len + take),
+            bytes.get(..take),
+        ) {
             dst.copy_from_slice(src);
             self.len += take;
         }

@@ -245,28 +245,48 @@ pub struct PointMm {
 pub enum Command {
     SetMode(Mode),
     /// Manual mode velocity: forward speed and turn rate (counter-clockwise positive).
-    Teleop { v_mm_s: i16, w_mrad_s: i16 },
+    Teleop {
+        v_mm_s: i16,
+        w_mrad_s: i16,
+    },
     /// Stop the motors and switch to `Mode::Idle`.
     Stop,
     /// Drive to a point (switches to `Mode::GoTo`).
     GoTo(PointMm),
-    SetParam { id: ParamId, value: f32 },
-    GetParam { id: ParamId },
+    SetParam {
+        id: ParamId,
+        value: f32,
+    },
+    GetParam {
+        id: ParamId,
+    },
     /// Reactive goal search with mapping (switches to `Mode::Explore`).
     StartExploration,
     /// Execute the installed plan with this object id (switches to `Mode::ExecutePlan`).
-    ExecutePlan { plan_id: u32 },
+    ExecutePlan {
+        plan_id: u32,
+    },
     /// Segment the robot's map; the regions become object `ObjectKind::Regions`.
     Segment,
     /// Plan on the robot from `from` (default: current pose) to `to` (default: the goal);
     /// the result becomes object `ObjectKind::Plan`.
-    Plan { from: Option<PointMm>, to: Option<PointMm> },
+    Plan {
+        from: Option<PointMm>,
+        to: Option<PointMm>,
+    },
     /// Telemetry rate in Hz; 0 stops telemetry.
-    SetTelemetryRate { hz: u8 },
+    SetTelemetryRate {
+        hz: u8,
+    },
     /// Ask the robot to send an object, starting at `offset` (non-zero to resume).
-    Download { object: ObjectKind, offset: u32 },
+    Download {
+        object: ObjectKind,
+        offset: u32,
+    },
     /// Overwrite the pose estimate.
-    SetPose { pose: Pose },
+    SetPose {
+        pose: Pose,
+    },
 }
 
 /// Robot -> station: the command in frame `cmd_seq` was accepted.
@@ -281,9 +301,17 @@ pub struct Ack {
 pub enum AckInfo {
     Done,
     /// Reply to `GetParam` and `SetParam`: the value now in force.
-    Param { id: ParamId, value: f32 },
+    Param {
+        id: ParamId,
+        value: f32,
+    },
     /// Reply to `Download`: the object that will follow in `TransferBegin` + chunks.
-    Object { object: ObjectKind, id: u32, len: u32, crc: u32 },
+    Object {
+        object: ObjectKind,
+        id: u32,
+        len: u32,
+        crc: u32,
+    },
 }
 
 /// Robot -> station: the command in frame `cmd_seq` was refused and changed nothing.

@@ -1,5 +1,7 @@
 //! Every message survives encode -> frame -> streaming decode unchanged, whatever the chunking.
 
+#![allow(clippy::unwrap_used, clippy::panic)]
+
 mod common;
 
 use common::{any_message, full_telemetry};
@@ -8,7 +10,11 @@ use protocol::*;
 
 /// Feeds `wire` to a fresh decoder in chunks of the given sizes (cycled) and collects frames,
 /// converted by `f` while they borrow the decoder.
-fn decode_chunked<T>(wire: &[u8], sizes: &[usize], mut f: impl FnMut(Frame<'_>) -> T) -> (Vec<T>, usize) {
+fn decode_chunked<T>(
+    wire: &[u8],
+    sizes: &[usize],
+    mut f: impl FnMut(Frame<'_>) -> T,
+) -> (Vec<T>, usize) {
     let mut dec = FrameDecoder::new();
     let mut out = Vec::new();
     let mut errors = 0;
@@ -109,9 +115,16 @@ fn a_full_telemetry_frame_is_at_most_80_bytes_on_the_wire() {
 #[test]
 fn the_largest_messages_fit_one_256_byte_frame() {
     let data = [0xAB; MAX_CHUNK];
-    let chunk = Message::TransferChunk(TransferChunk { id: u32::MAX, offset: u32::MAX, data: &data });
+    let chunk = Message::TransferChunk(TransferChunk {
+        id: u32::MAX,
+        offset: u32::MAX,
+        data: &data,
+    });
     let text = "x".repeat(MAX_LOG_TEXT);
-    let log = Message::Log(Log { level: LogLevel::Error, text: &text });
+    let log = Message::Log(Log {
+        level: LogLevel::Error,
+        text: &text,
+    });
     let name = "n".repeat(MAX_NAME);
     let reply = Message::HelloReply(HelloReply {
         fingerprint: [0xFF; 8],
@@ -122,7 +135,10 @@ fn the_largest_messages_fit_one_256_byte_frame() {
         firmware_version: &name,
         profile: ProfileId::MicroRato,
         capabilities: u32::MAX,
-        map_capacity: MapCapacity { width: u16::MAX, height: u16::MAX },
+        map_capacity: MapCapacity {
+            width: u16::MAX,
+            height: u16::MAX,
+        },
         telemetry_hz: 255,
         failsafe_ms: u16::MAX,
     });
@@ -136,7 +152,11 @@ fn the_largest_messages_fit_one_256_byte_frame() {
 #[test]
 fn an_oversized_payload_is_refused_by_the_encoder() {
     let data = [1u8; MAX_PAYLOAD];
-    let m = Message::TransferChunk(TransferChunk { id: 1, offset: 0, data: &data });
+    let m = Message::TransferChunk(TransferChunk {
+        id: 1,
+        offset: 0,
+        data: &data,
+    });
     let mut buf = [0u8; MAX_FRAME];
     assert_eq!(encode(0, &m, &mut buf), Err(EncodeError::PayloadTooLarge));
     let mut small = [0u8; 8];

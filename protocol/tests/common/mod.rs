@@ -1,5 +1,6 @@
 //! Proptest strategies for every message, and a few fixed samples.
 #![allow(dead_code)]
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use proptest::prelude::*;
 use protocol::*;
@@ -80,7 +81,10 @@ impl OwnedMsg {
                 offset: *offset,
                 data,
             }),
-            OwnedMsg::Log { level, text } => Message::Log(Log { level: *level, text }),
+            OwnedMsg::Log { level, text } => Message::Log(Log {
+                level: *level,
+                text,
+            }),
             OwnedMsg::Plain(m) => *m,
         }
     }
@@ -267,14 +271,14 @@ fn ack_info() -> impl Strategy<Value = AckInfo> {
             id: ParamId(id),
             value
         }),
-        (object(), any::<u32>(), any::<u32>(), any::<u32>()).prop_map(
-            |(object, id, len, crc)| AckInfo::Object {
+        (object(), any::<u32>(), any::<u32>(), any::<u32>()).prop_map(|(object, id, len, crc)| {
+            AckInfo::Object {
                 object,
                 id,
                 len,
-                crc
+                crc,
             }
-        ),
+        }),
     ]
 }
 
@@ -290,17 +294,32 @@ fn hello_fixed() -> impl Strategy<Value = HelloFixed> {
         any::<u8>(),
         any::<u16>(),
     )
-        .prop_map(|(fingerprint, protocol, session, accepted, profile, capabilities, (w, h), telemetry_hz, failsafe_ms)| HelloFixed {
-            fingerprint,
-            protocol,
-            session,
-            accepted,
-            profile,
-            capabilities,
-            map_capacity: MapCapacity { width: w, height: h },
-            telemetry_hz,
-            failsafe_ms,
-        })
+        .prop_map(
+            |(
+                fingerprint,
+                protocol,
+                session,
+                accepted,
+                profile,
+                capabilities,
+                (w, h),
+                telemetry_hz,
+                failsafe_ms,
+            )| HelloFixed {
+                fingerprint,
+                protocol,
+                session,
+                accepted,
+                profile,
+                capabilities,
+                map_capacity: MapCapacity {
+                    width: w,
+                    height: h,
+                },
+                telemetry_hz,
+                failsafe_ms,
+            },
+        )
 }
 
 /// Any message of any kind.
@@ -326,9 +345,8 @@ pub fn any_message() -> impl Strategy<Value = OwnedMsg> {
         command().prop_map(|c| OwnedMsg::Plain(Message::Command(c))),
         (any::<u16>(), ack_info())
             .prop_map(|(cmd_seq, info)| OwnedMsg::Plain(Message::Ack(Ack { cmd_seq, info }))),
-        (any::<u16>(), nack_reason()).prop_map(|(cmd_seq, reason)| OwnedMsg::Plain(
-            Message::Nack(Nack { cmd_seq, reason })
-        )),
+        (any::<u16>(), nack_reason())
+            .prop_map(|(cmd_seq, reason)| OwnedMsg::Plain(Message::Nack(Nack { cmd_seq, reason }))),
         (object(), any::<u32>(), any::<u32>(), any::<u32>()).prop_map(|(object, id, len, crc)| {
             OwnedMsg::Plain(Message::TransferBegin(TransferBegin {
                 object,
