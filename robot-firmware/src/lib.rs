@@ -3,10 +3,33 @@
 //! microcontroller and inside the emulator, which implements the `Hal` trait over a simulated
 //! world. Its navigation modules (`nav`) are also linked by the station, so a map segmented or a
 //! plan made on either side of the link is the same.
+//!
+//! - `robot`: `Robot::step`, the main loop over a `Hal`.
+//! - `hal`, `profile`: the hardware boundary and the two robots of the papers.
+//! - `link`, `telemetry`, `params`: the robot's side of the protocol.
+//! - `odometry`, `deadreckon`: position (seed 000 §3; seed 004 §4).
+//! - `behaviour`, `guided`: reflexive behaviours (seed 000 §4) and guided motion (seed 004 §7).
+//! - `nav`: occupancy grid, square segmentation, A* (seed 004 §5-6).
+//! - `scripted`: a scripted `Hal` for host tests and benchmarks.
 #![no_std]
 #![deny(unsafe_code)]
 
-pub mod nav;
 pub mod behaviour;
 pub mod deadreckon;
+pub mod guided;
+pub mod hal;
+pub mod link;
+pub mod nav;
 pub mod odometry;
+pub mod params;
+pub mod profile;
+pub mod robot;
+pub mod scripted;
+pub mod telemetry;
+
+pub use hal::{BeaconReading, Hal, MotorCommand};
+pub use profile::{Profile, KHEPERA, MICRO_RATO};
+pub use robot::{Robot, RobotOptions};
+
+/// Side of the square map the firmware holds, in cells (seed 004 used 17 x 17).
+pub const MAP_CAPACITY: usize = 64;

@@ -1,0 +1,189 @@
+//! The firmware's fixed-size navigation storage: grid, segmentation and search in arrays.
+//!
+//! Layer: a convenience owner over the generic functions of `segment.rs`, `astar.rs` and
+//! `smooth.rs`; the station calls the same functions with `Vec`-backed slices and gets the
+//! same bytes (see `tests/props.rs`). Sizes are const parameters, checked at compile time, so
+//! the memory is known before the robot runs (architecture: "every piece of state has a size
+//! fixed at compile time").
+//!
+//! [`Nav64`], the robot's instance, is 64 x 64 cells, up to 511 regions and 256-region plans:
+//! [`NAV64_BYTES`] = 14 872 bytes on a 64-bit host (asserted below; a 32-bit MCU saves the
+//! upper halves of two `usize`s), within the seed 004 §3 robot's 32 KB. Where the bytes go:
+//! grid 1 040 (2 bits/cell + size and geometry), region map 4 624 (9 bits/cell, ids
+//! 0 ..= 510), squares 3 066 (6 B each), search scratch 5 110 (`f` u32, parent/heap/pos u16),
+//! raw and smoothed plans 1 024 (u16 each), segmentation flag and padding 8. 511 regions hold a
+//! perfect 16 x 16 maze of 1-cell corridors (33 x 33 cells, 511 free cells); denser maps fail
+//! with `TooManyRegions`, never a panic.
+//!
+//! What can fail: segmentation (too many regions) and planning errors, as in those modules;
+//! planning on a map changed since the last [`FixedNav::segment`] returns `NotSegmented`.
+
+use super::astar::{find_path, Plan, PlanError, SearchScratch};
+use super::grid::{grid_bytes, Geometry, Grid, GridPoint, MAX_SIDE};
+use super::ids::{packed_bytes, PackedIds};
+use super::segment::{segment, Regions, SegmentError, Square};
+use super::smooth::smooth;
+
+/// Fixed-capacity navigation storage: a `W` x `H` grid (`GB` bytes), a `BITS`-bit region map
+/// (`MB` bytes), up to `R` regions and plans of up to `P` regions.
+pub struct FixedNav<
+    const W: u16,
+    const H: u16,
+    const GB: usize,
+    const BITS: u32,
+    const MB: usize,
+    const R: usize,
+    const P: usize,
+> {
+    grid: Grid<[u8; GB]>,
+    map: PackedIds<BITS, [u8; MB]>,
+    squares: [Square; R],
+    /// Number of regions from the last segmentation; `None` when the grid changed since.
+    count: Option<u16>,
+    f: [u32; R],
+    parent: [u16; R],
+    heap: [u16; R],
+    pos: [u16; R],
+    path: [u16; P],
+    smoothed: [u16; P],
+}
+
+/// Cells of the robot's map side.
+pub const NAV64_SIDE: u16 = 64;
+/// Bits per region id in the robot's map: ids 0 ..= 510, 511 means "no region".
+pub const NAV64_MAP_BITS: u32 = 9;
+/// Regions the robot's instance holds.
+pub const NAV64_REGIONS: usize = 511;
+/// Regions a robot plan holds.
+pub const NAV64_PATH: usize = 256;
+
+/// The robot's instance: 64 x 64 cells, 511 regions, 256-region plans.
+pub type Nav64 = FixedNav<
+    NAV64_SIDE,
+    NAV64_SIDE,
+    { grid_bytes(NAV64_SIDE as usize, NAV64_SIDE as usize) },
+    NAV64_MAP_BITS,
+    { packed_bytes(NAV64_MAP_BITS, NAV64_SIDE as usize * NAV64_SIDE as usize) },
+    NAV64_REGIONS,
+    NAV64_PATH,
+>;
+
+/// Size of [`Nav64`] in bytes.
+pub const NAV64_BYTES: usize = core::mem::size_of::<Nav64>();
+
+impl<
+        const W: u16,
+        const H: u16,
+        const GB: usize,
+        const BITS: u32,
+        const MB: usize,
+        const R: usize,
+        const P: usize,
+    > FixedNav<W, H, GB, BITS, MB, R, P>
+{
+    /// Compile-time check of the const parameters (evaluated by `new`).
+    const SIZES_OK: () = {
+        assert!(W >= 1 && H >= 1 && W <= MAX_SIDE && H <= MAX_SIDE);
+        assert!(GB >= grid_bytes(W as usize, H as usize));
+        assert!(BITS >= 1 && BITS <= 16);
+        assert!(MB >= packed_bytes(BITS, W as usize * H as usize));
+        // Ids 0 ..= R - 1 must stay below the map's and the u16 scratch's markers.
+        assert!(R < (1usize << BITS) && R < u16::MAX as usize - 1);
+    };
+
+    /// Empty storage: a `W` x `H` grid of unknown cells, not yet segmented.
+    pub const fn new(geometry: Geometry) -> Self {
+        let () = Self::SIZES_OK;
+        FixedNav {
+            grid: Grid::from_raw(W, H, geometry, [0; GB]),
+            map: PackedIds::from_raw(W as usize * H as usize, [0; MB]),
+            squares: [Square::EMPTY; R],
+            count: None,
+            f: [0; R],
+            parent: [0; R],
+            heap: [0; R],
+            pos: [0; R],
+            path: [0; P],
+            smoothed: [0; P],
+        }
+    }
+
+    /// The occupancy grid.
+    pub const fn grid(&self) -> &Grid<[u8; GB]> {
+        &self.grid
+    }
+
+    /// The occupancy grid for writing (e.g. `reshape` to a smaller map); forgets the
+    /// segmentation, which must be redone before planning.
+    pub fn grid_mut(&mut self) -> &mut Grid<[u8; GB]> {
+        self.count = None;
+        &mut self.grid
+    }
+
+    /// Segments the grid (seed 004 §6, Fig. 6); returns the number of regions.
+    pub fn segment(&mut self) -> Result<usize, SegmentError> {
+        self.count = None;
+        if !self.map.resize(self.grid.len()) {
+            return Err(SegmentError::MapSizeMismatch {
+                expected: self.grid.len(),
+                got: self.map.capacity(),
+            });
+        }
+        let n = segment(&self.grid, &mut self.map, &mut self.squares)?.len();
+        // n <= R < u16::MAX (SIZES_OK), so this never saturates.
+        self.count = Some(u16::try_from(n).unwrap_or(u16::MAX));
+        Ok(n)
+    }
+
+    /// The last segmentation, if the grid has not changed since.
+    pub fn regions(&self) -> Option<Regions<'_, PackedIds<BITS, [u8; MB]>>> {
+        let n = usize::from(self.count?);
+        let squares = self.squares.get(..n)?;
+        Some(Regions::from_parts(&self.grid, &self.map, squares))
+    }
+
+    /// Plans from `start` to `goal` (seed 004 §6); the regions are in [`path`](Self::path).
+    pub fn plan(&mut self, start: GridPoint, goal: GridPoint) -> Result<Plan, PlanError> {
+        let n = usize::from(self.count.ok_or(PlanError::NotSegmented)?);
+        let squares = self.squares.get(..n).ok_or(PlanError::NotSegmented)?;
+        let regions = Regions::from_parts(&self.grid, &self.map, squares);
+        let mut scratch = SearchScratch::new(
+            &mut self.f,
+            &mut self.parent[..],
+            &mut self.heap[..],
+            &mut self.pos[..],
+        );
+        find_path(&regions, start, goal, &mut scratch, &mut self.path[..])
+    }
+
+    /// Smooths a plan made by [`plan`](Self::plan); the kept regions are in
+    /// [`smoothed_path`](Self::smoothed_path), the raw plan stays in [`path`](Self::path).
+    pub fn smooth(&mut self, plan: &Plan) -> Result<Plan, PlanError> {
+        let n = usize::from(self.count.ok_or(PlanError::NotSegmented)?);
+        let squares = self.squares.get(..n).ok_or(PlanError::NotSegmented)?;
+        let regions = Regions::from_parts(&self.grid, &self.map, squares);
+        smooth(&regions, plan, &self.path[..], &mut self.smoothed[..])
+    }
+
+    /// Region store of the last raw plan.
+    pub fn path(&self) -> &[u16] {
+        &self.path
+    }
+
+    /// Region store of the last smoothed plan.
+    pub fn smoothed_path(&self) -> &[u16] {
+        &self.smoothed
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_robot_instance_fits_well_under_20_kb() {
+        #[cfg(target_pointer_width = "64")]
+        assert_eq!(NAV64_BYTES, 14_872);
+        const { assert!(NAV64_BYTES <= 14_872) };
+    }
+}

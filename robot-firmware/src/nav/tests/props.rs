@@ -1,0 +1,273 @@
+//! Property tests on random grids: segmentation invariants, plans over adjacent regions with
+//! optimal cost, sound line of sight, and byte-identical plans from fixed and `Vec` storage.
+
+extern crate std;
+
+use std::collections::BTreeSet;
+use std::vec;
+use std::vec::Vec;
+
+use proptest::collection::vec as pvec;
+use proptest::prelude::*;
+
+use super::reference;
+use super::util::{encode, from_cells, Seg, VecSearch};
+use crate::nav::{
+    line_of_sight, polyline_length, Cell, Geometry, Grid, GridPoint, Nav64, PlanError, Regions,
+    SegmentError, UNITS_PER_CELL,
+};
+
+/// Width, height, cells (more or fewer obstacles per case, some unknown), and two selectors
+/// (index, sub-cell offsets) for start and goal.
+type Case = (
+    usize,
+    usize,
+    Vec<Cell>,
+    (usize, i32, i32),
+    (usize, i32, i32),
+);
+
+fn case(max_side: usize) -> impl Strategy<Value = Case> {
+    (1..=max_side, 1..=max_side, 0u32..=8).prop_flat_map(|(w, h, d)| {
+        let cell = prop_oneof![
+            10 - d => Just(Cell::Free),
+            d + 1 => Just(Cell::Obstacle),
+            1 => Just(Cell::Unknown),
+        ];
+        let sel = || (any::<usize>(), 0..UNITS_PER_CELL, 0..UNITS_PER_CELL);
+        (Just(w), Just(h), pvec(cell, w * h), sel(), sel())
+    })
+}
+
+/// A point in a free cell chosen by `sel`, if there is a free cell.
+fn free_point(g: &Grid<Vec<u8>>, sel: (usize, i32, i32)) -> Option<GridPoint> {
+    let free: Vec<usize> = (0..g.len())
+        .filter(|&i| g.cell_at(i) == Cell::Free)
+        .collect();
+    let i = *free.get(sel.0 % free.len().max(1))?;
+    let w = usize::from(g.width());
+    Some(GridPoint {
+        x: (i % w) as i32 * UNITS_PER_CELL + sel.1,
+        y: (i / w) as i32 * UNITS_PER_CELL + sel.2,
+    })
+}
+
+fn check_regions(g: &Grid<Vec<u8>>, seg: &Seg) -> Result<(), TestCaseError> {
+    // The rule itself: seed 004 §6, Fig. 6, by the letter.
+    prop_assert_eq!(&seg.squares, &reference::fig6(g));
+    let w = usize::from(g.width());
+    let mut owner = vec![u32::MAX; g.len()];
+    for (id, s) in seg.squares.iter().enumerate() {
+        prop_assert!(s.size >= 1);
+        prop_assert!(usize::from(s.x + s.size) <= w && s.y + s.size <= g.height());
+        for y in usize::from(s.y)..usize::from(s.y + s.size) {
+            for x in usize::from(s.x)..usize::from(s.x + s.size) {
+                prop_assert_eq!(
+                    g.get(x, y),
+                    Cell::Free,
+                    "square {} holds a non-free cell",
+                    id
+                );
+                prop_assert_eq!(
+                    owner[y * w + x],
+                    u32::MAX,
+                    "squares overlap at ({}, {})",
+                    x,
+                    y
+                );
+                owner[y * w + x] = id as u32;
+            }
+        }
+    }
+    for (i, &o) in owner.iter().enumerate() {
+        // Disjoint squares covering exactly the free cells, and the map says which.
+        prop_assert_eq!(o != u32::MAX, g.cell_at(i) == Cell::Free);
+        prop_assert_eq!(seg.map[i], o);
+    }
+    let mut walked = BTreeSet::new();
+    seg.regions(g).for_each_edge(|a, b| {
+        walked.insert((a, b));
+    });
+    prop_assert_eq!(walked, reference::edges(&seg.squares));
+    Ok(())
+}
+
+fn check_plan(
+    regions: &Regions<'_, [u32]>,
+    seg: &Seg,
+    s: &VecSearch,
+    plan: &crate::nav::Plan,
+) -> Result<(), TestCaseError> {
+    let ids = &s.path[..plan.len as usize];
+    prop_assert_eq!(ids.first().copied(), regions.region_of(plan.start));
+    prop_assert_eq!(ids.last().copied(), regions.region_of(plan.goal));
+    for step in ids.windows(2) {
+        let (a, b) = (seg.squares[step[0] as usize], seg.squares[step[1] as usize]);
+        prop_assert!(reference::touch(&a, &b), "{:?} -> {:?} not adjacent", a, b);
+    }
+    let best = reference::dijkstra(
+        &seg.squares,
+        ids[0],
+        ids[ids.len() - 1],
+        plan.start,
+        plan.goal,
+    );
+    prop_assert_eq!(Some(u64::from(plan.cost)), best);
+    prop_assert_eq!(
+        plan.cost,
+        polyline_length(plan.waypoints(regions, &s.path[..]))
+    );
+    Ok(())
+}
+
+fn check_smoothed(
+    regions: &Regions<'_, [u32]>,
+    s: &VecSearch,
+    plan: &crate::nav::Plan,
+    smooth: &crate::nav::Plan,
+) -> Result<(), TestCaseError> {
+    prop_assert!(smooth.cost <= plan.cost);
+    prop_assert_eq!(
+        smooth.cost,
+        polyline_length(smooth.waypoints(regions, &s.smoothed[..]))
+    );
+    // Each smoothed segment is a raw segment or passes the line-of-sight test.
+    let raw: Vec<GridPoint> = plan.waypoints(regions, &s.path[..]).collect();
+    let kept: Vec<GridPoint> = smooth.waypoints(regions, &s.smoothed[..]).collect();
+    let mut at = 0;
+    for pair in kept.windows(2) {
+        let next = at
+            + 1
+            + raw[at + 1..]
+                .iter()
+                .position(|p| *p == pair[1])
+                .unwrap_or(usize::MAX - at - 1);
+        prop_assert!(
+            next < raw.len(),
+            "smoothed waypoint {:?} not in the raw plan",
+            pair[1]
+        );
+        prop_assert!(next == at + 1 || line_of_sight(regions, pair[0], pair[1]));
+        at = next;
+    }
+    Ok(())
+}
+
+/// The same query through the firmware's fixed instance: packed 9-bit map, u16 scratch.
+fn check_fixed(
+    g: &Grid<Vec<u8>>,
+    seg: &Seg,
+    s: &VecSearch,
+    query: Option<(GridPoint, GridPoint)>,
+    plans: Option<(crate::nav::Plan, crate::nav::Plan)>,
+) -> Result<(), TestCaseError> {
+    let mut nav = Nav64::new(Geometry::SEED_004);
+    let grid = nav.grid_mut();
+    grid.reshape(g.width(), g.height()).expect("fits 64 x 64");
+    for i in 0..g.len() {
+        let w = usize::from(g.width());
+        grid.set(i % w, i / w, g.cell_at(i)).expect("inside");
+    }
+    match nav.segment() {
+        Err(SegmentError::TooManyRegions { capacity }) => {
+            prop_assert!(seg.squares.len() > capacity);
+            return Ok(());
+        }
+        other => prop_assert_eq!(other, Ok(seg.squares.len())),
+    }
+    let Some((start, goal)) = query else {
+        return Ok(());
+    };
+    match (nav.plan(start, goal), plans) {
+        (Ok(fixed), Some((plan, smooth))) => {
+            prop_assert_eq!(encode(&fixed, nav.path()), encode(&plan, &s.path[..]));
+            let fixed_smooth = nav.smooth(&fixed).expect("fits");
+            prop_assert_eq!(
+                encode(&fixed_smooth, nav.smoothed_path()),
+                encode(&smooth, &s.smoothed[..])
+            );
+            // And the waypoints in metres, bit for bit.
+            let regions = nav.regions().expect("segmented");
+            let geo = g.geometry();
+            let bits = |p: GridPoint| {
+                let (x, y) = geo.grid_to_metres(p);
+                (x.to_bits(), y.to_bits())
+            };
+            let a: Vec<_> = fixed.waypoints(&regions, nav.path()).map(bits).collect();
+            let vr = seg.regions(g);
+            let b: Vec<_> = plan.waypoints(&vr, &s.path[..]).map(bits).collect();
+            prop_assert_eq!(a, b);
+        }
+        (Err(PlanError::PathTooLong { .. }), Some((plan, _))) => prop_assert!(plan.len > 256),
+        (Err(e), None) => prop_assert_eq!(e, PlanError::Unreachable),
+        (fixed, vec_side) => prop_assert!(false, "fixed {:?} vs vec {:?}", fixed, vec_side),
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn segmentation_plans_and_storage_agree_on_random_grids(c in case(32)) {
+        let (w, h, cells, ssel, gsel) = c;
+        let g = from_cells(w, h, &cells);
+        let seg = Seg::new(&g).expect("Vec storage holds every region");
+        check_regions(&g, &seg)?;
+        let regions = seg.regions(&g);
+        let mut s = VecSearch::new(regions.len());
+        let query = free_point(&g, ssel).zip(free_point(&g, gsel));
+        let mut plans = None;
+        if let Some((start, goal)) = query {
+            match s.plan(&regions, start, goal) {
+                Ok(plan) => {
+                    check_plan(&regions, &seg, &s, &plan)?;
+                    let smooth = s.smooth(&regions, &plan).expect("fits");
+                    check_smoothed(&regions, &s, &plan, &smooth)?;
+                    plans = Some((plan, smooth));
+                }
+                Err(e) => {
+                    prop_assert_eq!(e, PlanError::Unreachable);
+                    let (from, to) = (regions.region_of(start), regions.region_of(goal));
+                    let best = reference::dijkstra(&seg.squares, from.unwrap(), to.unwrap(), start, goal);
+                    prop_assert_eq!(best, None);
+                }
+            }
+        }
+        check_fixed(&g, &seg, &s, query, plans)?;
+    }
+
+    #[test]
+    fn a_start_or_goal_outside_free_space_is_refused(c in case(16), sx in -300i32..5000, sy in -300i32..5000) {
+        let (w, h, cells, _, gsel) = c;
+        let g = from_cells(w, h, &cells);
+        let seg = Seg::new(&g).expect("fits");
+        let regions = seg.regions(&g);
+        let mut s = VecSearch::new(regions.len());
+        let p = GridPoint { x: sx, y: sy };
+        let (cx, cy) = p.cell();
+        let free = g.contains(cx, cy) && g.get(cx as usize, cy as usize) == Cell::Free;
+        if let (false, Some(goal)) = (free, free_point(&g, gsel)) {
+            prop_assert_eq!(s.plan(&regions, p, goal), Err(PlanError::StartBlocked));
+            prop_assert_eq!(s.plan(&regions, goal, p), Err(PlanError::GoalBlocked));
+        }
+    }
+
+    #[test]
+    fn line_of_sight_only_passes_segments_over_free_cells(c in case(24), ax in 0i32..6144, ay in 0i32..6144, bx in 0i32..6144, by in 0i32..6144) {
+        let (w, h, cells, _, _) = c;
+        let g = from_cells(w, h, &cells);
+        let seg = Seg::new(&g).expect("fits");
+        let regions = seg.regions(&g);
+        let (a, b) = (GridPoint { x: ax, y: ay }, GridPoint { x: bx, y: by });
+        if line_of_sight(&regions, a, b) {
+            for k in 0..=256i64 {
+                let at = |p: i32, q: i32| (i64::from(p) * (256 - k) + i64::from(q) * k).div_euclid(256);
+                let (x, y) = (at(a.x, b.x), at(a.y, b.y));
+                let (cx, cy) = (x.div_euclid(256), y.div_euclid(256));
+                prop_assert!(g.contains(cx as i32, cy as i32));
+                prop_assert_eq!(g.get(cx as usize, cy as usize), Cell::Free, "({}, {}) at k = {}", x, y, k);
+            }
+        }
+    }
+}

@@ -1,0 +1,259 @@
+//! Parameters settable over the link (`Command::SetParam` / `GetParam`).
+//!
+//! Layer: a table from parameter ids to the fields of the robot's parameter structs. Every
+//! value the papers leave open is here, with the default the firmware starts with, its unit
+//! and its range; the station links this crate and shows the same names. Ids are part of the
+//! protocol contract: never renumber, only append. A `set` outside the range, not finite, or
+//! not whole for an integer parameter is refused with `OutOfRange` and changes nothing.
+
+use protocol::NackReason;
+
+use crate::behaviour::ArbiterParams;
+use crate::deadreckon::DeadReckonParams;
+use crate::guided::GuidedParams;
+use crate::odometry::OdometryParams;
+
+/// Robot-level settings that belong to no algorithm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RobotConfig {
+    /// Manual-mode failsafe: motors stop after this much silence (PROTOCOL.md §7).
+    pub failsafe_ms: u16,
+    /// Telemetry rate, Hz; 0 = off.
+    pub telemetry_hz: u8,
+    /// Largest teleop wheel speed, mm/s.
+    pub teleop_max_mm_s: f32,
+    /// Battery voltage read as empty (level 0) and full (level 1), for the speed table.
+    pub battery_empty_mv: u16,
+    pub battery_full_mv: u16,
+}
+
+impl Default for RobotConfig {
+    fn default() -> Self {
+        RobotConfig {
+            failsafe_ms: protocol::timing::FAILSAFE_DEFAULT_MS,
+            telemetry_hz: protocol::timing::TELEMETRY_DEFAULT_HZ,
+            teleop_max_mm_s: 300.0,
+            battery_empty_mv: 7000,
+            battery_full_mv: 9000,
+        }
+    }
+}
+
+/// One parameter's description.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParamInfo {
+    pub id: u16,
+    pub name: &'static str,
+    pub unit: &'static str,
+    pub min: f32,
+    pub max: f32,
+    /// Only whole numbers are accepted.
+    pub integer: bool,
+}
+
+const fn p(id: u16, name: &'static str, unit: &'static str, min: f32, max: f32) -> ParamInfo {
+    ParamInfo {
+        id,
+        name,
+        unit,
+        min,
+        max,
+        integer: false,
+    }
+}
+
+const fn pi(id: u16, name: &'static str, unit: &'static str, min: f32, max: f32) -> ParamInfo {
+    ParamInfo {
+        id,
+        name,
+        unit,
+        min,
+        max,
+        integer: true,
+    }
+}
+
+/// Every parameter, by id.
+pub const PARAMS: [ParamInfo; 27] = [
+    pi(0, "failsafe_ms", "ms", 50.0, 10_000.0),
+    pi(1, "telemetry_hz", "Hz", 0.0, 50.0),
+    p(2, "teleop_max_mm_s", "mm/s", 0.0, 2000.0),
+    pi(3, "battery_empty_mv", "mV", 0.0, 20_000.0),
+    pi(4, "battery_full_mv", "mV", 0.0, 20_000.0),
+    p(5, "odo_wheel_distance_mm", "mm", 10.0, 500.0),
+    p(6, "odo_mm_per_pulse", "mm", 0.001, 10.0),
+    pi(7, "avoid_threshold", "counts", 0.0, 1023.0),
+    pi(8, "avoid_threshold_spread", "counts", 0.0, 200.0),
+    pi(9, "avoid_base_units", "units", 0.0, 127.0),
+    pi(10, "edge_noise_threshold", "counts", 1.0, 500.0),
+    pi(11, "edge_lost_threshold", "counts", 1.0, 1023.0),
+    pi(12, "edge_lost_max_cycles", "cycles", 1.0, 10_000.0),
+    p(13, "drift_approach_radius_m", "m", 0.01, 2.0),
+    p(14, "drift_arrival_radius_m", "m", 0.005, 1.0),
+    pi(15, "behaviour_max_units", "units", 1.0, 127.0),
+    pi(16, "light_t1", "counts", 0.0, 1023.0),
+    pi(17, "light_t2", "counts", 0.0, 1023.0),
+    pi(18, "light_t3", "counts", 0.0, 1023.0),
+    p(19, "xi_calibration_gain", "", 0.0, 1.0),
+    p(20, "xi_collision_loss", "", 0.0, 1.0),
+    p(21, "beacon_x_m", "m", -100.0, 100.0),
+    p(22, "beacon_y_m", "m", -100.0, 100.0),
+    p(23, "guided_top_speed", "nominal", 0.0, 100.0),
+    p(24, "guided_heading_gain", "nominal/rad", 0.0, 500.0),
+    pi(25, "guided_obstacle_ir", "counts", 0.0, 1023.0),
+    p(26, "guided_arrival_m", "m", 0.01, 2.0),
+];
+
+/// The description of parameter `id`.
+pub fn info(id: u16) -> Option<&'static ParamInfo> {
+    PARAMS.iter().find(|p| p.id == id)
+}
+
+/// The description of the parameter called `name`.
+pub fn by_name(name: &str) -> Option<&'static ParamInfo> {
+    PARAMS.iter().find(|p| p.name == name)
+}
+
+/// Mutable views of every parameter struct.
+pub struct Tunables<'a> {
+    pub robot: &'a mut RobotConfig,
+    pub odometry: &'a mut OdometryParams,
+    pub arbiter: &'a mut ArbiterParams,
+    pub dead_reckon: &'a mut DeadReckonParams,
+    pub guided: &'a mut GuidedParams,
+}
+
+enum Slot<'a> {
+    F32(&'a mut f32),
+    U16(&'a mut u16),
+    I16(&'a mut i16),
+    I32(&'a mut i32),
+    U8(&'a mut u8),
+}
+
+impl Tunables<'_> {
+    fn slot(&mut self, id: u16) -> Option<Slot<'_>> {
+        Some(match id {
+            0 => Slot::U16(&mut self.robot.failsafe_ms),
+            1 => Slot::U8(&mut self.robot.telemetry_hz),
+            2 => Slot::F32(&mut self.robot.teleop_max_mm_s),
+            3 => Slot::U16(&mut self.robot.battery_empty_mv),
+            4 => Slot::U16(&mut self.robot.battery_full_mv),
+            5 => Slot::F32(&mut self.odometry.wheel_distance_mm),
+            6 => Slot::F32(&mut self.odometry.mm_per_pulse),
+            7 => Slot::U16(&mut self.arbiter.avoid.threshold),
+            8 => Slot::U16(&mut self.arbiter.avoid.threshold_spread),
+            9 => Slot::I16(&mut self.arbiter.avoid.base_units),
+            10 => Slot::I32(&mut self.arbiter.edge.noise_threshold),
+            11 => Slot::I32(&mut self.arbiter.edge.lost_threshold),
+            12 => Slot::U16(&mut self.arbiter.edge.lost_max_cycles),
+            13 => Slot::F32(&mut self.arbiter.drift.approach_radius_m),
+            14 => Slot::F32(&mut self.arbiter.drift.arrival_radius_m),
+            15 => Slot::I16(&mut self.arbiter.max_units),
+            16 => Slot::U16(&mut self.arbiter.light.detect),
+            17 => Slot::U16(&mut self.arbiter.light.optimal),
+            18 => Slot::U16(&mut self.arbiter.light.leave),
+            19 => Slot::F32(&mut self.dead_reckon.xi_calibration_gain),
+            20 => Slot::F32(&mut self.dead_reckon.xi_collision_loss),
+            21 => Slot::F32(&mut self.dead_reckon.beacon.x),
+            22 => Slot::F32(&mut self.dead_reckon.beacon.y),
+            23 => Slot::F32(&mut self.guided.top_speed),
+            24 => Slot::F32(&mut self.guided.heading_gain),
+            25 => Slot::U16(&mut self.guided.obstacle_ir),
+            26 => Slot::F32(&mut self.guided.arrival_m),
+            _ => return None,
+        })
+    }
+
+    /// The value of parameter `id`.
+    pub fn get(&mut self, id: u16) -> Result<f32, NackReason> {
+        Ok(match self.slot(id).ok_or(NackReason::UnknownParam)? {
+            Slot::F32(v) => *v,
+            Slot::U16(v) => f32::from(*v),
+            Slot::I16(v) => f32::from(*v),
+            // Every i32 parameter's range fits f32 exactly (|v| < 2^24).
+            Slot::I32(v) => *v as f32,
+            Slot::U8(v) => f32::from(*v),
+        })
+    }
+
+    /// Sets parameter `id` if `value` is valid for it; returns the value now in force.
+    pub fn set(&mut self, id: u16, value: f32) -> Result<f32, NackReason> {
+        let info = info(id).ok_or(NackReason::UnknownParam)?;
+        let whole = libm::truncf(value) == value;
+        if !value.is_finite() || value < info.min || value > info.max || (info.integer && !whole) {
+            return Err(NackReason::OutOfRange);
+        }
+        // The range check above bounds every integer cast below to its type.
+        match self.slot(id).ok_or(NackReason::UnknownParam)? {
+            Slot::F32(v) => *v = value,
+            Slot::U16(v) => *v = value as u16,
+            Slot::I16(v) => *v = value as i16,
+            Slot::I32(v) => *v = value as i32,
+            Slot::U8(v) => *v = value as u8,
+        }
+        self.get(id)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with_tunables<R>(f: impl FnOnce(&mut Tunables<'_>) -> R) -> R {
+        let mut robot = RobotConfig::default();
+        let mut odometry = OdometryParams::default();
+        let mut arbiter = ArbiterParams::default();
+        let mut dead_reckon = DeadReckonParams::default();
+        let mut guided = GuidedParams::default();
+        f(&mut Tunables {
+            robot: &mut robot,
+            odometry: &mut odometry,
+            arbiter: &mut arbiter,
+            dead_reckon: &mut dead_reckon,
+            guided: &mut guided,
+        })
+    }
+
+    #[test]
+    fn every_listed_parameter_has_a_slot_and_ids_are_unique() {
+        with_tunables(|t| {
+            for (i, info) in PARAMS.iter().enumerate() {
+                assert_eq!(usize::from(info.id), i, "ids are dense and in order");
+                let v = t.get(info.id).expect("slot exists");
+                assert!(
+                    v >= info.min && v <= info.max,
+                    "{} default {v} outside its range",
+                    info.name
+                );
+                // Setting the default back is always accepted and changes nothing.
+                assert_eq!(t.set(info.id, v), Ok(v));
+            }
+            assert_eq!(t.get(PARAMS.len() as u16), Err(NackReason::UnknownParam));
+        });
+    }
+
+    #[test]
+    fn papers_defaults_are_in_force() {
+        with_tunables(|t| {
+            assert_eq!(t.get(0), Ok(300.0)); // failsafe 300 ms
+            assert_eq!(t.get(5), Ok(52.0)); // seed 000 §3: d = 52 mm
+            assert_eq!(t.get(7), Ok(475.0)); // seed 000 §4: threshold 475
+            assert_eq!(t.get(10), Ok(7.0)); // edge noise 7
+            assert_eq!(t.get(16), Ok(470.0)); // T1
+        });
+    }
+
+    #[test]
+    fn invalid_values_are_refused_and_change_nothing() {
+        with_tunables(|t| {
+            for bad in [f32::NAN, f32::INFINITY, -1.0, 1e9, 300.5] {
+                assert_eq!(t.set(0, bad), Err(NackReason::OutOfRange), "{bad}");
+                assert_eq!(t.get(0), Ok(300.0));
+            }
+            assert_eq!(t.set(999, 1.0), Err(NackReason::UnknownParam));
+            assert_eq!(t.set(0, 500.0), Ok(500.0));
+            assert_eq!(by_name("failsafe_ms").map(|p| p.id), Some(0));
+        });
+    }
+}

@@ -1,0 +1,739 @@
+//! The robot: one `step()` per pass of the main loop, a control cycle when its period is due.
+//!
+//! Layer: the top of the firmware. `Robot::step` is the only function that touches the `Hal`:
+//! it moves serial bytes through the link handler, runs the control cycle (sensors, position
+//! estimate, mode logic, motors) every `Profile::cycle_us`, and schedules telemetry and
+//! heartbeats. Call it as often as the board allows (every millisecond or so): the link is
+//! serviced on every call, so telemetry can run faster than the control cycle (up to 50 Hz)
+//! and a failsafe stop takes effect at once rather than at the next cycle.
+//!
+//! Invariants: the motors move only in a mode a handshaken station (or the firmware's own
+//! autonomy) asked for; a refused command changes nothing; every piece of state has a fixed
+//! size (`size_of::<Robot>()` is the firmware's whole RAM use apart from the stack).
+
+use heapless::Deque;
+use protocol::{
+    AckInfo, Command, Event, EventCode, Message, Mode, NackReason, ObjectKind, TransferAck,
+    TransferStatus,
+};
+
+use crate::behaviour::{self, Arbiter, ArbiterParams, BehaviourSet, Inputs, Side};
+use crate::deadreckon::{DeadReckonInput, DeadReckonParams, DeadReckoner, DegradeEvent};
+use crate::guided::{guided_step, GuidedParams, GuidedPhase};
+use crate::hal::{BeaconReading, Hal, MotorCommand};
+use crate::link::{Identity, Inbound, Link, LinkStatus, Reply, Response};
+use crate::odometry::{encoder_delta, wrap_angle, Odometry, OdometryParams, Point, Pose};
+use crate::params::{RobotConfig, Tunables};
+use crate::profile::Profile;
+use crate::telemetry;
+
+/// Events waiting to be sent; a burst larger than this loses its oldest.
+const EVENT_QUEUE: usize = 8;
+/// Serial bytes read per `step`, so a flood cannot starve the control cycle.
+const RX_BUDGET: usize = 1024;
+/// Largest teleop request accepted, before clamping to `teleop_max_mm_s`.
+const TELEOP_LIMIT_MM_S: i16 = 2000;
+const TELEOP_LIMIT_MRAD_S: i16 = 20_000;
+/// Largest coordinate accepted for a goal or pose, millimetres (1 km).
+const COORD_LIMIT_MM: i32 = 1_000_000;
+/// Minimum time between two beacon calibrations, ms (seed 004 §4 gives no rate).
+const CALIBRATION_INTERVAL_MS: u32 = 1000;
+/// Beacon bearing under which the beacon is taken to be straight ahead, radians (~3 degrees).
+const BEACON_AHEAD_RAD: f32 = 0.05;
+/// Beacon strength above which a calibration is attempted.
+const CALIBRATION_MIN_STRENGTH: u8 = 20;
+
+/// How a robot is started.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RobotOptions {
+    pub profile: &'static Profile,
+    /// Seeds the behaviours' random draws (seed 000 §4.2 threshold jitter).
+    pub seed: u32,
+    /// Where the robot believes it starts (metres, radians).
+    pub start: Pose,
+    /// Set by the emulator: the HelloReply says so and `EmuTruth` frames follow telemetry.
+    pub emulated: bool,
+    pub firmware_version: &'static str,
+}
+
+/// The last sensor readings.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sensors {
+    pub ir: [u16; 8],
+    pub ambient: [u16; 8],
+    pub compass: Option<f32>,
+    pub ground: bool,
+    pub line: bool,
+    pub beacon: Option<BeaconReading>,
+    pub battery_mv: u16,
+    pub encoders: Option<[i32; 2]>,
+}
+
+/// Control-cycle timing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Timing {
+    pub last_cycle_us: Option<u64>,
+    pub next_cycle_us: u64,
+    pub period_us: u32,
+    pub busy_us: u32,
+    pub overruns: u8,
+    pub cycles: u32,
+}
+
+/// Everything but the link: the state commands act on.
+pub struct Core {
+    pub profile: &'static Profile,
+    pub config: RobotConfig,
+    pub arbiter: Arbiter,
+    pub odometry: Odometry,
+    pub dead: DeadReckoner,
+    pub guided: GuidedParams,
+    /// Heading from the compass (micro-rato), radians.
+    pub compass_heading: f32,
+    pub mode: Mode,
+    pub goal: Option<Point>,
+    /// Manual-mode request: forward mm/s, turn mrad/s.
+    pub teleop: (i16, i16),
+    /// The motor command in force.
+    pub motor: MotorCommand,
+    pub sensors: Sensors,
+    prev_encoders: Option<[i32; 2]>,
+    pub wheel_speed_mm_s: [i16; 2],
+    pub arrived: bool,
+    /// The manual-mode failsafe has stopped the motors.
+    pub failsafe: bool,
+    pub line_events: u8,
+    last_calibration_ms: Option<u32>,
+    prev_dead_end: bool,
+    guided_active: bool,
+    pub timing: Timing,
+    next_telemetry_ms: u32,
+    events: Deque<Event, EVENT_QUEUE>,
+    emulated: bool,
+}
+
+/// The whole robot.
+pub struct Robot {
+    pub link: Link,
+    pub core: Core,
+    identity: Identity,
+}
+
+impl Robot {
+    pub fn new(opts: RobotOptions) -> Self {
+        let profile = opts.profile;
+        let mut odometry_params = OdometryParams::default();
+        odometry_params.wheel_distance_mm = profile.wheel_distance_m * 1000.0;
+        odometry_params.mm_per_pulse = profile.pulse_m * 1000.0;
+        let mut capabilities = profile.capabilities;
+        if opts.emulated {
+            capabilities |= protocol::caps::EMULATED;
+        }
+        Robot {
+            link: Link::new(),
+            identity: Identity {
+                firmware: "robot-firmware",
+                firmware_version: opts.firmware_version,
+                profile: profile.id,
+                capabilities,
+                map_capacity: profile.map_capacity(),
+            },
+            core: Core {
+                profile,
+                config: RobotConfig::default(),
+                arbiter: Arbiter::new(ArbiterParams::default(), opts.seed),
+                odometry: Odometry::new(odometry_params, opts.start),
+                dead: DeadReckoner::new(DeadReckonParams::default(), opts.start.point()),
+                guided: GuidedParams::default(),
+                compass_heading: opts.start.heading,
+                mode: Mode::Idle,
+                goal: None,
+                teleop: (0, 0),
+                motor: MotorCommand::STOP,
+                sensors: Sensors::default(),
+                prev_encoders: None,
+                wheel_speed_mm_s: [0, 0],
+                arrived: false,
+                failsafe: false,
+                line_events: 0,
+                last_calibration_ms: None,
+                prev_dead_end: false,
+                guided_active: false,
+                timing: Timing::default(),
+                next_telemetry_ms: 0,
+                events: Deque::new(),
+                emulated: opts.emulated,
+            },
+        }
+    }
+
+    /// One pass of the main loop.
+    pub fn step<H: Hal>(&mut self, hal: &mut H) {
+        let now_us = hal.now_us();
+        let now_ms = ms(now_us);
+        self.receive(hal, now_ms);
+        self.link.expire(now_ms, protocol::timing::LINK_TIMEOUT_MS);
+        self.core.check_failsafe(self.link.last_rx_ms(), now_ms);
+        if self.core.must_stop_now() {
+            self.core.motor = MotorCommand::STOP;
+            hal.set_motors(MotorCommand::STOP);
+        }
+        if now_us >= self.core.timing.next_cycle_us {
+            self.core.control_cycle(hal, now_us);
+        }
+        self.send_periodic(now_ms);
+        self.link.flush(&mut |bytes| hal.serial_write(bytes));
+    }
+
+    fn receive<H: Hal>(&mut self, hal: &mut H, now_ms: u32) {
+        let mut buf = [0u8; 128];
+        let mut budget = RX_BUDGET;
+        while budget > 0 {
+            let want = buf.len().min(budget);
+            let n = hal.serial_read(&mut buf[..want]).min(want);
+            if n == 0 {
+                break;
+            }
+            budget -= n;
+            let status = LinkStatus {
+                telemetry_hz: self.core.config.telemetry_hz,
+                failsafe_ms: self.core.config.failsafe_ms,
+            };
+            let core = &mut self.core;
+            self.link
+                .receive(&buf[..n], now_ms, &self.identity, status, &mut |inbound| {
+                    core.handle(inbound, now_ms)
+                });
+        }
+    }
+
+    fn send_periodic(&mut self, now_ms: u32) {
+        while let Some(ev) = self.core.events.pop_front() {
+            if !self.link.connected() {
+                continue;
+            }
+            self.link.send(&Message::Event(ev), now_ms);
+        }
+        if !self.link.connected() {
+            return;
+        }
+        let hz = self.core.config.telemetry_hz;
+        if hz > 0 && due(now_ms, self.core.next_telemetry_ms) {
+            let t = telemetry::build(&self.core, now_ms);
+            self.link.send_low_priority(&Message::Telemetry(t), now_ms);
+            let period = 1000 / u32::from(hz);
+            let next = self.core.next_telemetry_ms.wrapping_add(period);
+            // Fell behind by more than a period (a stall): restart the schedule from now.
+            self.core.next_telemetry_ms = if due(now_ms, next.wrapping_add(period)) {
+                now_ms.wrapping_add(period)
+            } else {
+                next
+            };
+        }
+        self.link
+            .heartbeat(now_ms, protocol::timing::HEARTBEAT_PERIOD_MS);
+    }
+
+    /// Whether the robot declared itself emulated.
+    pub fn emulated(&self) -> bool {
+        self.core.emulated
+    }
+
+    /// The pose the robot believes in.
+    pub fn pose(&self) -> Pose {
+        self.core.pose()
+    }
+}
+
+impl Core {
+    /// The pose estimate: odometry on robots with encoders, compass dead reckoning otherwise.
+    pub fn pose(&self) -> Pose {
+        if self.profile.has(protocol::caps::ENCODERS) {
+            self.odometry.pose()
+        } else {
+            let p = self.dead.position();
+            Pose::new(p.x, p.y, self.compass_heading)
+        }
+    }
+
+    fn handle(&mut self, inbound: Inbound<'_>, now_ms: u32) -> Response {
+        match inbound {
+            Inbound::Connected => {
+                // A new session starts at the default telemetry rate (PROTOCOL.md §4).
+                self.config.telemetry_hz = protocol::timing::TELEMETRY_DEFAULT_HZ;
+                self.next_telemetry_ms = now_ms;
+                Response::Nothing
+            }
+            Inbound::Command { command, .. } => Response::Reply(self.apply(command, now_ms)),
+            Inbound::Transfer(m) => Response::Send(refuse_transfer(&m)),
+        }
+    }
+
+    /// Executes one command, or refuses it having changed nothing.
+    pub fn apply(&mut self, command: Command, now_ms: u32) -> Reply {
+        match self.try_apply(command, now_ms) {
+            Ok(info) => Reply::Ack(info),
+            Err(reason) => Reply::Nack(reason),
+        }
+    }
+
+    fn try_apply(&mut self, command: Command, now_ms: u32) -> Result<AckInfo, NackReason> {
+        match command {
+            Command::SetMode(mode) => {
+                self.check_mode(mode)?;
+                self.enter(mode, now_ms);
+            }
+            Command::Teleop { v_mm_s, w_mrad_s } => {
+                if v_mm_s.unsigned_abs() > TELEOP_LIMIT_MM_S.unsigned_abs()
+                    || w_mrad_s.unsigned_abs() > TELEOP_LIMIT_MRAD_S.unsigned_abs()
+                {
+                    return Err(NackReason::OutOfRange);
+                }
+                self.teleop = (v_mm_s, w_mrad_s);
+                self.failsafe = false;
+                if self.mode != Mode::Manual {
+                    self.enter(Mode::Manual, now_ms);
+                }
+            }
+            Command::Stop => {
+                self.teleop = (0, 0);
+                self.enter(Mode::Idle, now_ms);
+            }
+            Command::GoTo(p) => {
+                let target = point_from_mm(p.x_mm, p.y_mm)?;
+                self.check_mode(Mode::GoTo)?;
+                self.goal = Some(target);
+                self.enter(Mode::GoTo, now_ms);
+            }
+            Command::SetParam { id, value } => {
+                let v = self.tunables().set(id.0, value)?;
+                self.after_param_change();
+                self.push_event(EventCode::ParamChanged, i32::from(id.0));
+                return Ok(AckInfo::Param { id, value: v });
+            }
+            Command::GetParam { id } => {
+                let value = self.tunables().get(id.0)?;
+                return Ok(AckInfo::Param { id, value });
+            }
+            Command::SetTelemetryRate { hz } => {
+                if hz > 50 {
+                    return Err(NackReason::OutOfRange);
+                }
+                self.config.telemetry_hz = hz;
+                self.next_telemetry_ms = now_ms;
+            }
+            Command::SetPose { pose } => {
+                let p = point_from_mm(pose.x_mm, pose.y_mm)?;
+                let heading = f32::from(pose.heading_mrad) / 1000.0;
+                if libm::fabsf(heading) > core::f32::consts::PI + 1e-3 {
+                    return Err(NackReason::OutOfRange);
+                }
+                self.odometry.set_pose(Pose::new(p.x, p.y, heading));
+                // Without encoders the heading comes from the compass; only x, y are set.
+                self.dead.set_position(p);
+            }
+            // Exploration and plans arrive with the maps/planning and exploration work; until
+            // then the robot says so rather than pretending.
+            Command::StartExploration => return Err(NackReason::Unsupported),
+            Command::ExecutePlan { .. } => return Err(NackReason::NoPlan),
+            Command::Segment | Command::Plan { .. } => return Err(NackReason::NoMap),
+            Command::Download { object, .. } => {
+                return Err(match object {
+                    ObjectKind::Map | ObjectKind::Regions => NackReason::NoMap,
+                    ObjectKind::Plan => NackReason::NoPlan,
+                })
+            }
+        }
+        Ok(AckInfo::Done)
+    }
+
+    fn tunables(&mut self) -> Tunables<'_> {
+        Tunables {
+            robot: &mut self.config,
+            odometry: &mut self.odometry.params,
+            arbiter: &mut self.arbiter.params,
+            dead_reckon: &mut self.dead.params,
+            guided: &mut self.guided,
+        }
+    }
+
+    fn after_param_change(&mut self) {
+        // A new rate takes effect at once rather than after the old period.
+        if self.config.telemetry_hz > 0 {
+            self.next_telemetry_ms = 0;
+        }
+    }
+
+    /// Whether this robot can run `mode` now.
+    fn check_mode(&self, mode: Mode) -> Result<(), NackReason> {
+        let khepera_like =
+            self.profile.has(protocol::caps::IR_PROXIMITY) && self.profile.ir.count == 8;
+        match mode {
+            Mode::Idle | Mode::Manual => Ok(()),
+            Mode::GoTo => {
+                if khepera_like || self.profile.has(protocol::caps::COMPASS) {
+                    Ok(())
+                } else {
+                    Err(NackReason::Unsupported)
+                }
+            }
+            Mode::Wander | Mode::EdgeFollowLeft | Mode::EdgeFollowRight => {
+                if khepera_like {
+                    Ok(())
+                } else {
+                    Err(NackReason::Unsupported)
+                }
+            }
+            Mode::SeekLight => {
+                if khepera_like && self.profile.has(protocol::caps::AMBIENT_LIGHT) {
+                    Ok(())
+                } else {
+                    Err(NackReason::Unsupported)
+                }
+            }
+            Mode::Explore => Err(NackReason::Unsupported),
+            Mode::ExecutePlan => Err(NackReason::NoPlan),
+        }
+        .and_then(|()| {
+            if mode == Mode::GoTo && self.goal.is_none() {
+                // SetMode(GoTo) needs a goal given earlier; GoTo(point) sets one first.
+                Err(NackReason::BadState)
+            } else {
+                Ok(())
+            }
+        })
+        .or_else(|e| {
+            // GoTo(point) sets the goal after this check, so a missing goal is fine there.
+            if e == NackReason::BadState && mode == Mode::GoTo {
+                Ok(())
+            } else {
+                Err(e)
+            }
+        })
+    }
+
+    fn enter(&mut self, mode: Mode, now_ms: u32) {
+        let _ = now_ms;
+        self.arrived = false;
+        self.guided_active = false;
+        let arbiter_mode = match mode {
+            Mode::Wander => behaviour::Mode::Wander,
+            Mode::EdgeFollowLeft => behaviour::Mode::EdgeFollow(Side::Left),
+            Mode::EdgeFollowRight => behaviour::Mode::EdgeFollow(Side::Right),
+            Mode::SeekLight => behaviour::Mode::DriveToLight,
+            Mode::GoTo if self.profile.has(protocol::caps::ENCODERS) => match self.goal {
+                Some(g) => behaviour::Mode::GoTo(g),
+                None => behaviour::Mode::Idle,
+            },
+            Mode::GoTo => {
+                self.guided_active = true;
+                behaviour::Mode::Idle
+            }
+            _ => behaviour::Mode::Idle,
+        };
+        self.arbiter.set_mode(arbiter_mode);
+        if mode == Mode::SeekLight {
+            self.arbiter.release_light();
+        }
+        if mode != self.mode {
+            self.mode = mode;
+            self.push_event(EventCode::ModeChanged, mode as i32);
+        }
+    }
+
+    fn push_event(&mut self, code: EventCode, value: i32) {
+        if self.events.is_full() {
+            self.events.pop_front();
+        }
+        let _ = self.events.push_back(Event { code, value });
+    }
+
+    fn check_failsafe(&mut self, last_rx_ms: u32, now_ms: u32) {
+        if self.mode != Mode::Manual || self.failsafe {
+            return;
+        }
+        let silence = now_ms.wrapping_sub(last_rx_ms);
+        if silence > u32::from(self.config.failsafe_ms) {
+            self.failsafe = true;
+            self.teleop = (0, 0);
+            self.push_event(
+                EventCode::FailsafeStop,
+                i32::try_from(silence).unwrap_or(i32::MAX),
+            );
+        }
+    }
+
+    fn must_stop_now(&self) -> bool {
+        self.motor != MotorCommand::STOP
+            && (self.mode == Mode::Idle || (self.mode == Mode::Manual && self.failsafe))
+    }
+
+    fn control_cycle<H: Hal>(&mut self, hal: &mut H, now_us: u64) {
+        let now_ms = ms(now_us);
+        let t = &mut self.timing;
+        let cycle_us = u64::from(self.profile.cycle_us);
+        if let Some(last) = t.last_cycle_us {
+            t.period_us = u32::try_from(now_us.saturating_sub(last)).unwrap_or(u32::MAX);
+            if u64::from(t.period_us) > cycle_us + cycle_us / 2 {
+                t.overruns = t.overruns.wrapping_add(1);
+            }
+        }
+        t.last_cycle_us = Some(now_us);
+        t.cycles = t.cycles.wrapping_add(1);
+        // Keep the cycle grid; after a stall of more than a cycle, restart it from now.
+        t.next_cycle_us = if t.next_cycle_us + cycle_us > now_us {
+            t.next_cycle_us + cycle_us
+        } else {
+            now_us + cycle_us
+        };
+
+        self.read_sensors(hal);
+        self.estimate(now_ms);
+        let cmd = self.decide();
+        let max = self.profile.motor_max;
+        let cmd = cmd.clamped(max);
+        self.motor = cmd;
+        hal.set_motors(cmd);
+        let end = hal.now_us();
+        self.timing.busy_us = u32::try_from(end.saturating_sub(now_us)).unwrap_or(u32::MAX);
+    }
+
+    fn read_sensors<H: Hal>(&mut self, hal: &mut H) {
+        let s = Sensors {
+            ir: hal.ir(),
+            ambient: hal.ambient(),
+            compass: hal.compass(),
+            ground: hal.ground(),
+            line: hal.line(),
+            beacon: hal.beacon(),
+            battery_mv: hal.battery_mv(),
+            encoders: hal.encoders(),
+        };
+        if s.line && !self.sensors.line {
+            self.line_events = self.line_events.wrapping_add(1);
+            self.push_event(EventCode::LineCrossed, i32::from(self.line_events));
+        }
+        self.sensors = s;
+    }
+
+    fn estimate(&mut self, now_ms: u32) {
+        let period_s = (self.timing.period_us as f32) * 1e-6;
+        if let Some(enc) = self.sensors.encoders {
+            if let Some(prev) = self.prev_encoders {
+                let dl = encoder_delta(prev[0], enc[0]);
+                let dr = encoder_delta(prev[1], enc[1]);
+                self.odometry.step(dl, dr);
+                if period_s > 0.0 {
+                    let mm = self.odometry.params.mm_per_pulse;
+                    self.wheel_speed_mm_s = [
+                        sat_i16(dl as f32 * mm / period_s),
+                        sat_i16(dr as f32 * mm / period_s),
+                    ];
+                }
+            }
+            self.prev_encoders = Some(enc);
+        }
+        if !self.profile.has(protocol::caps::ENCODERS) {
+            if let Some(h) = self.sensors.compass {
+                self.compass_heading = wrap_angle(h);
+            }
+            let nominal = (f32::from(self.motor.left) + f32::from(self.motor.right)) * 0.5;
+            let battery = self.battery_level();
+            self.dead.step(
+                now_ms,
+                DeadReckonInput {
+                    heading_rad: self.compass_heading,
+                    nominal_speed: nominal,
+                    battery,
+                },
+            );
+            let speed = |u: i16| {
+                let mps = self.dead.params.speed.speed_mps(f32::from(u), battery);
+                sat_i16(mps * 1000.0)
+            };
+            self.wheel_speed_mm_s = [speed(self.motor.left), speed(self.motor.right)];
+            self.calibrate_on_beacon(now_ms);
+        }
+    }
+
+    /// Seed 004 §4: with the beacon straight ahead, its strength gives the distance and the
+    /// compass the direction, an alternative position blended in by the confidence xi.
+    fn calibrate_on_beacon(&mut self, now_ms: u32) {
+        let Some(b) = self.sensors.beacon else { return };
+        let recent = self
+            .last_calibration_ms
+            .is_some_and(|t| now_ms.wrapping_sub(t) < CALIBRATION_INTERVAL_MS);
+        if recent
+            || b.strength < CALIBRATION_MIN_STRENGTH
+            || libm::fabsf(b.bearing_rad) > BEACON_AHEAD_RAD
+        {
+            return;
+        }
+        let bearing = wrap_angle(self.compass_heading + b.bearing_rad);
+        if self.dead.calibrate(u16::from(b.strength), bearing).is_ok() {
+            self.last_calibration_ms = Some(now_ms);
+            let xi = libm::roundf(self.dead.confidence() * 1000.0) as i32;
+            self.push_event(EventCode::BeaconCalibration, xi);
+        }
+    }
+
+    /// Battery level 0..=1 from the voltage, for the speed table.
+    fn battery_level(&self) -> f32 {
+        let (lo, hi) = (self.config.battery_empty_mv, self.config.battery_full_mv);
+        if hi <= lo || self.sensors.battery_mv == 0 {
+            // Unknown battery: assume average, the paper's reference point.
+            return 0.5;
+        }
+        let v = f32::from(self.sensors.battery_mv.saturating_sub(lo)) / f32::from(hi - lo);
+        v.clamp(0.0, 1.0)
+    }
+
+    /// The motor command for this cycle, by mode.
+    fn decide(&mut self) -> MotorCommand {
+        match self.mode {
+            Mode::Idle => MotorCommand::STOP,
+            Mode::Manual => {
+                if self.failsafe {
+                    MotorCommand::STOP
+                } else {
+                    self.teleop_command()
+                }
+            }
+            Mode::GoTo if self.guided_active => self.guided_command(),
+            Mode::GoTo
+            | Mode::Wander
+            | Mode::EdgeFollowLeft
+            | Mode::EdgeFollowRight
+            | Mode::SeekLight => self.behaviour_command(),
+            Mode::Explore | Mode::ExecutePlan => MotorCommand::STOP,
+        }
+    }
+
+    /// Differential-drive kinematics: wheel speeds from forward speed and turn rate.
+    fn teleop_command(&self) -> MotorCommand {
+        let (v, w) = self.teleop;
+        let half_base_mm = self.profile.wheel_distance_m * 500.0;
+        let max = self.config.teleop_max_mm_s;
+        let turn = f32::from(w) / 1000.0 * half_base_mm;
+        let left = (f32::from(v) - turn).clamp(-max, max);
+        let right = (f32::from(v) + turn).clamp(-max, max);
+        MotorCommand::new(
+            self.profile.motor_units(left),
+            self.profile.motor_units(right),
+        )
+    }
+
+    fn behaviour_command(&mut self) -> MotorCommand {
+        let inputs = Inputs::fresh(self.sensors.ir, self.sensors.ambient, self.pose());
+        let cmd = self.arbiter.step(&inputs);
+        let st = self.arbiter.state();
+        let dead_end = st.dead_end;
+        let reached = st.drift_phase == behaviour::drift::DriftPhase::Reached;
+        if dead_end && !self.prev_dead_end {
+            self.dead.degrade(DegradeEvent::DeadEnd);
+        }
+        self.prev_dead_end = dead_end;
+        if self.mode == Mode::GoTo && reached {
+            self.mark_arrived();
+        }
+        cmd
+    }
+
+    fn guided_command(&mut self) -> MotorCommand {
+        let Some(goal) = self.goal else {
+            return MotorCommand::STOP;
+        };
+        let mut ir = [(0u16, 0.0f32); 8];
+        let n = self.profile.ir.count.min(8);
+        for (i, slot) in ir.iter_mut().enumerate().take(n) {
+            *slot = (self.sensors.ir[i], self.profile.ir.angle_rad[i]);
+        }
+        let (cmd, phase) = guided_step(self.pose(), goal, &ir[..n], &self.guided);
+        if phase == GuidedPhase::Arrived {
+            self.mark_arrived();
+        }
+        cmd
+    }
+
+    fn mark_arrived(&mut self) {
+        if !self.arrived {
+            self.arrived = true;
+            self.push_event(EventCode::GoalReached, 0);
+        }
+    }
+
+    /// The behaviour bits and motor output telemetry reports.
+    pub fn behaviour_report(&self) -> (u8, MotorCommand) {
+        use protocol::behaviours as b;
+        let mut bits = 0u8;
+        if matches!(
+            self.mode,
+            Mode::GoTo
+                | Mode::Wander
+                | Mode::EdgeFollowLeft
+                | Mode::EdgeFollowRight
+                | Mode::SeekLight
+        ) && !self.guided_active
+        {
+            let active = self.arbiter.state().active;
+            for (from, to) in [
+                (BehaviourSet::AVOID, b::AVOID),
+                (BehaviourSet::EDGE, b::EDGE),
+                (BehaviourSet::DRIFT, b::DRIFT),
+                (BehaviourSet::TURN, b::TURN),
+                (BehaviourSet::LIGHT, b::LIGHT),
+            ] {
+                if active.contains(from) {
+                    bits |= to;
+                }
+            }
+        }
+        if self.guided_active && self.mode == Mode::GoTo {
+            bits |= b::GUIDED;
+        }
+        (bits, self.motor)
+    }
+
+    pub fn emulated(&self) -> bool {
+        self.emulated
+    }
+}
+
+/// The answer to a transfer frame while this firmware holds no transfer store: refuse.
+fn refuse_transfer(m: &Message<'_>) -> Message<'static> {
+    let (id, status) = match m {
+        Message::TransferBegin(b) => (b.id, TransferStatus::Rejected),
+        Message::TransferChunk(c) => (c.id, TransferStatus::UnknownId),
+        Message::TransferAck(a) => (a.id, TransferStatus::UnknownId),
+        _ => (0, TransferStatus::UnknownId),
+    };
+    Message::TransferAck(TransferAck {
+        id,
+        next: 0,
+        status,
+    })
+}
+
+fn point_from_mm(x_mm: i32, y_mm: i32) -> Result<Point, NackReason> {
+    if x_mm.unsigned_abs() > COORD_LIMIT_MM.unsigned_abs()
+        || y_mm.unsigned_abs() > COORD_LIMIT_MM.unsigned_abs()
+    {
+        return Err(NackReason::BadPoint);
+    }
+    Ok(Point::new(x_mm as f32 / 1000.0, y_mm as f32 / 1000.0))
+}
+
+/// Milliseconds of a microsecond clock, wrapping at 2^32 (49.7 days) like the wire's time_ms.
+fn ms(us: u64) -> u32 {
+    (us / 1000) as u32
+}
+
+/// Whether wrapping time `now` has reached `deadline`.
+fn due(now: u32, deadline: u32) -> bool {
+    now.wrapping_sub(deadline) < 0x8000_0000
+}
+
+fn sat_i16(v: f32) -> i16 {
+    // `as` saturates at the i16 range and maps NaN to 0.
+    libm::roundf(v) as i16
+}
