@@ -247,11 +247,11 @@ impl Link {
                 }
                 m @ (Message::TransferBegin(_)
                 | Message::TransferChunk(_)
-                | Message::TransferAck(_)) => {
-                    if st.session.is_some() {
-                        if let Response::Send(out) = on(Inbound::Transfer(m)) {
-                            st.send(&out, now_ms);
-                        }
+                | Message::TransferAck(_))
+                    if st.session.is_some() =>
+                {
+                    if let Response::Send(out) = on(Inbound::Transfer(m)) {
+                        st.send(&out, now_ms);
                     }
                 }
                 // Heartbeats only refresh `last_rx_ms`; robot-bound kinds from a station

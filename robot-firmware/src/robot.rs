@@ -122,9 +122,11 @@ pub struct Robot {
 impl Robot {
     pub fn new(opts: RobotOptions) -> Self {
         let profile = opts.profile;
-        let mut odometry_params = OdometryParams::default();
-        odometry_params.wheel_distance_mm = profile.wheel_distance_m * 1000.0;
-        odometry_params.mm_per_pulse = profile.pulse_m * 1000.0;
+        let odometry_params = OdometryParams {
+            wheel_distance_mm: profile.wheel_distance_m * 1000.0,
+            mm_per_pulse: profile.pulse_m * 1000.0,
+            ..OdometryParams::default()
+        };
         let mut capabilities = profile.capabilities;
         if opts.emulated {
             capabilities |= protocol::caps::EMULATED;
@@ -281,7 +283,11 @@ impl Core {
         match command {
             Command::SetMode(mode) => {
                 self.check_mode(mode)?;
-                self.enter(mode, now_ms);
+                if mode == Mode::GoTo && self.goal.is_none() {
+                    // SetMode(GoTo) resumes an earlier goal; GoTo(point) gives one.
+                    return Err(NackReason::BadState);
+                }
+                self.enter(mode);
             }
             Command::Teleop { v_mm_s, w_mrad_s } => {
                 if v_mm_s.unsigned_abs() > TELEOP_LIMIT_MM_S.unsigned_abs()
@@ -292,18 +298,18 @@ impl Core {
                 self.teleop = (v_mm_s, w_mrad_s);
                 self.failsafe = false;
                 if self.mode != Mode::Manual {
-                    self.enter(Mode::Manual, now_ms);
+                    self.enter(Mode::Manual);
                 }
             }
             Command::Stop => {
                 self.teleop = (0, 0);
-                self.enter(Mode::Idle, now_ms);
+                self.enter(Mode::Idle);
             }
             Command::GoTo(p) => {
                 let target = point_from_mm(p.x_mm, p.y_mm)?;
                 self.check_mode(Mode::GoTo)?;
                 self.goal = Some(target);
-                self.enter(Mode::GoTo, now_ms);
+                self.enter(Mode::GoTo);
             }
             Command::SetParam { id, value } => {
                 let v = self.tunables().set(id.0, value)?;
@@ -394,26 +400,9 @@ impl Core {
             Mode::Explore => Err(NackReason::Unsupported),
             Mode::ExecutePlan => Err(NackReason::NoPlan),
         }
-        .and_then(|()| {
-            if mode == Mode::GoTo && self.goal.is_none() {
-                // SetMode(GoTo) needs a goal given earlier; GoTo(point) sets one first.
-                Err(NackReason::BadState)
-            } else {
-                Ok(())
-            }
-        })
-        .or_else(|e| {
-            // GoTo(point) sets the goal after this check, so a missing goal is fine there.
-            if e == NackReason::BadState && mode == Mode::GoTo {
-                Ok(())
-            } else {
-                Err(e)
-            }
-        })
     }
 
-    fn enter(&mut self, mode: Mode, now_ms: u32) {
-        let _ = now_ms;
+    fn enter(&mut self, mode: Mode) {
         self.arrived = false;
         self.guided_active = false;
         let arbiter_mode = match mode {

@@ -44,8 +44,10 @@ impl Bench {
             emulated: false,
             firmware_version: "test",
         });
-        let mut hal = ScriptedHal::default();
-        hal.encoders = profile.has(caps::ENCODERS).then_some([0, 0]);
+        let hal = ScriptedHal {
+            encoders: profile.has(caps::ENCODERS).then_some([0, 0]),
+            ..ScriptedHal::default()
+        };
         Bench {
             robot,
             hal,
