@@ -3,3 +3,6 @@
 
 pub mod arena;
 pub mod geometry;
+pub mod pty;
+pub mod fault;
+pub mod link;

@@ -1,7 +1,8 @@
 //! A* over the region graph (seed 004 §6) and the resulting [`Plan`].
 //!
-//! Layer: reads [`Regions`], works in caller scratch ([`SearchScratch`]), writes the region
-//! sequence to a caller store. Costs follow seed 004 §6: g is the length of the path start
+//! Layer: reads a [`RegionGraph`] (the implicit [`Regions`] or a stored
+//! [`Adjacency`](super::graph::Adjacency)), works in caller scratch ([`SearchScratch`]), writes
+//! the region sequence to a caller store. Costs follow seed 004 §6: g is the length of the path start
 //! point -> centre of the start region -> ... -> centre of the goal region -> goal point, h is
 //! the straight-line distance from a region's centre to the goal point.
 //!
@@ -20,6 +21,7 @@
 
 use core::fmt;
 
+use super::graph::RegionGraph;
 use super::grid::GridPoint;
 use super::heap::{closed, unseen, OpenSet};
 use super::ids::IdStore;
@@ -111,9 +113,12 @@ pub(crate) fn dist_ceil(a: GridPoint, b: GridPoint) -> u32 {
 /// A* scratch in caller storage: one entry per region in each store.
 ///
 /// `f` holds g + h per region (g is recovered as f - h, saving a store); `parent`, `heap` and
-/// `pos` hold region ids or heap slots, so `[u16]` suffices up to 65 534 regions.
+/// `pos` hold region ids or heap slots, so `[u16]` suffices up to 65 534 regions. An optional
+/// `h` cache ([`with_h_cache`](Self::with_h_cache)) saves recomputing square roots; it changes
+/// the speed, never the plan.
 pub struct SearchScratch<'s, I: ?Sized> {
     f: &'s mut [u32],
+    h: &'s mut [u32],
     parent: &'s mut I,
     heap: &'s mut I,
     pos: &'s mut I,
@@ -124,10 +129,16 @@ impl<'s, I: IdStore + ?Sized> SearchScratch<'s, I> {
     pub fn new(f: &'s mut [u32], parent: &'s mut I, heap: &'s mut I, pos: &'s mut I) -> Self {
         SearchScratch {
             f,
+            h: &mut [],
             parent,
             heap,
             pos,
         }
+    }
+
+    /// Adds a cache of h per region; used when it holds at least one entry per region.
+    pub fn with_h_cache(self, h: &'s mut [u32]) -> Self {
+        SearchScratch { h, ..self }
     }
 
     /// Most regions a search can handle: the shortest store, and ids must leave room for the
@@ -233,21 +244,21 @@ impl Plan {
     }
 }
 
-/// Plans from `start` to `goal` over `regions` by A* (seed 004 §6); the region sequence goes to
-/// the front of `path`.
-pub fn find_path<M, I, P>(
-    regions: &Regions<'_, M>,
+/// Plans from `start` to `goal` over the region graph by A* (seed 004 §6); the region
+/// sequence goes to the front of `path`.
+pub fn find_path<G, I, P>(
+    graph: &G,
     start: GridPoint,
     goal: GridPoint,
     scratch: &mut SearchScratch<'_, I>,
     path: &mut P,
 ) -> Result<Plan, PlanError>
 where
-    M: IdStore + ?Sized,
+    G: RegionGraph,
     I: IdStore + ?Sized,
     P: IdStore + ?Sized,
 {
-    let n = regions.len();
+    let n = graph.region_count();
     let capacity = scratch.capacity().min(P::NONE as usize);
     if n > capacity {
         return Err(PlanError::ScratchTooSmall {
@@ -255,22 +266,49 @@ where
             capacity,
         });
     }
-    let from = regions.region_of(start).ok_or(PlanError::StartBlocked)?;
-    let to = regions.region_of(goal).ok_or(PlanError::GoalBlocked)?;
-    let g_to = search(regions, start, goal, from, to, scratch)?;
+    let from = graph.region_of(start).ok_or(PlanError::StartBlocked)?;
+    let to = graph.region_of(goal).ok_or(PlanError::GoalBlocked)?;
+    let g_to = search(graph, start, goal, from, to, scratch)?;
     let len = write_path(&*scratch.parent, from, to, n, path)?;
-    let last = regions.square(to).map_or(goal, |s| s.centre());
     Ok(Plan {
         start,
         goal,
         len,
-        cost: g_to.saturating_add(dist_ceil(last, goal)),
+        cost: g_to.saturating_add(dist_ceil(graph.centre(to), goal)),
     })
 }
 
+/// h of region `id`: the straight-line distance from its centre to the goal, rounded down
+/// (seed 004 §6: "the straight-line distance to the goal position"), from the cache if any.
+struct Heuristic<'h> {
+    goal: GridPoint,
+    cache: Option<&'h mut [u32]>,
+}
+
+impl Heuristic<'_> {
+    /// h of a region seen for the first time (fills the cache).
+    #[inline]
+    fn first<G: RegionGraph>(&mut self, graph: &G, id: u32) -> u32 {
+        let h = dist_floor(graph.centre(id), self.goal);
+        if let Some(slot) = self.cache.as_mut().and_then(|c| c.get_mut(id as usize)) {
+            *slot = h;
+        }
+        h
+    }
+
+    /// h of a region seen before.
+    #[inline]
+    fn again<G: RegionGraph>(&self, graph: &G, id: u32) -> u32 {
+        match self.cache.as_ref().and_then(|c| c.get(id as usize)) {
+            Some(&h) => h,
+            None => dist_floor(graph.centre(id), self.goal),
+        }
+    }
+}
+
 /// The A* loop; returns g of the goal region (start leg included, goal leg not).
-fn search<M, I>(
-    regions: &Regions<'_, M>,
+fn search<G, I>(
+    graph: &G,
     start: GridPoint,
     goal: GridPoint,
     from: u32,
@@ -278,48 +316,43 @@ fn search<M, I>(
     scratch: &mut SearchScratch<'_, I>,
 ) -> Result<u32, PlanError>
 where
-    M: IdStore + ?Sized,
+    G: RegionGraph,
     I: IdStore + ?Sized,
 {
-    let centre = |id: u32| regions.square(id).map_or(goal, |s| s.centre());
+    let n = graph.region_count();
     let f = &mut *scratch.f;
     let parent = &mut *scratch.parent;
+    let cache = (scratch.h.len() >= n).then_some(&mut *scratch.h);
+    let mut h = Heuristic { goal, cache };
     let mut open = OpenSet::new(&mut *scratch.heap, &mut *scratch.pos);
-    let c_from = centre(from);
-    set_f(
-        f,
-        from,
-        dist_ceil(start, c_from).saturating_add(dist_floor(c_from, goal)),
-    );
+    let g_from = dist_ceil(start, graph.centre(from));
+    set_f(f, from, g_from.saturating_add(h.first(graph, from)));
     parent.set(from as usize, I::NONE);
     open.push(f, from);
     while let Some(u) = open.pop(f) {
-        EXPANDED.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
-        let cu = centre(u);
-        let g_u = get_f(f, u).saturating_sub(dist_floor(cu, goal));
+        let g_u = get_f(f, u).saturating_sub(h.again(graph, u));
         if u == to {
             return Ok(g_u);
         }
-        for v in regions.neighbours(u) {
-            RELAXED.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
+        graph.for_each_neighbour(u, |v, cost| {
             let state = open.state(v);
             if state == closed::<I>() {
-                continue;
+                return;
             }
-            let cv = centre(v);
-            let fv = g_u
-                .saturating_add(dist_ceil(cu, cv))
-                .saturating_add(dist_floor(cv, goal));
+            let g_v = g_u.saturating_add(cost);
             if state == unseen::<I>() {
-                set_f(f, v, fv);
+                set_f(f, v, g_v.saturating_add(h.first(graph, v)));
                 parent.set(v as usize, u);
                 open.push(f, v);
-            } else if fv < get_f(f, v) {
-                set_f(f, v, fv);
-                parent.set(v as usize, u);
-                open.decreased(f, v);
+            } else {
+                let fv = g_v.saturating_add(h.again(graph, v));
+                if fv < get_f(f, v) {
+                    set_f(f, v, fv);
+                    parent.set(v as usize, u);
+                    open.decreased(f, v);
+                }
             }
-        }
+        });
     }
     Err(PlanError::Unreachable)
 }
@@ -420,6 +453,3 @@ mod tests {
         );
     }
 }
-
-pub static EXPANDED: core::sync::atomic::AtomicUsize = core::sync::atomic::AtomicUsize::new(0);
-pub static RELAXED: core::sync::atomic::AtomicUsize = core::sync::atomic::AtomicUsize::new(0);

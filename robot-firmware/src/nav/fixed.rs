@@ -6,12 +6,13 @@
 //! the memory is known before the robot runs (architecture: "every piece of state has a size
 //! fixed at compile time").
 //!
-//! [`Nav64`], the robot's instance, is 64 x 64 cells, up to 511 regions and 256-region plans:
-//! [`NAV64_BYTES`] = 14 872 bytes on a 64-bit host (asserted below; a 32-bit MCU saves the
-//! upper halves of two `usize`s), within the seed 004 §3 robot's 32 KB. Where the bytes go:
-//! grid 1 040 (2 bits/cell + size and geometry), region map 4 624 (9 bits/cell, ids
-//! 0 ..= 510), squares 3 066 (6 B each), search scratch 5 110 (`f` u32, parent/heap/pos u16),
-//! raw and smoothed plans 1 024 (u16 each), segmentation flag and padding 8. 511 regions hold a
+//! [`Nav64`], the robot's instance, is 64 x 64 cells, up to 511 regions, 256-region plans and
+//! 128-point smoothed plans: [`NAV64_BYTES`] = 15 384 bytes on a 64-bit host (asserted below;
+//! a 32-bit MCU saves the upper half of a `usize`), within the seed 004 §3 robot's 32 KB.
+//! Where the bytes go: grid 1 040 (2 bits/cell + size and geometry), region map 4 624 (9
+//! bits/cell, ids 0 ..= 510), squares 3 066 (6 B each), search scratch 5 110 (`f` u32,
+//! parent/heap/pos u16; no h cache, no stored adjacency - the implicit graph costs nothing),
+//! raw plan 512 (u16 ids), smoothed plan 1 024 (8 B points), flag and padding 8. 511 regions hold a
 //! perfect 16 x 16 maze of 1-cell corridors (33 x 33 cells, 511 free cells); denser maps fail
 //! with `TooManyRegions`, never a panic.
 //!
@@ -22,10 +23,10 @@ use super::astar::{find_path, Plan, PlanError, SearchScratch};
 use super::grid::{grid_bytes, Geometry, Grid, GridPoint, MAX_SIDE};
 use super::ids::{packed_bytes, PackedIds};
 use super::segment::{segment, Regions, SegmentError, Square};
-use super::smooth::smooth;
+use super::smooth::{smooth, Smoothed};
 
 /// Fixed-capacity navigation storage: a `W` x `H` grid (`GB` bytes), a `BITS`-bit region map
-/// (`MB` bytes), up to `R` regions and plans of up to `P` regions.
+/// (`MB` bytes), up to `R` regions, plans of up to `P` regions, smoothed plans of `S` points.
 pub struct FixedNav<
     const W: u16,
     const H: u16,
@@ -34,6 +35,7 @@ pub struct FixedNav<
     const MB: usize,
     const R: usize,
     const P: usize,
+    const S: usize,
 > {
     grid: Grid<[u8; GB]>,
     map: PackedIds<BITS, [u8; MB]>,
@@ -45,7 +47,7 @@ pub struct FixedNav<
     heap: [u16; R],
     pos: [u16; R],
     path: [u16; P],
-    smoothed: [u16; P],
+    smoothed: [GridPoint; S],
 }
 
 /// Cells of the robot's map side.
@@ -56,8 +58,10 @@ pub const NAV64_MAP_BITS: u32 = 9;
 pub const NAV64_REGIONS: usize = 511;
 /// Regions a robot plan holds.
 pub const NAV64_PATH: usize = 256;
+/// Points a robot's smoothed plan holds (corners only, so far fewer than regions).
+pub const NAV64_SMOOTHED: usize = 128;
 
-/// The robot's instance: 64 x 64 cells, 511 regions, 256-region plans.
+/// The robot's instance: 64 x 64 cells, 511 regions, 256-region plans, 128-point smoothing.
 pub type Nav64 = FixedNav<
     NAV64_SIDE,
     NAV64_SIDE,
@@ -66,6 +70,7 @@ pub type Nav64 = FixedNav<
     { packed_bytes(NAV64_MAP_BITS, NAV64_SIDE as usize * NAV64_SIDE as usize) },
     NAV64_REGIONS,
     NAV64_PATH,
+    NAV64_SMOOTHED,
 >;
 
 /// Size of [`Nav64`] in bytes.
@@ -79,7 +84,8 @@ impl<
         const MB: usize,
         const R: usize,
         const P: usize,
-    > FixedNav<W, H, GB, BITS, MB, R, P>
+        const S: usize,
+    > FixedNav<W, H, GB, BITS, MB, R, P, S>
 {
     /// Compile-time check of the const parameters (evaluated by `new`).
     const SIZES_OK: () = {
@@ -104,7 +110,7 @@ impl<
             heap: [0; R],
             pos: [0; R],
             path: [0; P],
-            smoothed: [0; P],
+            smoothed: [GridPoint { x: 0, y: 0 }; S],
         }
     }
 
@@ -156,13 +162,14 @@ impl<
         find_path(&regions, start, goal, &mut scratch, &mut self.path[..])
     }
 
-    /// Smooths a plan made by [`plan`](Self::plan); the kept regions are in
-    /// [`smoothed_path`](Self::smoothed_path), the raw plan stays in [`path`](Self::path).
-    pub fn smooth(&mut self, plan: &Plan) -> Result<Plan, PlanError> {
+    /// Smooths a plan made by [`plan`](Self::plan), `margin` grid units from square corners;
+    /// the points are in [`smoothed_points`](Self::smoothed_points), the raw plan stays in
+    /// [`path`](Self::path).
+    pub fn smooth(&mut self, plan: &Plan, margin: u32) -> Result<Smoothed, PlanError> {
         let n = usize::from(self.count.ok_or(PlanError::NotSegmented)?);
         let squares = self.squares.get(..n).ok_or(PlanError::NotSegmented)?;
         let regions = Regions::from_parts(&self.grid, &self.map, squares);
-        smooth(&regions, plan, &self.path[..], &mut self.smoothed[..])
+        smooth(&regions, plan, &self.path[..], margin, &mut self.smoothed)
     }
 
     /// Region store of the last raw plan.
@@ -170,8 +177,8 @@ impl<
         &self.path
     }
 
-    /// Region store of the last smoothed plan.
-    pub fn smoothed_path(&self) -> &[u16] {
+    /// Point store of the last smoothed plan.
+    pub fn smoothed_points(&self) -> &[GridPoint] {
         &self.smoothed
     }
 }
@@ -183,7 +190,7 @@ mod tests {
     #[test]
     fn the_robot_instance_fits_well_under_20_kb() {
         #[cfg(target_pointer_width = "64")]
-        assert_eq!(NAV64_BYTES, 14_872);
-        const { assert!(NAV64_BYTES <= 14_872) };
+        assert_eq!(NAV64_BYTES, 15_384);
+        const { assert!(NAV64_BYTES <= 15_384) };
     }
 }

@@ -1,74 +1,299 @@
-//! Optional smoothing of a plan: drop waypoints while the shortcut stays collision-free.
+//! Optional smoothing of a raw plan, reported beside it so the paper's method stays visible.
 //!
-//! Layer: after `astar.rs`; reads [`Regions`] (a cell is free exactly when it has a region) and
-//! a raw [`Plan`], writes a second region list, so the paper's raw plan (seed 004 §6-7: the
-//! trajectory through region centres) stays available beside the smoothed one.
+//! Layer: after `astar.rs`; reads [`Regions`] and a raw [`Plan`] (seed 004 §6-7: the
+//! trajectory through region centres), writes points to a caller store ([`Smoothed`]).
 //!
-//! Rule: greedy string pulling. From an anchor waypoint, extend to the next waypoint while the
-//! straight segment from the anchor to it passes [`line_of_sight`]; when it does not, the last
-//! reachable waypoint becomes the new anchor. Segments between consecutive raw waypoints are
-//! never tested: seed 004 §6 proves them feasible ("a path through the centers of connected
-//! regions is always feasible"), so smoothing never fails for lack of sight and the smoothed
-//! length is at most the raw one (rounded-up segment lengths obey the triangle inequality).
+//! Two passes:
+//! 1. Funnel (string pulling) through the plan's portals - the edge each pair of consecutive
+//!    squares shares: the shortest path from start to goal that crosses those edges in order.
+//!    It stays inside the plan's squares (a segment between two points of a convex square stays
+//!    in it), so it is collision-free by the same argument as seed 004 §6's "a path through the
+//!    centers of connected regions is always feasible". `margin` (grid units) pulls each portal
+//!    end inwards, keeping the path that far from the squares' corners (a robot is not a point).
+//! 2. Drop: from an anchor, skip ahead over waypoints while the straight segment to the next
+//!    one passes [`line_of_sight`]; consecutive funnel segments are never tested (already
+//!    proved feasible), so this pass only ever shortens.
+//!
+//! If rounding ever made the result longer than the raw plan, the raw centres are returned:
+//! the smoothed length is never above the raw one. All arithmetic is exact integer arithmetic
+//! on grid units, so both sides of the link get the same points.
 //!
 //! [`line_of_sight`] is conservative: every cell whose closed square meets the segment must be
 //! free, so a segment that grazes an obstacle's corner or runs along its edge is refused.
-//! All arithmetic is exact integer arithmetic on grid units.
 //!
-//! What can fail: the output store is shorter (or its ids narrower) than the plan needs.
+//! What can fail: the output store is too small for the points. Never a panic.
 
 use super::astar::{dist_ceil, Plan, PlanError};
 use super::grid::{GridPoint, UNITS_PER_CELL};
 use super::ids::IdStore;
-use super::segment::Regions;
+use super::segment::{Regions, Square};
 
-/// Smooths `plan` (whose regions are at the front of `path`); the kept regions go to the front
-/// of `out`. The result has the same start and goal, and `cost` is the smoothed length.
-pub fn smooth<M, P, Q>(
+/// A smoothed plan: the start, `len` points at the front of the caller's point store, the goal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Smoothed {
+    pub start: GridPoint,
+    pub goal: GridPoint,
+    pub len: u32,
+    /// Length of the polyline in grid units (each segment rounded up).
+    pub cost: u32,
+}
+
+impl Smoothed {
+    /// Number of waypoints (points plus start and goal).
+    pub const fn waypoint_count(&self) -> usize {
+        self.len as usize + 2
+    }
+
+    /// Waypoint `i`, in grid units.
+    pub fn waypoint(&self, points: &[GridPoint], i: usize) -> Option<GridPoint> {
+        match i {
+            0 => Some(self.start),
+            _ if i == self.len as usize + 1 => Some(self.goal),
+            _ if i <= self.len as usize => points.get(i - 1).copied(),
+            _ => None,
+        }
+    }
+
+    /// The waypoints in order, in grid units.
+    pub fn waypoints<'x>(&'x self, points: &'x [GridPoint]) -> impl Iterator<Item = GridPoint> + 'x {
+        (0..self.waypoint_count()).filter_map(move |i| self.waypoint(points, i))
+    }
+
+    /// Length of the encoding: 24-byte header plus 8 bytes per point.
+    pub const fn encoded_len(&self) -> usize {
+        Plan::HEADER_BYTES + 8 * self.len as usize
+    }
+
+    /// Serialises like [`Plan::encode`], with points (x, y as i32) instead of region ids.
+    pub fn encode(&self, points: &[GridPoint], out: &mut [u8]) -> Result<usize, PlanError> {
+        let needed = self.encoded_len();
+        let out = out
+            .get_mut(..needed)
+            .ok_or(PlanError::BufferTooSmall { needed })?;
+        let head = [
+            self.start.x, self.start.y, self.goal.x, self.goal.y,
+        ]
+        .map(i32::to_le_bytes)
+        .into_iter()
+        .chain([self.len.to_le_bytes(), self.cost.to_le_bytes()]);
+        let pts = (0..self.len as usize)
+            .filter_map(|i| points.get(i))
+            .flat_map(|p| [p.x.to_le_bytes(), p.y.to_le_bytes()]);
+        for (chunk, bytes) in out.chunks_exact_mut(4).zip(head.chain(pts)) {
+            chunk.copy_from_slice(&bytes);
+        }
+        Ok(needed)
+    }
+}
+
+/// Smooths `plan` (whose regions are at the front of `path`), keeping `margin` grid units from
+/// the corners of the squares it passes; the points go to the front of `out`.
+pub fn smooth<M, P>(
     regions: &Regions<'_, M>,
     plan: &Plan,
     path: &P,
-    out: &mut Q,
-) -> Result<Plan, PlanError>
+    margin: u32,
+    out: &mut [GridPoint],
+) -> Result<Smoothed, PlanError>
 where
     M: IdStore + ?Sized,
     P: IdStore + ?Sized,
-    Q: IdStore + ?Sized,
 {
-    if regions.len() > Q::NONE as usize {
-        return Err(PlanError::ScratchTooSmall {
-            regions: regions.len(),
-            capacity: Q::NONE as usize,
+    let (start, goal) = (plan.start, plan.goal);
+    let pulled = funnel(regions, plan, path, margin, out)?;
+    let mut len = match pulled {
+        Some(k) => drop_pass(regions, start, goal, out, k),
+        None => raw_centres(regions, plan, path, out)?,
+    };
+    let points = |n: usize| out.get(..n).unwrap_or(&[]).iter().copied();
+    let mut cost = polyline_length(Some(start).into_iter().chain(points(len)).chain(Some(goal)));
+    if cost > plan.cost {
+        len = raw_centres(regions, plan, path, out)?;
+        cost = plan.cost;
+    }
+    Ok(Smoothed {
+        start,
+        goal,
+        len: u32::try_from(len).unwrap_or(u32::MAX),
+        cost,
+    })
+}
+
+/// Writes the raw plan's centres to `out`; returns their number.
+fn raw_centres<M, P>(
+    regions: &Regions<'_, M>,
+    plan: &Plan,
+    path: &P,
+    out: &mut [GridPoint],
+) -> Result<usize, PlanError>
+where
+    M: IdStore + ?Sized,
+    P: IdStore + ?Sized,
+{
+    let n = plan.len as usize;
+    let slots = out.get_mut(..n).ok_or(PlanError::PathTooLong {
+        capacity: n.saturating_sub(1),
+    })?;
+    for (i, slot) in slots.iter_mut().enumerate() {
+        *slot = plan.waypoint(regions, path, i + 1).unwrap_or(plan.goal);
+    }
+    Ok(n)
+}
+
+/// Twice the signed area of triangle o, a, b: positive when b is left of the ray o -> a.
+#[inline]
+fn cross(o: GridPoint, a: GridPoint, b: GridPoint) -> i64 {
+    let (ax, ay) = (i64::from(a.x) - i64::from(o.x), i64::from(a.y) - i64::from(o.y));
+    let (bx, by) = (i64::from(b.x) - i64::from(o.x), i64::from(b.y) - i64::from(o.y));
+    ax * by - ay * bx
+}
+
+/// The edge shared by square `a` (left) and square `b` (entered) as (left end, right end) seen
+/// along the direction of travel, each end pulled in by `margin` (at most to the midpoint);
+/// `None` if the squares do not share an edge of positive length.
+fn portal(a: Square, b: Square, margin: u32) -> Option<(GridPoint, GridPoint)> {
+    let u = UNITS_PER_CELL;
+    let lo = |s: Square| (i32::from(s.x) * u, i32::from(s.y) * u);
+    let hi = |s: Square| {
+        let (x, y) = lo(s);
+        (x + i32::from(s.size) * u, y + i32::from(s.size) * u)
+    };
+    let ((ax0, ay0), (ax1, ay1)) = (lo(a), hi(a));
+    let ((bx0, by0), (bx1, by1)) = (lo(b), hi(b));
+    let m = i32::try_from(margin).unwrap_or(i32::MAX);
+    let shrink = |l: i32, h: i32| {
+        if (h - l) / 2 > m {
+            (l + m, h - m)
+        } else {
+            ((l + h) / 2, (l + h) / 2)
+        }
+    };
+    let p = |x: i32, y: i32| GridPoint { x, y };
+    if ax1 == bx0 || bx1 == ax0 {
+        let (l, h) = (ay0.max(by0), ay1.min(by1));
+        if l >= h {
+            return None;
+        }
+        let (l, h) = shrink(l, h);
+        // Moving +x, left is +y; moving -x, left is -y.
+        return Some(if ax1 == bx0 {
+            (p(bx0, h), p(bx0, l))
+        } else {
+            (p(ax0, l), p(ax0, h))
         });
     }
-    let last = plan.waypoint_count() - 1;
-    let at = |i: usize| plan.waypoint(regions, path, i).unwrap_or(plan.goal);
-    let (mut anchor, mut kept, mut cost) = (0usize, 0usize, 0u32);
-    let mut j = 1usize;
-    while j < last {
-        if line_of_sight(regions, at(anchor), at(j + 1)) {
+    if ay1 == by0 || by1 == ay0 {
+        let (l, h) = (ax0.max(bx0), ax1.min(bx1));
+        if l >= h {
+            return None;
+        }
+        let (l, h) = shrink(l, h);
+        // Moving +y, left is -x; moving -y, left is +x.
+        return Some(if ay1 == by0 {
+            (p(l, by0), p(h, by0))
+        } else {
+            (p(h, ay0), p(l, ay0))
+        });
+    }
+    None
+}
+
+/// The funnel algorithm over portals 0 (the start) ..= n (the goal); writes the corner points
+/// to `out` and returns their number, or `None` if two consecutive regions share no edge.
+///
+/// Each restart moves the apex to a later portal, so it ends after at most n restarts.
+fn funnel<M, P>(
+    regions: &Regions<'_, M>,
+    plan: &Plan,
+    path: &P,
+    margin: u32,
+    out: &mut [GridPoint],
+) -> Result<Option<usize>, PlanError>
+where
+    M: IdStore + ?Sized,
+    P: IdStore + ?Sized,
+{
+    let n = plan.len as usize;
+    let (start, goal) = (plan.start, plan.goal);
+    let square = |i: usize| plan.region(path, i).and_then(|id| regions.square(id));
+    let gate = |k: usize| match k {
+        0 => Some((start, start)),
+        _ if k >= n => Some((goal, goal)),
+        _ => portal(square(k - 1)?, square(k)?, margin),
+    };
+    let (mut count, capacity) = (0usize, out.len());
+    let mut apex = start;
+    let (mut left, mut left_k, mut right, mut right_k) = (start, 0usize, start, 0usize);
+    let mut k = 1usize;
+    while k <= n {
+        let Some((l, r)) = gate(k) else {
+            return Ok(None);
+        };
+        let mut corner = None;
+        // Right side: narrow it, or, if it crosses the left side, the left end is a corner.
+        if cross(apex, right, r) >= 0 {
+            if apex == right || cross(apex, left, r) < 0 {
+                (right, right_k) = (r, k);
+            } else {
+                corner = Some((left, left_k));
+            }
+        }
+        // Left side likewise.
+        if corner.is_none() && cross(apex, left, l) <= 0 {
+            if apex == left || cross(apex, right, l) > 0 {
+                (left, left_k) = (l, k);
+            } else {
+                corner = Some((right, right_k));
+            }
+        }
+        let Some((c, ck)) = corner else {
+            k += 1;
+            continue;
+        };
+        if c != apex {
+            let slot = out
+                .get_mut(count)
+                .ok_or(PlanError::PathTooLong { capacity })?;
+            *slot = c;
+            count += 1;
+        }
+        apex = c;
+        (left, left_k, right, right_k) = (c, ck, c, ck);
+        k = ck + 1;
+    }
+    Ok(Some(count))
+}
+
+/// Drops points while the shortcut passes [`line_of_sight`], compacting `pts[..k]` in place;
+/// returns the number kept.
+fn drop_pass<M: IdStore + ?Sized>(
+    regions: &Regions<'_, M>,
+    start: GridPoint,
+    goal: GridPoint,
+    pts: &mut [GridPoint],
+    k: usize,
+) -> usize {
+    // Waypoint j: 0 the start, 1 ..= k the points, k + 1 the goal.
+    let at = |pts: &[GridPoint], j: usize| match j {
+        0 => start,
+        _ => pts.get(j - 1).copied().filter(|_| j <= k).unwrap_or(goal),
+    };
+    let (mut anchor, mut kept, mut j) = (start, 0usize, 1usize);
+    while j <= k {
+        if line_of_sight(regions, anchor, at(pts, j + 1)) {
             j += 1;
             continue;
         }
-        // Waypoint j (1 ..= len) is region j - 1 of the raw plan.
-        if kept >= out.len() {
-            return Err(PlanError::PathTooLong {
-                capacity: out.len(),
-            });
+        // Keep waypoint j; writing slot `kept` <= j - 1 never touches a point still to read.
+        let p = at(pts, j);
+        if let Some(slot) = pts.get_mut(kept) {
+            *slot = p;
         }
-        out.set(kept, path.get(j - 1));
         kept += 1;
-        cost = cost.saturating_add(dist_ceil(at(anchor), at(j)));
-        anchor = j;
-        j = anchor + 1;
+        anchor = p;
+        j += 1;
     }
-    cost = cost.saturating_add(dist_ceil(at(anchor), plan.goal));
-    Ok(Plan {
-        start: plan.start,
-        goal: plan.goal,
-        len: u32::try_from(kept).unwrap_or(u32::MAX),
-        cost,
-    })
+    kept
 }
 
 /// Whether every cell whose closed square meets the segment `a`-`b` is free.

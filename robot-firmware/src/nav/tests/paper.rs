@@ -7,7 +7,7 @@ extern crate std;
 use std::vec::Vec;
 
 use super::reference;
-use super::util::{centre, encode, parse, tuples, Seg, VecSearch};
+use super::util::{centre, encode, encode_smoothed, parse, tuples, with_adjacency, Seg, VecSearch};
 use crate::nav::{Cell, Geometry, GridPoint, Nav64};
 
 /// `shared/data/arenas/ciberrato/wallsMicRato99.xml` rasterised at 17 x 17 (a cell is
@@ -76,12 +76,12 @@ fn micro_rato_99_segments_by_fig6_and_plans_optimally_over_its_regions() {
         let (a, b) = (seg.squares[step[0] as usize], seg.squares[step[1] as usize]);
         assert!(reference::touch(&a, &b), "{a:?} -> {b:?}");
     }
-    let smooth = s.smooth(&regions, &plan).expect("fits");
+    let smooth = s.smooth(&regions, &plan, 0).expect("fits");
     assert!(smooth.cost <= plan.cost);
     let geo = g.geometry();
     let m = |p: GridPoint| geo.grid_to_metres(p);
     let raw: Vec<(f32, f32)> = plan.waypoints(&regions, &s.path[..]).map(m).collect();
-    let smoothed: Vec<(f32, f32)> = smooth.waypoints(&regions, &s.smoothed[..]).map(m).collect();
+    let smoothed: Vec<(f32, f32)> = smooth.waypoints(&s.points).map(m).collect();
     std::eprintln!("plan {ids:?}\nraw {raw:?}\nsmoothed {smoothed:?}");
     std::eprintln!("raw {} units, smoothed {} units", plan.cost, smooth.cost);
 }
@@ -93,8 +93,9 @@ fn micro_rato_99_gives_the_same_bytes_in_the_firmware_instance() {
     let regions = seg.regions(&g);
     let mut s = VecSearch::new(regions.len());
     let (start, goal) = query();
-    let plan = s.plan(&regions, start, goal).expect("reachable");
-    let smooth = s.smooth(&regions, &plan).expect("fits");
+    // The station's way: stored adjacency, h cache, u32 ids.
+    let plan = with_adjacency(regions, |adj| s.plan(adj, start, goal)).expect("reachable");
+    let smooth = s.smooth(&regions, &plan, 64).expect("fits");
 
     let mut nav = Nav64::new(Geometry::SEED_004);
     let grid = nav.grid_mut();
@@ -107,11 +108,11 @@ fn micro_rato_99_gives_the_same_bytes_in_the_firmware_instance() {
     assert_eq!(grid.as_bytes()[..g.as_bytes().len()], g.as_bytes()[..]);
     assert_eq!(nav.segment(), Ok(seg.squares.len()));
     let fixed_plan = nav.plan(start, goal).expect("reachable");
-    let fixed_smooth = nav.smooth(&fixed_plan).expect("fits");
+    let fixed_smooth = nav.smooth(&fixed_plan, 64).expect("fits");
     assert_eq!(encode(&fixed_plan, nav.path()), encode(&plan, &s.path[..]));
     assert_eq!(
-        encode(&fixed_smooth, nav.smoothed_path()),
-        encode(&smooth, &s.smoothed[..])
+        encode_smoothed(&fixed_smooth, nav.smoothed_points()),
+        encode_smoothed(&smooth, &s.points)
     );
     // Changing the map forgets the segmentation until it is redone.
     nav.grid_mut().set(0, 0, Cell::Obstacle).expect("inside");

@@ -11,10 +11,10 @@ use proptest::collection::vec as pvec;
 use proptest::prelude::*;
 
 use super::reference;
-use super::util::{encode, from_cells, Seg, VecSearch};
+use super::util::{encode, encode_smoothed, from_cells, with_adjacency, Seg, VecSearch};
 use crate::nav::{
-    line_of_sight, polyline_length, Cell, Geometry, Grid, GridPoint, Nav64, PlanError, Regions,
-    SegmentError, UNITS_PER_CELL,
+    line_of_sight, polyline_length, Cell, Geometry, Grid, GridPoint, Nav64, Plan, PlanError,
+    Regions, SegmentError, Smoothed, UNITS_PER_CELL,
 };
 
 /// Width, height, cells (more or fewer obstacles per case, some unknown), and two selectors
@@ -96,7 +96,7 @@ fn check_plan(
     regions: &Regions<'_, [u32]>,
     seg: &Seg,
     s: &VecSearch,
-    plan: &crate::nav::Plan,
+    plan: &Plan,
 ) -> Result<(), TestCaseError> {
     let ids = &s.path[..plan.len as usize];
     prop_assert_eq!(ids.first().copied(), regions.region_of(plan.start));
@@ -120,52 +120,60 @@ fn check_plan(
     Ok(())
 }
 
+/// Whether `p` lies in the closed square of one of the plan's regions.
+fn in_plan_squares(squares: &[crate::nav::Square], p: (i64, i64, i64)) -> bool {
+    let (xn, yn, den) = p;
+    let u = i64::from(UNITS_PER_CELL);
+    squares.iter().any(|s| {
+        let lo = |v: u16| i64::from(v) * u * den;
+        let hi = |v: u16| (i64::from(v) + i64::from(s.size)) * u * den;
+        (lo(s.x)..=hi(s.x)).contains(&xn) && (lo(s.y)..=hi(s.y)).contains(&yn)
+    })
+}
+
 fn check_smoothed(
     regions: &Regions<'_, [u32]>,
     s: &VecSearch,
-    plan: &crate::nav::Plan,
-    smooth: &crate::nav::Plan,
+    plan: &Plan,
+    smooth: &Smoothed,
 ) -> Result<(), TestCaseError> {
     prop_assert!(smooth.cost <= plan.cost);
-    prop_assert_eq!(
-        smooth.cost,
-        polyline_length(smooth.waypoints(regions, &s.smoothed[..]))
-    );
-    // Each smoothed segment is a raw segment or passes the line-of-sight test.
-    let raw: Vec<GridPoint> = plan.waypoints(regions, &s.path[..]).collect();
-    let kept: Vec<GridPoint> = smooth.waypoints(regions, &s.smoothed[..]).collect();
-    let mut at = 0;
-    for pair in kept.windows(2) {
-        let next = at
-            + 1
-            + raw[at + 1..]
-                .iter()
-                .position(|p| *p == pair[1])
-                .unwrap_or(usize::MAX - at - 1);
-        prop_assert!(
-            next < raw.len(),
-            "smoothed waypoint {:?} not in the raw plan",
-            pair[1]
-        );
-        prop_assert!(next == at + 1 || line_of_sight(regions, pair[0], pair[1]));
-        at = next;
+    prop_assert_eq!(smooth.cost, polyline_length(smooth.waypoints(&s.points)));
+    // Each segment passes the line-of-sight test, or (a funnel segment) stays inside the
+    // closed squares of the plan: checked exactly at 65 points along it.
+    let squares: Vec<_> = s.path[..plan.len as usize]
+        .iter()
+        .map(|&id| regions.square(id).expect("valid id"))
+        .collect();
+    let wps: Vec<GridPoint> = smooth.waypoints(&s.points).collect();
+    for pair in wps.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        if line_of_sight(regions, a, b) {
+            continue;
+        }
+        for k in 0..=64i64 {
+            let at = |p: i32, q: i32| i64::from(p) * (64 - k) + i64::from(q) * k;
+            let point = (at(a.x, b.x), at(a.y, b.y), 64);
+            prop_assert!(in_plan_squares(&squares, point), "{:?} -> {:?} leaves the plan", a, b);
+        }
     }
     Ok(())
 }
 
-/// The same query through the firmware's fixed instance: packed 9-bit map, u16 scratch.
+/// The same query through the firmware's fixed instance: packed 9-bit map, u16 scratch,
+/// implicit graph, no h cache - against the station's `Vec`s, stored adjacency and h cache.
 fn check_fixed(
     g: &Grid<Vec<u8>>,
     seg: &Seg,
     s: &VecSearch,
     query: Option<(GridPoint, GridPoint)>,
-    plans: Option<(crate::nav::Plan, crate::nav::Plan)>,
+    plans: Option<(Plan, Smoothed, u32)>,
 ) -> Result<(), TestCaseError> {
     let mut nav = Nav64::new(Geometry::SEED_004);
     let grid = nav.grid_mut();
     grid.reshape(g.width(), g.height()).expect("fits 64 x 64");
+    let w = usize::from(g.width());
     for i in 0..g.len() {
-        let w = usize::from(g.width());
         grid.set(i % w, i / w, g.cell_at(i)).expect("inside");
     }
     match nav.segment() {
@@ -179,12 +187,12 @@ fn check_fixed(
         return Ok(());
     };
     match (nav.plan(start, goal), plans) {
-        (Ok(fixed), Some((plan, smooth))) => {
+        (Ok(fixed), Some((plan, smooth, margin))) => {
             prop_assert_eq!(encode(&fixed, nav.path()), encode(&plan, &s.path[..]));
-            let fixed_smooth = nav.smooth(&fixed).expect("fits");
+            let fixed_smooth = nav.smooth(&fixed, margin).expect("fits");
             prop_assert_eq!(
-                encode(&fixed_smooth, nav.smoothed_path()),
-                encode(&smooth, &s.smoothed[..])
+                encode_smoothed(&fixed_smooth, nav.smoothed_points()),
+                encode_smoothed(&smooth, &s.points)
             );
             // And the waypoints in metres, bit for bit.
             let regions = nav.regions().expect("segmented");
@@ -198,7 +206,7 @@ fn check_fixed(
             let b: Vec<_> = plan.waypoints(&vr, &s.path[..]).map(bits).collect();
             prop_assert_eq!(a, b);
         }
-        (Err(PlanError::PathTooLong { .. }), Some((plan, _))) => prop_assert!(plan.len > 256),
+        (Err(PlanError::PathTooLong { .. }), Some((plan, _, _))) => prop_assert!(plan.len > 256),
         (Err(e), None) => prop_assert_eq!(e, PlanError::Unreachable),
         (fixed, vec_side) => prop_assert!(false, "fixed {:?} vs vec {:?}", fixed, vec_side),
     }
@@ -209,7 +217,7 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
     #[test]
-    fn segmentation_plans_and_storage_agree_on_random_grids(c in case(32)) {
+    fn segmentation_plans_and_storage_agree_on_random_grids(c in case(32), margin in 0u32..160) {
         let (w, h, cells, ssel, gsel) = c;
         let g = from_cells(w, h, &cells);
         let seg = Seg::new(&g).expect("Vec storage holds every region");
@@ -219,12 +227,18 @@ proptest! {
         let query = free_point(&g, ssel).zip(free_point(&g, gsel));
         let mut plans = None;
         if let Some((start, goal)) = query {
-            match s.plan(&regions, start, goal) {
+            let implicit = s.plan(&regions, start, goal);
+            let path = s.path.clone();
+            let stored = with_adjacency(regions, |adj| s.plan(adj, start, goal));
+            // Implicit and stored graphs give the same plan.
+            prop_assert_eq!(&implicit, &stored);
+            prop_assert_eq!(&path, &s.path);
+            match stored {
                 Ok(plan) => {
                     check_plan(&regions, &seg, &s, &plan)?;
-                    let smooth = s.smooth(&regions, &plan).expect("fits");
+                    let smooth = s.smooth(&regions, &plan, margin).expect("fits");
                     check_smoothed(&regions, &s, &plan, &smooth)?;
-                    plans = Some((plan, smooth));
+                    plans = Some((plan, smooth, margin));
                 }
                 Err(e) => {
                     prop_assert_eq!(e, PlanError::Unreachable);

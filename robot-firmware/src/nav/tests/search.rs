@@ -167,34 +167,70 @@ fn start_and_goal_in_one_region_still_pass_through_its_centre() {
     let wps: Vec<GridPoint> = plan.waypoints(&regions, &s.path[..]).collect();
     assert_eq!(wps, [a, GridPoint { x: 512, y: 512 }, b]);
     // Smoothing drops the centre: the square is convex.
-    let smooth = s.smooth(&regions, &plan).expect("fits");
+    let smooth = s.smooth(&regions, &plan, 0).expect("fits");
     assert_eq!(smooth.len, 0);
     assert_eq!(smooth.cost, polyline_length([a, b]));
 }
 
 #[test]
-fn smoothing_cuts_corners_only_where_the_grid_is_free() {
-    // An L-shaped corridor: the shortcut across the inner corner is blocked.
+fn smoothing_pulls_the_path_tight_around_an_inner_corner() {
+    // An L-shaped corridor: the obstacle block's corner is at vertex (2, 2) = (512, 512).
     let g = parse(&[".......", ".......", "..#####", "..#####", "..#####"]);
     let seg = Seg::new(&g).expect("fits");
     let regions = seg.regions(&g);
     let mut s = VecSearch::new(regions.len());
     let (start, goal) = (centre(6, 0), centre(0, 4));
     let plan = s.plan(&regions, start, goal).expect("reachable");
-    let smooth = s.smooth(&regions, &plan).expect("fits");
-    assert!(smooth.cost < plan.cost);
     assert!(!line_of_sight(&regions, start, goal));
-    let wps: Vec<GridPoint> = smooth.waypoints(&regions, &s.smoothed[..]).collect();
-    assert!(wps.len() >= 3, "the corner needs a waypoint: {wps:?}");
+    let tight = s.smooth(&regions, &plan, 0).expect("fits");
+    let corner = GridPoint { x: 512, y: 512 };
+    assert_eq!(&s.points[..tight.len as usize], [corner]);
+    assert_eq!(tight.cost, polyline_length([start, corner, goal]));
+    assert!(tight.cost < plan.cost);
+    // With a margin the bend moves off the corner, and every segment keeps clear of the
+    // obstacle by the conservative line-of-sight test.
+    let loose = s.smooth(&regions, &plan, 64).expect("fits");
+    assert!(tight.cost <= loose.cost && loose.cost <= plan.cost);
+    let wps: Vec<GridPoint> = loose.waypoints(&s.points).collect();
+    assert!(!wps.contains(&corner));
     for pair in wps.windows(2) {
         assert!(line_of_sight(&regions, pair[0], pair[1]), "{pair:?}");
     }
-    // The kept regions are a subsequence of the raw plan.
-    let raw: Vec<u32> = s.path[..plan.len as usize].to_vec();
-    let mut it = raw.iter();
-    for k in &s.smoothed[..smooth.len as usize] {
-        assert!(it.any(|r| r == k), "{k} is not in order in {raw:?}");
+}
+
+#[test]
+fn smoothing_bends_the_right_way_through_left_and_right_turns() {
+    // A corridor that turns right, then left (an S): a wrong left/right convention in the
+    // funnel would cut through the walls.
+    let g = parse(&[
+        "....####", "....####", "##..####", "##......", "##......", "######..", "######..",
+    ]);
+    let seg = Seg::new(&g).expect("fits");
+    let regions = seg.regions(&g);
+    let mut s = VecSearch::new(regions.len());
+    for (a, b) in [(centre(0, 0), centre(7, 6)), (centre(7, 6), centre(0, 0))] {
+        let plan = s.plan(&regions, a, b).expect("reachable");
+        let smooth = s.smooth(&regions, &plan, 32).expect("fits");
+        assert!(smooth.cost < plan.cost);
+        let wps: Vec<GridPoint> = smooth.waypoints(&s.points).collect();
+        for pair in wps.windows(2) {
+            assert!(line_of_sight(&regions, pair[0], pair[1]), "{pair:?} in {wps:?}");
+        }
     }
+}
+
+#[test]
+fn a_smoothed_plan_too_long_for_its_store_is_an_error() {
+    let g = parse(&["....####", "....####", "##..####", "##......", "##......", "######.."]);
+    let seg = Seg::new(&g).expect("fits");
+    let regions = seg.regions(&g);
+    let mut s = VecSearch::new(regions.len());
+    let plan = s.plan(&regions, centre(0, 0), centre(6, 5)).expect("reachable");
+    let mut one = [GridPoint::default(); 1];
+    assert_eq!(
+        crate::nav::smooth(&regions, &plan, &s.path[..], 0, &mut one),
+        Err(PlanError::PathTooLong { capacity: 1 })
+    );
 }
 
 #[test]

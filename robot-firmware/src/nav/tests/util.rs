@@ -6,8 +6,9 @@ use std::vec;
 use std::vec::Vec;
 
 use crate::nav::{
-    find_path, grid_bytes, segment, smooth, Cell, Geometry, Grid, GridPoint, IdStore, Plan,
-    PlanError, Regions, SearchScratch, SegmentError, Square,
+    find_path, grid_bytes, segment, smooth, Adjacency, Cell, Edge, Geometry, Grid, GridPoint,
+    IdStore, Plan, PlanError, RegionGraph, Regions, SearchScratch, SegmentError, Smoothed,
+    Square,
 };
 
 /// A grid from rows of `.` (free), `#` (obstacle) and `?` (unknown); row 0 is the first line.
@@ -71,31 +72,33 @@ impl Seg {
     }
 }
 
-/// A* scratch and path in `Vec`s sized for `n` regions.
+/// A* scratch (with the h cache) and plan stores in `Vec`s sized for `n` regions.
 pub struct VecSearch {
     pub f: Vec<u32>,
+    pub h: Vec<u32>,
     pub parent: Vec<u32>,
     pub heap: Vec<u32>,
     pub pos: Vec<u32>,
     pub path: Vec<u32>,
-    pub smoothed: Vec<u32>,
+    pub points: Vec<GridPoint>,
 }
 
 impl VecSearch {
     pub fn new(n: usize) -> VecSearch {
         VecSearch {
             f: vec![0; n],
+            h: vec![0; n],
             parent: vec![0; n],
             heap: vec![0; n],
             pos: vec![0; n],
             path: vec![0; n],
-            smoothed: vec![0; n],
+            points: vec![GridPoint::default(); n],
         }
     }
 
-    pub fn plan<M: IdStore + ?Sized>(
+    pub fn plan<G: RegionGraph>(
         &mut self,
-        regions: &Regions<'_, M>,
+        graph: &G,
         start: GridPoint,
         goal: GridPoint,
     ) -> Result<Plan, PlanError> {
@@ -104,17 +107,38 @@ impl VecSearch {
             &mut self.parent[..],
             &mut self.heap[..],
             &mut self.pos[..],
-        );
-        find_path(regions, start, goal, &mut scratch, &mut self.path[..])
+        )
+        .with_h_cache(&mut self.h);
+        find_path(graph, start, goal, &mut scratch, &mut self.path[..])
     }
 
     pub fn smooth<M: IdStore + ?Sized>(
         &mut self,
         regions: &Regions<'_, M>,
         plan: &Plan,
-    ) -> Result<Plan, PlanError> {
-        smooth(regions, plan, &self.path[..], &mut self.smoothed[..])
+        margin: u32,
+    ) -> Result<Smoothed, PlanError> {
+        smooth(regions, plan, &self.path[..], margin, &mut self.points)
     }
+}
+
+/// Runs `f` with the stored adjacency of `regions` (the station's graph).
+pub fn with_adjacency<R>(
+    regions: Regions<'_, [u32]>,
+    f: impl FnOnce(&Adjacency<'_, [u32]>) -> R,
+) -> R {
+    let mut offsets = vec![0u32; regions.len() + 1];
+    let mut edges = vec![Edge::default(); Adjacency::edge_count(&regions)];
+    let adj = Adjacency::build(regions, &mut offsets, &mut edges).expect("sized by edge_count");
+    f(&adj)
+}
+
+/// A smoothed plan's encoding as a `Vec`.
+pub fn encode_smoothed(s: &Smoothed, points: &[GridPoint]) -> Vec<u8> {
+    let mut out = vec![0u8; s.encoded_len()];
+    let n = s.encode(points, &mut out).expect("sized");
+    assert_eq!(n, out.len());
+    out
 }
 
 /// The centre of cell (`x`, `y`).

@@ -1,0 +1,363 @@
+//! Serving the simulated robot on a pseudo-terminal, in real time or faster.
+//!
+//! Layer: the emulator's I/O loop. It advances the simulation in 1 ms steps against the wall
+//! clock (times `speed`), moves bytes between the pty and the robot's UART model through the
+//! seeded fault injectors, and can unplug and replug the port to test reconnection. The
+//! simulation itself knows nothing of ptys, faults or wall time; the baud rate is enforced by
+//! its UART model in simulated time, so in real-time mode the pty carries no more than the
+//! configured baud rate.
+//!
+//! `spawn` runs the loop on a thread and hands back the slave path: the station's built-in
+//! default uses it, and so do the end-to-end tests.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use crate::fault::{FaultConfig, FaultInjector, FaultStats};
+use crate::pty::{Pty, PtyError, ReadState};
+
+/// A simulated robot as the serving loop sees it.
+pub trait Device {
+    /// Simulated time, microseconds.
+    fn now_us(&self) -> u64;
+    /// Advances the simulation by one millisecond.
+    fn step_ms(&mut self);
+    /// Bytes arriving at the robot's serial port.
+    fn push_inbound(&mut self, bytes: &[u8]);
+    /// Bytes the robot's serial port has finished sending, appended to `out`.
+    fn take_outbound(&mut self, out: &mut Vec<u8>);
+    /// Control cycles run so far (for the real-time jitter figure).
+    fn cycles(&self) -> u32;
+    /// The control-cycle period, microseconds.
+    fn cycle_us(&self) -> u32;
+}
+
+/// How fast simulated time runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Speed {
+    /// `factor` simulated seconds per wall second; 1.0 is real time.
+    Factor(f64),
+    /// As fast as the machine allows.
+    Max,
+}
+
+/// Link behaviour of a served emulator.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ServeOptions {
+    pub speed: Speed,
+    /// Faults on bytes from the station to the robot.
+    pub to_robot: FaultConfig,
+    /// Faults on bytes from the robot to the station.
+    pub from_robot: FaultConfig,
+    /// Unplug the port after this many simulated seconds.
+    pub disconnect_after_s: Option<f64>,
+    /// Plug it back in (a new pty, the `--link` symlink updated) this long after unplugging.
+    pub reconnect_after_s: Option<f64>,
+    /// A symlink kept pointing at the current pty.
+    pub link: Option<PathBuf>,
+    pub seed: u64,
+}
+
+impl Default for ServeOptions {
+    fn default() -> Self {
+        ServeOptions {
+            speed: Speed::Factor(1.0),
+            to_robot: FaultConfig::default(),
+            from_robot: FaultConfig::default(),
+            disconnect_after_s: None,
+            reconnect_after_s: None,
+            link: None,
+            seed: 0,
+        }
+    }
+}
+
+/// What a serving run measured.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ServeStats {
+    pub sim_s: f64,
+    pub wall_s: f64,
+    pub bytes_to_robot: u64,
+    pub bytes_from_robot: u64,
+    /// Bytes the pty would not take (no station attached, or its buffer full).
+    pub bytes_unsent: u64,
+    pub to_robot_faults: FaultCounts,
+    pub from_robot_faults: FaultCounts,
+    pub disconnects: u32,
+    /// Real-time mode: wall-clock control-cycle period, microseconds.
+    pub cycle_period_us: Jitter,
+}
+
+/// Fault counters in serialisable form.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FaultCounts {
+    pub bytes_dropped: u64,
+    pub bits_flipped: u64,
+}
+
+impl From<FaultStats> for FaultCounts {
+    fn from(s: FaultStats) -> Self {
+        FaultCounts {
+            bytes_dropped: s.bytes_dropped,
+            bits_flipped: s.bits_flipped,
+        }
+    }
+}
+
+/// Distribution of the wall-clock control-cycle period.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Jitter {
+    pub samples: u64,
+    pub nominal_us: f64,
+    pub mean_us: f64,
+    pub p50_us: f64,
+    pub p99_us: f64,
+    pub max_abs_error_us: f64,
+}
+
+impl Jitter {
+    fn from_periods(nominal_us: f64, mut periods: Vec<f64>) -> Jitter {
+        if periods.is_empty() {
+            return Jitter {
+                nominal_us,
+                ..Jitter::default()
+            };
+        }
+        periods.sort_by(f64::total_cmp);
+        let pick = |q: f64| {
+            let i = ((periods.len() - 1) as f64 * q).round() as usize;
+            periods.get(i).copied().unwrap_or(0.0)
+        };
+        let mean = periods.iter().sum::<f64>() / periods.len() as f64;
+        let max_err = periods
+            .iter()
+            .map(|p| (p - nominal_us).abs())
+            .fold(0.0, f64::max);
+        Jitter {
+            samples: periods.len() as u64,
+            nominal_us,
+            mean_us: mean,
+            p50_us: pick(0.5),
+            p99_us: pick(0.99),
+            max_abs_error_us: max_err,
+        }
+    }
+}
+
+/// Wall time between two pty polls in real-time mode.
+const TICK: Duration = Duration::from_millis(1);
+/// Simulated milliseconds between pty polls at maximum speed.
+const MAX_SPEED_BATCH_MS: u32 = 20;
+/// Most simulated steps one tick may catch up, so a stalled host does not freeze the pty.
+const MAX_CATCH_UP_MS: u32 = 200;
+
+/// Serves `dev` until `stop` is set. The pty is created here, so the slave path is reported
+/// through `on_ready` (called again with the new path after each replug).
+pub fn serve<D: Device>(
+    dev: &mut D,
+    opts: &ServeOptions,
+    stop: &AtomicBool,
+    on_ready: &mut dyn FnMut(&Path),
+) -> Result<ServeStats, PtyError> {
+    let mut pty = Some(Pty::open(opts.link.as_deref())?);
+    if let Some(p) = &pty {
+        on_ready(p.slave_path());
+    }
+    let mut to_robot = FaultInjector::new(opts.to_robot, opts.seed, 1);
+    let mut from_robot = FaultInjector::new(opts.from_robot, opts.seed, 2);
+    let mut stats = ServeStats::default();
+    let wall0 = Instant::now();
+    let sim0 = dev.now_us();
+    let mut unplugged_at: Option<f64> = None;
+    let mut buf = vec![0u8; 4096];
+    let mut inbound = Vec::with_capacity(4096);
+    let mut outbound = Vec::with_capacity(4096);
+    let mut faulted = Vec::with_capacity(4096);
+    let mut periods = Vec::new();
+    let mut last_cycle = (dev.cycles(), Instant::now());
+
+    while !stop.load(Ordering::Relaxed) {
+        // 1. Advance simulated time.
+        let steps = match opts.speed {
+            Speed::Max => MAX_SPEED_BATCH_MS,
+            Speed::Factor(f) => {
+                let target = sim0 + (wall0.elapsed().as_secs_f64() * f * 1e6) as u64;
+                let behind_ms = target.saturating_sub(dev.now_us()) / 1000;
+                u32::try_from(behind_ms).unwrap_or(u32::MAX).min(MAX_CATCH_UP_MS)
+            }
+        };
+        for _ in 0..steps {
+            dev.step_ms();
+            if matches!(opts.speed, Speed::Factor(_)) && dev.cycles() != last_cycle.0 {
+                let now = Instant::now();
+                periods.push(now.duration_since(last_cycle.1).as_secs_f64() * 1e6);
+                last_cycle = (dev.cycles(), now);
+            }
+        }
+        let t_s = (dev.now_us() - sim0) as f64 * 1e-6;
+
+        // 2. Unplug / replug.
+        if let (Some(after), None) = (opts.disconnect_after_s, unplugged_at) {
+            if t_s >= after && pty.is_some() {
+                pty = None;
+                unplugged_at = Some(t_s);
+                stats.disconnects += 1;
+            }
+        }
+        if let (Some(at), Some(re)) = (unplugged_at, opts.reconnect_after_s) {
+            if pty.is_none() && t_s >= at + re {
+                let p = Pty::open(opts.link.as_deref())?;
+                on_ready(p.slave_path());
+                pty = Some(p);
+            }
+        }
+
+        // 3. Station -> robot.
+        inbound.clear();
+        if let Some(p) = &pty {
+            while let ReadState::Data(n) = p.read(&mut buf) {
+                inbound.extend_from_slice(buf.get(..n).unwrap_or(&[]));
+            }
+        }
+        stats.bytes_to_robot += inbound.len() as u64;
+        // Called even with no new bytes, so bytes held by a stall that has ended go through.
+        faulted.clear();
+        to_robot.apply(&inbound, t_s, &mut faulted);
+        if !faulted.is_empty() {
+            dev.push_inbound(&faulted);
+        }
+
+        // 4. Robot -> station.
+        outbound.clear();
+        dev.take_outbound(&mut outbound);
+        faulted.clear();
+        from_robot.apply(&outbound, t_s, &mut faulted);
+        stats.bytes_from_robot += outbound.len() as u64;
+        let sent = pty.as_ref().map_or(0, |p| write_all_possible(p, &faulted));
+        stats.bytes_unsent += (faulted.len() - sent) as u64;
+
+        if let Speed::Factor(_) = opts.speed {
+            std::thread::sleep(TICK);
+        }
+    }
+    stats.sim_s = (dev.now_us() - sim0) as f64 * 1e-6;
+    stats.wall_s = wall0.elapsed().as_secs_f64();
+    stats.to_robot_faults = to_robot.stats().into();
+    stats.from_robot_faults = from_robot.stats().into();
+    // The first period after start-up includes the pty setup; drop it.
+    let periods = periods.into_iter().skip(1).collect();
+    stats.cycle_period_us = Jitter::from_periods(f64::from(dev.cycle_us()), periods);
+    Ok(stats)
+}
+
+fn write_all_possible(pty: &Pty, bytes: &[u8]) -> usize {
+    let mut sent = 0;
+    while sent < bytes.len() {
+        let n = pty.write(bytes.get(sent..).unwrap_or(&[]));
+        if n == 0 {
+            break;
+        }
+        sent += n;
+    }
+    sent
+}
+
+/// A serving loop running on its own thread. Dropping it stops the loop and removes the pty.
+pub struct Running {
+    path: PathBuf,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<Result<ServeStats, PtyError>>>,
+    paths: std::sync::mpsc::Receiver<PathBuf>,
+}
+
+impl Running {
+    /// The slave path to open (the newest one after a replug).
+    pub fn path(&mut self) -> &Path {
+        while let Ok(p) = self.paths.try_recv() {
+            self.path = p;
+        }
+        &self.path
+    }
+
+    /// Stops the loop and returns what it measured.
+    pub fn stop(mut self) -> Option<Result<ServeStats, PtyError>> {
+        self.stop.store(true, Ordering::Relaxed);
+        self.thread.take().and_then(|t| t.join().ok())
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// Runs `serve` for a device built by `make` on a new thread; returns once the pty exists.
+pub fn spawn_device<D, F>(make: F, opts: ServeOptions) -> Result<Running, SpawnError>
+where
+    D: Device,
+    F: FnOnce() -> Result<D, SpawnError> + Send + 'static,
+{
+    let stop = Arc::new(AtomicBool::new(false));
+    let (path_tx, path_rx) = std::sync::mpsc::channel::<PathBuf>();
+    let (err_tx, err_rx) = std::sync::mpsc::channel::<SpawnError>();
+    let stop2 = Arc::clone(&stop);
+    let thread = std::thread::Builder::new()
+        .name("robot-emulator".into())
+        .spawn(move || {
+            let mut dev = match make() {
+                Ok(d) => d,
+                Err(e) => {
+                    let _ = err_tx.send(e);
+                    return Ok(ServeStats::default());
+                }
+            };
+            let result = serve(&mut dev, &opts, &stop2, &mut |p| {
+                let _ = path_tx.send(p.to_path_buf());
+            });
+            if let Err(e) = &result {
+                let _ = err_tx.send(SpawnError::Pty(e.to_string()));
+            }
+            result
+        })
+        .map_err(|e| SpawnError::Thread(e.to_string()))?;
+    // Wait for the first path or an error.
+    loop {
+        if let Ok(path) = path_rx.recv_timeout(Duration::from_millis(10)) {
+            return Ok(Running {
+                path,
+                stop,
+                thread: Some(thread),
+                paths: path_rx,
+            });
+        }
+        if let Ok(e) = err_rx.try_recv() {
+            let _ = thread.join();
+            return Err(e);
+        }
+        if thread.is_finished() {
+            return Err(SpawnError::Thread(
+                "the emulator thread ended before opening its pty".into(),
+            ));
+        }
+    }
+}
+
+/// Why an emulator could not be started.
+#[derive(Debug, thiserror::Error)]
+pub enum SpawnError {
+    #[error("{0}")]
+    Arena(String),
+    #[error("{0}")]
+    Sim(String),
+    #[error("{0}")]
+    Pty(String),
+    #[error("cannot start the emulator thread: {0}")]
+    Thread(String),
+}
