@@ -2,7 +2,16 @@
 #![deny(unsafe_code)]
 
 pub mod arena;
-pub mod geometry;
-pub mod pty;
+pub mod builtin;
+pub mod cli;
 pub mod fault;
+pub mod geometry;
 pub mod link;
+pub mod physics;
+pub mod pty;
+pub mod rng;
+pub mod scenario;
+pub mod sensors;
+pub mod sim;
+pub mod uart;
+pub mod world;

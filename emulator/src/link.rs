@@ -186,7 +186,9 @@ pub fn serve<D: Device>(
             Speed::Factor(f) => {
                 let target = sim0 + (wall0.elapsed().as_secs_f64() * f * 1e6) as u64;
                 let behind_ms = target.saturating_sub(dev.now_us()) / 1000;
-                u32::try_from(behind_ms).unwrap_or(u32::MAX).min(MAX_CATCH_UP_MS)
+                u32::try_from(behind_ms)
+                    .unwrap_or(u32::MAX)
+                    .min(MAX_CATCH_UP_MS)
             }
         };
         for _ in 0..steps {
@@ -360,4 +362,79 @@ pub enum SpawnError {
     Pty(String),
     #[error("cannot start the emulator thread: {0}")]
     Thread(String),
+}
+
+impl Device for crate::sim::Sim {
+    fn now_us(&self) -> u64 {
+        crate::sim::Sim::now_us(self)
+    }
+
+    fn step_ms(&mut self) {
+        self.step();
+    }
+
+    fn push_inbound(&mut self, bytes: &[u8]) {
+        // The UART's inbound queue is bounded; what it refuses is counted there, as a UART
+        // overrun would be.
+        self.uart_mut().push_inbound(bytes);
+    }
+
+    fn take_outbound(&mut self, out: &mut Vec<u8>) {
+        let mut buf = [0u8; 1024];
+        loop {
+            let n = self.uart_mut().take_outbound_into(&mut buf);
+            if n == 0 {
+                return;
+            }
+            out.extend_from_slice(buf.get(..n).unwrap_or(&[]));
+        }
+    }
+
+    fn cycles(&self) -> u32 {
+        self.robot().core.timing.cycles
+    }
+
+    fn cycle_us(&self) -> u32 {
+        self.robot().core.profile.cycle_us
+    }
+}
+
+/// Everything needed to start a served emulator.
+#[derive(Clone, Debug)]
+pub struct EmulatorOptions {
+    /// A built-in arena name (`builtin::MICRO_RATO_99`) or a file path.
+    pub arena: String,
+    pub load: crate::arena::LoadOptions,
+    pub sim: crate::sim::SimConfig,
+    pub serve: ServeOptions,
+}
+
+impl EmulatorOptions {
+    /// The station's built-in default: Micro-Rato'99, the micro-rato profile, real time.
+    pub fn builtin_default() -> EmulatorOptions {
+        EmulatorOptions {
+            arena: crate::builtin::MICRO_RATO_99.to_string(),
+            load: crate::arena::LoadOptions::default(),
+            sim: crate::sim::SimConfig::new(&robot_firmware::MICRO_RATO),
+            serve: ServeOptions::default(),
+        }
+    }
+}
+
+/// A served emulator on its own thread; dropping it stops the robot and removes the pty.
+pub type RunningEmulator = Running;
+
+/// Loads the arena, builds the simulation and serves it on a new pty.
+pub fn spawn(opts: EmulatorOptions) -> Result<RunningEmulator, SpawnError> {
+    let EmulatorOptions {
+        arena,
+        load,
+        sim,
+        serve,
+    } = opts;
+    // Load here, not on the thread, so a bad arena is reported before anything starts.
+    let arena =
+        crate::builtin::load(&arena, &load).map_err(|e| SpawnError::Arena(e.to_string()))?;
+    let sim = crate::sim::Sim::new(arena, sim).map_err(|e| SpawnError::Sim(e.to_string()))?;
+    spawn_device(move || Ok(sim), serve)
 }

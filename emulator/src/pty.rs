@@ -133,7 +133,7 @@ fn make_link(link: &Path, target: &Path) -> Result<PathBuf, PtyError> {
         }
         Ok(_) => {
             return Err(err(
-                "exists and is not a symlink; refusing to overwrite it".to_string(),
+                "exists and is not a symlink; refusing to overwrite it".to_string()
             ))
         }
         Err(e) if e.kind() == io::ErrorKind::NotFound => {}
@@ -206,7 +206,10 @@ mod tests {
         let pty = Pty::open(Some(&link)).expect("pty");
         assert_eq!(std::fs::read_link(&link).expect("link"), pty.slave_path());
         drop(pty);
-        assert!(std::fs::symlink_metadata(&link).is_err(), "link removed on drop");
+        assert!(
+            std::fs::symlink_metadata(&link).is_err(),
+            "link removed on drop"
+        );
         std::fs::write(&link, b"precious").expect("file");
         assert!(matches!(Pty::open(Some(&link)), Err(PtyError::Link { .. })));
         assert_eq!(std::fs::read(&link).expect("file kept"), b"precious");

@@ -8,6 +8,9 @@
 //! only where both side cells are free, the same no-corner-cutting rule as the smoother's line
 //! of sight), octile heuristic. Its cost is the grid optimum the length ratios refer to.
 //!
+//! Region side as the station runs it: `Vec` storage, the adjacency stored once per map
+//! (`Adjacency`, built after segmentation and timed with it), the h cache on.
+//!
 //! `cargo bench -p robot-firmware --bench nav` prints a summary table once (stderr), then runs
 //! the criterion groups with 10 samples and short measurement times (CI machines have 2 cores).
 //! Without `--bench` (e.g. `cargo test --all-targets`) it runs a quick smoke version only.
@@ -18,8 +21,8 @@ use std::time::{Duration, Instant};
 use criterion::{Criterion, SamplingMode};
 use pathfinding::directed::astar::astar;
 use robot_firmware::nav::{
-    find_path, grid_bytes, segment, smooth, Cell, Geometry, Grid, GridPoint, IdStore, Plan,
-    Regions, SearchScratch, Square, UNITS_PER_CELL,
+    find_path, grid_bytes, segment, smooth, Adjacency, Cell, Edge, Geometry, Grid, GridPoint, Plan,
+    RegionGraph, Regions, SearchScratch, Smoothed, Square, UNITS_PER_CELL,
 };
 
 /// splitmix64: a fixed-seed generator, so every run benchmarks the same maps.
@@ -81,46 +84,20 @@ fn blobs(side: usize, fraction: f64, seed: u64) -> VecGrid {
     g
 }
 
-/// A maze: a depth-first spanning tree of `corridor`-wide passages between `wall`-thick walls,
-/// then `loops` of the remaining inner walls knocked out.
-fn maze(side: usize, corridor: usize, wall: usize, loops: f64, seed: u64) -> VecGrid {
-    let mut g = empty(side, Cell::Obstacle);
-    let pitch = corridor + wall;
-    let n = (side - wall) / pitch;
-    let mut rng = Rng(seed);
-    let carve = |g: &mut VecGrid, x0: usize, y0: usize, w: usize, h: usize| {
-        for y in y0..y0 + h {
-            for x in x0..x0 + w {
-                g.set(x, y, Cell::Free).expect("inside");
-            }
-        }
-    };
-    let origin = |i: usize| wall + i * pitch;
-    for cy in 0..n {
-        for cx in 0..n {
-            carve(&mut g, origin(cx), origin(cy), corridor, corridor);
-        }
-    }
-    // Openings: between (cx, cy) and its right (dir 0) or lower (dir 1) neighbour.
-    let open = |g: &mut VecGrid, cx: usize, cy: usize, dir: usize| {
-        if dir == 0 {
-            carve(g, origin(cx) + corridor, origin(cy), wall, corridor);
-        } else {
-            carve(g, origin(cx), origin(cy) + corridor, corridor, wall);
-        }
-    };
-    let mut seen = vec![false; n * n];
+/// Openings of an `n` x `n` lattice of maze cells, `[right, down]` per cell: a depth-first
+/// spanning tree, then `loops` of the remaining inner walls knocked out.
+fn maze_openings(n: usize, loops: f64, rng: &mut Rng) -> Vec<[bool; 2]> {
     let mut opened = vec![[false; 2]; n * n];
+    let mut seen = vec![false; n * n];
     let mut stack = vec![(0usize, 0usize)];
     seen[0] = true;
     while let Some(&(cx, cy)) = stack.last() {
         let mut next = Vec::with_capacity(4);
         for (dx, dy) in [(1i64, 0i64), (-1, 0), (0, 1), (0, -1)] {
             let (nx, ny) = (cx as i64 + dx, cy as i64 + dy);
-            if nx >= 0 && ny >= 0 && (nx as usize) < n && (ny as usize) < n {
-                if !seen[ny as usize * n + nx as usize] {
-                    next.push((nx as usize, ny as usize));
-                }
+            let inside = nx >= 0 && ny >= 0 && (nx as usize) < n && (ny as usize) < n;
+            if inside && !seen[ny as usize * n + nx as usize] {
+                next.push((nx as usize, ny as usize));
             }
         }
         if next.is_empty() {
@@ -133,19 +110,47 @@ fn maze(side: usize, corridor: usize, wall: usize, loops: f64, seed: u64) -> Vec
         } else {
             (cx, cy.min(ny), 1)
         };
-        open(&mut g, ax, ay, dir);
         opened[ay * n + ax][dir] = true;
         seen[ny * n + nx] = true;
         stack.push((nx, ny));
     }
     for cy in 0..n {
         for cx in 0..n {
-            for dir in 0..2 {
-                let inner = if dir == 0 { cx + 1 < n } else { cy + 1 < n };
+            for (dir, inner) in [(0, cx + 1 < n), (1, cy + 1 < n)] {
                 let roll = rng.below(1000) < (loops * 1000.0) as usize;
-                if inner && !opened[cy * n + cx][dir] && roll {
-                    open(&mut g, cx, cy, dir);
+                if inner && roll {
+                    opened[cy * n + cx][dir] = true;
                 }
+            }
+        }
+    }
+    opened
+}
+
+/// A maze of `corridor`-wide passages between `wall`-thick walls (see [`maze_openings`]).
+fn maze(side: usize, corridor: usize, wall: usize, loops: f64, seed: u64) -> VecGrid {
+    let mut g = empty(side, Cell::Obstacle);
+    let pitch = corridor + wall;
+    let n = (side - wall) / pitch;
+    let opened = maze_openings(n, loops, &mut Rng(seed));
+    let mut carve = |x0: usize, y0: usize, w: usize, h: usize| {
+        for y in y0..y0 + h {
+            for x in x0..x0 + w {
+                g.set(x, y, Cell::Free).expect("inside");
+            }
+        }
+    };
+    let origin = |i: usize| wall + i * pitch;
+    for cy in 0..n {
+        for cx in 0..n {
+            let (x, y) = (origin(cx), origin(cy));
+            carve(x, y, corridor, corridor);
+            let [right, down] = opened[cy * n + cx];
+            if right {
+                carve(x + corridor, y, wall, corridor);
+            }
+            if down {
+                carve(x, y + corridor, corridor, wall);
             }
         }
     }
@@ -156,20 +161,27 @@ fn maze(side: usize, corridor: usize, wall: usize, loops: f64, seed: u64) -> Vec
 struct Station {
     map: Vec<u32>,
     squares: Vec<Square>,
+    offsets: Vec<u32>,
+    edges: Vec<Edge>,
     count: usize,
 }
 
 impl Station {
+    /// Segments `g` and stores its adjacency: what the station does once per map.
     fn new(g: &VecGrid) -> Station {
         let mut map = vec![0u32; g.len()];
         let mut squares = vec![Square::EMPTY; g.len()];
-        let count = segment(g, &mut map[..], &mut squares[..])
-            .expect("Vec storage holds every region")
-            .len();
+        let regions = segment(g, &mut map[..], &mut squares[..]).expect("Vec holds every region");
+        let count = regions.len();
+        let mut offsets = vec![0u32; count + 1];
+        let mut edges = vec![Edge::default(); Adjacency::edge_count(&regions)];
+        Adjacency::build(regions, &mut offsets, &mut edges).expect("sized by edge_count");
         squares.truncate(count);
         Station {
             map,
             squares,
+            offsets,
+            edges,
             count,
         }
     }
@@ -177,42 +189,49 @@ impl Station {
     fn regions<'a>(&'a self, g: &VecGrid) -> Regions<'a, [u32]> {
         Regions::from_segmented(g, &self.map[..], &self.squares[..]).expect("sizes match")
     }
+
+    fn graph<'a>(&'a self, g: &VecGrid) -> Adjacency<'a, [u32]> {
+        Adjacency::from_built(self.regions(g), &self.offsets, &self.edges).expect("sizes match")
+    }
 }
 
-/// A* scratch plus raw and smoothed path stores.
+/// A* scratch (with the h cache) plus raw plan and smoothed point stores.
 struct Search {
     f: Vec<u32>,
+    h: Vec<u32>,
     parent: Vec<u32>,
     heap: Vec<u32>,
     pos: Vec<u32>,
     path: Vec<u32>,
-    smoothed: Vec<u32>,
+    points: Vec<GridPoint>,
 }
 
 impl Search {
     fn new(n: usize) -> Search {
         Search {
             f: vec![0; n],
+            h: vec![0; n],
             parent: vec![0; n],
             heap: vec![0; n],
             pos: vec![0; n],
             path: vec![0; n],
-            smoothed: vec![0; n],
+            points: vec![GridPoint::default(); n],
         }
     }
 
-    fn plan(&mut self, r: &Regions<'_, [u32]>, q: (GridPoint, GridPoint)) -> Option<Plan> {
+    fn plan<G: RegionGraph>(&mut self, graph: &G, q: (GridPoint, GridPoint)) -> Option<Plan> {
         let mut scratch = SearchScratch::new(
             &mut self.f,
             &mut self.parent[..],
             &mut self.heap[..],
             &mut self.pos[..],
-        );
-        find_path(r, q.0, q.1, &mut scratch, &mut self.path[..]).ok()
+        )
+        .with_h_cache(&mut self.h);
+        find_path(graph, q.0, q.1, &mut scratch, &mut self.path[..]).ok()
     }
 
-    fn smooth(&mut self, r: &Regions<'_, [u32]>, plan: &Plan) -> Plan {
-        smooth(r, plan, &self.path[..], &mut self.smoothed[..]).expect("store holds the plan")
+    fn smooth(&mut self, r: &Regions<'_, [u32]>, plan: &Plan, margin: u32) -> Smoothed {
+        smooth(r, plan, &self.path[..], margin, &mut self.points).expect("store holds the plan")
     }
 }
 
@@ -250,9 +269,9 @@ fn grid_astar(g: &VecGrid, from: (i32, i32), to: (i32, i32)) -> Option<u64> {
     astar(&from, successors, heuristic, |&p| p == to).map(|(_, c)| c)
 }
 
-/// Euclidean length of a plan's waypoints, in cells.
-fn length_cells<P: IdStore + ?Sized>(r: &Regions<'_, [u32]>, plan: &Plan, path: &P) -> f64 {
-    let pts: Vec<GridPoint> = plan.waypoints(r, path).collect();
+/// Euclidean length of a polyline, in cells.
+fn length_cells(points: impl IntoIterator<Item = GridPoint>) -> f64 {
+    let pts: Vec<GridPoint> = points.into_iter().collect();
     let u = f64::from(UNITS_PER_CELL);
     pts.windows(2)
         .map(|w| f64::from(w[1].x - w[0].x).hypot(f64::from(w[1].y - w[0].y)) / u)
@@ -262,11 +281,11 @@ fn length_cells<P: IdStore + ?Sized>(r: &Regions<'_, [u32]>, plan: &Plan, path: 
 /// `count` reachable queries between random free cell centres at least half a side apart.
 fn queries(g: &VecGrid, st: &Station, count: usize, seed: u64) -> Vec<(GridPoint, GridPoint)> {
     let side = usize::from(g.width());
-    let regions = st.regions(g);
+    let graph = st.graph(g);
     let mut s = Search::new(st.count);
     let mut rng = Rng(seed);
     let mut out = Vec::new();
-    let mut free_cell = |rng: &mut Rng| loop {
+    let free_cell = |rng: &mut Rng| loop {
         let (x, y) = (rng.below(side), rng.below(side));
         if g.get(x, y) == Cell::Free {
             return (x as u16, y as u16);
@@ -279,7 +298,7 @@ fn queries(g: &VecGrid, st: &Station, count: usize, seed: u64) -> Vec<(GridPoint
             GridPoint::cell_centre(a.0, a.1),
             GridPoint::cell_centre(b.0, b.1),
         );
-        if far && s.plan(&regions, q).is_some() {
+        if far && s.plan(&graph, q).is_some() {
             out.push(q);
         }
     }
@@ -312,78 +331,117 @@ fn cases(full: bool) -> Vec<Case> {
         ];
     }
     vec![
-        case("random-512", blobs(512, 0.25, 1), 8),
-        case("maze-512", maze(512, 6, 2, 0.1, 2), 8),
-        case("random-2048", blobs(2048, 0.25, 3), 4),
-        case("maze-2048", maze(2048, 6, 2, 0.1, 4), 4),
+        case("random-512", blobs(512, 0.25, 1), 16),
+        case("maze-512", maze(512, 6, 2, 0.1, 2), 16),
+        case("random-2048", blobs(2048, 0.25, 3), 6),
+        case("maze-2048", maze(2048, 6, 2, 0.1, 4), 6),
     ]
 }
 
-/// Median of `runs` timings of `f`.
-fn time<T>(runs: usize, mut f: impl FnMut() -> T) -> Duration {
-    let mut v: Vec<Duration> = (0..runs)
+/// Fastest of `runs` timings of `f`, in seconds: the least-disturbed run on a shared machine.
+fn time<T>(runs: usize, mut f: impl FnMut() -> T) -> f64 {
+    (0..runs.max(1))
         .map(|_| {
             let t = Instant::now();
             black_box(f());
-            t.elapsed()
+            t.elapsed().as_secs_f64()
         })
-        .collect();
-    v.sort();
-    v[v.len() / 2]
+        .fold(f64::INFINITY, f64::min)
 }
 
-/// The table of the summary: one row per grid, averaged over its queries.
+/// Smoothing margin of the last ratio column: a quarter cell, in grid units.
+const MARGIN: u32 = 64;
+
+/// Measurements of one grid: times are means over its queries of each query's fastest run.
+struct Row {
+    t_seg: f64,
+    t_astar: f64,
+    t_smooth: f64,
+    t_grid: f64,
+    /// Per-query speed-ups, sorted.
+    speedups: Vec<f64>,
+    raw: f64,
+    tight: f64,
+    margin: f64,
+}
+
+fn measure(c: &Case) -> Row {
+    let big = c.grid.len() > 1 << 20;
+    let t_seg = time(3, || Station::new(&c.grid).count);
+    let (regions, graph) = (c.station.regions(&c.grid), c.station.graph(&c.grid));
+    let mut s = Search::new(c.station.count);
+    let n = c.queries.len() as f64;
+    let mut row = Row {
+        t_seg,
+        t_astar: 0.0,
+        t_smooth: 0.0,
+        t_grid: 0.0,
+        speedups: Vec::new(),
+        raw: 0.0,
+        tight: 0.0,
+        margin: 0.0,
+    };
+    for &q in &c.queries {
+        let t_a = time(10, || s.plan(&graph, q));
+        let plan = s.plan(&graph, q).expect("reachable");
+        row.t_smooth += time(10, || s.smooth(&regions, &plan, 0)) / n;
+        let (a, b) = (q.0.cell(), q.1.cell());
+        let mut opt = None;
+        let t_g = time(if big { 1 } else { 3 }, || opt = grid_astar(&c.grid, a, b));
+        let opt = opt.expect("the grid search agrees the goal is reachable") as f64 / 1e6;
+        row.t_astar += t_a / n;
+        row.t_grid += t_g / n;
+        row.speedups.push(t_g / t_a);
+        row.raw += length_cells(plan.waypoints(&regions, &s.path[..])) / opt / n;
+        let tight = s.smooth(&regions, &plan, 0);
+        row.tight += length_cells(tight.waypoints(&s.points)) / opt / n;
+        let loose = s.smooth(&regions, &plan, MARGIN);
+        row.margin += length_cells(loose.waypoints(&s.points)) / opt / n;
+    }
+    row.speedups.sort_by(f64::total_cmp);
+    row
+}
+
+/// The summary: one row per grid.
 fn summary(cases: &[Case]) {
     eprintln!(
-        "\n{:<12} {:>8} {:>9} {:>10} {:>10} {:>10} {:>8} {:>8} {:>9} {:>9}",
+        "\n{:<11} {:>7} {:>9} {:>9} {:>8} {:>9} {:>7} {:>12} {:>6} {:>6} {:>6}",
         "grid",
         "regions",
-        "segment",
+        "seg+graph",
         "A*/query",
-        "+smooth",
+        "smooth",
         "grid A*",
         "speedup",
-        "+smooth",
-        "raw/opt",
-        "smth/opt"
+        "per-query",
+        "raw",
+        "smooth",
+        "margin"
     );
+    let ms = |secs: f64| format!("{:.3}ms", secs * 1e3);
     for c in cases {
-        let t_seg = time(3, || Station::new(&c.grid).count);
-        let regions = c.station.regions(&c.grid);
-        let mut s = Search::new(c.station.count);
-        let (mut t_a, mut t_s, mut t_g) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
-        let (mut raw_ratio, mut smooth_ratio) = (0.0, 0.0);
-        for &q in &c.queries {
-            t_a += time(5, || s.plan(&regions, q));
-            let plan = s.plan(&regions, q).expect("reachable");
-            t_s += time(5, || s.smooth(&regions, &plan));
-            let smoothed = s.smooth(&regions, &plan);
-            let (a, b) = (q.0.cell(), q.1.cell());
-            let mut opt = None;
-            t_g += time(1, || opt = grid_astar(&c.grid, a, b));
-            let opt = opt.expect("the grid search agrees the goal is reachable") as f64 / 1e6;
-            raw_ratio += length_cells(&regions, &plan, &s.path[..]) / opt;
-            smooth_ratio += length_cells(&regions, &smoothed, &s.smoothed[..]) / opt;
-        }
-        let n = c.queries.len() as f64;
-        let per = |d: Duration| d.as_secs_f64() / n;
-        let ms = |secs: f64| format!("{:.3} ms", secs * 1e3);
+        let r = measure(c);
+        let (lo, hi) = (r.speedups[0], r.speedups[r.speedups.len() - 1]);
         eprintln!(
-            "{:<12} {:>8} {:>9} {:>10} {:>10} {:>10} {:>7.0}x {:>7.0}x {:>9.3} {:>9.3}",
+            "{:<11} {:>7} {:>9} {:>9} {:>8} {:>9} {:>6.1}x {:>12} {:>6.3} {:>6.3} {:>6.3}",
             c.name,
             c.station.count,
-            ms(t_seg.as_secs_f64()),
-            ms(per(t_a)),
-            ms(per(t_s)),
-            ms(per(t_g)),
-            per(t_g) / per(t_a),
-            per(t_g) / (per(t_a) + per(t_s)),
-            raw_ratio / n,
-            smooth_ratio / n
+            ms(r.t_seg),
+            ms(r.t_astar),
+            ms(r.t_smooth),
+            ms(r.t_grid),
+            r.t_grid / r.t_astar,
+            format!("{lo:.1}-{hi:.0}x"),
+            r.raw,
+            r.tight,
+            r.margin
         );
     }
-    eprintln!("(A*/query excludes segmentation; +smooth is the smoothing pass alone; ratios are");
-    eprintln!(" path length over the 8-connected grid optimum, averaged over the queries)\n");
+    eprintln!("Times: mean over the queries of each query's fastest run. seg+graph: segmentation");
+    eprintln!("and stored adjacency, once per map. A*/query: region A* alone; smooth: the");
+    eprintln!("smoothing pass alone. speedup: grid A* time / region A* time (per-query range");
+    eprintln!("beside it). raw / smooth / margin: path length over the 8-connected grid optimum");
+    eprintln!("(raw centres; smoothed; smoothed with a 1/4-cell margin), mean over the queries.\n");
 }
 
 /// The paper's arena: Micro-Rato'99 at 17 x 17 (as in the crate's tests), B = goal light.
@@ -424,12 +482,18 @@ fn bench_paper(c: &mut Criterion) {
     let mut map = vec![0u32; g.len()];
     let mut squares = vec![Square::EMPTY; g.len()];
     let mut s = Search::new(g.len());
-    c.bench_function("paper-17x17/segment+astar", |b| {
+    let mut group = c.benchmark_group("paper-17x17");
+    group.sample_size(10);
+    group.warm_up_time(Duration::from_millis(300));
+    group.measurement_time(Duration::from_secs(1));
+    // As the firmware does it: segmentation, then A* over the implicit graph.
+    group.bench_function("segment+astar", |b| {
         b.iter(|| {
             let r = segment(&g, &mut map[..], &mut squares[..]).expect("fits");
             black_box(s.plan(&r, (start, goal)))
         })
     });
+    group.finish();
 }
 
 fn bench_case(c: &mut Criterion, case: &Case) {
@@ -442,21 +506,27 @@ fn bench_case(c: &mut Criterion, case: &Case) {
     group.bench_function("segment", |b| {
         b.iter(|| black_box(segment(&case.grid, &mut map[..], &mut squares[..]).is_ok()))
     });
-    let regions = case.station.regions(&case.grid);
+    group.bench_function("segment+graph", |b| {
+        b.iter(|| black_box(Station::new(&case.grid).count))
+    });
+    let (regions, graph) = (
+        case.station.regions(&case.grid),
+        case.station.graph(&case.grid),
+    );
     let mut s = Search::new(case.station.count);
     let qs = &case.queries;
     let mut k = 0;
     group.bench_function("region-astar/query", |b| {
         b.iter(|| {
             k += 1;
-            black_box(s.plan(&regions, qs[k % qs.len()]))
+            black_box(s.plan(&graph, qs[k % qs.len()]))
         })
     });
     group.bench_function("region-astar+smooth/query", |b| {
         b.iter(|| {
             k += 1;
-            let plan = s.plan(&regions, qs[k % qs.len()]).expect("reachable");
-            black_box(s.smooth(&regions, &plan))
+            let plan = s.plan(&graph, qs[k % qs.len()]).expect("reachable");
+            black_box(s.smooth(&regions, &plan, 0))
         })
     });
     // One grid A* query can take a second at 2048: flat sampling keeps it to 10 runs.

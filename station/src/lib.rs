@@ -1,1 +1,20 @@
 //! The station: terminal UI and command line for a robot on a serial link.
+//!
+//! Data flows one way: terminal and link events become `action::Action`s, `app::App::update`
+//! applies them, `ui::render` draws the app. One task (`link`) owns the serial port.
+//!
+//! - `link`: the port's owner: handshake, heartbeat, retries, reconnect, statistics.
+//! - `action`, `app`, `input`: the UI's state machine and what feeds it.
+//! - `ui`: drawing, pure.
+//! - `tui`: the terminal loop; `cli`, `headless`, `builtin`: the binary's edge.
+#![deny(unsafe_code)]
+
+pub mod action;
+pub mod app;
+pub mod builtin;
+pub mod cli;
+pub mod headless;
+pub mod input;
+pub mod link;
+pub mod tui;
+pub mod ui;

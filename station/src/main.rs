@@ -1,1 +1,5 @@
-fn main() {}
+//! `station`: see `station --help`. Everything lives in the library; this only runs it.
+
+fn main() -> std::process::ExitCode {
+    station::cli::run()
+}

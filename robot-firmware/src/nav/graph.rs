@@ -86,6 +86,8 @@ impl fmt::Display for GraphError {
     }
 }
 
+impl core::error::Error for GraphError {}
+
 /// The connectivity graph stored in caller slices (CSR): region `r`'s edges are
 /// `edges[offsets[r] .. offsets[r + 1]]`.
 pub struct Adjacency<'a, M: ?Sized> {
@@ -142,6 +144,23 @@ impl<'a, M: IdStore + ?Sized> Adjacency<'a, M> {
             regions,
             offsets: offsets.get(..=n).unwrap_or(&[]),
             edges: edges.get(..k).unwrap_or(&[]),
+        })
+    }
+
+    /// The view again, over slices that [`build`](Self::build) filled for these `regions` (for
+    /// a caller that keeps them in its own struct). Only sizes are checked: `None` unless
+    /// `offsets` has regions + 1 entries and its last one is `edges.len()`.
+    pub fn from_built(
+        regions: Regions<'a, M>,
+        offsets: &'a [u32],
+        edges: &'a [Edge],
+    ) -> Option<Self> {
+        let ok = offsets.len() == regions.len() + 1
+            && offsets.last().map(|&o| o as usize) == Some(edges.len());
+        ok.then_some(Adjacency {
+            regions,
+            offsets,
+            edges,
         })
     }
 

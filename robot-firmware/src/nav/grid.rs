@@ -78,9 +78,11 @@ impl fmt::Display for GridError {
     }
 }
 
+impl core::error::Error for GridError {}
+
 /// Bytes of packed storage for a `width` x `height` grid (usable in array lengths).
 pub const fn grid_bytes(width: usize, height: usize) -> usize {
-    (width * height).div_ceil(4)
+    width.saturating_mul(height).div_ceil(4)
 }
 
 /// A position inside the grid in 1/256 of a cell, relative to the grid's origin corner.

@@ -62,7 +62,10 @@ slice_store!(u32);
 /// Bytes needed to hold `len` values of `bits` bits each, plus the 3 bytes of slack that let a
 /// read always fetch a whole 32-bit window (usable in array lengths: it is a `const fn`).
 pub const fn packed_bytes(bits: u32, len: usize) -> usize {
-    (len * bits as usize).div_ceil(8) + 3
+    // Saturating, so an absurd `len` gives an unsatisfiable size rather than an overflow.
+    len.saturating_mul(bits as usize)
+        .div_ceil(8)
+        .saturating_add(3)
 }
 
 /// A bit-packed [`IdStore`] of `BITS`-bit values (1 ..= 24) over caller bytes.
@@ -108,7 +111,12 @@ impl<const BITS: u32, S: AsRef<[u8]>> PackedIds<BITS, S> {
 
     /// Largest number of entries the bytes can hold.
     pub fn capacity(&self) -> usize {
-        (self.bytes.as_ref().len().saturating_sub(3) * 8) / BITS.max(1) as usize
+        self.bytes
+            .as_ref()
+            .len()
+            .saturating_sub(3)
+            .saturating_mul(8)
+            / BITS.max(1) as usize
     }
 
     /// The packed bytes (little-endian bit order, entry `i` at bit `i * BITS`).

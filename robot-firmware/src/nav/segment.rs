@@ -80,6 +80,8 @@ impl fmt::Display for SegmentError {
     }
 }
 
+impl core::error::Error for SegmentError {}
+
 /// The result of [`segment`]: squares, the region-id map and the grid's size and geometry.
 pub struct Regions<'a, M: ?Sized> {
     width: u16,
@@ -116,9 +118,26 @@ where
             got: map.len(),
         });
     }
+    map.fill(M::NONE);
+    let count = scan(grid, map, squares)?;
+    let squares: &'a [Square] = squares;
+    Ok(Regions {
+        width: grid.width(),
+        height: grid.height(),
+        geometry: grid.geometry(),
+        map,
+        squares: squares.get(..count).unwrap_or(&[]),
+    })
+}
+
+/// The scan of Fig. 6 over a map cleared to `NONE`; returns the number of squares.
+fn scan<S, M>(grid: &Grid<S>, map: &mut M, squares: &mut [Square]) -> Result<usize, SegmentError>
+where
+    S: AsRef<[u8]>,
+    M: IdStore + ?Sized,
+{
     // Ids run 0 ..= NONE - 1, so at most NONE squares fit the map's id width.
     let capacity = squares.len().min(M::NONE as usize);
-    map.fill(M::NONE);
     let (w, h) = (usize::from(grid.width()), usize::from(grid.height()));
     let mut count = 0usize;
     // seed 004 §6, Fig. 6: "for i := 1 to Nrow do for j := 1 to Ncol do" - rows, then columns.
@@ -132,32 +151,23 @@ where
                 x += 1;
                 continue;
             }
-            if count >= capacity {
-                return Err(SegmentError::TooManyRegions { capacity });
-            }
+            let slot = squares
+                .get_mut(count)
+                .filter(|_| count < capacity)
+                .ok_or(SegmentError::TooManyRegions { capacity })?;
             let size = largest_square(grid, map, x, y);
-            let sq = Square {
+            *slot = Square {
                 x: u16::try_from(x).unwrap_or(u16::MAX),
                 y: u16::try_from(y).unwrap_or(u16::MAX),
                 size,
             };
-            claim(map, w, sq, count as u32);
-            if let Some(slot) = squares.get_mut(count) {
-                *slot = sq;
-            }
+            claim(map, w, *slot, count as u32);
             count += 1;
             // The cells x .. x + size of this row now belong to the new square.
             x += usize::from(size).max(1);
         }
     }
-    let squares: &'a [Square] = squares;
-    Ok(Regions {
-        width: grid.width(),
-        height: grid.height(),
-        geometry: grid.geometry(),
-        map,
-        squares: squares.get(..count).unwrap_or(&[]),
-    })
+    Ok(count)
 }
 
 /// Side of the largest square of free, still unclaimed cells with top-left cell (`x`, `y`),

@@ -55,13 +55,16 @@ impl Smoothed {
     }
 
     /// The waypoints in order, in grid units.
-    pub fn waypoints<'x>(&'x self, points: &'x [GridPoint]) -> impl Iterator<Item = GridPoint> + 'x {
+    pub fn waypoints<'x>(
+        &'x self,
+        points: &'x [GridPoint],
+    ) -> impl Iterator<Item = GridPoint> + 'x {
         (0..self.waypoint_count()).filter_map(move |i| self.waypoint(points, i))
     }
 
     /// Length of the encoding: 24-byte header plus 8 bytes per point.
     pub const fn encoded_len(&self) -> usize {
-        Plan::HEADER_BYTES + 8 * self.len as usize
+        Plan::HEADER_BYTES.saturating_add((self.len as usize).saturating_mul(8))
     }
 
     /// Serialises like [`Plan::encode`], with points (x, y as i32) instead of region ids.
@@ -70,12 +73,10 @@ impl Smoothed {
         let out = out
             .get_mut(..needed)
             .ok_or(PlanError::BufferTooSmall { needed })?;
-        let head = [
-            self.start.x, self.start.y, self.goal.x, self.goal.y,
-        ]
-        .map(i32::to_le_bytes)
-        .into_iter()
-        .chain([self.len.to_le_bytes(), self.cost.to_le_bytes()]);
+        let head = [self.start.x, self.start.y, self.goal.x, self.goal.y]
+            .map(i32::to_le_bytes)
+            .into_iter()
+            .chain([self.len.to_le_bytes(), self.cost.to_le_bytes()]);
         let pts = (0..self.len as usize)
             .filter_map(|i| points.get(i))
             .flat_map(|p| [p.x.to_le_bytes(), p.y.to_le_bytes()]);
@@ -143,8 +144,14 @@ where
 /// Twice the signed area of triangle o, a, b: positive when b is left of the ray o -> a.
 #[inline]
 fn cross(o: GridPoint, a: GridPoint, b: GridPoint) -> i64 {
-    let (ax, ay) = (i64::from(a.x) - i64::from(o.x), i64::from(a.y) - i64::from(o.y));
-    let (bx, by) = (i64::from(b.x) - i64::from(o.x), i64::from(b.y) - i64::from(o.y));
+    let (ax, ay) = (
+        i64::from(a.x) - i64::from(o.x),
+        i64::from(a.y) - i64::from(o.y),
+    );
+    let (bx, by) = (
+        i64::from(b.x) - i64::from(o.x),
+        i64::from(b.y) - i64::from(o.y),
+    );
     ax * by - ay * bx
 }
 
@@ -198,6 +205,47 @@ fn portal(a: Square, b: Square, margin: u32) -> Option<(GridPoint, GridPoint)> {
     None
 }
 
+/// The funnel: an apex and the two sides (point and portal index) seen from it.
+struct Funnel {
+    apex: GridPoint,
+    left: (GridPoint, usize),
+    right: (GridPoint, usize),
+}
+
+impl Funnel {
+    /// A funnel with its apex at portal `k`'s point `p` and both sides closed on it.
+    fn at(p: GridPoint, k: usize) -> Funnel {
+        Funnel {
+            apex: p,
+            left: (p, k),
+            right: (p, k),
+        }
+    }
+
+    /// Narrows the funnel to portal `k`'s ends `l`, `r`; returns the corner (point, portal)
+    /// where the path must bend if one side crossed the other.
+    fn narrow(&mut self, l: GridPoint, r: GridPoint, k: usize) -> Option<(GridPoint, usize)> {
+        let (apex, left, right) = (self.apex, self.left.0, self.right.0);
+        // Right side: narrow it, or, if it crosses the left side, the left end is a corner.
+        if cross(apex, right, r) >= 0 {
+            if apex == right || cross(apex, left, r) < 0 {
+                self.right = (r, k);
+            } else {
+                return Some(self.left);
+            }
+        }
+        // Left side likewise (against the possibly narrowed right side).
+        if cross(apex, left, l) <= 0 {
+            if apex == left || cross(apex, self.right.0, l) > 0 {
+                self.left = (l, k);
+            } else {
+                return Some(self.right);
+            }
+        }
+        None
+    }
+}
+
 /// The funnel algorithm over portals 0 (the start) ..= n (the goal); writes the corner points
 /// to `out` and returns their number, or `None` if two consecutive regions share no edge.
 ///
@@ -222,43 +270,26 @@ where
         _ => portal(square(k - 1)?, square(k)?, margin),
     };
     let (mut count, capacity) = (0usize, out.len());
-    let mut apex = start;
-    let (mut left, mut left_k, mut right, mut right_k) = (start, 0usize, start, 0usize);
+    let mut funnel = Funnel::at(start, 0);
     let mut k = 1usize;
     while k <= n {
         let Some((l, r)) = gate(k) else {
             return Ok(None);
         };
-        let mut corner = None;
-        // Right side: narrow it, or, if it crosses the left side, the left end is a corner.
-        if cross(apex, right, r) >= 0 {
-            if apex == right || cross(apex, left, r) < 0 {
-                (right, right_k) = (r, k);
-            } else {
-                corner = Some((left, left_k));
-            }
-        }
-        // Left side likewise.
-        if corner.is_none() && cross(apex, left, l) <= 0 {
-            if apex == left || cross(apex, right, l) > 0 {
-                (left, left_k) = (l, k);
-            } else {
-                corner = Some((right, right_k));
-            }
-        }
-        let Some((c, ck)) = corner else {
+        let Some((c, ck)) = funnel.narrow(l, r, k) else {
             k += 1;
             continue;
         };
-        if c != apex {
+        // A corner equal to the apex adds nothing; one equal to the goal is where the narrowed
+        // funnel ends (collinear sides count as crossing), and the goal closes the path anyway.
+        if c != funnel.apex && c != goal {
             let slot = out
                 .get_mut(count)
                 .ok_or(PlanError::PathTooLong { capacity })?;
             *slot = c;
             count += 1;
         }
-        apex = c;
-        (left, left_k, right, right_k) = (c, ck, c, ck);
+        funnel = Funnel::at(c, ck);
         k = ck + 1;
     }
     Ok(Some(count))
@@ -319,6 +350,22 @@ pub fn line_of_sight<M: IdStore + ?Sized>(
     if !inside(a) || !inside(b) {
         return false;
     }
+    let (x0, x1) = (i64::from(a.x), i64::from(b.x));
+    // Column c's closed x-range [c u, (c + 1) u] meets [x0, x1].
+    let (c_lo, c_hi) = (ceil_div(x0, u) - 1, x1.div_euclid(u));
+    (c_lo..=c_hi).all(|c| {
+        let (r_lo, r_hi) = rows_in_column(a, b, c);
+        (r_lo..=r_hi).all(|r| match (i32::try_from(c), i32::try_from(r)) {
+            (Ok(cx), Ok(cy)) => regions.region_at(cx, cy).is_some(),
+            _ => false,
+        })
+    })
+}
+
+/// Rows whose closed cells in column `c` meet the segment `a`-`b` (`a.x <= b.x`, both inside
+/// the grid, and the column within the segment's x-range), as an inclusive range.
+fn rows_in_column(a: GridPoint, b: GridPoint, c: i64) -> (i64, i64) {
+    let u = i64::from(UNITS_PER_CELL);
     let (x0, y0, x1, y1) = (
         i64::from(a.x),
         i64::from(a.y),
@@ -326,31 +373,17 @@ pub fn line_of_sight<M: IdStore + ?Sized>(
         i64::from(b.y),
     );
     let (dx, dy) = (x1 - x0, y1 - y0);
-    // Column c's closed x-range [c u, (c + 1) u] meets [x0, x1].
-    let (c_lo, c_hi) = (ceil_div(x0, u) - 1, x1.div_euclid(u));
-    for c in c_lo..=c_hi {
-        let (xa, xb) = (x0.max(c * u), x1.min((c + 1) * u));
-        // y over [xa, xb] as numerators over `den` (den = dx, or 1 for a vertical segment).
-        let (lo, hi, den) = if dx == 0 {
-            (y0.min(y1), y0.max(y1), 1)
-        } else {
-            let ya = y0 * dx + (xa - x0) * dy;
-            let yb = y0 * dx + (xb - x0) * dy;
-            (ya.min(yb), ya.max(yb), dx)
-        };
-        // Row r's closed y-range [r u, (r + 1) u] meets [lo, hi] / den.
-        let (r_lo, r_hi) = (ceil_div(lo, den * u) - 1, hi.div_euclid(den * u));
-        for r in r_lo..=r_hi {
-            let free = match (i32::try_from(c), i32::try_from(r)) {
-                (Ok(cx), Ok(cy)) => regions.region_at(cx, cy).is_some(),
-                _ => false,
-            };
-            if !free {
-                return false;
-            }
-        }
-    }
-    true
+    let (xa, xb) = (x0.max(c * u), x1.min((c + 1) * u));
+    // y over [xa, xb] as numerators over `den` (den = dx, or 1 for a vertical segment); exact.
+    let (lo, hi, den) = if dx == 0 {
+        (y0.min(y1), y0.max(y1), 1)
+    } else {
+        let ya = y0 * dx + (xa - x0) * dy;
+        let yb = y0 * dx + (xb - x0) * dy;
+        (ya.min(yb), ya.max(yb), dx)
+    };
+    // Row r's closed y-range [r u, (r + 1) u] meets [lo, hi] / den.
+    (ceil_div(lo, den * u) - 1, hi.div_euclid(den * u))
 }
 
 /// Ceiling of `n / d` for `d > 0`.

@@ -7,6 +7,7 @@
 // Lints denied in product code (workspace lints) are fine for test assertions.
 #![allow(clippy::panic, clippy::unwrap_used)]
 
+mod graph;
 mod paper;
 mod props;
 mod reference;

@@ -154,7 +154,12 @@ fn check_smoothed(
         for k in 0..=64i64 {
             let at = |p: i32, q: i32| i64::from(p) * (64 - k) + i64::from(q) * k;
             let point = (at(a.x, b.x), at(a.y, b.y), 64);
-            prop_assert!(in_plan_squares(&squares, point), "{:?} -> {:?} leaves the plan", a, b);
+            prop_assert!(
+                in_plan_squares(&squares, point),
+                "{:?} -> {:?} leaves the plan",
+                a,
+                b
+            );
         }
     }
     Ok(())
@@ -213,9 +218,8 @@ fn check_fixed(
     Ok(())
 }
 
+// 256 cases each by default; PROPTEST_CASES=N runs more.
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
-
     #[test]
     fn segmentation_plans_and_storage_agree_on_random_grids(c in case(32), margin in 0u32..160) {
         let (w, h, cells, ssel, gsel) = c;

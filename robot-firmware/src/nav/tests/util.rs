@@ -7,8 +7,7 @@ use std::vec::Vec;
 
 use crate::nav::{
     find_path, grid_bytes, segment, smooth, Adjacency, Cell, Edge, Geometry, Grid, GridPoint,
-    IdStore, Plan, PlanError, RegionGraph, Regions, SearchScratch, SegmentError, Smoothed,
-    Square,
+    IdStore, Plan, PlanError, RegionGraph, Regions, SearchScratch, SegmentError, Smoothed, Square,
 };
 
 /// A grid from rows of `.` (free), `#` (obstacle) and `?` (unknown); row 0 is the first line.

@@ -1,0 +1,416 @@
+//! The `robot-emulator` command line: `serve` (the default) puts the simulated robot on a
+//! pseudo-terminal; `run` runs a headless scenario and prints a JSON report.
+//!
+//! Layer: argument parsing and validation at the edge. Every bad argument is reported with the
+//! flag's name and why, and nothing starts.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use robot_firmware::{Profile, KHEPERA, MICRO_RATO};
+
+use crate::fault::{FaultConfig, Stall};
+use crate::link::{EmulatorOptions, ServeOptions, Speed};
+use crate::scenario::{GoalPoint, ScenarioOptions, Task};
+use crate::sensors::Noise;
+use crate::sim::SimConfig;
+
+/// The robot's firmware, unchanged, in a simulated world, on a serial port.
+#[derive(Debug, Parser)]
+#[command(
+    name = "robot-emulator",
+    version,
+    about = "Runs the robot firmware in a simulated arena and exposes its serial link on a \
+             pseudo-terminal, so the station (or any serial tool) talks to it as to a real \
+             robot on /dev/ttyUSB0.",
+    after_help = "Examples:\n  \
+        robot-emulator                                   # Micro-Rato'99, micro-rato robot, real time\n  \
+        robot-emulator --link /tmp/robot                 # and a stable path to the port\n  \
+        station --port /tmp/robot                        # drive it\n  \
+        robot-emulator --arena maze.txt --profile khepera --speed 10\n  \
+        robot-emulator run --arena lab.xml --profile micro-rato --task go-to --seed 3 --json"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    #[command(flatten)]
+    pub serve: ServeArgs,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Serve the robot on a pseudo-terminal (the default).
+    Serve(ServeArgs),
+    /// Run a scenario headless at maximum speed and print a report.
+    Run(RunArgs),
+}
+
+/// Robot and world.
+#[derive(Debug, Clone, Args)]
+pub struct WorldArgs {
+    /// Arena file: CiberRato lab .xml, micromouse maze .txt, ROS map .yaml, or an ASCII grid;
+    /// or `builtin:micro-rato-99`.
+    #[arg(long, default_value = crate::builtin::MICRO_RATO_99, value_name = "FILE")]
+    pub arena: String,
+    /// CiberRato grid file with start poses (default: found beside a `...Lab.xml`).
+    #[arg(long, value_name = "FILE")]
+    pub grid: Option<PathBuf>,
+    /// Robot profile.
+    #[arg(long, value_enum, default_value_t = ProfileArg::MicroRato)]
+    pub profile: ProfileArg,
+    /// Seed for every random draw; the same seed gives the same run.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Start pose `X,Y[,HEADING_DEG]` in metres (default: the arena's start).
+    #[arg(long, value_name = "X,Y[,DEG]", value_parser = parse_pose)]
+    pub start: Option<[f64; 3]>,
+    /// Switch every noise source off (exact sensors, nominal wheels).
+    #[arg(long)]
+    pub no_noise: bool,
+    /// Compass noise, degrees RMS (CiberRato's CompassNoise).
+    #[arg(long, value_name = "DEG")]
+    pub compass_noise: Option<f64>,
+    /// Beacon bearing noise, degrees (BeaconNoise).
+    #[arg(long, value_name = "DEG")]
+    pub beacon_noise: Option<f64>,
+    /// IR proximity noise, counts (ObstacleNoise).
+    #[arg(long, value_name = "COUNTS")]
+    pub obstacle_noise: Option<f64>,
+    /// Per-wheel speed error, relative sigma (MotorsNoise).
+    #[arg(long, value_name = "SIGMA")]
+    pub motors_noise: Option<f64>,
+    /// True wheel distance in metres, if not the profile's nominal one.
+    #[arg(long, value_name = "M")]
+    pub true_wheel_distance: Option<f64>,
+    /// Wheel slip, relative sigma (0 = none).
+    #[arg(long, default_value_t = 0.0, value_name = "SIGMA")]
+    pub slip: f64,
+    /// Floor grid of black lines with this pitch in metres (seed 003 uses 0.10).
+    #[arg(long, value_name = "M")]
+    pub floor_grid: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ProfileArg {
+    Khepera,
+    MicroRato,
+}
+
+impl ProfileArg {
+    pub fn profile(self) -> &'static Profile {
+        match self {
+            ProfileArg::Khepera => &KHEPERA,
+            ProfileArg::MicroRato => &MICRO_RATO,
+        }
+    }
+}
+
+/// `serve` options.
+#[derive(Debug, Clone, Args)]
+pub struct ServeArgs {
+    #[command(flatten)]
+    pub world: WorldArgs,
+    /// Also create this symlink to the pty (like socat's link=), replaced on restart.
+    #[arg(long, value_name = "PATH")]
+    pub link: Option<PathBuf>,
+    /// Serial line rate the robot's UART runs at (8N1).
+    #[arg(long, default_value_t = 115_200)]
+    pub baud: u32,
+    /// Simulation speed: a factor (1 = real time) or `max`.
+    #[arg(long, default_value = "1", value_parser = parse_speed)]
+    pub speed: Speed,
+    /// Probability of losing a byte, both directions.
+    #[arg(long, default_value_t = 0.0, value_name = "P")]
+    pub drop_rate: f64,
+    /// Probability of flipping a bit, both directions.
+    #[arg(long, default_value_t = 0.0, value_name = "P")]
+    pub flip_rate: f64,
+    /// Only fault the station-to-robot direction.
+    #[arg(long, conflicts_with = "only_from_robot")]
+    pub only_to_robot: bool,
+    /// Only fault the robot-to-station direction.
+    #[arg(long)]
+    pub only_from_robot: bool,
+    /// Stall the link every PERIOD seconds for DURATION seconds: `PERIOD,DURATION`.
+    #[arg(long, value_name = "PERIOD,DURATION", value_parser = parse_stall)]
+    pub stall: Option<Stall>,
+    /// Unplug the port after this many simulated seconds.
+    #[arg(long, value_name = "S")]
+    pub disconnect_after: Option<f64>,
+    /// Plug it back in (a new pty; --link follows it) this many seconds after unplugging.
+    #[arg(long, value_name = "S", requires = "disconnect_after")]
+    pub reconnect_after: Option<f64>,
+    /// On exit, print what the run measured (bytes, faults, cycle jitter) as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `run` options.
+#[derive(Debug, Clone, Args)]
+pub struct RunArgs {
+    #[command(flatten)]
+    pub world: WorldArgs,
+    /// What the robot does.
+    #[arg(long, value_enum, default_value_t = TaskArg::GoTo)]
+    pub task: TaskArg,
+    /// Goal `X,Y` in metres for go-to (default: the arena's goal or target).
+    #[arg(long, value_name = "X,Y", value_parser = parse_point)]
+    pub goal: Option<[f64; 2]>,
+    /// Simulated seconds before giving up.
+    #[arg(long, default_value_t = 300.0)]
+    pub timeout: f64,
+    /// Print the report as one JSON object (otherwise a readable summary).
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TaskArg {
+    /// Drive to --goal (default: the arena's target).
+    GoTo,
+}
+
+impl WorldArgs {
+    fn noise(&self) -> Result<Noise, String> {
+        let mut n = if self.no_noise {
+            Noise::none()
+        } else {
+            Noise::default()
+        };
+        let set = |v: Option<f64>, name: &str, slot: &mut f64| -> Result<(), String> {
+            if let Some(v) = v {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(format!("--{name} {v}: must be a finite number >= 0"));
+                }
+                *slot = v;
+            }
+            Ok(())
+        };
+        set(self.compass_noise, "compass-noise", &mut n.compass_deg)?;
+        set(self.beacon_noise, "beacon-noise", &mut n.beacon_deg)?;
+        set(
+            self.obstacle_noise,
+            "obstacle-noise",
+            &mut n.obstacle_counts,
+        )?;
+        set(self.motors_noise, "motors-noise", &mut n.motors)?;
+        Ok(n)
+    }
+
+    fn load_options(&self) -> crate::arena::LoadOptions {
+        let mut load = crate::arena::LoadOptions::default();
+        if let Some(g) = &self.grid {
+            load.ciberrato_grid = crate::arena::GridFile::Path(g.clone());
+        }
+        load
+    }
+
+    fn check(&self) -> Result<(), String> {
+        if let Some(d) = self.true_wheel_distance {
+            if !(d.is_finite() && d > 0.0 && d < 2.0) {
+                return Err(format!(
+                    "--true-wheel-distance {d}: must be in (0, 2) metres"
+                ));
+            }
+        }
+        if !(self.slip.is_finite() && (0.0..1.0).contains(&self.slip)) {
+            return Err(format!("--slip {}: must be in [0, 1)", self.slip));
+        }
+        if let Some(g) = self.floor_grid {
+            if !(g.is_finite() && g > 0.02) {
+                return Err(format!("--floor-grid {g}: must be more than 0.02 m"));
+            }
+        }
+        Ok(())
+    }
+
+    fn start_pose(&self) -> Option<crate::arena::Pose> {
+        self.start.map(|[x, y, deg]| crate::arena::Pose {
+            x,
+            y,
+            heading: deg.to_radians(),
+        })
+    }
+
+    fn sim_config(&self, baud: u32) -> Result<SimConfig, String> {
+        self.check()?;
+        let mut cfg = SimConfig::new(self.profile.profile());
+        cfg.seed = self.seed;
+        cfg.noise = self.noise()?;
+        cfg.start = self.start_pose();
+        cfg.true_wheel_distance_m = self.true_wheel_distance;
+        cfg.slip = self.slip;
+        cfg.floor_grid_m = self.floor_grid;
+        cfg.baud = baud;
+        Ok(cfg)
+    }
+}
+
+impl ServeArgs {
+    /// The emulator these arguments describe.
+    pub fn options(&self) -> Result<EmulatorOptions, String> {
+        if self.baud == 0 || self.baud > 4_000_000 {
+            return Err(format!("--baud {}: must be 1..=4000000", self.baud));
+        }
+        if let Speed::Factor(f) = self.speed {
+            if !(f.is_finite() && f > 0.0) {
+                return Err(format!("--speed {f}: must be a positive factor or `max`"));
+            }
+        }
+        let faults = FaultConfig {
+            drop_rate: self.drop_rate,
+            flip_rate: self.flip_rate,
+            stall: self.stall,
+        };
+        faults.validate("--drop-rate/--flip-rate/--stall")?;
+        for (name, v) in [
+            ("--disconnect-after", self.disconnect_after),
+            ("--reconnect-after", self.reconnect_after),
+        ] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(format!("{name} {v}: must be a number of seconds >= 0"));
+                }
+            }
+        }
+        let clean = FaultConfig::default();
+        Ok(EmulatorOptions {
+            arena: self.world.arena.clone(),
+            load: self.world.load_options(),
+            sim: self.world.sim_config(self.baud)?,
+            serve: ServeOptions {
+                speed: self.speed,
+                to_robot: if self.only_from_robot { clean } else { faults },
+                from_robot: if self.only_to_robot { clean } else { faults },
+                disconnect_after_s: self.disconnect_after,
+                reconnect_after_s: self.reconnect_after,
+                link: self.link.clone(),
+                seed: self.world.seed,
+            },
+        })
+    }
+}
+
+impl RunArgs {
+    /// The scenario these arguments describe.
+    pub fn options(&self) -> Result<ScenarioOptions, String> {
+        self.world.check()?;
+        if !(self.timeout.is_finite() && self.timeout > 0.0) {
+            return Err(format!(
+                "--timeout {}: must be positive seconds",
+                self.timeout
+            ));
+        }
+        let task = match self.task {
+            TaskArg::GoTo => Task::GoTo(self.goal.map(|[x, y]| GoalPoint { x_m: x, y_m: y })),
+        };
+        let mut o = ScenarioOptions::new(self.world.profile.profile(), task);
+        o.seed = self.world.seed;
+        o.timeout_s = self.timeout;
+        o.noise = self.world.noise()?;
+        o.start = self.world.start_pose();
+        o.true_wheel_distance_m = self.world.true_wheel_distance;
+        o.slip = self.world.slip;
+        Ok(o)
+    }
+}
+
+fn numbers(s: &str, what: &str, min: usize, max: usize) -> Result<Vec<f64>, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() < min || parts.len() > max {
+        return Err(format!("expected {what}, got `{s}`"));
+    }
+    parts
+        .iter()
+        .map(|p| {
+            p.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("`{p}` in `{s}` is not a finite number ({what})"))
+        })
+        .collect()
+}
+
+fn parse_point(s: &str) -> Result<[f64; 2], String> {
+    let v = numbers(s, "X,Y in metres", 2, 2)?;
+    Ok([v[0], v[1]])
+}
+
+fn parse_pose(s: &str) -> Result<[f64; 3], String> {
+    let v = numbers(s, "X,Y or X,Y,HEADING_DEG", 2, 3)?;
+    Ok([v[0], v[1], v.get(2).copied().unwrap_or(0.0)])
+}
+
+fn parse_stall(s: &str) -> Result<Stall, String> {
+    let v = numbers(s, "PERIOD,DURATION in seconds", 2, 2)?;
+    Ok(Stall {
+        period_s: v[0],
+        duration_s: v[1],
+    })
+}
+
+fn parse_speed(s: &str) -> Result<Speed, String> {
+    if s.eq_ignore_ascii_case("max") {
+        return Ok(Speed::Max);
+    }
+    match s.parse::<f64>() {
+        Ok(f) if f.is_finite() && f > 0.0 => Ok(Speed::Factor(f)),
+        _ => Err(format!("`{s}` is neither a positive factor nor `max`")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Result<Cli, clap::Error> {
+        Cli::try_parse_from(std::iter::once("robot-emulator").chain(args.iter().copied()))
+    }
+
+    #[test]
+    fn defaults_serve_micro_rato_99_in_real_time() {
+        let cli = parse(&[]).expect("no arguments is valid");
+        assert!(cli.command.is_none());
+        let o = cli.serve.options().expect("valid");
+        assert_eq!(o.arena, crate::builtin::MICRO_RATO_99);
+        assert_eq!(o.serve.speed, Speed::Factor(1.0));
+        assert_eq!(o.sim.baud, 115_200);
+    }
+
+    #[test]
+    fn bad_values_name_the_flag() {
+        let cli = parse(&["--drop-rate", "2"]).expect("parses");
+        assert!(cli.serve.options().unwrap_err().contains("drop rate"));
+        assert!(parse(&["--speed", "fast"]).is_err());
+        assert!(parse(&["--speed", "-1"]).is_err());
+        assert!(parse(&["run", "--goal", "1"]).is_err());
+        assert!(parse(&["run", "--goal", "1,nan"]).is_err());
+        assert!(parse(&["--profile", "roomba"]).is_err());
+        let cli = parse(&["--baud", "0"]).expect("parses");
+        assert!(cli.serve.options().unwrap_err().contains("--baud"));
+        assert!(
+            parse(&["--reconnect-after", "1"]).is_err(),
+            "needs --disconnect-after"
+        );
+    }
+
+    #[test]
+    fn run_takes_task_goal_and_seed() {
+        let cli = parse(&[
+            "run",
+            "--profile",
+            "khepera",
+            "--goal",
+            "0.4,0.2",
+            "--seed",
+            "9",
+        ])
+        .expect("valid");
+        let Some(Command::Run(r)) = cli.command else {
+            panic!("run subcommand")
+        };
+        let o = r.options().expect("valid");
+        assert_eq!(o.seed, 9);
+        assert_eq!(o.task, Task::GoTo(Some(GoalPoint { x_m: 0.4, y_m: 0.2 })));
+    }
+}

@@ -1,0 +1,342 @@
+//! Headless scenario runs: one task, one arena, as fast as the host allows, and a report.
+//!
+//! Layer: std, on top of [`Sim`]; used by tests, benchmarks, the paper reproductions and a
+//! future `robot-emulator run` subcommand. There is no station and no link session: the task
+//! is given to the firmware through its own command path, `Core::apply` (exactly what an
+//! accepted `Command` frame does), and the run ends when the firmware reports arrival (plus a
+//! short settle so the true pose is taken at rest) or at the timeout.
+//!
+//! What the firmware is told, and only that, each as a station would over the link: the
+//! task's goal; the arrival radius (Khepera: parameter 14, drift arrival; micro-rato:
+//! parameter 26, guided arrival); for a robot with a beacon sensor the beacon position
+//! (parameters 21/22) and the arena's bounds (the dead reckoning's validation rectangle, seed
+//! 004 §4; the firmware has no link parameter for it yet, so it is written into
+//! `DeadReckonParams` directly). Never the pose.
+//!
+//! "Reached" (decided here, documented in [`ScenarioReport::reached`]): the firmware reported
+//! arrival AND its TRUE position is within the tolerance of the goal. Default tolerance:
+//! Khepera 5 cm (seed 000 §4.4, Fig. 17: target reached with a 5 cm tolerance); micro-rato the
+//! radius of the arena's target circle when the goal is that target (seed 004 §2: the goal
+//! area), else 0.3 m (seed 004 §4: dead-reckoning accuracy in free motion).
+//!
+//! The firmware stops as soon as it BELIEVES it is within its arrival radius, so with the
+//! arrival radius equal to the tolerance (the Khepera's 5 cm in both roles) the true error
+//! lands on the tolerance's edge and "reached" would be a coin toss decided by the sign of the
+//! odometry error. The runner therefore tells the firmware to arrive within
+//! `min(firmware default, tolerance / 2)`, leaving half the tolerance for odometry error
+//! (Khepera: 2.5 cm; the real run of seed 000 Fig. 17 ended 2.2 cm from its target).
+//!
+//! What can fail: an invalid setup ([`SimError`]), a task without a goal, a command the
+//! firmware refuses ([`ScenarioError`]). The run itself cannot fail.
+
+use std::time::Instant;
+
+use protocol::{Command, NackReason, ParamId, PointMm};
+use robot_firmware::deadreckon::Bounds;
+use robot_firmware::link::Reply;
+use robot_firmware::odometry::Point as FwPoint;
+use robot_firmware::Profile;
+use serde::Serialize;
+use thiserror::Error;
+
+use crate::arena::{Arena, Pose};
+use crate::sensors::Noise;
+use crate::sim::{Sim, SimConfig, SimError};
+
+/// Settle time after the firmware reports arrival, ms (a few motor time constants).
+pub const SETTLE_MS: u64 = 500;
+/// Khepera go-to tolerance, metres. seed 000 §4.4 / Fig. 17: 5 cm.
+pub const KHEPERA_TOLERANCE_M: f64 = 0.05;
+/// Micro-rato tolerance for a goal that is not the arena's target. seed 004 §4: 0.3 m.
+pub const RATO_POINT_TOLERANCE_M: f64 = 0.3;
+/// Firmware parameter ids of the beacon position (robot-firmware `params::PARAMS`).
+const PARAM_BEACON_X: u16 = 21;
+const PARAM_BEACON_Y: u16 = 22;
+/// Firmware parameter ids of the arrival radii (drift: Khepera; guided: micro-rato).
+const PARAM_DRIFT_ARRIVAL: u16 = 14;
+const PARAM_GUIDED_ARRIVAL: u16 = 26;
+
+/// A point in the map frame, metres.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct GoalPoint {
+    /// x, metres.
+    pub x_m: f64,
+    /// y, metres.
+    pub y_m: f64,
+}
+
+/// What the robot is asked to do. Reach-beacon, explore and forage come later.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Task {
+    /// Go to a point; `None` = the arena's goal (its marked goal, else its target's centre).
+    GoTo(Option<GoalPoint>),
+}
+
+/// How a scenario is run. [`ScenarioOptions::new`] gives the defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScenarioOptions {
+    /// Which robot.
+    pub profile: &'static Profile,
+    /// The task.
+    pub task: Task,
+    /// The run's seed.
+    pub seed: u64,
+    /// Simulated seconds before giving up.
+    pub timeout_s: f64,
+    /// Noise levels.
+    pub noise: Noise,
+    /// Start pose (default: as [`SimConfig::start`]).
+    pub start: Option<Pose>,
+    /// Goal tolerance (default: see the module text).
+    pub tolerance_m: Option<f64>,
+    /// Arrival radius the firmware is told (default: see the module text).
+    pub arrival_m: Option<f64>,
+    /// True wheel distance (default nominal).
+    pub true_wheel_distance_m: Option<f64>,
+    /// Wheel bias (default drawn from the seed).
+    pub wheel_bias: Option<[f64; 2]>,
+    /// Slip (default none).
+    pub slip: f64,
+}
+
+impl ScenarioOptions {
+    /// Defaults: seed 0, 120 s, the papers' noise.
+    pub fn new(profile: &'static Profile, task: Task) -> ScenarioOptions {
+        ScenarioOptions {
+            profile,
+            task,
+            seed: 0,
+            timeout_s: 120.0,
+            noise: Noise::default(),
+            start: None,
+            tolerance_m: None,
+            arrival_m: None,
+            true_wheel_distance_m: None,
+            wheel_bias: None,
+            slip: 0.0,
+        }
+    }
+}
+
+/// A pose in the report.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PoseReport {
+    /// x, metres.
+    pub x_m: f64,
+    /// y, metres.
+    pub y_m: f64,
+    /// Heading, radians.
+    pub heading_rad: f64,
+}
+
+impl From<Pose> for PoseReport {
+    fn from(p: Pose) -> Self {
+        PoseReport {
+            x_m: p.x,
+            y_m: p.y,
+            heading_rad: p.heading,
+        }
+    }
+}
+
+/// The outcome of a run (serialises to JSON for CI and the paper reproductions).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ScenarioReport {
+    /// Arena name.
+    pub arena: String,
+    /// Profile name.
+    pub profile: &'static str,
+    /// The run's seed.
+    pub seed: u64,
+    /// The task as given.
+    pub task: Task,
+    /// The goal actually used.
+    pub goal: GoalPoint,
+    /// The tolerance actually used, metres.
+    pub tolerance_m: f64,
+    /// The firmware reported arrival and its TRUE position is within `tolerance_m` of the goal.
+    pub reached: bool,
+    /// The firmware reported arrival (whatever the truth).
+    pub arrived: bool,
+    /// Simulated seconds.
+    pub sim_s: f64,
+    /// Wall-clock seconds.
+    pub wall_s: f64,
+    /// Wall contacts.
+    pub collisions: u32,
+    /// Final distance between the true and the believed position, metres.
+    pub pose_error_m: f64,
+    /// Final distance between the true position and the goal, metres.
+    pub goal_error_m: f64,
+    /// Ground distance travelled, metres.
+    pub distance_m: f64,
+    /// Final true pose.
+    pub final_true: PoseReport,
+    /// Final believed pose.
+    pub final_believed: PoseReport,
+}
+
+/// Why a scenario could not run.
+#[derive(Debug, Error)]
+pub enum ScenarioError {
+    /// The simulation could not be set up.
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    /// No goal in the task and none in the arena.
+    #[error("the task names no goal and arena {0:?} has neither a goal nor a target")]
+    NoGoal(String),
+    /// The firmware refused the task's command.
+    #[error("the firmware refused {what}: {reason:?}")]
+    Refused {
+        /// Which command.
+        what: &'static str,
+        /// Its reason.
+        reason: NackReason,
+    },
+    /// The timeout is not a finite positive number of seconds.
+    #[error("timeout {0} s must be finite and > 0")]
+    BadTimeout(f64),
+}
+
+/// Runs one scenario to arrival or timeout.
+pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioReport, ScenarioError> {
+    if !(opts.timeout_s.is_finite() && opts.timeout_s > 0.0) {
+        return Err(ScenarioError::BadTimeout(opts.timeout_s));
+    }
+    let Task::GoTo(given) = opts.task;
+    let target = arena.target().copied();
+    let goal = given
+        .or_else(|| arena.goal.map(|g| GoalPoint { x_m: g.x, y_m: g.y }))
+        .or_else(|| {
+            target.map(|t| GoalPoint {
+                x_m: t.centre.x,
+                y_m: t.centre.y,
+            })
+        })
+        .ok_or_else(|| ScenarioError::NoGoal(arena.name.clone()))?;
+    let tolerance_m = opts.tolerance_m.unwrap_or_else(|| {
+        if opts.profile.has(protocol::caps::ENCODERS) {
+            KHEPERA_TOLERANCE_M
+        } else {
+            match target {
+                Some(t) if (t.centre.x - goal.x_m).hypot(t.centre.y - goal.y_m) < 1e-6 => {
+                    t.radius_m
+                }
+                _ => RATO_POINT_TOLERANCE_M,
+            }
+        }
+    });
+    let name = arena.name.clone();
+    let cfg = SimConfig {
+        seed: opts.seed,
+        noise: opts.noise,
+        start: opts.start,
+        true_wheel_distance_m: opts.true_wheel_distance_m,
+        wheel_bias: opts.wheel_bias,
+        slip: opts.slip,
+        ..SimConfig::new(opts.profile)
+    };
+    let mut sim = Sim::new(arena, cfg)?;
+    brief_firmware(&mut sim)?;
+    set_arrival(&mut sim, opts.arrival_m, tolerance_m)?;
+    let cmd = Command::GoTo(PointMm {
+        x_mm: mm(goal.x_m),
+        y_mm: mm(goal.y_m),
+    });
+    apply(&mut sim, cmd, "GoTo")?;
+
+    let started = Instant::now();
+    // Whole milliseconds; the float-to-int cast saturates for absurd timeouts.
+    let timeout_ms = (opts.timeout_s * 1000.0).ceil() as u64;
+    let mut arrived = false;
+    for _ in 0..timeout_ms {
+        sim.step();
+        if sim.robot().core.arrived {
+            arrived = true;
+            sim.run_for(SETTLE_MS);
+            break;
+        }
+    }
+    let wall_s = started.elapsed().as_secs_f64();
+    let t = sim.truth();
+    let goal_error_m = (t.x - goal.x_m).hypot(t.y - goal.y_m);
+    Ok(ScenarioReport {
+        arena: name,
+        profile: opts.profile.name,
+        seed: opts.seed,
+        task: opts.task,
+        goal,
+        tolerance_m,
+        reached: arrived && goal_error_m <= tolerance_m,
+        arrived,
+        sim_s: sim.now_us() as f64 * 1e-6,
+        wall_s,
+        collisions: sim.collisions(),
+        pose_error_m: sim.pose_error_m(),
+        goal_error_m,
+        distance_m: sim.distance_m(),
+        final_true: t.into(),
+        final_believed: sim.believed().into(),
+    })
+}
+
+/// Tells the firmware what an operator would: the beacon position and the arena's bounds.
+fn brief_firmware(sim: &mut Sim) -> Result<(), ScenarioError> {
+    if !sim.robot().core.profile.has(protocol::caps::BEACON) {
+        return Ok(());
+    }
+    if let Some(b) = sim.world().beacon().map(|b| b.position) {
+        for (id, v) in [(PARAM_BEACON_X, b.x), (PARAM_BEACON_Y, b.y)] {
+            let cmd = Command::SetParam {
+                id: ParamId(id),
+                value: v as f32,
+            };
+            apply(sim, cmd, "SetParam(beacon)")?;
+        }
+    }
+    let bounds = sim.world().arena().bounds;
+    let dead = &mut sim.robot_mut().core.dead.params.bounds;
+    *dead = Bounds {
+        min: FwPoint::new(bounds.min.x as f32, bounds.min.y as f32),
+        max: FwPoint::new(bounds.max.x as f32, bounds.max.y as f32),
+        ..*dead
+    };
+    Ok(())
+}
+
+/// Tells the firmware its arrival radius: the option, else `min(default, tolerance / 2)`.
+fn set_arrival(
+    sim: &mut Sim,
+    arrival_m: Option<f64>,
+    tolerance_m: f64,
+) -> Result<(), ScenarioError> {
+    let core = &sim.robot().core;
+    let (id, default) = if core.profile.has(protocol::caps::ENCODERS) {
+        (
+            PARAM_DRIFT_ARRIVAL,
+            f64::from(core.arbiter.params.drift.arrival_radius_m),
+        )
+    } else {
+        (PARAM_GUIDED_ARRIVAL, f64::from(core.guided.arrival_m))
+    };
+    let value = arrival_m.unwrap_or_else(|| default.min(tolerance_m / 2.0));
+    let cmd = Command::SetParam {
+        id: ParamId(id),
+        value: value as f32,
+    };
+    apply(sim, cmd, "SetParam(arrival radius)")
+}
+
+fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), ScenarioError> {
+    let now_ms = (sim.now_us() / 1000) as u32;
+    match sim.robot_mut().core.apply(cmd, now_ms) {
+        Reply::Ack(_) => Ok(()),
+        Reply::Nack(reason) => Err(ScenarioError::Refused { what, reason }),
+    }
+}
+
+fn mm(m: f64) -> i32 {
+    // `as` saturates; the firmware refuses points beyond 1 km anyway.
+    (m * 1000.0).round() as i32
+}

@@ -1,0 +1,462 @@
+//! The simulation: the unchanged firmware (`Robot`) stepped every simulated millisecond
+//! against a `Hal` implemented over the world, the physics, the sensor models and the UART.
+//!
+//! Layer: std, the top of the emulator's core; the pty front end, the headless scenario
+//! runner (`scenario`) and the station's built-in emulator drive a [`Sim`]. One
+//! [`Sim::step`] is one millisecond: `Robot::step` with the clock at `t` (it runs its control
+//! cycle itself when due and reads the sensors then), then the physics from `t` to `t + 1 ms`
+//! under the motor command in force, then the UART up to `t + 1 ms`.
+//!
+//! Invariants: the ground truth (pose, collisions, wheel bias) is never given to the
+//! firmware: it sees only what `Hal` returns, and the truth leaves the emulator only through
+//! the `EmuTruth` channel of the UART and the accessors here. The robot is created with
+//! `emulated: true`, so its HelloReply carries `caps::EMULATED`. Determinism: everything
+//! random is drawn from streams of `SimConfig::seed`, and no wall-clock time enters, so the
+//! same seed and the same inputs give the same run bit for bit.
+//!
+//! What can fail: [`Sim::new`] with an invalid configuration or a start pose inside (or
+//! overlapping) a wall ([`SimError`]). Stepping cannot fail.
+
+use robot_firmware::odometry::Pose as FwPose;
+use robot_firmware::{BeaconReading, Hal, MotorCommand, Profile, Robot, RobotOptions};
+use thiserror::Error;
+
+use crate::arena::{Arena, Light, Pose};
+use crate::geometry::Point;
+use crate::physics::{Body, PhysicsError, PhysicsParams};
+use crate::rng::{stream, SimRng};
+use crate::sensors::ir::IrArray;
+use crate::sensors::light::AmbientLight;
+use crate::sensors::line::LineSensor;
+use crate::sensors::rato::{Battery, BeaconSensor, Compass};
+use crate::sensors::Noise;
+use crate::uart::{TruthHistory, TruthSample, Uart, UartError, DEFAULT_BAUD};
+use crate::world::{FloorGrid, World, WorldError};
+
+/// One simulation step, microseconds.
+pub const STEP_US: u64 = 1000;
+const STEP_S: f64 = 1e-3;
+
+/// How a run is set up. [`SimConfig::new`] gives the defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimConfig {
+    /// Which robot.
+    pub profile: &'static Profile,
+    /// Seeds every random draw of the run (and the firmware's own).
+    pub seed: u64,
+    /// Sensor and motor noise levels.
+    pub noise: Noise,
+    /// Start pose; default the arena's first start pose, else [`World::free_spot`].
+    pub start: Option<Pose>,
+    /// True wheel distance; default the profile's nominal one (seed 000 §3: 0.0533 m
+    /// reproduces Tables 1-2 with a nominal-52 mm odometry).
+    pub true_wheel_distance_m: Option<f64>,
+    /// Per-wheel relative speed bias; default drawn from `seed` with sigma `noise.motors`.
+    pub wheel_bias: Option<[f64; 2]>,
+    /// Slip: standard deviation of the fraction of ground travel lost, redrawn every 100 ms
+    /// per wheel (0 = none).
+    pub slip: f64,
+    /// Floor grid pitch (seed 003: 0.10 m); `None` = no grid. Lines are 1 cm wide from the
+    /// arena's lower-left corner.
+    pub floor_grid_m: Option<f64>,
+    /// Light sources added to the arena's.
+    pub lights: Vec<Light>,
+    /// Serial line rate.
+    pub baud: u32,
+}
+
+impl SimConfig {
+    /// Defaults for `profile`: seed 0, the papers' noise, 115200 baud, nothing else.
+    pub fn new(profile: &'static Profile) -> SimConfig {
+        SimConfig {
+            profile,
+            seed: 0,
+            noise: Noise::default(),
+            start: None,
+            true_wheel_distance_m: None,
+            wheel_bias: None,
+            slip: 0.0,
+            floor_grid_m: None,
+            lights: Vec::new(),
+            baud: DEFAULT_BAUD,
+        }
+    }
+}
+
+/// Why a simulation cannot start.
+#[derive(Debug, Error)]
+pub enum SimError {
+    /// The start pose puts the body inside or across a wall.
+    #[error(
+        "start pose ({x:.3} m, {y:.3} m) is inside a wall or closer to one than the robot's \
+         radius ({radius_m:.3} m); pick a free spot"
+    )]
+    StartInWall {
+        /// Start x.
+        x: f64,
+        /// Start y.
+        y: f64,
+        /// Robot radius.
+        radius_m: f64,
+    },
+    /// A start pose with a non-finite coordinate.
+    #[error("start pose has a non-finite coordinate")]
+    StartNotFinite,
+    /// No start pose given, none in the arena, and no free spot found.
+    #[error("arena {arena:?} has no start pose and no free spot for a {diameter_m} m robot")]
+    NoFreeSpot {
+        /// Arena name.
+        arena: String,
+        /// Robot diameter.
+        diameter_m: f64,
+    },
+    /// Bad lights or floor grid.
+    #[error(transparent)]
+    World(#[from] WorldError),
+    /// Bad wheel distance, bias or slip.
+    #[error(transparent)]
+    Physics(#[from] PhysicsError),
+    /// Bad baud rate.
+    #[error(transparent)]
+    Uart(#[from] UartError),
+}
+
+/// The simulated hardware: everything `Hal` reads and writes.
+pub struct SimHal {
+    now_us: u64,
+    profile: &'static Profile,
+    world: World,
+    body: Body,
+    motor: MotorCommand,
+    ir: IrArray,
+    ambient: AmbientLight,
+    line: LineSensor,
+    compass: Compass,
+    beacon: BeaconSensor,
+    battery: Battery,
+    uart: Uart,
+    slip_rng: SimRng,
+}
+
+impl Hal for SimHal {
+    fn now_us(&mut self) -> u64 {
+        self.now_us
+    }
+
+    fn set_motors(&mut self, cmd: MotorCommand) {
+        self.motor = cmd;
+    }
+
+    fn encoders(&mut self) -> Option<[i32; 2]> {
+        self.body.encoders()
+    }
+
+    fn ir(&mut self) -> [u16; 8] {
+        self.ir.read(self.world.walls(), self.body.pose())
+    }
+
+    fn ambient(&mut self) -> [u16; 8] {
+        let lights = self.world.lights();
+        self.ambient
+            .read(self.world.walls(), lights, self.body.pose())
+    }
+
+    fn compass(&mut self) -> Option<f32> {
+        self.compass.read(self.now_us, self.body.pose().heading)
+    }
+
+    fn ground(&mut self) -> bool {
+        let p = self.body.pose();
+        self.profile.has(protocol::caps::GROUND_SENSOR)
+            && self.world.in_target(Point::new(p.x, p.y))
+    }
+
+    fn line(&mut self) -> bool {
+        self.line.read()
+    }
+
+    fn beacon(&mut self) -> Option<BeaconReading> {
+        self.beacon.read(self.world.beacon(), self.body.pose())
+    }
+
+    fn battery_mv(&mut self) -> u16 {
+        self.battery.read()
+    }
+
+    fn serial_read(&mut self, buf: &mut [u8]) -> usize {
+        self.uart.serial_read(buf)
+    }
+
+    fn serial_write(&mut self, bytes: &[u8]) -> usize {
+        self.uart.serial_write(bytes)
+    }
+}
+
+impl SimHal {
+    /// Advances the physical world by one step under the motor command in force.
+    fn advance(&mut self) {
+        let level = self.battery.level();
+        self.body.step(
+            self.motor,
+            level,
+            self.world.walls(),
+            STEP_S,
+            &mut self.slip_rng,
+        );
+        let max = f64::from(self.profile.motor_max.max(1));
+        let effort = (f64::from(self.motor.left.unsigned_abs())
+            + f64::from(self.motor.right.unsigned_abs()))
+            / (2.0 * max);
+        self.battery.drain(STEP_S, effort);
+        if self.line.present() {
+            let p = self.body.pose();
+            self.line.update(self.world.on_line(Point::new(p.x, p.y)));
+        }
+        self.now_us += STEP_US;
+    }
+}
+
+/// A running simulation.
+pub struct Sim {
+    robot: Robot,
+    hal: SimHal,
+    truth: TruthHistory,
+    seed: u64,
+    wheel_bias: [f64; 2],
+}
+
+impl Sim {
+    /// Builds the world, the body at its start pose and the robot (believing that pose).
+    pub fn new(arena: Arena, cfg: SimConfig) -> Result<Sim, SimError> {
+        let profile = cfg.profile;
+        let noise = cfg.noise.sanitised();
+        let floor = match cfg.floor_grid_m {
+            Some(pitch) => Some(FloorGrid::new(pitch, arena.bounds.min)?),
+            None => None,
+        };
+        let world = World::new(arena, cfg.lights.clone(), floor)?;
+        let radius = f64::from(profile.body_diameter_m) / 2.0;
+        let start = start_pose(&world, cfg.start, radius)?;
+
+        let mut run_rng = SimRng::new(cfg.seed, stream::RUN);
+        let drawn = [
+            run_rng.gaussian(noise.motors),
+            run_rng.gaussian(noise.motors),
+        ];
+        let wheel_bias = cfg.wheel_bias.unwrap_or(drawn);
+        let mut params = PhysicsParams::for_profile(profile);
+        params.wheel_bias = wheel_bias;
+        params.slip_sigma = cfg.slip;
+        if let Some(d) = cfg.true_wheel_distance_m {
+            params.wheel_distance_m = d;
+        }
+        params.validate()?;
+
+        let has = |bits| profile.has(bits);
+        let seed = cfg.seed;
+        let hal = SimHal {
+            now_us: 0,
+            profile,
+            body: Body::new(params, start),
+            motor: MotorCommand::STOP,
+            ir: IrArray::new(
+                profile,
+                noise.obstacle_counts,
+                noise.obstacle_gain_spread,
+                &mut run_rng,
+                SimRng::new(seed, stream::IR),
+            ),
+            ambient: AmbientLight::new(
+                profile,
+                noise.light_counts,
+                SimRng::new(seed, stream::LIGHT),
+            ),
+            line: LineSensor::new(
+                has(protocol::caps::LINE_SENSOR) && world.floor().is_some(),
+                noise.line_miss,
+                noise.line_double,
+                SimRng::new(seed, stream::LINE),
+            ),
+            compass: Compass::new(
+                has(protocol::caps::COMPASS),
+                noise.compass_deg,
+                SimRng::new(seed, stream::COMPASS),
+            ),
+            beacon: BeaconSensor::new(
+                has(protocol::caps::BEACON),
+                noise.beacon_deg,
+                noise.beacon_strength,
+                SimRng::new(seed, stream::BEACON),
+            ),
+            battery: Battery::for_profile(
+                profile,
+                noise.battery_mv,
+                SimRng::new(seed, stream::BATTERY),
+            ),
+            uart: Uart::new(cfg.baud, true)?,
+            slip_rng: SimRng::new(seed, stream::SLIP),
+            world,
+        };
+        let firmware_seed = SimRng::new(seed, stream::FIRMWARE).next_u64() as u32;
+        let robot = Robot::new(RobotOptions {
+            profile,
+            seed: firmware_seed,
+            // The robot is told where it starts (seed 004 §5: the start pose is known).
+            start: FwPose::new(start.x as f32, start.y as f32, start.heading as f32),
+            emulated: true,
+            firmware_version: env!("CARGO_PKG_VERSION"),
+        });
+        let mut sim = Sim {
+            robot,
+            hal,
+            truth: TruthHistory::default(),
+            seed,
+            wheel_bias,
+        };
+        sim.record_truth();
+        Ok(sim)
+    }
+
+    /// Advances one millisecond.
+    pub fn step(&mut self) {
+        self.robot.step(&mut self.hal);
+        self.hal.advance();
+        self.record_truth();
+        self.hal.uart.tick(self.hal.now_us, &self.truth);
+    }
+
+    /// Advances `ms` milliseconds.
+    pub fn run_for(&mut self, ms: u64) {
+        for _ in 0..ms {
+            self.step();
+        }
+    }
+
+    fn record_truth(&mut self) {
+        self.truth.push(TruthSample {
+            time_ms: (self.hal.now_us / 1000) as u32,
+            pose: self.hal.body.pose(),
+            collisions: self.hal.body.collisions(),
+        });
+    }
+
+    /// Simulated time, microseconds.
+    pub fn now_us(&self) -> u64 {
+        self.hal.now_us
+    }
+
+    /// The true pose.
+    pub fn truth(&self) -> Pose {
+        self.hal.body.pose()
+    }
+
+    /// The pose the firmware believes in.
+    pub fn believed(&self) -> Pose {
+        let p = self.robot.pose();
+        Pose {
+            x: f64::from(p.x),
+            y: f64::from(p.y),
+            heading: f64::from(p.heading),
+        }
+    }
+
+    /// Distance between the true and the believed position, metres.
+    pub fn pose_error_m(&self) -> f64 {
+        let (t, b) = (self.truth(), self.believed());
+        (t.x - b.x).hypot(t.y - b.y)
+    }
+
+    /// Wall contacts so far.
+    pub fn collisions(&self) -> u32 {
+        self.hal.body.collisions()
+    }
+
+    /// Ground distance travelled, metres.
+    pub fn distance_m(&self) -> f64 {
+        self.hal.body.distance_m()
+    }
+
+    /// The true physical state (wheel rotation, encoders, contact).
+    pub fn body(&self) -> &Body {
+        &self.hal.body
+    }
+
+    /// The wheel bias in force (drawn or given).
+    pub fn wheel_bias(&self) -> [f64; 2] {
+        self.wheel_bias
+    }
+
+    /// The run's seed.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The motor command the firmware last set.
+    pub fn motor(&self) -> MotorCommand {
+        self.hal.motor
+    }
+
+    /// True battery voltage, millivolts.
+    pub fn battery_mv(&self) -> f64 {
+        self.hal.battery.true_mv()
+    }
+
+    /// The world.
+    pub fn world(&self) -> &World {
+        &self.hal.world
+    }
+
+    /// The firmware.
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+
+    /// The firmware, mutably (headless runs command it directly).
+    pub fn robot_mut(&mut self) -> &mut Robot {
+        &mut self.robot
+    }
+
+    /// The serial port (host side: `push_inbound`, `take_outbound`).
+    pub fn uart(&self) -> &Uart {
+        &self.hal.uart
+    }
+
+    /// The serial port, mutably.
+    pub fn uart_mut(&mut self) -> &mut Uart {
+        &mut self.hal.uart
+    }
+}
+
+/// The start pose: given, the arena's first, or a free spot; checked free.
+fn start_pose(world: &World, given: Option<Pose>, radius: f64) -> Result<Pose, SimError> {
+    let pose = match given.or_else(|| world.arena().starts.first().copied()) {
+        Some(p) => p,
+        None => {
+            let p = world
+                .free_spot(radius)
+                .ok_or_else(|| SimError::NoFreeSpot {
+                    arena: world.arena().name.clone(),
+                    diameter_m: 2.0 * radius,
+                })?;
+            Pose {
+                x: p.x,
+                y: p.y,
+                heading: 0.0,
+            }
+        }
+    };
+    if !(pose.x.is_finite() && pose.y.is_finite() && pose.heading.is_finite()) {
+        return Err(SimError::StartNotFinite);
+    }
+    if !world.is_free(Point::new(pose.x, pose.y), radius) {
+        return Err(SimError::StartInWall {
+            x: pose.x,
+            y: pose.y,
+            radius_m: radius,
+        });
+    }
+    Ok(Pose {
+        heading: crate::physics::wrap_pi(pose.heading),
+        ..pose
+    })
+}

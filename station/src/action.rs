@@ -1,0 +1,64 @@
+//! Everything that can change the app's state, as data.
+//!
+//! Layer: the one-way data flow's middle (ratatui templates, gitui): terminal input and link
+//! events become `Action`s (`input.rs`, the TUI loop), `App::update` applies them, and
+//! `ui::render` draws the result. An action never does I/O; commands the app wants sent are
+//! queued in the app's outbox and handed to the link task by the loop.
+
+use protocol::Mode;
+
+use crate::app::View;
+use crate::link::LinkEvent;
+
+/// One change to the app.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    /// Time passes: `now_ms` since the station started. Drives teleop repetition.
+    Tick { now_ms: u64 },
+    /// The terminal's size changed.
+    Resize { width: u16, height: u16 },
+    /// Something the link task reported.
+    Link(LinkEvent),
+    Quit,
+    ToggleHelp,
+    /// Close the topmost overlay or mode (help, go-to cursor, parameter edit).
+    Back,
+    NextView,
+    PrevView,
+    ShowView(View),
+    /// Change the teleop velocity by a step: forward mm/s, turn mrad/s.
+    Drive { dv: i16, dw: i16 },
+    /// Zero the velocity, stop repeating teleop and send `Stop`.
+    StopDriving,
+    SetMode(Mode),
+    /// Enter go-to mode with a cursor on the map at the robot.
+    GoToCursorStart,
+    /// Move the go-to cursor, metres.
+    MoveCursor { dx: f64, dy: f64 },
+    /// Send `GoTo` to the cursor.
+    GoToCursor,
+    /// Send `GoTo` to a point (a mouse click on the map), metres.
+    GoToPoint { x_m: f64, y_m: f64 },
+    /// Select another parameter.
+    ParamSelect(i32),
+    /// `GetParam` the selected parameter.
+    ParamRead,
+    /// `GetParam` every parameter.
+    ParamReadAll,
+    /// Start typing a new value for the selected parameter.
+    ParamEdit,
+    ParamInput(char),
+    ParamBackspace,
+    /// `SetParam` the typed value.
+    ParamCommit,
+    /// Step the telemetry rate through 0, 1, 2, 5, 10, 20, 50 Hz.
+    RateStep(i32),
+    /// Show the next set of chart series.
+    ChartNext,
+    /// Scroll the log by lines (positive: older).
+    LogScroll(i32),
+    /// Show or hide a map layer by name.
+    ToggleLayer(&'static str),
+    /// Forget the drawn tracks.
+    ClearTracks,
+}

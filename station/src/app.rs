@@ -1,0 +1,592 @@
+//! The station's state and the one function that changes it, `App::update`.
+//!
+//! Layer: pure state machine of the UI (ratatui templates' `update`, gitui's components without
+//! their I/O). It never touches the terminal or the port: commands it wants sent go into an
+//! outbox (`take_outbox`) that the TUI loop hands to the link task, and time arrives in
+//! `Action::Tick`. Rendering borrows it immutably (`ui::render`). Invariants: teleop repeats
+//! only while driving and only in a connected session (a reconnect never restarts motion by
+//! itself); every command sent is remembered until its `CommandDone` arrives, so its outcome
+//! (with the robot's Nack reason) reaches the log and the parameter editor. Cannot fail.
+
+pub mod arena;
+pub mod history;
+pub mod log;
+pub mod params;
+
+use std::collections::HashMap;
+
+use protocol::{AckInfo, Command, EmuTruth, Event, EventCode, Mode, PointMm, Telemetry};
+
+use crate::action::Action;
+use crate::link::api::{command_text, nack_text, param_name};
+use crate::link::{CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats, PeerInfo};
+use arena::ArenaOverlay;
+use history::{EncoderUnwrap, History, Track, CHART_PRESETS};
+use log::{Level, LogBuffer, LogLine, Source};
+use params::ParamEditor;
+
+/// Teleop repeat period while driving (PROTOCOL.md §7: 10 Hz).
+pub const TELEOP_PERIOD_MS: u64 = 100;
+/// One arrow press changes the forward speed by this much, mm/s.
+pub const V_STEP: i16 = 50;
+/// One arrow press changes the turn rate by this much, mrad/s.
+pub const W_STEP: i16 = 250;
+/// Teleop limits the keys reach (the firmware clamps to its `teleop_max_mm_s` too).
+pub const V_MAX: i16 = 500;
+pub const W_MAX: i16 = 3000;
+/// Telemetry rates `+`/`-` step through, Hz.
+pub const RATES: [u8; 7] = [0, 1, 2, 5, 10, 20, 50];
+/// Link statistics snapshots kept for the link panel's sparkline.
+const STATS_HISTORY: usize = 120;
+
+/// The main area's content.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    /// Everything that fits, arranged by the terminal's size.
+    Dashboard,
+    Sensors,
+    Charts,
+    Map,
+    Link,
+    Log,
+    Params,
+}
+
+impl View {
+    pub const ALL: [View; 7] = [
+        View::Dashboard,
+        View::Sensors,
+        View::Charts,
+        View::Map,
+        View::Link,
+        View::Log,
+        View::Params,
+    ];
+
+    pub fn title(&self) -> &'static str {
+        match self {
+            View::Dashboard => "Dashboard",
+            View::Sensors => "Sensors",
+            View::Charts => "Charts",
+            View::Map => "Map",
+            View::Link => "Link",
+            View::Log => "Log",
+            View::Params => "Parameters",
+        }
+    }
+}
+
+/// Keyboard teleop state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Teleop {
+    pub v_mm_s: i16,
+    pub w_mrad_s: i16,
+    /// Teleop repeats at 10 Hz while true.
+    pub driving: bool,
+    last_sent_ms: Option<u64>,
+}
+
+/// The map's interactive state.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MapState {
+    pub arena: Option<ArenaOverlay>,
+    /// The go-to cursor, metres; shown while `cursor_mode`.
+    pub cursor: (f64, f64),
+    pub cursor_mode: bool,
+    /// The last go-to goal sent.
+    pub goal: Option<(f64, f64)>,
+    /// Names of hidden layers.
+    pub hidden: Vec<&'static str>,
+}
+
+impl MapState {
+    pub fn visible(&self, layer: &str) -> bool {
+        !self.hidden.contains(&layer)
+    }
+}
+
+/// How the app starts.
+#[derive(Clone, Debug, Default)]
+pub struct AppOptions {
+    /// What the header says the link is ("/dev/ttyUSB0", "built-in emulator on /dev/pts/3").
+    pub port_label: String,
+    pub arena: Option<ArenaOverlay>,
+}
+
+/// The station's whole UI state.
+#[derive(Debug)]
+pub struct App {
+    pub now_ms: u64,
+    pub size: (u16, u16),
+    pub view: View,
+    pub help: bool,
+    pub quit: bool,
+    pub port_label: String,
+    pub connection: Connection,
+    pub peer: Option<PeerInfo>,
+    pub telemetry: Option<Telemetry>,
+    pub truth: Option<EmuTruth>,
+    pub stats: Option<LinkStats>,
+    /// Bytes/s received, one sample per statistics snapshot.
+    pub rx_rate_history: Vec<u64>,
+    pub history: History,
+    pub believed: Track,
+    pub true_track: Track,
+    pub encoders: EncoderUnwrap,
+    pub log: LogBuffer,
+    pub teleop: Teleop,
+    pub map: MapState,
+    pub params: ParamEditor,
+    /// The telemetry rate the robot confirmed last, Hz.
+    pub rate_hz: Option<u8>,
+    /// Index into `CHART_PRESETS`.
+    pub chart: usize,
+    next_id: CommandId,
+    pending: HashMap<CommandId, Pending>,
+    outbox: Vec<(CommandId, Command)>,
+}
+
+/// What the app remembers about a command until its outcome.
+#[derive(Clone, Copy, Debug)]
+struct Pending {
+    /// The parameter's value before a `SetParam`, to show beside a refusal.
+    before: Option<f32>,
+}
+
+impl App {
+    pub fn new(opts: AppOptions) -> Self {
+        App {
+            now_ms: 0,
+            size: (80, 24),
+            view: View::Dashboard,
+            help: false,
+            quit: false,
+            port_label: opts.port_label,
+            connection: Connection::Closed {
+                reason: "starting".into(),
+            },
+            peer: None,
+            telemetry: None,
+            truth: None,
+            stats: None,
+            rx_rate_history: Vec::new(),
+            history: History::default(),
+            believed: Track::default(),
+            true_track: Track::default(),
+            encoders: EncoderUnwrap::default(),
+            log: LogBuffer::default(),
+            teleop: Teleop::default(),
+            map: MapState {
+                arena: opts.arena,
+                ..MapState::default()
+            },
+            params: ParamEditor::default(),
+            rate_hz: None,
+            chart: 0,
+            next_id: 1,
+            pending: HashMap::new(),
+            outbox: Vec::new(),
+        }
+    }
+
+    /// Commands to send, with the ids their outcomes will carry; empties the outbox.
+    pub fn take_outbox(&mut self) -> Vec<(CommandId, Command)> {
+        std::mem::take(&mut self.outbox)
+    }
+
+    pub fn connected(&self) -> bool {
+        matches!(self.connection, Connection::Connected(_))
+    }
+
+    /// The robot's believed pose, metres and radians.
+    pub fn pose(&self) -> Option<(f64, f64, f64)> {
+        self.telemetry.map(|t| pose_m(&t.pose))
+    }
+
+    /// The true pose from the emulator, metres and radians.
+    pub fn true_pose(&self) -> Option<(f64, f64, f64)> {
+        self.truth.map(|t| pose_m(&t.pose))
+    }
+
+    /// Applies one action.
+    pub fn update(&mut self, action: Action) {
+        match action {
+            Action::Tick { now_ms } => self.tick(now_ms),
+            Action::Resize { width, height } => self.size = (width, height),
+            Action::Link(ev) => self.on_link(ev),
+            Action::Quit => {
+                if self.teleop.driving {
+                    self.stop_driving();
+                }
+                self.quit = true;
+            }
+            Action::ToggleHelp => self.help = !self.help,
+            Action::Back => self.back(),
+            Action::NextView => self.step_view(1),
+            Action::PrevView => self.step_view(-1),
+            Action::ShowView(v) => self.view = v,
+            Action::Drive { dv, dw } => self.drive(dv, dw),
+            Action::StopDriving => self.stop_driving(),
+            Action::SetMode(m) => {
+                self.teleop.driving = false;
+                self.send(Command::SetMode(m));
+            }
+            Action::GoToCursorStart => {
+                if let Some((x, y, _)) = self.pose() {
+                    self.map.cursor = (x, y);
+                }
+                self.map.cursor_mode = true;
+            }
+            Action::MoveCursor { dx, dy } => {
+                self.map.cursor.0 += dx;
+                self.map.cursor.1 += dy;
+            }
+            Action::GoToCursor => {
+                let (x, y) = self.map.cursor;
+                self.map.cursor_mode = false;
+                self.go_to(x, y);
+            }
+            Action::GoToPoint { x_m, y_m } => {
+                self.map.cursor = (x_m, y_m);
+                self.map.cursor_mode = false;
+                self.go_to(x_m, y_m);
+            }
+            Action::ParamSelect(d) => self.params.select(d),
+            Action::ParamRead => {
+                if let Some(p) = self.params.selected_info() {
+                    self.read_param(p.id);
+                }
+            }
+            Action::ParamReadAll => {
+                for p in self.params.params() {
+                    self.read_param(p.id);
+                }
+            }
+            Action::ParamEdit => self.params.input = Some(String::new()),
+            Action::ParamInput(c) => {
+                if let Some(s) = &mut self.params.input {
+                    if s.len() < 24 {
+                        s.push(c);
+                    }
+                }
+            }
+            Action::ParamBackspace => {
+                if let Some(s) = &mut self.params.input {
+                    s.pop();
+                }
+            }
+            Action::ParamCommit => self.commit_param(),
+            Action::RateStep(d) => self.step_rate(d),
+            Action::ChartNext => self.chart = (self.chart + 1) % CHART_PRESETS.len(),
+            Action::LogScroll(d) => self.log.scroll_by(d),
+            Action::ToggleLayer(name) => {
+                if let Some(i) = self.map.hidden.iter().position(|h| *h == name) {
+                    self.map.hidden.remove(i);
+                } else {
+                    self.map.hidden.push(name);
+                }
+            }
+            Action::ClearTracks => {
+                self.believed.clear();
+                self.true_track.clear();
+            }
+        }
+    }
+
+    fn tick(&mut self, now_ms: u64) {
+        self.now_ms = now_ms;
+        let due = self
+            .teleop
+            .last_sent_ms
+            .is_none_or(|t| now_ms.saturating_sub(t) >= TELEOP_PERIOD_MS);
+        if self.teleop.driving && due {
+            self.send_teleop();
+        }
+    }
+
+    fn back(&mut self) {
+        if self.help {
+            self.help = false;
+        } else if self.params.input.is_some() {
+            self.params.input = None;
+        } else if self.map.cursor_mode {
+            self.map.cursor_mode = false;
+        } else if self.view != View::Dashboard {
+            self.view = View::Dashboard;
+        }
+    }
+
+    fn step_view(&mut self, d: i32) {
+        let n = View::ALL.len() as i32;
+        let i = View::ALL.iter().position(|v| *v == self.view).unwrap_or(0) as i32;
+        let j = (i + d).rem_euclid(n) as usize;
+        self.view = View::ALL.get(j).copied().unwrap_or(View::Dashboard);
+    }
+
+    fn drive(&mut self, dv: i16, dw: i16) {
+        if !self.connected() {
+            self.note(Level::Warn, Source::Command, "teleop: not connected".into());
+            return;
+        }
+        let t = &mut self.teleop;
+        t.v_mm_s = t.v_mm_s.saturating_add(dv).clamp(-V_MAX, V_MAX);
+        t.w_mrad_s = t.w_mrad_s.saturating_add(dw).clamp(-W_MAX, W_MAX);
+        t.driving = true;
+        self.send_teleop();
+    }
+
+    fn send_teleop(&mut self) {
+        self.teleop.last_sent_ms = Some(self.now_ms);
+        self.send(Command::Teleop {
+            v_mm_s: self.teleop.v_mm_s,
+            w_mrad_s: self.teleop.w_mrad_s,
+        });
+    }
+
+    fn stop_driving(&mut self) {
+        self.teleop = Teleop::default();
+        self.send(Command::Stop);
+    }
+
+    fn go_to(&mut self, x: f64, y: f64) {
+        self.teleop.driving = false;
+        self.map.goal = Some((x, y));
+        self.send(Command::GoTo(PointMm {
+            x_mm: m_to_mm(x),
+            y_mm: m_to_mm(y),
+        }));
+    }
+
+    fn read_param(&mut self, id: u16) {
+        self.params.set_pending(id);
+        self.send(Command::GetParam {
+            id: protocol::ParamId(id),
+        });
+    }
+
+    fn commit_param(&mut self) {
+        match self.params.parse_input() {
+            Ok((id, value)) => {
+                self.params.input = None;
+                let before = self.params.value_of(id);
+                self.params.set_pending(id);
+                let command = Command::SetParam {
+                    id: protocol::ParamId(id),
+                    value,
+                };
+                let cid = self.send(command);
+                if let Some(p) = self.pending.get_mut(&cid) {
+                    p.before = before;
+                }
+            }
+            Err(e) => self.note(Level::Warn, Source::Command, format!("param: {e}")),
+        }
+    }
+
+    fn step_rate(&mut self, d: i32) {
+        let current = self
+            .rate_hz
+            .or(self.peer.as_ref().map(|p| p.telemetry_hz))
+            .unwrap_or(protocol::timing::TELEMETRY_DEFAULT_HZ);
+        // The nearest step at or above the current rate, then one step along.
+        let i = RATES.iter().position(|&r| r >= current).unwrap_or(RATES.len() - 1) as i32;
+        let j = (i + d).clamp(0, RATES.len() as i32 - 1) as usize;
+        let hz = RATES.get(j).copied().unwrap_or(current);
+        self.send(Command::SetTelemetryRate { hz });
+    }
+
+    /// Queues a command; returns its id.
+    fn send(&mut self, command: Command) -> CommandId {
+        let id = self.next_id;
+        self.next_id += 1;
+        self.pending.insert(id, Pending { before: None });
+        self.outbox.push((id, command));
+        id
+    }
+
+    fn on_link(&mut self, ev: LinkEvent) {
+        match ev {
+            LinkEvent::Connection(c) => self.on_connection(c),
+            LinkEvent::Telemetry(t) => self.on_telemetry(t),
+            LinkEvent::Truth(t) => {
+                let (x, y, _) = pose_m(&t.pose);
+                self.true_track.push(x, y);
+                self.truth = Some(t);
+            }
+            LinkEvent::Robot(e) => self.on_robot_event(e),
+            LinkEvent::Log { level, text } => self.note(level.into(), Source::Robot, text),
+            LinkEvent::CommandDone { id, command, outcome } => self.on_done(id, command, outcome),
+            LinkEvent::Transfer(_) => {}
+            LinkEvent::Stats(s) => {
+                if self.rx_rate_history.len() == STATS_HISTORY {
+                    self.rx_rate_history.remove(0);
+                }
+                self.rx_rate_history.push(s.bytes_in_per_s.round() as u64);
+                self.stats = Some(*s);
+            }
+        }
+    }
+
+    fn on_connection(&mut self, c: Connection) {
+        let (level, text) = match &c {
+            Connection::Closed { reason } => (Level::Warn, format!("link closed: {reason}")),
+            Connection::Handshaking { port } => (Level::Info, format!("handshaking on {port}")),
+            Connection::Connected(p) => (
+                Level::Info,
+                format!(
+                    "connected: {} {} ({:?}), telemetry {} Hz",
+                    p.firmware, p.firmware_version, p.profile, p.telemetry_hz
+                ),
+            ),
+            Connection::Refused { message } => (Level::Error, format!("refused: {message}")),
+        };
+        self.note(level, Source::Link, text);
+        if let Connection::Connected(p) = &c {
+            self.rate_hz = Some(p.telemetry_hz);
+            self.peer = Some(p.clone());
+        } else if self.teleop.driving {
+            // Never resume motion by itself after a reconnect.
+            self.teleop = Teleop::default();
+            self.note(Level::Warn, Source::Command, "teleop stopped: link lost".into());
+        }
+        self.connection = c;
+    }
+
+    fn on_telemetry(&mut self, t: Telemetry) {
+        let (x, y, _) = pose_m(&t.pose);
+        self.believed.push(x, y);
+        self.encoders.push(t.wheels.encoders);
+        self.history.push(self.now_ms as f64 / 1000.0, t);
+        self.telemetry = Some(t);
+    }
+
+    fn on_robot_event(&mut self, e: Event) {
+        let v = e.value;
+        let (level, text) = match e.code {
+            EventCode::ModeChanged => (Level::Info, format!("mode changed to {}", mode_name_i32(v))),
+            EventCode::GoalReached => (Level::Info, "goal reached".into()),
+            EventCode::FailsafeStop => (Level::Warn, format!("failsafe stop after {v} ms of silence")),
+            EventCode::Collision => (Level::Warn, "collision".into()),
+            EventCode::LineCrossed => (Level::Debug, format!("line crossed ({v} so far)")),
+            EventCode::PoseCorrected => (Level::Info, format!("pose corrected by {v} mm")),
+            EventCode::BeaconCalibration => (
+                Level::Info,
+                format!("beacon calibration, confidence {:.3}", f64::from(v) / 1000.0),
+            ),
+            EventCode::MapUpdated => (Level::Debug, "map updated".into()),
+            EventCode::PlanInstalled => (Level::Info, "plan installed".into()),
+            EventCode::PlanFinished => (Level::Info, "plan finished".into()),
+            EventCode::PlanAborted => (Level::Warn, format!("plan aborted at waypoint {v}")),
+            EventCode::HandshakeRefused => (
+                Level::Error,
+                format!("robot refused our handshake (it saw protocol {v})"),
+            ),
+            EventCode::ParamChanged => (
+                Level::Info,
+                format!("parameter {} changed", param_name(u16::try_from(v).unwrap_or(u16::MAX))),
+            ),
+        };
+        self.note(level, Source::Event, text);
+    }
+
+    fn on_done(&mut self, id: CommandId, command: Command, outcome: CommandOutcome) {
+        let before = self.pending.remove(&id).and_then(|p| p.before);
+        let what = command_text(&command);
+        match outcome {
+            CommandOutcome::Acked { info, rtt_ms, .. } => {
+                match (command, info) {
+                    (_, AckInfo::Param { id, value }) => self.params.set_value(id.0, value),
+                    (Command::SetTelemetryRate { hz }, _) => self.rate_hz = Some(hz),
+                    _ => {}
+                }
+                // Teleop is acked ten times a second: only its failures are news.
+                if !matches!(command, Command::Teleop { .. }) {
+                    let detail = match info {
+                        AckInfo::Param { value, .. } => format!(" = {}", params::format_value(value)),
+                        _ => String::new(),
+                    };
+                    self.note(Level::Info, Source::Command, format!("ok: {what}{detail} ({rtt_ms} ms)"));
+                }
+            }
+            CommandOutcome::Nacked { reason, .. } => {
+                if let Command::SetParam { id, .. } | Command::GetParam { id } = command {
+                    self.params.set_refused(id.0, reason, before);
+                }
+                if matches!(command, Command::Teleop { .. }) {
+                    self.teleop = Teleop::default();
+                }
+                self.note(Level::Error, Source::Command, format!("refused: {what}: {}", nack_text(reason)));
+            }
+            CommandOutcome::Failed(CommandFailure::Superseded) => {}
+            CommandOutcome::Failed(why) => {
+                if let Command::SetParam { id, .. } | Command::GetParam { id } = command {
+                    self.params.set_failed(id.0, why.to_string());
+                }
+                self.note(Level::Error, Source::Command, format!("failed: {what}: {why}"));
+            }
+        }
+    }
+
+    fn note(&mut self, level: Level, source: Source, text: String) {
+        self.log.push(LogLine {
+            t_ms: self.now_ms,
+            level,
+            source,
+            text,
+        });
+    }
+}
+
+fn pose_m(p: &protocol::Pose) -> (f64, f64, f64) {
+    (
+        f64::from(p.x_mm) / 1000.0,
+        f64::from(p.y_mm) / 1000.0,
+        f64::from(p.heading_mrad) / 1000.0,
+    )
+}
+
+fn m_to_mm(m: f64) -> i32 {
+    // `as` saturates; a point kilometres away is refused by the robot (BadPoint).
+    (m * 1000.0).round() as i32
+}
+
+/// A mode's name for display.
+pub fn mode_name(m: Mode) -> &'static str {
+    match m {
+        Mode::Idle => "Idle",
+        Mode::Manual => "Manual",
+        Mode::GoTo => "GoTo",
+        Mode::Wander => "Wander",
+        Mode::EdgeFollowLeft => "EdgeFollowLeft",
+        Mode::EdgeFollowRight => "EdgeFollowRight",
+        Mode::SeekLight => "SeekLight",
+        Mode::Explore => "Explore",
+        Mode::ExecutePlan => "ExecutePlan",
+    }
+}
+
+/// The mode with wire index `i` (as in `Event ModeChanged`).
+pub fn mode_from_index(i: i32) -> Option<Mode> {
+    MODES.get(usize::try_from(i).ok()?).copied()
+}
+
+/// Every mode in wire order; the digit keys 0-8 select them.
+pub const MODES: [Mode; 9] = [
+    Mode::Idle,
+    Mode::Manual,
+    Mode::GoTo,
+    Mode::Wander,
+    Mode::EdgeFollowLeft,
+    Mode::EdgeFollowRight,
+    Mode::SeekLight,
+    Mode::Explore,
+    Mode::ExecutePlan,
+];
+
+fn mode_name_i32(i: i32) -> String {
+    mode_from_index(i).map_or_else(|| format!("#{i}"), |m| mode_name(m).to_string())
+}
+
+#[cfg(test)]
+#[path = "app_tests.rs"]
+mod tests;

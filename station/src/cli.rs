@@ -1,0 +1,355 @@
+//! The command line: `station [--port P]`, `station ports`, `station send ...`,
+//! `station stats ...`.
+//!
+//! Layer: argument parsing (clap derive) and dispatch; `main.rs` only calls `run`. Parsing
+//! turns every argument into a checked value or a clear error (clap exits 2 on usage errors);
+//! a name that is not a parameter or a mode is refused here, before any port is opened. What
+//! can fail afterwards is reported by the subcommand with a non-zero exit: 1 when the robot
+//! refused or did not answer, or the port could not be used.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use protocol::{Command, Mode, ParamId, PointMm};
+
+use crate::link::serial::DEFAULT_BAUD;
+
+/// Terminal control station for small mobile robots over a serial link.
+///
+/// With no arguments, starts the built-in emulator on a pseudo-terminal and connects to it.
+#[derive(Debug, Parser)]
+#[command(name = "station", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Sub>,
+    #[command(flatten)]
+    pub port: PortArgs,
+    /// An arena file to draw under the map (CiberRato XML, maze text, ROS YAML, ASCII grid).
+    #[arg(long, value_name = "FILE", global = false)]
+    pub arena: Option<PathBuf>,
+}
+
+/// Which port to use.
+#[derive(Debug, Args, Clone)]
+pub struct PortArgs {
+    /// Serial port (or pty) of the robot, e.g. /dev/ttyUSB0.
+    #[arg(long, short = 'p', value_name = "PATH")]
+    pub port: Option<PathBuf>,
+    /// Baud rate (ignored by ptys).
+    #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
+    pub baud: u32,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Sub {
+    /// List serial ports (and pseudo-terminals an emulator may be on).
+    Ports {
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Send one command, print the robot's Ack or Nack (exit 1 when refused or unanswered).
+    Send {
+        #[command(flatten)]
+        port: RequiredPort,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+        /// Seconds to wait for the handshake.
+        #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
+        timeout: f64,
+        #[command(subcommand)]
+        command: SendCmd,
+    },
+    /// Watch the link for a while and print its statistics.
+    Stats {
+        #[command(flatten)]
+        port: RequiredPort,
+        /// Seconds to watch.
+        #[arg(long, short = 's', default_value_t = 5.0, value_parser = parse_seconds)]
+        seconds: f64,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+        /// Seconds to wait for the handshake.
+        #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
+        timeout: f64,
+    },
+}
+
+/// A port that headless commands require.
+#[derive(Debug, Args, Clone)]
+pub struct RequiredPort {
+    /// Serial port (or pty) of the robot.
+    #[arg(long, short = 'p', value_name = "PATH")]
+    pub port: PathBuf,
+    /// Baud rate (ignored by ptys).
+    #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
+    pub baud: u32,
+}
+
+/// The commands `send` knows.
+#[derive(Debug, Subcommand, Clone, PartialEq)]
+pub enum SendCmd {
+    /// Switch mode.
+    Mode { mode: ModeArg },
+    /// Manual velocity: forward mm/s, turn mrad/s (counter-clockwise positive).
+    #[command(allow_negative_numbers = true)]
+    Teleop {
+        #[arg(value_parser = clap::value_parser!(i16).range(-2000..=2000))]
+        v_mm_s: i16,
+        #[arg(value_parser = clap::value_parser!(i16).range(-20000..=20000))]
+        w_mrad_s: i16,
+    },
+    /// Drive to a point, metres in the map frame.
+    #[command(allow_negative_numbers = true)]
+    Goto {
+        #[arg(value_parser = parse_metres)]
+        x: f64,
+        #[arg(value_parser = parse_metres)]
+        y: f64,
+    },
+    /// Read or write a parameter (names as in the firmware's table; see `param list`).
+    Param {
+        #[command(subcommand)]
+        op: ParamOp,
+    },
+    /// Stop the motors and go idle.
+    Stop,
+    /// Telemetry rate in Hz (0 = off, at most 50).
+    Rate {
+        #[arg(value_parser = clap::value_parser!(u8).range(0..=50))]
+        hz: u8,
+    },
+}
+
+#[derive(Debug, Subcommand, Clone, PartialEq)]
+pub enum ParamOp {
+    /// Set a parameter; the robot answers with the value in force or refuses with a reason.
+    #[command(allow_negative_numbers = true)]
+    Set {
+        #[arg(value_parser = parse_param)]
+        name: u16,
+        #[arg(value_parser = parse_value)]
+        value: f32,
+    },
+    /// Read a parameter.
+    Get {
+        #[arg(value_parser = parse_param)]
+        name: u16,
+    },
+}
+
+/// Mode names on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ModeArg {
+    Idle,
+    Manual,
+    Goto,
+    Wander,
+    EdgeLeft,
+    EdgeRight,
+    SeekLight,
+    Explore,
+    ExecutePlan,
+}
+
+impl From<ModeArg> for Mode {
+    fn from(m: ModeArg) -> Mode {
+        match m {
+            ModeArg::Idle => Mode::Idle,
+            ModeArg::Manual => Mode::Manual,
+            ModeArg::Goto => Mode::GoTo,
+            ModeArg::Wander => Mode::Wander,
+            ModeArg::EdgeLeft => Mode::EdgeFollowLeft,
+            ModeArg::EdgeRight => Mode::EdgeFollowRight,
+            ModeArg::SeekLight => Mode::SeekLight,
+            ModeArg::Explore => Mode::Explore,
+            ModeArg::ExecutePlan => Mode::ExecutePlan,
+        }
+    }
+}
+
+impl SendCmd {
+    /// The wire command.
+    pub fn to_command(&self) -> Command {
+        match *self {
+            SendCmd::Mode { mode } => Command::SetMode(mode.into()),
+            SendCmd::Teleop { v_mm_s, w_mrad_s } => Command::Teleop { v_mm_s, w_mrad_s },
+            SendCmd::Goto { x, y } => Command::GoTo(PointMm {
+                x_mm: (x * 1000.0).round() as i32,
+                y_mm: (y * 1000.0).round() as i32,
+            }),
+            SendCmd::Param {
+                op: ParamOp::Set { name, value },
+            } => Command::SetParam {
+                id: ParamId(name),
+                value,
+            },
+            SendCmd::Param {
+                op: ParamOp::Get { name },
+            } => Command::GetParam { id: ParamId(name) },
+            SendCmd::Stop => Command::Stop,
+            SendCmd::Rate { hz } => Command::SetTelemetryRate { hz },
+        }
+    }
+}
+
+fn parse_baud(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(b) if (50..=4_000_000).contains(&b) => Ok(b),
+        Ok(b) => Err(format!("{b} is not a usable baud rate (50 ..= 4000000)")),
+        Err(_) => Err(format!("{s:?} is not a number")),
+    }
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 86_400.0 => Ok(v),
+        Ok(v) => Err(format!("{v} s is out of range (> 0, at most a day)")),
+        Err(_) => Err(format!("{s:?} is not a number of seconds")),
+    }
+}
+
+fn parse_metres(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v.abs() <= 1000.0 => Ok(v),
+        Ok(v) => Err(format!("{v} m is too far (at most 1000 m)")),
+        Err(_) => Err(format!("{s:?} is not a distance in metres")),
+    }
+}
+
+fn parse_value(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("{s:?} is not a finite number")),
+    }
+}
+
+/// A parameter by name or id.
+fn parse_param(s: &str) -> Result<u16, String> {
+    use robot_firmware::params::{by_name, info, PARAMS};
+    if let Some(p) = by_name(s) {
+        return Ok(p.id);
+    }
+    if let Some(p) = s.parse::<u16>().ok().and_then(info) {
+        return Ok(p.id);
+    }
+    let close: Vec<&str> = PARAMS
+        .iter()
+        .map(|p| p.name)
+        .filter(|n| n.contains(s) || s.contains(n.split('_').next().unwrap_or(n)))
+        .collect();
+    let all: Vec<&str> = PARAMS.iter().map(|p| p.name).collect();
+    Err(if close.is_empty() {
+        format!("unknown parameter {s:?}; known: {}", all.join(", "))
+    } else {
+        format!("unknown parameter {s:?}; did you mean {}?", close.join(", "))
+    })
+}
+
+/// Parses the process arguments and runs; the exit code to return.
+pub fn run() -> ExitCode {
+    let cli = Cli::parse();
+    let rt = match tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+    {
+        Ok(rt) => rt,
+        Err(e) => {
+            eprintln!("station: cannot start the async runtime: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    match rt.block_on(crate::headless::dispatch(cli)) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("station: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Result<Cli, clap::Error> {
+        Cli::try_parse_from(std::iter::once("station").chain(args.iter().copied()))
+    }
+
+    #[test]
+    fn send_parses_every_command_form() {
+        let cases: &[(&[&str], Command)] = &[
+            (&["mode", "manual"], Command::SetMode(Mode::Manual)),
+            (
+                &["teleop", "-150", "500"],
+                Command::Teleop {
+                    v_mm_s: -150,
+                    w_mrad_s: 500,
+                },
+            ),
+            (
+                &["goto", "1.5", "-0.25"],
+                Command::GoTo(PointMm {
+                    x_mm: 1500,
+                    y_mm: -250,
+                }),
+            ),
+            (
+                &["param", "set", "failsafe_ms", "500"],
+                Command::SetParam {
+                    id: ParamId(0),
+                    value: 500.0,
+                },
+            ),
+            (&["param", "get", "7"], Command::GetParam { id: ParamId(7) }),
+            (&["stop"], Command::Stop),
+            (&["rate", "20"], Command::SetTelemetryRate { hz: 20 }),
+        ];
+        for (args, want) in cases {
+            let mut full = vec!["send", "--port", "/dev/null"];
+            full.extend_from_slice(args);
+            let cli = parse(&full).unwrap_or_else(|e| panic!("{args:?}: {e}"));
+            let Some(Sub::Send { command, .. }) = cli.command else {
+                panic!("not a send: {args:?}");
+            };
+            assert_eq!(command.to_command(), *want, "{args:?}");
+        }
+    }
+
+    #[test]
+    fn bad_arguments_are_refused_with_a_clear_message() {
+        let cases: &[(&[&str], &str)] = &[
+            (&["send", "--port", "p", "param", "get", "warp_factor"], "unknown parameter"),
+            (&["send", "--port", "p", "mode", "dance"], "invalid value 'dance'"),
+            (&["send", "--port", "p", "rate", "99"], "99 is not in 0..=50"),
+            (&["send", "--port", "p", "teleop", "fast", "0"], "invalid digit"),
+            (&["send", "--port", "p", "goto", "NaN", "0"], "not a distance"),
+            (&["send", "--port", "p", "goto", "1e9", "0"], "too far"),
+            (&["send", "--port", "p", "param", "set", "failsafe_ms", "inf"], "not a finite"),
+            (&["send", "stop"], "--port <PATH>"),
+            (&["--baud", "0"], "not a usable baud rate"),
+            (&["stats", "--port", "p", "--seconds", "-1"], "out of range"),
+            (&["frobnicate"], "unrecognized subcommand"),
+        ];
+        for (args, needle) in cases {
+            match parse(args) {
+                Ok(c) => panic!("{args:?} parsed: {c:?}"),
+                Err(e) => {
+                    let text = e.to_string();
+                    assert!(text.contains(needle), "{args:?}: {text}");
+                    assert_eq!(e.exit_code(), 2, "{args:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn no_arguments_means_the_built_in_emulator() {
+        let cli = parse(&[]).expect("parses");
+        assert!(cli.command.is_none());
+        assert!(cli.port.port.is_none());
+    }
+}

@@ -1,0 +1,291 @@
+//! What each command line form does: the TUI (on a port or the built-in emulator), `ports`,
+//! `send` and `stats`.
+//!
+//! Layer: the binary's edge (anyhow lives here and in `main`). Headless commands start the same
+//! link task as the TUI, wait for the handshake (failing at once, with the reason, when the
+//! port cannot be opened or the robot refuses us), do their one thing and print plain text or
+//! JSON. Exit codes: 0 done, 1 refused / unanswered / port unusable, 2 usage (clap).
+
+use std::io::IsTerminal;
+use std::path::Path;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::{bail, Context as _};
+use protocol::AckInfo;
+use serde_json::json;
+use tokio::time::Instant;
+
+use crate::app::arena::ArenaOverlay;
+use crate::app::params::format_value;
+use crate::app::{App, AppOptions};
+use crate::builtin::start_builtin_emulator;
+use crate::cli::{Cli, RequiredPort, SendCmd, Sub};
+use crate::link::api::{command_text, nack_text, param_name};
+use crate::link::serial::{open_exclusive, SerialConnector};
+use crate::link::{
+    spawn_link, CommandOutcome, Connection, LinkEvent, LinkOptions, LinkStats, PeerInfo,
+    RunningLink,
+};
+
+/// Runs what the command line asked for.
+pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
+    match cli.command {
+        None => interactive(cli.port.port.as_deref(), cli.port.baud, cli.arena.as_deref()).await,
+        Some(Sub::Ports { json }) => ports(json),
+        Some(Sub::Send {
+            port,
+            json,
+            timeout,
+            command,
+        }) => send(&port, json, timeout, &command).await,
+        Some(Sub::Stats {
+            port,
+            seconds,
+            json,
+            timeout,
+        }) => stats(&port, seconds, json, timeout).await,
+    }
+}
+
+async fn interactive(
+    port: Option<&Path>,
+    baud: u32,
+    arena: Option<&Path>,
+) -> anyhow::Result<ExitCode> {
+    if !std::io::stdout().is_terminal() {
+        bail!("the TUI needs a terminal; for scripts use `station send` or `station stats`");
+    }
+    let mut arena = match arena {
+        Some(p) => Some(
+            ArenaOverlay::load(p).with_context(|| format!("cannot load arena {}", p.display()))?,
+        ),
+        None => None,
+    };
+    // Keeps the built-in emulator alive for the whole session.
+    let mut builtin = None;
+    let (path, label) = match port {
+        Some(p) => {
+            // Fail now, with the reason, rather than open a TUI on a port that cannot work.
+            drop(open_exclusive(p, baud)?);
+            (p.to_path_buf(), p.display().to_string())
+        }
+        None => {
+            let mut emu = start_builtin_emulator()?;
+            let label = format!("built-in emulator on {}", emu.pty_path().display());
+            if arena.is_none() {
+                arena = emu.arena.clone();
+            }
+            let path = emu.path().to_path_buf();
+            builtin = Some(emu);
+            (path, label)
+        }
+    };
+    let link = spawn_link(SerialConnector::new(&path, baud), LinkOptions::default());
+    let app = App::new(AppOptions {
+        port_label: label,
+        arena,
+    });
+    crate::tui::run(app, link).await?;
+    drop(builtin);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn ports(json: bool) -> anyhow::Result<ExitCode> {
+    let serial = serialport::available_ports().unwrap_or_default();
+    let mut ptys: Vec<String> = std::fs::read_dir("/dev/pts")
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.chars().all(|c| c.is_ascii_digit()))
+                .map(|n| format!("/dev/pts/{n}"))
+                .collect()
+        })
+        .unwrap_or_default();
+    ptys.sort_by_key(|p| p.rsplit('/').next().and_then(|n| n.parse::<u32>().ok()));
+    let describe = |t: &serialport::SerialPortType| match t {
+        serialport::SerialPortType::UsbPort(u) => format!(
+            "USB {:04x}:{:04x} {} {}",
+            u.vid,
+            u.pid,
+            u.manufacturer.as_deref().unwrap_or(""),
+            u.product.as_deref().unwrap_or("")
+        )
+        .trim_end()
+        .to_string(),
+        serialport::SerialPortType::PciPort => "PCI".into(),
+        serialport::SerialPortType::BluetoothPort => "Bluetooth".into(),
+        serialport::SerialPortType::Unknown => "serial".into(),
+    };
+    if json {
+        let v = json!({
+            "serial": serial.iter().map(|p| json!({
+                "path": p.port_name,
+                "kind": describe(&p.port_type),
+            })).collect::<Vec<_>>(),
+            "pty": ptys,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        if serial.is_empty() {
+            println!("no serial ports found");
+        }
+        for p in &serial {
+            println!("{:<24} {}", p.port_name, describe(&p.port_type));
+        }
+        if !ptys.is_empty() {
+            println!();
+            println!("pseudo-terminals (an emulator's port is one of these; it prints which):");
+            for p in &ptys {
+                println!("  {p}");
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Starts a link and waits for the handshake; fails fast on a port that cannot be opened or a
+/// robot that refuses us.
+async fn connect(port: &RequiredPort, timeout_s: f64) -> anyhow::Result<(RunningLink, PeerInfo)> {
+    let mut link = spawn_link(
+        SerialConnector::new(&port.port, port.baud),
+        LinkOptions {
+            station: format!("station-cli {}", env!("CARGO_PKG_VERSION")),
+            ..LinkOptions::default()
+        },
+    );
+    let deadline = Instant::now() + Duration::from_secs_f64(timeout_s);
+    loop {
+        let ev = match tokio::time::timeout_at(deadline, link.events.recv()).await {
+            Ok(Some(ev)) => ev,
+            Ok(None) => bail!("the link task ended"),
+            Err(_) => bail!(
+                "no handshake with a robot on {} within {timeout_s} s (is the robot on this \
+                 port, at this baud rate?)",
+                port.port.display()
+            ),
+        };
+        match ev {
+            LinkEvent::Connection(Connection::Connected(p)) => return Ok((link, p)),
+            LinkEvent::Connection(Connection::Closed { reason }) => bail!("{reason}"),
+            LinkEvent::Connection(Connection::Refused { message }) => bail!("{message}"),
+            _ => {}
+        }
+    }
+}
+
+async fn send(
+    port: &RequiredPort,
+    json: bool,
+    timeout: f64,
+    cmd: &SendCmd,
+) -> anyhow::Result<ExitCode> {
+    let (link, _peer) = connect(port, timeout).await?;
+    let command = cmd.to_command();
+    let outcome = link.handle.call(command).await;
+    link.handle.shutdown();
+    let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;
+    let what = command_text(&command);
+    let (ok, text, value) = match outcome {
+        CommandOutcome::Acked {
+            info,
+            sends,
+            rtt_ms,
+        } => {
+            let (text, detail) = match info {
+                AckInfo::Param { id, value } => (
+                    format!("ack: {} = {}", param_name(id.0), format_value(value)),
+                    json!({"param": param_name(id.0), "id": id.0, "value": value}),
+                ),
+                AckInfo::Object {
+                    object,
+                    id,
+                    len,
+                    crc,
+                } => (
+                    format!("ack: {what}: object {object:?} id {id:#010x}, {len} bytes"),
+                    json!({"object": format!("{object:?}"), "id": id, "len": len, "crc": crc}),
+                ),
+                AckInfo::Done => (format!("ack: {what}"), json!(null)),
+            };
+            let v = json!({"outcome": "ack", "command": what, "sends": sends, "rtt_ms": rtt_ms,
+                           "info": detail});
+            (true, format!("{text} ({rtt_ms} ms)"), v)
+        }
+        CommandOutcome::Nacked { reason, sends } => (
+            false,
+            format!("nack: {what}: {}", nack_text(reason)),
+            json!({"outcome": "nack", "command": what, "sends": sends,
+                   "reason": format!("{reason:?}"), "reason_text": nack_text(reason)}),
+        ),
+        CommandOutcome::Failed(why) => (
+            false,
+            format!("failed: {what}: {why}"),
+            json!({"outcome": "failed", "command": what, "error": why.to_string()}),
+        ),
+    };
+    if json {
+        println!("{}", serde_json::to_string_pretty(&value)?);
+    } else if ok {
+        println!("{text}");
+    } else {
+        eprintln!("{text}");
+    }
+    Ok(if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+async fn stats(
+    port: &RequiredPort,
+    seconds: f64,
+    json: bool,
+    timeout: f64,
+) -> anyhow::Result<ExitCode> {
+    let (mut link, peer) = connect(port, timeout).await?;
+    let deadline = Instant::now() + Duration::from_secs_f64(seconds);
+    let mut last: Option<LinkStats> = None;
+    while let Ok(Some(ev)) = tokio::time::timeout_at(deadline, link.events.recv()).await {
+        if let LinkEvent::Stats(s) = ev {
+            last = Some(*s);
+        }
+    }
+    link.handle.shutdown();
+    let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;
+    let Some(s) = last else {
+        bail!("no statistics were published in {seconds} s");
+    };
+    if json {
+        let v = json!({"port": port.port.display().to_string(), "peer": peer, "stats": s});
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!("port        {}", port.port.display());
+        println!(
+            "robot       {} {} {:?}",
+            peer.firmware, peer.firmware_version, peer.profile
+        );
+        println!("state       {} for {:.1} s", s.state, s.session_ms as f64 / 1000.0);
+        println!(
+            "frames      in {} out {}  bytes in {} ({:.0}/s) out {} ({:.0}/s)",
+            s.frames_in, s.frames_out, s.bytes_in, s.bytes_in_per_s, s.bytes_out, s.bytes_out_per_s
+        );
+        println!("telemetry   {:.1} Hz ({} frames)", s.telemetry_hz, s.telemetry_frames);
+        println!(
+            "loss        robot {} ({:.2}%)  truth {}  duplicates {}",
+            s.robot_seq.lost, s.robot_seq.loss_percent, s.truth_seq.lost, s.robot_seq.duplicates
+        );
+        println!(
+            "errors      CRC {}  bad frames {}  dropped bytes {}",
+            s.decoder.crc_errors,
+            s.decoder.errors(),
+            s.decoder.bytes_dropped
+        );
+        match (s.rtt_ms.p50, s.rtt_ms.p99) {
+            (Some(a), Some(b)) => println!("rtt         p50 {a:.0} ms  p99 {b:.0} ms"),
+            _ => println!("rtt         no samples (no commands sent)"),
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,140 @@
+//! Terminal input to `Action`s: the key map and mouse clicks.
+//!
+//! Layer: the first step of the one-way flow. It reads the app (which mode the keys are in,
+//! where the map is drawn) but changes nothing. Key bindings depend on the context, innermost
+//! first: help open, typing a parameter value, the go-to cursor, the parameter view, then the
+//! global keys. Key release events (kitty protocol terminals) are ignored.
+
+use protocol::Mode;
+use ratatui::crossterm::event::{
+    Event, KeyCode, KeyEvent, KeyEventKind, KeyModifiers, MouseButton, MouseEventKind,
+};
+use ratatui::layout::Rect;
+
+use crate::action::Action;
+use crate::app::{App, View, MODES, V_STEP, W_STEP};
+use crate::ui::{self, Panel};
+
+/// Cursor step of one arrow press in go-to mode, metres (shift: 5x).
+pub const CURSOR_STEP_M: f64 = 0.1;
+
+/// The action for one terminal event, if any.
+pub fn action_for(app: &App, ev: &Event) -> Option<Action> {
+    match ev {
+        Event::Resize(w, h) => Some(Action::Resize {
+            width: *w,
+            height: *h,
+        }),
+        Event::Key(k) if k.kind != KeyEventKind::Release => key(app, k),
+        Event::Mouse(m) => {
+            let screen = Rect::new(0, 0, app.size.0, app.size.1);
+            let areas = ui::areas(screen, app);
+            match m.kind {
+                MouseEventKind::Down(MouseButton::Left) => {
+                    let map = areas.find(Panel::Map)?;
+                    let inner = inner_of(map);
+                    let (x_m, y_m) = ui::map::to_world(app, inner, m.column, m.row)?;
+                    Some(Action::GoToPoint { x_m, y_m })
+                }
+                MouseEventKind::ScrollUp => Some(Action::LogScroll(3)),
+                MouseEventKind::ScrollDown => Some(Action::LogScroll(-3)),
+                _ => None,
+            }
+        }
+        _ => None,
+    }
+}
+
+/// The area inside a panel's border.
+fn inner_of(r: Rect) -> Rect {
+    ratatui::widgets::Block::bordered().inner(r)
+}
+
+fn key(app: &App, k: &KeyEvent) -> Option<Action> {
+    let ctrl = k.modifiers.contains(KeyModifiers::CONTROL);
+    if ctrl && matches!(k.code, KeyCode::Char('c')) {
+        return Some(Action::Quit);
+    }
+    if app.help {
+        return Some(match k.code {
+            KeyCode::Char('q') => Action::Quit,
+            _ => Action::ToggleHelp,
+        });
+    }
+    if app.params.input.is_some() {
+        return match k.code {
+            KeyCode::Char(c) if c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E') => {
+                Some(Action::ParamInput(c))
+            }
+            KeyCode::Backspace => Some(Action::ParamBackspace),
+            KeyCode::Enter => Some(Action::ParamCommit),
+            KeyCode::Esc => Some(Action::Back),
+            _ => None,
+        };
+    }
+    if app.map.cursor_mode {
+        let step = if k.modifiers.contains(KeyModifiers::SHIFT) {
+            5.0 * CURSOR_STEP_M
+        } else {
+            CURSOR_STEP_M
+        };
+        let mv = |dx: f64, dy: f64| Some(Action::MoveCursor { dx, dy });
+        match k.code {
+            KeyCode::Up | KeyCode::Char('k') | KeyCode::Char('K') => return mv(0.0, step),
+            KeyCode::Down | KeyCode::Char('j') | KeyCode::Char('J') => return mv(0.0, -step),
+            KeyCode::Left | KeyCode::Char('h') | KeyCode::Char('H') => return mv(-step, 0.0),
+            KeyCode::Right | KeyCode::Char('l') | KeyCode::Char('L') => return mv(step, 0.0),
+            KeyCode::Enter => return Some(Action::GoToCursor),
+            KeyCode::Esc => return Some(Action::Back),
+            _ => {}
+        }
+    }
+    if app.view == View::Params {
+        match k.code {
+            KeyCode::Up | KeyCode::Char('k') => return Some(Action::ParamSelect(-1)),
+            KeyCode::Down | KeyCode::Char('j') => return Some(Action::ParamSelect(1)),
+            KeyCode::PageUp => return Some(Action::ParamSelect(-10)),
+            KeyCode::PageDown => return Some(Action::ParamSelect(10)),
+            KeyCode::Char('r') => return Some(Action::ParamRead),
+            KeyCode::Char('R') => return Some(Action::ParamReadAll),
+            KeyCode::Enter | KeyCode::Char('e') => return Some(Action::ParamEdit),
+            // No driving from the table: arrows select there, so WASD would surprise.
+            KeyCode::Char('w' | 'a' | 's' | 'd') | KeyCode::Left | KeyCode::Right => return None,
+            _ => {}
+        }
+    }
+    global(k)
+}
+
+fn global(k: &KeyEvent) -> Option<Action> {
+    let drive = |dv: i16, dw: i16| Some(Action::Drive { dv, dw });
+    match k.code {
+        KeyCode::Char('q') => Some(Action::Quit),
+        KeyCode::Char('?') => Some(Action::ToggleHelp),
+        KeyCode::Esc => Some(Action::Back),
+        KeyCode::Tab => Some(Action::NextView),
+        KeyCode::BackTab => Some(Action::PrevView),
+        KeyCode::F(n) => View::ALL
+            .get(usize::from(n).checked_sub(1)?)
+            .map(|v| Action::ShowView(*v)),
+        KeyCode::Up | KeyCode::Char('w') => drive(V_STEP, 0),
+        KeyCode::Down | KeyCode::Char('s') => drive(-V_STEP, 0),
+        KeyCode::Left | KeyCode::Char('a') => drive(0, W_STEP),
+        KeyCode::Right | KeyCode::Char('d') => drive(0, -W_STEP),
+        KeyCode::Char(' ') => Some(Action::StopDriving),
+        KeyCode::Char(c @ '0'..='8') => {
+            let i = c.to_digit(10)? as usize;
+            MODES.get(i).map(|m: &Mode| Action::SetMode(*m))
+        }
+        KeyCode::Char('g') => Some(Action::GoToCursorStart),
+        KeyCode::Char('p') => Some(Action::ShowView(View::Params)),
+        KeyCode::Char('+') | KeyCode::Char('=') => Some(Action::RateStep(1)),
+        KeyCode::Char('-') => Some(Action::RateStep(-1)),
+        KeyCode::Char('c') => Some(Action::ChartNext),
+        KeyCode::Char('t') => Some(Action::ToggleLayer("truth")),
+        KeyCode::Char('x') => Some(Action::ClearTracks),
+        KeyCode::PageUp => Some(Action::LogScroll(5)),
+        KeyCode::PageDown => Some(Action::LogScroll(-5)),
+        _ => None,
+    }
+}

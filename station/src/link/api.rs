@@ -1,0 +1,240 @@
+//! What the app and the link task say to each other: requests in, events out.
+//!
+//! Layer: plain owned data crossing the channel between the link task (which owns the port)
+//! and its users (the TUI, the headless commands, and later recording, replay and transfers).
+//! Nothing here does I/O. Every command a user submits carries a caller-chosen `CommandId`
+//! and is answered by exactly one `LinkEvent::CommandDone` with that id (and, when asked, on a
+//! oneshot channel too), whatever happens to the link in between.
+
+use protocol::{AckInfo, Command, EmuTruth, Event, LogLevel, MapCapacity, NackReason, ProfileId};
+use protocol::{ObjectKind, Telemetry, TransferAck, TransferBegin};
+use serde::Serialize;
+use tokio::sync::oneshot;
+
+use super::stats::LinkStats;
+
+/// Names one submitted command; chosen by the caller, opaque to the link.
+pub type CommandId = u64;
+
+/// A request to the link task.
+#[derive(Debug)]
+pub enum LinkRequest {
+    /// Send `command` (retried per PROTOCOL.md §7); the outcome comes back as
+    /// `LinkEvent::CommandDone { id, .. }` and on `reply` if given.
+    Command {
+        id: CommandId,
+        command: Command,
+        reply: Option<oneshot::Sender<CommandOutcome>>,
+    },
+    /// Send a transfer frame as is (no windowing yet: the transfer engine that drives these
+    /// belongs to the map/plan transfer work).
+    Transfer(TransferOut),
+    /// Close the port and end the task.
+    Shutdown,
+}
+
+/// An outgoing transfer frame, owned.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TransferOut {
+    Begin(TransferBegin),
+    Chunk { id: u32, offset: u32, data: Vec<u8> },
+    Ack(TransferAck),
+}
+
+/// An incoming transfer frame, owned.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TransferIn {
+    Begin(TransferBegin),
+    Chunk { id: u32, offset: u32, data: Vec<u8> },
+    Ack(TransferAck),
+}
+
+/// Something the link task reports.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LinkEvent {
+    /// The connection changed state.
+    Connection(Connection),
+    Telemetry(Telemetry),
+    /// Ground truth from the emulator (never from a real robot).
+    Truth(EmuTruth),
+    /// An `Event` frame from the robot.
+    Robot(Event),
+    /// A `Log` line from the robot.
+    Log {
+        level: LogLevel,
+        text: String,
+    },
+    /// The one answer to a submitted command.
+    CommandDone {
+        id: CommandId,
+        command: Command,
+        outcome: CommandOutcome,
+    },
+    /// A transfer frame from the robot (forwarded, not interpreted yet).
+    Transfer(TransferIn),
+    /// A snapshot of the link statistics, published periodically.
+    Stats(Box<LinkStats>),
+}
+
+/// The state of the link.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Connection {
+    /// No port open: why (not present, busy and who holds it, ...). The task keeps trying.
+    Closed { reason: String },
+    /// The port is open and a `Hello` is out; no reply yet.
+    Handshaking { port: String },
+    /// Handshake done: commands can be sent.
+    Connected(PeerInfo),
+    /// The robot speaks another schema or protocol version; the message names both builds.
+    Refused { message: String },
+}
+
+impl Connection {
+    /// A one-word name for status lines and JSON.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Connection::Closed { .. } => "closed",
+            Connection::Handshaking { .. } => "handshaking",
+            Connection::Connected(_) => "connected",
+            Connection::Refused { .. } => "refused",
+        }
+    }
+}
+
+/// What the robot said about itself in its `HelloReply`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PeerInfo {
+    pub session: u32,
+    pub firmware: String,
+    pub firmware_version: String,
+    #[serde(serialize_with = "ser_profile")]
+    pub profile: ProfileId,
+    /// `protocol::caps` bits.
+    pub capabilities: u32,
+    #[serde(serialize_with = "ser_capacity")]
+    pub map_capacity: MapCapacity,
+    pub telemetry_hz: u8,
+    pub failsafe_ms: u16,
+}
+
+impl PeerInfo {
+    /// Whether the robot has capability bit(s) `cap`.
+    pub fn has(&self, cap: u32) -> bool {
+        self.capabilities & cap == cap
+    }
+}
+
+fn ser_profile<S: serde::Serializer>(p: &ProfileId, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(&format!("{p:?}"))
+}
+
+fn ser_capacity<S: serde::Serializer>(c: &MapCapacity, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(&format!("{}x{}", c.width, c.height))
+}
+
+/// How a command ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CommandOutcome {
+    /// Acknowledged. `rtt_ms` is from the last send to the ack.
+    Acked {
+        info: AckInfo,
+        sends: u32,
+        rtt_ms: u64,
+    },
+    /// Refused by the robot; it changed nothing.
+    Nacked { reason: NackReason, sends: u32 },
+    /// Never answered, or could not be sent.
+    Failed(CommandFailure),
+}
+
+impl CommandOutcome {
+    /// Whether the robot accepted the command.
+    pub fn is_ack(&self) -> bool {
+        matches!(self, CommandOutcome::Acked { .. })
+    }
+}
+
+/// Why a command got no answer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CommandFailure {
+    /// Sent `sends` times, 200 ms apart, without an answer.
+    Timeout { sends: u32 },
+    /// Submitted while no handshaken session existed.
+    NotConnected,
+    /// The link went down (port closed, timeout, re-handshake) before the answer.
+    LinkLost,
+    /// A newer teleop command replaced it before it was answered.
+    Superseded,
+    /// The link task ended.
+    Shutdown,
+}
+
+impl std::fmt::Display for CommandFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CommandFailure::Timeout { sends } => write!(f, "no answer after {sends} sends"),
+            CommandFailure::NotConnected => write!(f, "not connected"),
+            CommandFailure::LinkLost => write!(f, "link lost before the answer"),
+            CommandFailure::Superseded => write!(f, "superseded by a newer teleop"),
+            CommandFailure::Shutdown => write!(f, "link closed"),
+        }
+    }
+}
+
+/// A human description of a Nack reason (PROTOCOL.md §6 kind 6).
+pub fn nack_text(reason: NackReason) -> &'static str {
+    match reason {
+        NackReason::NoHandshake => "no handshake (the robot lost the session)",
+        NackReason::Unsupported => "unsupported by this robot",
+        NackReason::UnknownParam => "unknown parameter",
+        NackReason::OutOfRange => "value out of range",
+        NackReason::BadState => "not allowed in the current mode",
+        NackReason::NoMap => "the robot holds no map",
+        NackReason::NoPlan => "the robot holds no plan",
+        NackReason::PlanIdMismatch => "plan id mismatch",
+        NackReason::BadPoint => "point outside the map or in an obstacle",
+        NackReason::Unreachable => "unreachable",
+        NackReason::CapacityExceeded => "capacity exceeded",
+        NackReason::Busy => "busy with another transfer",
+    }
+}
+
+/// A short description of a command for logs and the CLI.
+pub fn command_text(c: &Command) -> String {
+    match c {
+        Command::SetMode(m) => format!("mode {m:?}"),
+        Command::Teleop { v_mm_s, w_mrad_s } => format!("teleop {v_mm_s} mm/s {w_mrad_s} mrad/s"),
+        Command::Stop => "stop".into(),
+        Command::GoTo(p) => format!("goto {:.3} {:.3} m", mm_to_m(p.x_mm), mm_to_m(p.y_mm)),
+        Command::SetParam { id, value } => format!("param set {} {value}", param_name(id.0)),
+        Command::GetParam { id } => format!("param get {}", param_name(id.0)),
+        Command::StartExploration => "explore".into(),
+        Command::ExecutePlan { plan_id } => format!("execute plan {plan_id:#010x}"),
+        Command::Segment => "segment".into(),
+        Command::Plan { .. } => "plan".into(),
+        Command::SetTelemetryRate { hz } => format!("rate {hz} Hz"),
+        Command::Download { object, offset } => {
+            let o: &str = match object {
+                ObjectKind::Map => "map",
+                ObjectKind::Plan => "plan",
+                ObjectKind::Regions => "regions",
+            };
+            format!("download {o} from {offset}")
+        }
+        Command::SetPose { pose } => format!(
+            "set pose {:.3} {:.3} m {} mrad",
+            mm_to_m(pose.x_mm),
+            mm_to_m(pose.y_mm),
+            pose.heading_mrad
+        ),
+    }
+}
+
+/// The firmware's name for parameter `id`, or the number.
+pub fn param_name(id: u16) -> String {
+    robot_firmware::params::info(id).map_or_else(|| format!("#{id}"), |p| p.name.to_string())
+}
+
+fn mm_to_m(mm: i32) -> f64 {
+    f64::from(mm) / 1000.0
+}

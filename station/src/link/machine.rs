@@ -1,0 +1,609 @@
+//! The station's link state machine: handshake, heartbeat, commands, link timeout, statistics.
+//!
+//! Layer: protocol state with no I/O and no clock (smoltcp's `poll(timestamp)`, rumqttc's
+//! `state.rs`, with time passed in). The link task feeds it received bytes, port open/close
+//! notices, submitted commands and the time in milliseconds; it answers with bytes to write
+//! (`take_output`) and `LinkEvent`s (`take_events`), and says when it next needs a `poll`
+//! (`next_deadline`). Invariants:
+//! - commands are sent only in a handshaken session; one submitted otherwise fails at once
+//!   with `NotConnected`, and the ones in flight when the session ends fail with `LinkLost`;
+//! - every submitted command produces exactly one `CommandDone`;
+//! - a fingerprint or protocol mismatch is reported once with both builds named, and retried
+//!   only slowly (the robot may be reflashed), never every 200 ms.
+//!
+//! Cannot fail: encoding errors are impossible for the messages it builds (all fit a frame)
+//! and are counted, not raised, if they ever happen.
+
+use std::collections::VecDeque;
+
+use protocol::timing::{HEARTBEAT_PERIOD_MS, LINK_TIMEOUT_MS};
+use protocol::{
+    encode, Command, Feed, FrameDecoder, FrameError, Heartbeat, Hello, HelloReply, Kind, Message,
+    NackReason, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION,
+};
+
+use super::api::{
+    CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, PeerInfo, TransferIn,
+    TransferOut,
+};
+use super::commands::{CommandTable, InFlight};
+use super::stats::{LinkStats, StatsCollector};
+
+/// Time between two `Hello`s while handshaking (PROTOCOL.md §4).
+pub const HELLO_RETRY_MS: u64 = 200;
+/// Time between two `Hello`s after a refusal: a mismatch heals only by reflashing.
+pub const REFUSED_RETRY_MS: u64 = 2000;
+/// How often a statistics snapshot is published.
+pub const STATS_PERIOD_MS: u64 = 250;
+
+/// Settings of one link.
+#[derive(Clone, Debug)]
+pub struct MachineConfig {
+    /// The station's name in `Hello` (at most 32 bytes; longer is cut).
+    pub station: String,
+    /// Seeds the session nonces; pass something random outside tests.
+    pub nonce_seed: u64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum State {
+    Closed,
+    Handshaking { session: u32, next_hello_ms: u64 },
+    Connected { session: u32, since_ms: u64 },
+    Refused { session: u32, next_hello_ms: u64 },
+}
+
+/// The state machine. See the module documentation.
+pub struct LinkMachine {
+    cfg: MachineConfig,
+    state: State,
+    connection: Connection,
+    port: String,
+    decoder: FrameDecoder,
+    tx_seq: u16,
+    rng: u64,
+    out: Vec<u8>,
+    events: VecDeque<LinkEvent>,
+    commands: CommandTable,
+    stats: StatsCollector,
+    last_rx_ms: u64,
+    last_tx_ms: u64,
+    next_stats_ms: u64,
+}
+
+impl LinkMachine {
+    pub fn new(mut cfg: MachineConfig) -> Self {
+        truncate_utf8(&mut cfg.station, protocol::MAX_NAME);
+        let rng = cfg.nonce_seed;
+        LinkMachine {
+            cfg,
+            state: State::Closed,
+            connection: Connection::Closed {
+                reason: "not opened yet".into(),
+            },
+            port: String::new(),
+            decoder: FrameDecoder::new(),
+            tx_seq: 0,
+            rng,
+            out: Vec::new(),
+            events: VecDeque::new(),
+            commands: CommandTable::default(),
+            stats: StatsCollector::default(),
+            last_rx_ms: 0,
+            last_tx_ms: 0,
+            next_stats_ms: 0,
+        }
+    }
+
+    /// The current connection state.
+    pub fn connection(&self) -> &Connection {
+        &self.connection
+    }
+
+    /// Whether a handshaken session exists.
+    pub fn connected(&self) -> bool {
+        matches!(self.state, State::Connected { .. })
+    }
+
+    /// Bytes to write to the port, in order; empties the buffer.
+    pub fn take_output(&mut self) -> Vec<u8> {
+        std::mem::take(&mut self.out)
+    }
+
+    /// Events produced so far, in order; empties the queue.
+    pub fn take_events(&mut self) -> Vec<LinkEvent> {
+        self.events.drain(..).collect()
+    }
+
+    /// The port could not be opened (or is absent): records why, once per distinct reason.
+    pub fn port_unavailable(&mut self, reason: String) {
+        self.state = State::Closed;
+        self.set_connection(Connection::Closed { reason });
+    }
+
+    /// The port was opened: flush the peer's decoder and start a handshake.
+    pub fn port_opened(&mut self, now_ms: u64, port: &str) {
+        self.port = port.to_string();
+        self.stats.port_opens = self.stats.port_opens.saturating_add(1);
+        self.decoder.reset();
+        self.last_rx_ms = now_ms;
+        // A lone delimiter ends whatever half-frame the robot holds (PROTOCOL.md §2).
+        self.out.push(0);
+        self.stats.bytes_out += 1;
+        self.start_handshake(now_ms);
+    }
+
+    /// The port closed or vanished: everything in flight is lost.
+    pub fn port_closed(&mut self, reason: String) {
+        self.fail_all(CommandFailure::LinkLost);
+        self.state = State::Closed;
+        self.stats.robot_seq.reset();
+        self.stats.truth_seq.reset();
+        self.set_connection(Connection::Closed { reason });
+    }
+
+    /// Submits a command. Its outcome arrives as a `CommandDone` event.
+    pub fn submit(&mut self, now_ms: u64, id: CommandId, command: Command) {
+        self.stats.commands.submitted += 1;
+        if !self.connected() {
+            self.finish(
+                id,
+                command,
+                CommandOutcome::Failed(CommandFailure::NotConnected),
+            );
+            return;
+        }
+        for (old, c) in self.commands.enqueue(id, command) {
+            self.finish(old, c, CommandOutcome::Failed(CommandFailure::Superseded));
+        }
+        self.pump(now_ms);
+    }
+
+    /// Sends a transfer frame if the port is open.
+    pub fn send_transfer(&mut self, now_ms: u64, t: &TransferOut) {
+        if matches!(self.state, State::Closed) {
+            return;
+        }
+        let msg = match t {
+            TransferOut::Begin(b) => Message::TransferBegin(*b),
+            TransferOut::Chunk { id, offset, data } => {
+                Message::TransferChunk(protocol::TransferChunk {
+                    id: *id,
+                    offset: *offset,
+                    data,
+                })
+            }
+            TransferOut::Ack(a) => Message::TransferAck(*a),
+        };
+        self.send(now_ms, &msg);
+    }
+
+    /// Feeds bytes read from the port.
+    pub fn receive(&mut self, now_ms: u64, bytes: &[u8]) {
+        self.stats.bytes_in += bytes.len() as u64;
+        let mut input = bytes;
+        loop {
+            let owned = match self.decoder.feed(input) {
+                Feed::NeedMore => break,
+                Feed::Error { error, rest } => {
+                    input = rest;
+                    self.on_bad_frame(now_ms, error);
+                    continue;
+                }
+                Feed::Frame { frame, rest } => {
+                    input = rest;
+                    let kind = frame.header.kind;
+                    let seq = frame.header.seq;
+                    (kind, seq, Owned::from(frame.message))
+                }
+            };
+            self.on_frame(now_ms, owned.0, owned.1, owned.2);
+        }
+    }
+
+    /// Runs the timers: hello retries, heartbeats, command retries, link timeout, statistics.
+    pub fn poll(&mut self, now_ms: u64) {
+        match self.state.clone() {
+            State::Closed => {}
+            State::Handshaking {
+                session,
+                next_hello_ms,
+            } if now_ms >= next_hello_ms => {
+                self.send_hello(now_ms, session);
+                self.state = State::Handshaking {
+                    session,
+                    next_hello_ms: now_ms + HELLO_RETRY_MS,
+                };
+            }
+            State::Refused {
+                session,
+                next_hello_ms,
+            } if now_ms >= next_hello_ms => {
+                self.send_hello(now_ms, session);
+                self.state = State::Refused {
+                    session,
+                    next_hello_ms: now_ms + REFUSED_RETRY_MS,
+                };
+            }
+            State::Connected { .. } => self.poll_connected(now_ms),
+            State::Handshaking { .. } | State::Refused { .. } => {}
+        }
+        if now_ms >= self.next_stats_ms {
+            self.next_stats_ms = now_ms + STATS_PERIOD_MS;
+            let s = self.stats(now_ms);
+            self.events.push_back(LinkEvent::Stats(Box::new(s)));
+        }
+    }
+
+    /// When `poll` next has work (absolute ms).
+    pub fn next_deadline(&self) -> u64 {
+        let mut t = self.next_stats_ms;
+        match &self.state {
+            State::Closed => {}
+            State::Handshaking { next_hello_ms, .. } | State::Refused { next_hello_ms, .. } => {
+                t = t.min(*next_hello_ms);
+            }
+            State::Connected { .. } => {
+                t = t
+                    .min(self.last_rx_ms + u64::from(LINK_TIMEOUT_MS))
+                    .min(self.last_tx_ms + u64::from(HEARTBEAT_PERIOD_MS));
+                if let Some(c) = self.commands.next_deadline() {
+                    t = t.min(c);
+                }
+            }
+        }
+        t
+    }
+
+    /// A statistics snapshot now.
+    pub fn stats(&mut self, now_ms: u64) -> LinkStats {
+        self.stats.commands.in_flight = u32::try_from(self.commands.in_flight()).unwrap_or(0);
+        self.stats.commands.queued = u32::try_from(self.commands.queued()).unwrap_or(0);
+        let session_ms = match self.state {
+            State::Connected { since_ms, .. } => now_ms.saturating_sub(since_ms),
+            _ => 0,
+        };
+        self.stats.snapshot(
+            now_ms,
+            self.connection.name(),
+            session_ms,
+            self.decoder.stats(),
+        )
+    }
+
+    /// Ends every command (the task is shutting down).
+    pub fn shutdown(&mut self) {
+        self.fail_all(CommandFailure::Shutdown);
+    }
+
+    fn poll_connected(&mut self, now_ms: u64) {
+        if now_ms.saturating_sub(self.last_rx_ms) >= u64::from(LINK_TIMEOUT_MS) {
+            self.stats.link_timeouts = self.stats.link_timeouts.saturating_add(1);
+            self.fail_all(CommandFailure::LinkLost);
+            self.start_handshake(now_ms);
+            return;
+        }
+        let (resend, expired) = self.commands.due(now_ms);
+        for f in resend {
+            self.stats.commands.resends += 1;
+            self.send_with_seq(now_ms, f.seq, &Message::Command(f.command));
+        }
+        for f in expired {
+            let failure = CommandFailure::Timeout { sends: f.sends };
+            self.finish(f.id, f.command, CommandOutcome::Failed(failure));
+        }
+        self.pump(now_ms);
+        if now_ms.saturating_sub(self.last_tx_ms) >= u64::from(HEARTBEAT_PERIOD_MS) {
+            let time_ms = now_ms as u32; // the wire's clock wraps (PROTOCOL.md §6 kind 2)
+            self.send(now_ms, &Message::Heartbeat(Heartbeat { time_ms }));
+        }
+    }
+
+    fn start_handshake(&mut self, now_ms: u64) {
+        let session = self.next_nonce();
+        self.stats.robot_seq.reset();
+        self.stats.truth_seq.reset();
+        self.send_hello(now_ms, session);
+        self.state = State::Handshaking {
+            session,
+            next_hello_ms: now_ms + HELLO_RETRY_MS,
+        };
+        self.set_connection(Connection::Handshaking {
+            port: self.port.clone(),
+        });
+    }
+
+    fn send_hello(&mut self, now_ms: u64, session: u32) {
+        let station = self.cfg.station.clone();
+        let hello = Hello {
+            fingerprint: FINGERPRINT,
+            protocol: PROTOCOL_VERSION,
+            session,
+            station: &station,
+        };
+        self.send(now_ms, &Message::Hello(hello));
+    }
+
+    fn on_bad_frame(&mut self, now_ms: u64, error: FrameError) {
+        // A good CRC with another version is a real peer, not noise: say so (PROTOCOL.md §3).
+        if let FrameError::UnsupportedVersion { version } = error {
+            if !self.connected() {
+                let message = format!(
+                    "the robot speaks protocol version {version}; this station speaks \
+                     {PROTOCOL_VERSION}: rebuild one of them"
+                );
+                self.refuse(now_ms, message);
+            }
+        }
+    }
+
+    fn on_frame(&mut self, now_ms: u64, kind: Kind, seq: u16, msg: Owned) {
+        self.stats.frames_in += 1;
+        self.last_rx_ms = now_ms;
+        if kind == Kind::EmuTruth {
+            self.stats.truth_seq.observe(seq);
+        } else {
+            self.stats.robot_seq.observe(seq);
+        }
+        match msg {
+            Owned::HelloReply(r) => self.on_hello_reply(now_ms, r),
+            Owned::Telemetry(t) => {
+                self.stats.telemetry(now_ms);
+                self.events.push_back(LinkEvent::Telemetry(t));
+            }
+            Owned::Truth(t) => self.events.push_back(LinkEvent::Truth(t)),
+            Owned::Ack(a) => match self.commands.answer(a.cmd_seq) {
+                Some(f) => {
+                    let rtt_ms = now_ms.saturating_sub(f.last_sent_ms);
+                    if f.sends == 1 {
+                        self.stats.rtt_sample(rtt_ms);
+                    }
+                    let outcome = CommandOutcome::Acked {
+                        info: a.info,
+                        sends: f.sends,
+                        rtt_ms,
+                    };
+                    self.finish(f.id, f.command, outcome);
+                    self.pump(now_ms);
+                }
+                None => self.stats.commands.unmatched_replies += 1,
+            },
+            Owned::Nack(n) => self.on_nack(now_ms, n),
+            Owned::Event(e) => self.events.push_back(LinkEvent::Robot(e)),
+            Owned::Log { level, text } => self.events.push_back(LinkEvent::Log { level, text }),
+            Owned::Transfer(t) => self.events.push_back(LinkEvent::Transfer(t)),
+            Owned::Other => {}
+        }
+    }
+
+    fn on_nack(&mut self, now_ms: u64, n: protocol::Nack) {
+        let Some(f) = self.commands.answer(n.cmd_seq) else {
+            self.stats.commands.unmatched_replies += 1;
+            return;
+        };
+        let InFlight {
+            id, command, sends, ..
+        } = f;
+        let outcome = CommandOutcome::Nacked {
+            reason: n.reason,
+            sends,
+        };
+        self.finish(id, command, outcome);
+        if n.reason == NackReason::NoHandshake && self.connected() {
+            // The robot forgot the session (reboot, or 1.5 s of our silence): start again.
+            self.fail_all(CommandFailure::LinkLost);
+            self.start_handshake(now_ms);
+        } else {
+            self.pump(now_ms);
+        }
+    }
+
+    fn on_hello_reply(&mut self, now_ms: u64, r: OwnedHelloReply) {
+        let expected = match self.state {
+            State::Handshaking { session, .. } | State::Refused { session, .. } => session,
+            // A late duplicate of the reply that opened this session, or noise: ignore.
+            State::Connected { .. } | State::Closed => return,
+        };
+        if r.session != expected {
+            return;
+        }
+        if r.accepted && r.fingerprint == FINGERPRINT && r.protocol == PROTOCOL_VERSION {
+            self.stats.handshakes = self.stats.handshakes.saturating_add(1);
+            self.state = State::Connected {
+                session: r.session,
+                since_ms: now_ms,
+            };
+            self.set_connection(Connection::Connected(PeerInfo {
+                session: r.session,
+                firmware: r.firmware,
+                firmware_version: r.firmware_version,
+                profile: r.profile,
+                capabilities: r.capabilities,
+                map_capacity: r.map_capacity,
+                telemetry_hz: r.telemetry_hz,
+                failsafe_ms: r.failsafe_ms,
+            }));
+        } else {
+            let message = format!(
+                "robot firmware {} {} has schema {} (protocol {}); this station has schema {} \
+                 (protocol {}): rebuild one of them",
+                r.firmware,
+                r.firmware_version,
+                hex(&r.fingerprint),
+                r.protocol,
+                hex(&FINGERPRINT),
+                PROTOCOL_VERSION
+            );
+            self.refuse(now_ms, message);
+        }
+    }
+
+    fn refuse(&mut self, now_ms: u64, message: String) {
+        let session = match self.state {
+            State::Handshaking { session, .. } | State::Refused { session, .. } => session,
+            _ => self.next_nonce(),
+        };
+        self.state = State::Refused {
+            session,
+            next_hello_ms: now_ms + REFUSED_RETRY_MS,
+        };
+        self.set_connection(Connection::Refused { message });
+    }
+
+    /// Sends queued commands while slots are free.
+    fn pump(&mut self, now_ms: u64) {
+        if !self.connected() {
+            return;
+        }
+        while let Some((id, command)) = self.commands.next_to_send() {
+            let seq = self.send(now_ms, &Message::Command(command));
+            self.commands.sent(id, seq, command, now_ms);
+        }
+    }
+
+    fn fail_all(&mut self, why: CommandFailure) {
+        for (id, c) in self.commands.drain() {
+            self.finish(id, c, CommandOutcome::Failed(why));
+        }
+    }
+
+    fn finish(&mut self, id: CommandId, command: Command, outcome: CommandOutcome) {
+        let c = &mut self.stats.commands;
+        match outcome {
+            CommandOutcome::Acked { .. } => c.acked += 1,
+            CommandOutcome::Nacked { .. } => c.nacked += 1,
+            CommandOutcome::Failed(_) => c.failed += 1,
+        }
+        self.events.push_back(LinkEvent::CommandDone {
+            id,
+            command,
+            outcome,
+        });
+    }
+
+    fn set_connection(&mut self, c: Connection) {
+        if self.connection != c {
+            self.connection = c.clone();
+            self.events.push_back(LinkEvent::Connection(c));
+        }
+    }
+
+    /// Encodes with the next sequence number; returns it.
+    fn send(&mut self, now_ms: u64, msg: &Message<'_>) -> u16 {
+        let seq = self.tx_seq;
+        self.tx_seq = self.tx_seq.wrapping_add(1);
+        self.send_with_seq(now_ms, seq, msg);
+        seq
+    }
+
+    fn send_with_seq(&mut self, now_ms: u64, seq: u16, msg: &Message<'_>) {
+        let mut buf = [0u8; MAX_FRAME];
+        // Every message built here fits a frame; a failure would be a bug, counted not raised.
+        if let Ok(n) = encode(seq, msg, &mut buf) {
+            self.out.extend_from_slice(buf.get(..n).unwrap_or(&[]));
+            self.stats.frames_out += 1;
+            self.stats.bytes_out += n as u64;
+            self.last_tx_ms = now_ms;
+        }
+    }
+
+    fn next_nonce(&mut self) -> u32 {
+        // splitmix64: distinct nonces from one seed.
+        self.rng = self.rng.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.rng;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        (z ^ (z >> 31)) as u32
+    }
+}
+
+/// A received message copied out of the decoder's buffer, so the machine can act on it while
+/// mutating itself.
+enum Owned {
+    HelloReply(OwnedHelloReply),
+    Telemetry(protocol::Telemetry),
+    Truth(protocol::EmuTruth),
+    Ack(protocol::Ack),
+    Nack(protocol::Nack),
+    Event(protocol::Event),
+    Log {
+        level: protocol::LogLevel,
+        text: String,
+    },
+    Transfer(TransferIn),
+    Other,
+}
+
+struct OwnedHelloReply {
+    fingerprint: [u8; protocol::FINGERPRINT_LEN],
+    protocol: u8,
+    session: u32,
+    accepted: bool,
+    firmware: String,
+    firmware_version: String,
+    profile: protocol::ProfileId,
+    capabilities: u32,
+    map_capacity: protocol::MapCapacity,
+    telemetry_hz: u8,
+    failsafe_ms: u16,
+}
+
+impl From<Message<'_>> for Owned {
+    fn from(m: Message<'_>) -> Self {
+        match m {
+            Message::HelloReply(r) => Owned::HelloReply(owned_reply(&r)),
+            Message::Telemetry(t) => Owned::Telemetry(t),
+            Message::EmuTruth(t) => Owned::Truth(t),
+            Message::Ack(a) => Owned::Ack(a),
+            Message::Nack(n) => Owned::Nack(n),
+            Message::Event(e) => Owned::Event(e),
+            Message::Log(l) => Owned::Log {
+                level: l.level,
+                text: l.text.to_string(),
+            },
+            Message::TransferBegin(b) => Owned::Transfer(TransferIn::Begin(b)),
+            Message::TransferChunk(c) => Owned::Transfer(TransferIn::Chunk {
+                id: c.id,
+                offset: c.offset,
+                data: c.data.to_vec(),
+            }),
+            Message::TransferAck(a) => Owned::Transfer(TransferIn::Ack(a)),
+            Message::Hello(_) | Message::Heartbeat(_) | Message::Command(_) => Owned::Other,
+        }
+    }
+}
+
+fn owned_reply(r: &HelloReply<'_>) -> OwnedHelloReply {
+    OwnedHelloReply {
+        fingerprint: r.fingerprint,
+        protocol: r.protocol,
+        session: r.session,
+        accepted: r.accepted,
+        firmware: r.firmware.to_string(),
+        firmware_version: r.firmware_version.to_string(),
+        profile: r.profile,
+        capabilities: r.capabilities,
+        map_capacity: r.map_capacity,
+        telemetry_hz: r.telemetry_hz,
+        failsafe_ms: r.failsafe_ms,
+    }
+}
+
+/// Hex digits of a fingerprint, as PROTOCOL.md prints it.
+pub fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn truncate_utf8(s: &mut String, max: usize) {
+    if s.len() > max {
+        let mut end = max;
+        while !s.is_char_boundary(end) {
+            end -= 1;
+        }
+        s.truncate(end);
+    }
+}
+
+#[cfg(test)]
+#[path = "machine_tests.rs"]
+mod tests;

@@ -1,0 +1,255 @@
+//! The map: arena walls, the robot's believed pose and track, the emulator's true pose and
+//! track, the go-to goal and cursor, drawn with a ratatui `Canvas` in metres.
+//!
+//! Layer: presentation, built from layers. A `MapLayer` paints one kind of thing from the app
+//! state onto the canvas, in `LAYERS` order (later layers on top); the occupancy grid,
+//! segmentation regions and plans are meant to be added as more layers. Layers can be hidden
+//! by name (`MapState::hidden`). `view_bounds` fits the arena (or the tracks) into the panel
+//! with square cells, and `to_world` inverts it for mouse clicks.
+
+use ratatui::layout::Rect;
+use ratatui::style::{Color, Stylize};
+use ratatui::symbols::Marker;
+use ratatui::text::Line as TLine;
+use ratatui::widgets::canvas::{Circle, Context, Line, Points};
+use ratatui::widgets::canvas::Canvas;
+use ratatui::widgets::Block;
+use ratatui::Frame;
+
+use crate::app::App;
+
+/// One kind of thing on the map.
+pub trait MapLayer: Sync {
+    /// The name used to hide it.
+    fn name(&self) -> &'static str;
+    /// Paints it; called only when visible.
+    fn paint(&self, app: &App, ctx: &mut Context<'_>);
+}
+
+/// The arena's walls, targets and beacons.
+pub struct ArenaLayer;
+/// The true pose and track from `EmuTruth`.
+pub struct TruthLayer;
+/// The pose and track the robot believes.
+pub struct BelievedLayer;
+/// The go-to goal and the cursor.
+pub struct GoalLayer;
+
+/// Layers in drawing order.
+pub static LAYERS: [&dyn MapLayer; 4] = [&ArenaLayer, &TruthLayer, &BelievedLayer, &GoalLayer];
+
+/// Extra margin around what is shown, metres.
+const MARGIN_M: f64 = 0.1;
+/// Smallest span shown without an arena, metres.
+const MIN_SPAN_M: f64 = 2.0;
+/// Marker radius of a robot, metres (about a Khepera).
+const ROBOT_R: f64 = 0.04;
+
+pub fn render(app: &App, frame: &mut Frame, area: Rect) {
+    let name = app
+        .map
+        .arena
+        .as_ref()
+        .map_or("no arena".to_string(), |a| a.name.clone());
+    let block = Block::bordered()
+        .title(format!(" Map — {name} "))
+        .title_bottom(TLine::from(vec![
+            " ● believed ".cyan(),
+            "○ true ".magenta(),
+            "× goal ".yellow(),
+            if app.map.cursor_mode { "+ cursor ".green() } else { "g/click: go-to ".dark_gray() },
+        ]));
+    let inner = block.inner(area);
+    let (xb, yb) = view_bounds(app, inner);
+    let canvas = Canvas::default()
+        .block(block)
+        .marker(Marker::Braille)
+        .x_bounds(xb)
+        .y_bounds(yb)
+        .paint(|ctx| {
+            for layer in LAYERS.iter() {
+                if app.map.visible(layer.name()) {
+                    layer.paint(app, ctx);
+                    ctx.layer();
+                }
+            }
+        });
+    frame.render_widget(canvas, area);
+}
+
+/// The world rectangle shown in `inner` (x bounds, y bounds), with square braille dots.
+pub fn view_bounds(app: &App, inner: Rect) -> ([f64; 2], [f64; 2]) {
+    let [mut x0, mut y0, mut x1, mut y1] = match &app.map.arena {
+        Some(a) => a.bounds,
+        None => content_bounds(app),
+    };
+    x0 -= MARGIN_M;
+    y0 -= MARGIN_M;
+    x1 += MARGIN_M;
+    y1 += MARGIN_M;
+    let (w, h) = (f64::from(inner.width.max(1)), f64::from(inner.height.max(1)));
+    // A braille cell is 2 x 4 dots and about 1 x 2 in shape: world span per dot equal in x and y.
+    let want = w / (2.0 * h); // x span / y span
+    let (xs, ys) = (x1 - x0, y1 - y0);
+    if xs / ys < want {
+        let grow = (ys * want - xs) / 2.0;
+        x0 -= grow;
+        x1 += grow;
+    } else {
+        let grow = (xs / want - ys) / 2.0;
+        y0 -= grow;
+        y1 += grow;
+    }
+    ([x0, x1], [y0, y1])
+}
+
+/// The cell at `col`, `row` of the terminal as a world point, if it is inside the map.
+pub fn to_world(app: &App, inner: Rect, col: u16, row: u16) -> Option<(f64, f64)> {
+    let inside = col >= inner.x
+        && col < inner.x + inner.width
+        && row >= inner.y
+        && row < inner.y + inner.height;
+    if !inside {
+        return None;
+    }
+    let ([x0, x1], [y0, y1]) = view_bounds(app, inner);
+    let fx = (f64::from(col - inner.x) + 0.5) / f64::from(inner.width);
+    let fy = (f64::from(row - inner.y) + 0.5) / f64::from(inner.height);
+    Some((x0 + fx * (x1 - x0), y1 - fy * (y1 - y0)))
+}
+
+fn content_bounds(app: &App) -> [f64; 4] {
+    let mut pts: Vec<(f64, f64)> = app
+        .believed
+        .points()
+        .chain(app.true_track.points())
+        .copied()
+        .collect();
+    pts.extend(app.pose().map(|(x, y, _)| (x, y)));
+    pts.extend(app.map.goal);
+    if app.map.cursor_mode {
+        pts.push(app.map.cursor);
+    }
+    let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+    for (x, y) in &pts {
+        x0 = x0.min(*x);
+        y0 = y0.min(*y);
+        x1 = x1.max(*x);
+        y1 = y1.max(*y);
+    }
+    if pts.is_empty() {
+        (x0, y0, x1, y1) = (0.0, 0.0, 0.0, 0.0);
+    }
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let half_x = ((x1 - x0) / 2.0).max(MIN_SPAN_M / 2.0);
+    let half_y = ((y1 - y0) / 2.0).max(MIN_SPAN_M / 2.0);
+    [cx - half_x, cy - half_y, cx + half_x, cy + half_y]
+}
+
+fn robot(ctx: &mut Context<'_>, (x, y, h): (f64, f64, f64), color: Color) {
+    ctx.draw(&Circle {
+        x,
+        y,
+        radius: ROBOT_R,
+        color,
+    });
+    ctx.draw(&Line {
+        x1: x,
+        y1: y,
+        x2: x + 2.5 * ROBOT_R * h.cos(),
+        y2: y + 2.5 * ROBOT_R * h.sin(),
+        color,
+    });
+}
+
+impl MapLayer for ArenaLayer {
+    fn name(&self) -> &'static str {
+        "arena"
+    }
+
+    fn paint(&self, app: &App, ctx: &mut Context<'_>) {
+        let Some(a) = &app.map.arena else { return };
+        let [x0, y0, x1, y1] = a.bounds;
+        let edge = |ctx: &mut Context<'_>, (ax, ay): (f64, f64), (bx, by): (f64, f64)| {
+            ctx.draw(&Line {
+                x1: ax,
+                y1: ay,
+                x2: bx,
+                y2: by,
+                color: Color::Gray,
+            });
+        };
+        let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)];
+        for i in 0..4 {
+            edge(ctx, corners[i], corners[(i + 1) % 4]);
+        }
+        for wall in &a.walls {
+            for (i, p) in wall.iter().enumerate() {
+                if let Some(q) = wall.get((i + 1) % wall.len()) {
+                    edge(ctx, *p, *q);
+                }
+            }
+        }
+        for ((x, y), r) in &a.targets {
+            ctx.draw(&Circle {
+                x: *x,
+                y: *y,
+                radius: *r,
+                color: Color::Green,
+            });
+        }
+        for (x, y) in &a.beacons {
+            ctx.print(*x, *y, "B".yellow());
+        }
+    }
+}
+
+impl MapLayer for TruthLayer {
+    fn name(&self) -> &'static str {
+        "truth"
+    }
+
+    fn paint(&self, app: &App, ctx: &mut Context<'_>) {
+        let pts: Vec<(f64, f64)> = app.true_track.points().copied().collect();
+        ctx.draw(&Points {
+            coords: &pts,
+            color: Color::Magenta,
+        });
+        if let Some(p) = app.true_pose() {
+            robot(ctx, p, Color::Magenta);
+        }
+    }
+}
+
+impl MapLayer for BelievedLayer {
+    fn name(&self) -> &'static str {
+        "believed"
+    }
+
+    fn paint(&self, app: &App, ctx: &mut Context<'_>) {
+        let pts: Vec<(f64, f64)> = app.believed.points().copied().collect();
+        ctx.draw(&Points {
+            coords: &pts,
+            color: Color::Cyan,
+        });
+        if let Some(p) = app.pose() {
+            robot(ctx, p, Color::Cyan);
+        }
+    }
+}
+
+impl MapLayer for GoalLayer {
+    fn name(&self) -> &'static str {
+        "goal"
+    }
+
+    fn paint(&self, app: &App, ctx: &mut Context<'_>) {
+        if let Some((x, y)) = app.map.goal {
+            ctx.print(x, y, "×".yellow());
+        }
+        if app.map.cursor_mode {
+            let (x, y) = app.map.cursor;
+            ctx.print(x, y, "+".green().bold());
+        }
+    }
+}

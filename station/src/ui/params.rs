@@ -1,0 +1,76 @@
+//! The parameter editor: the firmware's parameter table with the values read back, and the
+//! robot's reason whenever it refused a read or a write.
+//!
+//! Layer: presentation over `ParamEditor`. The table scrolls to keep the selection visible
+//! (a `TableState` built per frame: rendering changes nothing in the app).
+
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Block, Cell, Paragraph, Row, Table, TableState};
+use ratatui::Frame;
+
+use crate::app::params::{format_value, status_text, ParamStatus};
+use crate::app::App;
+
+pub fn render(app: &App, frame: &mut Frame, area: Rect) {
+    let block = Block::bordered().title(" Parameters (r read, R read all, Enter edit) ");
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let [table_area, edit_area] =
+        Layout::vertical([Constraint::Fill(1), Constraint::Length(1)]).areas(inner);
+    let rows: Vec<Row> = app
+        .params
+        .params()
+        .iter()
+        .zip(&app.params.status)
+        .map(|(p, s)| {
+            let color = match s {
+                ParamStatus::Refused { .. } | ParamStatus::Failed(_) => Color::Red,
+                ParamStatus::Pending => Color::Yellow,
+                ParamStatus::Value(_) => Color::Reset,
+                ParamStatus::Unknown => Color::DarkGray,
+            };
+            Row::new(vec![
+                Cell::from(p.id.to_string()),
+                Cell::from(p.name),
+                Cell::from(Span::styled(status_text(s), Style::new().fg(color))),
+                Cell::from(p.unit),
+                Cell::from(format!("{} .. {}", format_value(p.min), format_value(p.max))),
+            ])
+        })
+        .collect();
+    let table = Table::new(
+        rows,
+        [
+            Constraint::Length(3),
+            Constraint::Length(24),
+            Constraint::Fill(1),
+            Constraint::Length(12),
+            Constraint::Length(16),
+        ],
+    )
+    .header(
+        Row::new(["id", "name", "value", "unit", "range"])
+            .style(Style::new().add_modifier(Modifier::BOLD)),
+    )
+    .row_highlight_style(Style::new().add_modifier(Modifier::REVERSED));
+    let mut state = TableState::default().with_selected(Some(app.params.selected));
+    frame.render_stateful_widget(table, table_area, &mut state);
+    let edit = match (&app.params.input, app.params.selected_info()) {
+        (Some(text), Some(p)) => Line::from(vec![
+            Span::styled(format!("{} = ", p.name), Style::new().fg(Color::Yellow)),
+            Span::raw(text.clone()),
+            Span::styled("▏", Style::new().fg(Color::Yellow)),
+            Span::styled(
+                format!("  ({} .. {} {})", format_value(p.min), format_value(p.max), p.unit),
+                Style::new().fg(Color::DarkGray),
+            ),
+        ]),
+        _ => Line::from(Span::styled(
+            "values are read from the robot; a refused write shows the robot's reason",
+            Style::new().fg(Color::DarkGray),
+        )),
+    };
+    frame.render_widget(Paragraph::new(edit), edit_area);
+}

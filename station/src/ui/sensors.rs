@@ -1,0 +1,268 @@
+//! The sensor panel: IR and light bars around a robot glyph, and every other reading as text.
+//!
+//! Layer: presentation. The glyph is a ratatui `Canvas` with the robot facing up: each IR
+//! sensor is a bar pointing out from the body at its mounting angle (from the firmware's
+//! profile, so it matches the robot), as long as its reading; ambient light is a tick on an
+//! outer ring, longer when brighter (the wire's light values are inverted: lower is brighter).
+//! Readings a robot lacks (see its capabilities) are shown as "—".
+
+use protocol::{behaviours, caps, flags, ProfileId};
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::{Color, Style, Stylize};
+use ratatui::symbols::Marker;
+use ratatui::text::{Line, Span};
+use ratatui::widgets::canvas::{Canvas, Circle, Line as CLine};
+use ratatui::widgets::{Block, Paragraph};
+use ratatui::Frame;
+use robot_firmware::profile::{IrLayout, Profile, KHEPERA, MICRO_RATO};
+
+use crate::app::{mode_name, App};
+
+/// Radius of the body, IR bar room and light ring, in glyph units.
+const BODY: f64 = 1.0;
+const IR_LEN: f64 = 1.6;
+const RING: f64 = 3.0;
+const LIGHT_LEN: f64 = 0.5;
+
+pub fn render(app: &App, frame: &mut Frame, area: Rect) {
+    let profile = profile_of(app);
+    let title = format!(" Sensors — {} ", profile.name);
+    let block = Block::bordered().title(title);
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let lines = text_lines(app, profile);
+    let text_h = lines.len() as u16;
+    let (glyph, text) = if inner.width >= 70 {
+        let [g, t] =
+            Layout::horizontal([Constraint::Percentage(40), Constraint::Percentage(60)]).areas(inner);
+        (g, t)
+    } else {
+        let [g, t] = Layout::vertical([Constraint::Min(5), Constraint::Length(text_h)]).areas(inner);
+        (g, t)
+    };
+    if glyph.height >= 5 {
+        render_glyph(app, profile, frame, glyph);
+    }
+    frame.render_widget(Paragraph::new(lines), text);
+}
+
+/// The profile the robot said it is (Khepera before the handshake).
+pub fn profile_of(app: &App) -> &'static Profile {
+    match app.peer.as_ref().map(|p| p.profile) {
+        Some(ProfileId::MicroRato) => &MICRO_RATO,
+        _ => &KHEPERA,
+    }
+}
+
+fn render_glyph(app: &App, profile: &'static Profile, frame: &mut Frame, area: Rect) {
+    let half_y = RING + 0.3;
+    // Braille dots are 2 x 4 per cell: keep circles round.
+    let half_x = half_y * f64::from(area.width) / (2.0 * f64::from(area.height));
+    let t = app.telemetry;
+    let has_light = app.peer.as_ref().is_none_or(|p| p.has(caps::AMBIENT_LIGHT));
+    let canvas = Canvas::default()
+        .marker(Marker::Braille)
+        .x_bounds([-half_x, half_x])
+        .y_bounds([-half_y, half_y])
+        .paint(move |ctx| {
+            ctx.draw(&Circle {
+                x: 0.0,
+                y: 0.0,
+                radius: BODY,
+                color: Color::White,
+            });
+            // Heading: the robot faces up.
+            ctx.draw(&CLine {
+                x1: 0.0,
+                y1: 0.0,
+                x2: 0.0,
+                y2: BODY * 0.8,
+                color: Color::White,
+            });
+            let Some(t) = t else { return };
+            ctx.layer();
+            for (a, v) in sensor_angles(&profile.ir).zip(t.ir.values()) {
+                let frac = f64::from(v) / 1023.0;
+                let (dx, dy) = direction(a);
+                ctx.draw(&CLine {
+                    x1: dx * (BODY + 0.1),
+                    y1: dy * (BODY + 0.1),
+                    x2: dx * (BODY + 0.1 + 0.05 + IR_LEN * frac),
+                    y2: dy * (BODY + 0.1 + 0.05 + IR_LEN * frac),
+                    color: heat(frac),
+                });
+            }
+            if has_light {
+                ctx.layer();
+                for (a, v) in sensor_angles(&KHEPERA.ir).zip(t.light.values()) {
+                    let bright = 1.0 - f64::from(v.min(1023)) / 1023.0;
+                    let (dx, dy) = direction(a);
+                    ctx.draw(&CLine {
+                        x1: dx * RING,
+                        y1: dy * RING,
+                        x2: dx * (RING - 0.05 - LIGHT_LEN * bright),
+                        y2: dy * (RING - 0.05 - LIGHT_LEN * bright),
+                        color: Color::Yellow,
+                    });
+                }
+            }
+        });
+    frame.render_widget(canvas, area);
+}
+
+/// Mounting angles of the sensors in use, radians from the heading (left positive).
+fn sensor_angles(ir: &IrLayout) -> impl Iterator<Item = f64> + '_ {
+    ir.angle_rad.iter().take(ir.count).map(|&a| f64::from(a))
+}
+
+/// Unit vector on screen for a sensor at `a` from a heading that points up.
+fn direction(a: f64) -> (f64, f64) {
+    let screen = std::f64::consts::FRAC_PI_2 + a;
+    (screen.cos(), screen.sin())
+}
+
+fn heat(frac: f64) -> Color {
+    if frac > 0.66 {
+        Color::Red
+    } else if frac > 0.33 {
+        Color::Yellow
+    } else {
+        Color::Green
+    }
+}
+
+fn text_lines(app: &App, profile: &Profile) -> Vec<Line<'static>> {
+    let Some(t) = app.telemetry else {
+        return vec![Line::from("no telemetry yet".dark_gray())];
+    };
+    let has = |c: u32| app.peer.as_ref().map_or(profile.has(c), |p| p.has(c));
+    let dim = Style::new().fg(Color::DarkGray);
+    let label = |s: &'static str| Span::styled(s, dim);
+    let deg = |mrad: i16| f64::from(mrad) / 1000.0 * 180.0 / std::f64::consts::PI;
+    let mut lines = vec![
+        Line::from(vec![
+            label("pose "),
+            Span::raw(format!(
+                "{:.3} {:.3} m {:.1}°",
+                f64::from(t.pose.x_mm) / 1000.0,
+                f64::from(t.pose.y_mm) / 1000.0,
+                deg(t.pose.heading_mrad)
+            )),
+            label("  σ "),
+            Span::raw(format!("{} mm {:.1}°", t.sigma.xy_mm, deg(t.sigma.heading_mrad as i16))),
+        ]),
+        Line::from(vec![
+            label("mode "),
+            Span::styled(mode_name(t.mode), Style::new().fg(Color::Cyan).bold()),
+            label("  behaviours "),
+            Span::raw(behaviour_names(t.behaviour.active)),
+        ]),
+        Line::from(vec![
+            label("wheels "),
+            Span::raw(format!("{} {} mm/s", t.wheels.speed_mm_s[0], t.wheels.speed_mm_s[1])),
+            label("  motor "),
+            Span::raw(format!(
+                "{} {}",
+                t.behaviour.motor_mm_s[0], t.behaviour.motor_mm_s[1]
+            )),
+        ]),
+    ];
+    let enc = if has(caps::ENCODERS) {
+        format!("{} {}", app.encoders.total[0], app.encoders.total[1])
+    } else {
+        "—".into()
+    };
+    let compass = if has(caps::COMPASS) {
+        format!("{:.1}°", f64::from(t.compass_ddeg) / 10.0)
+    } else {
+        "—".into()
+    };
+    lines.push(Line::from(vec![
+        label("encoders "),
+        Span::raw(enc),
+        label("  compass "),
+        Span::raw(compass),
+    ]));
+    let battery = if has(caps::BATTERY) {
+        format!("{} mV", t.battery_mv)
+    } else {
+        "—".into()
+    };
+    let beacon = if has(caps::BEACON) {
+        if t.beacon.strength == 0 {
+            "not seen".into()
+        } else {
+            format!(
+                "{:+.1}° strength {}",
+                f64::from(t.beacon.bearing_ddeg) / 10.0,
+                t.beacon.strength
+            )
+        }
+    } else {
+        "—".into()
+    };
+    lines.push(Line::from(vec![
+        label("battery "),
+        Span::raw(battery),
+        label("  beacon "),
+        Span::raw(beacon),
+    ]));
+    let flag = |bit: u8, name: &'static str| -> Span<'static> {
+        if t.flags & bit != 0 {
+            Span::styled(format!("■{name} "), Style::new().fg(Color::Yellow).bold())
+        } else {
+            Span::styled(format!("□{name} "), dim)
+        }
+    };
+    lines.push(Line::from(vec![
+        flag(flags::GROUND, "ground"),
+        flag(flags::LINE, "line"),
+        flag(flags::CONTACT, "contact"),
+        flag(flags::FAILSAFE, "failsafe"),
+        flag(flags::ARRIVED, "arrived"),
+        label("lines "),
+        Span::raw(t.line_events.to_string()),
+    ]));
+    lines.push(Line::from(vec![
+        label("IR "),
+        Span::raw(readings(&t.ir.values(), profile.ir.count)),
+    ]));
+    if has(caps::AMBIENT_LIGHT) {
+        lines.push(Line::from(vec![
+            label("light "),
+            Span::raw(readings(&t.light.values(), 8)),
+        ]));
+    }
+    lines
+}
+
+fn readings(v: &[u16; 8], n: usize) -> String {
+    v.iter()
+        .take(n)
+        .map(|x| x.to_string())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Names of the active behaviour bits (seed 000 §4).
+pub fn behaviour_names(active: u8) -> String {
+    let names = [
+        (behaviours::AVOID, "avoid"),
+        (behaviours::EDGE, "edge"),
+        (behaviours::DRIFT, "drift"),
+        (behaviours::TURN, "turn"),
+        (behaviours::LIGHT, "light"),
+        (behaviours::WALL_FOLLOW, "wall"),
+        (behaviours::GUIDED, "guided"),
+    ];
+    let on: Vec<&str> = names
+        .iter()
+        .filter(|(b, _)| active & b != 0)
+        .map(|(_, n)| *n)
+        .collect();
+    if on.is_empty() {
+        "none".into()
+    } else {
+        on.join(" ")
+    }
+}
