@@ -9,12 +9,12 @@
 //! [`Nav64`], the robot's instance, is 64 x 64 cells, up to 511 regions, 256-region plans and
 //! 128-point smoothed plans: [`NAV64_BYTES`] = 15 384 bytes on a 64-bit host (asserted below;
 //! a 32-bit MCU saves the upper half of a `usize`), within the seed 004 §3 robot's 32 KB.
-//! Where the bytes go: grid 1 040 (2 bits/cell + size and geometry), region map 4 624 (9
-//! bits/cell, ids 0 ..= 510), squares 3 066 (6 B each), search scratch 5 110 (`f` u32,
-//! parent/heap/pos u16; no h cache, no stored adjacency - the implicit graph costs nothing),
-//! raw plan 512 (u16 ids), smoothed plan 1 024 (8 B points), flag and padding 8. 511 regions hold a
-//! perfect 16 x 16 maze of 1-cell corridors (33 x 33 cells, 511 free cells); denser maps fail
-//! with `TooManyRegions`, never a panic.
+//! Where the bytes go: grid 1 040 (2 bits/cell + size and geometry), region map 4 624
+//! (9 bits/cell, ids 0 ..= 510), squares 3 066 (6 B each), search scratch 5 110 (`f` u32,
+//! parent/heap/pos u16; no h cache and no stored adjacency: the implicit graph costs nothing),
+//! raw plan 512 (u16 ids), smoothed plan 1 024 (8 B points), flag and padding 8.
+//! 511 regions hold a perfect 16 x 16 maze of 1-cell corridors (33 x 33 cells, 511 free
+//! cells); denser maps fail with `TooManyRegions`, never a panic.
 //!
 //! What can fail: segmentation (too many regions) and planning errors, as in those modules;
 //! planning on a map changed since the last [`FixedNav::segment`] returns `NotSegmented`.

@@ -3,11 +3,12 @@
 //! Layer: reads a [`Grid`], writes a list of [`Square`]s and a per-cell region-id map, both in
 //! caller storage; [`Regions`] is the read-only result the planner and smoother use.
 //!
-//! Invariants of a [`Regions`] (checked by the property tests in `tests/props.rs`): every square holds
-//! only free cells; squares are disjoint and cover exactly the free cells; the map gives each
-//! free cell the id of its square (`id` = index in the square list) and every other cell
-//! `NONE`. The connectivity graph is implicit: two regions are adjacent when they share an edge
-//! segment of positive length, found by walking a square's border in the map (no O(R^2) scan).
+//! Invariants of a [`Regions`] (checked by the property tests in `tests/props.rs`): every
+//! square holds only free cells; squares are disjoint and cover exactly the free cells; the map
+//! gives each free cell the id of its square (`id` = index in the square list) and every other
+//! cell `NONE`. The connectivity graph is implicit: two regions are adjacent when they share an
+//! edge segment of positive length, found by walking a square's border in the map (no O(R^2)
+//! scan); `graph.rs` can also store it.
 //! Diagonal corner contact does NOT count: seed 004 §6 relies on "a path through the centers of
 //! connected regions is always feasible", and a segment through a shared corner only squeezes
 //! between two obstacle cells. With a shared edge the segment between the centres crosses that

@@ -9,7 +9,8 @@
 //!    It stays inside the plan's squares (a segment between two points of a convex square stays
 //!    in it), so it is collision-free by the same argument as seed 004 §6's "a path through the
 //!    centers of connected regions is always feasible". `margin` (grid units) pulls each portal
-//!    end inwards, keeping the path that far from the squares' corners (a robot is not a point).
+//!    end inwards, so bends stay about that far from the squares' corners, where obstacle
+//!    corners are (a robot is not a point); it is not a clearance guarantee along walls.
 //! 2. Drop: from an anchor, skip ahead over waypoints while the straight segment to the next
 //!    one passes [`line_of_sight`]; consecutive funnel segments are never tested (already
 //!    proved feasible), so this pass only ever shortens.

@@ -247,7 +247,8 @@ proptest! {
                 Err(e) => {
                     prop_assert_eq!(e, PlanError::Unreachable);
                     let (from, to) = (regions.region_of(start), regions.region_of(goal));
-                    let best = reference::dijkstra(&seg.squares, from.unwrap(), to.unwrap(), start, goal);
+                    let (from, to) = (from.unwrap(), to.unwrap());
+                    let best = reference::dijkstra(&seg.squares, from, to, start, goal);
                     prop_assert_eq!(best, None);
                 }
             }
@@ -256,7 +257,11 @@ proptest! {
     }
 
     #[test]
-    fn a_start_or_goal_outside_free_space_is_refused(c in case(16), sx in -300i32..5000, sy in -300i32..5000) {
+    fn a_start_or_goal_outside_free_space_is_refused(
+        c in case(16),
+        sx in -300i32..5000,
+        sy in -300i32..5000,
+    ) {
         let (w, h, cells, _, gsel) = c;
         let g = from_cells(w, h, &cells);
         let seg = Seg::new(&g).expect("fits");
@@ -272,7 +277,11 @@ proptest! {
     }
 
     #[test]
-    fn line_of_sight_only_passes_segments_over_free_cells(c in case(24), ax in 0i32..6144, ay in 0i32..6144, bx in 0i32..6144, by in 0i32..6144) {
+    fn line_of_sight_only_passes_segments_over_free_cells(
+        c in case(24),
+        (ax, ay) in (0i32..6144, 0i32..6144),
+        (bx, by) in (0i32..6144, 0i32..6144),
+    ) {
         let (w, h, cells, _, _) = c;
         let g = from_cells(w, h, &cells);
         let seg = Seg::new(&g).expect("fits");
@@ -280,11 +289,14 @@ proptest! {
         let (a, b) = (GridPoint { x: ax, y: ay }, GridPoint { x: bx, y: by });
         if line_of_sight(&regions, a, b) {
             for k in 0..=256i64 {
-                let at = |p: i32, q: i32| (i64::from(p) * (256 - k) + i64::from(q) * k).div_euclid(256);
+                let at = |p: i32, q: i32| {
+                    (i64::from(p) * (256 - k) + i64::from(q) * k).div_euclid(256)
+                };
                 let (x, y) = (at(a.x, b.x), at(a.y, b.y));
                 let (cx, cy) = (x.div_euclid(256), y.div_euclid(256));
                 prop_assert!(g.contains(cx as i32, cy as i32));
-                prop_assert_eq!(g.get(cx as usize, cy as usize), Cell::Free, "({}, {}) at k = {}", x, y, k);
+                let cell = g.get(cx as usize, cy as usize);
+                prop_assert_eq!(cell, Cell::Free, "({}, {}) at k = {}", x, y, k);
             }
         }
     }
