@@ -148,7 +148,7 @@ impl PhysicsParams {
         let s = self.slip_sigma;
         check("slip", s, (0.0..=0.5).contains(&s), "0..=0.5")?;
         let p = self.pulse_m;
-        check("pulse_m", p, p >= 0.0 && p < 1.0, "0 <= pulse < 1 m")?;
+        check("pulse_m", p, (0.0..1.0).contains(&p), "0 <= pulse < 1 m")?;
         if let SpeedModel::Linear { mm_s_per_unit } = self.speed {
             check(
                 "mm_s_per_unit",
@@ -297,9 +297,9 @@ impl Body {
         self.update_slip(dt_s, rng);
         let p = &self.params;
         let mut ground = [0.0; 2];
-        for i in 0..2 {
+        for (i, g) in ground.iter_mut().enumerate() {
             self.rotation_m[i] += self.rotation_mps[i] * dt_s;
-            ground[i] = self.rotation_mps[i] * (1.0 + p.wheel_bias[i]) * (1.0 - self.slip[i]);
+            *g = self.rotation_mps[i] * (1.0 + p.wheel_bias[i]) * (1.0 - self.slip[i]);
         }
         let v = (ground[0] + ground[1]) / 2.0;
         let dtheta = (ground[1] - ground[0]) / p.wheel_distance_m * dt_s;
@@ -538,6 +538,34 @@ mod tests {
         step_ms(&mut b, MotorCommand::new(-10, -10), &walls, 500);
         step_ms(&mut b, MotorCommand::new(10, 10), &walls, 1000);
         assert_eq!(b.collisions(), 2);
+    }
+
+    #[test]
+    fn a_wider_true_wheel_base_turns_less_than_the_encoders_say() {
+        // seed 000 §3: odometry with the nominal d = 52 mm on a robot whose true wheel distance
+        // is 53.3 mm overestimates every turn by 53.3 / 52 (Tables 1-2).
+        let mut params = PhysicsParams::for_profile(&KHEPERA);
+        params.wheel_distance_m = 0.0533;
+        params.motor_tau_s = 0.0;
+        let mut b = Body::new(
+            params,
+            Pose {
+                x: 0.0,
+                y: 0.0,
+                heading: 0.0,
+            },
+        );
+        step_ms(
+            &mut b,
+            MotorCommand::new(-5, 5),
+            &SegmentSet::default(),
+            500,
+        );
+        let enc = b.encoders().expect("khepera has encoders");
+        let believed = f64::from(enc[1] - enc[0]) * 0.000_08 / 0.052;
+        let ratio = believed / b.pose().heading;
+        // Within a pulse of quantisation out of 500.
+        assert!((ratio - 53.3 / 52.0).abs() < 3e-3, "{ratio}");
     }
 
     #[test]

@@ -85,10 +85,9 @@ impl TruthHistory {
     pub fn at(&self, time_ms: u32) -> Option<TruthSample> {
         let newest = self.ring.back()?;
         let back = newest.time_ms.wrapping_sub(time_ms) as usize;
-        let found = self
-            .ring
-            .len()
-            .checked_sub(1 + back)
+        let found = back
+            .checked_add(1)
+            .and_then(|b| self.ring.len().checked_sub(b))
             .and_then(|i| self.ring.get(i))
             .filter(|s| s.time_ms == time_ms);
         Some(*found.unwrap_or(newest))

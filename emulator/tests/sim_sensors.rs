@@ -309,8 +309,9 @@ fn the_micro_rato_compass_reads_five_times_a_second_with_two_degrees_of_noise() 
     for _ in 0..20_000 {
         sim.step();
         let c = sim.robot().core.sensors.compass;
-        if c.is_some() && sim.robot().core.timing.last_cycle_us == Some(sim.now_us() - 1000) {
-            readings.push(f64::from(c.unwrap()));
+        let cycle_just_ran = sim.robot().core.timing.last_cycle_us == Some(sim.now_us() - 1000);
+        if let (Some(h), true) = (c, cycle_just_ran) {
+            readings.push(f64::from(h));
         }
         last = c.or(last);
     }

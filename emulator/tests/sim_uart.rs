@@ -64,9 +64,12 @@ enum Seen {
     Other,
 }
 
+/// True position in millimetres by simulated millisecond.
+type TruthMm = HashMap<u32, (i32, i32)>;
+
 /// Runs a 10 s session at `baud` and returns the bytes per simulated second, the frames seen
 /// and the true position (mm) at every millisecond.
-fn session(baud: u32) -> (Vec<usize>, Vec<Seen>, HashMap<u32, (i32, i32)>) {
+fn session(baud: u32) -> (Vec<usize>, Vec<Seen>, TruthMm) {
     let cfg = SimConfig {
         seed: 4,
         baud,

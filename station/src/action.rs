@@ -14,9 +14,14 @@ use crate::link::LinkEvent;
 #[derive(Clone, Debug, PartialEq)]
 pub enum Action {
     /// Time passes: `now_ms` since the station started. Drives teleop repetition.
-    Tick { now_ms: u64 },
+    Tick {
+        now_ms: u64,
+    },
     /// The terminal's size changed.
-    Resize { width: u16, height: u16 },
+    Resize {
+        width: u16,
+        height: u16,
+    },
     /// Something the link task reported.
     Link(LinkEvent),
     Quit,
@@ -27,18 +32,27 @@ pub enum Action {
     PrevView,
     ShowView(View),
     /// Change the teleop velocity by a step: forward mm/s, turn mrad/s.
-    Drive { dv: i16, dw: i16 },
+    Drive {
+        dv: i16,
+        dw: i16,
+    },
     /// Zero the velocity, stop repeating teleop and send `Stop`.
     StopDriving,
     SetMode(Mode),
     /// Enter go-to mode with a cursor on the map at the robot.
     GoToCursorStart,
     /// Move the go-to cursor, metres.
-    MoveCursor { dx: f64, dy: f64 },
+    MoveCursor {
+        dx: f64,
+        dy: f64,
+    },
     /// Send `GoTo` to the cursor.
     GoToCursor,
     /// Send `GoTo` to a point (a mouse click on the map), metres.
-    GoToPoint { x_m: f64, y_m: f64 },
+    GoToPoint {
+        x_m: f64,
+        y_m: f64,
+    },
     /// Select another parameter.
     ParamSelect(i32),
     /// `GetParam` the selected parameter.

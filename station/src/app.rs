@@ -19,7 +19,9 @@ use protocol::{AckInfo, Command, EmuTruth, Event, EventCode, Mode, PointMm, Tele
 
 use crate::action::Action;
 use crate::link::api::{command_text, nack_text, param_name};
-use crate::link::{CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats, PeerInfo};
+use crate::link::{
+    CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats, PeerInfo,
+};
 use arena::ArenaOverlay;
 use history::{EncoderUnwrap, History, Track, CHART_PRESETS};
 use log::{Level, LogBuffer, LogLine, Source};
@@ -232,6 +234,9 @@ impl App {
                 self.send(Command::SetMode(m));
             }
             Action::GoToCursorStart => {
+                if !matches!(self.view, View::Dashboard | View::Map) {
+                    self.view = View::Map;
+                }
                 if let Some((x, y, _)) = self.pose() {
                     self.map.cursor = (x, y);
                 }
@@ -389,7 +394,10 @@ impl App {
             .or(self.peer.as_ref().map(|p| p.telemetry_hz))
             .unwrap_or(protocol::timing::TELEMETRY_DEFAULT_HZ);
         // The nearest step at or above the current rate, then one step along.
-        let i = RATES.iter().position(|&r| r >= current).unwrap_or(RATES.len() - 1) as i32;
+        let i = RATES
+            .iter()
+            .position(|&r| r >= current)
+            .unwrap_or(RATES.len() - 1) as i32;
         let j = (i + d).clamp(0, RATES.len() as i32 - 1) as usize;
         let hz = RATES.get(j).copied().unwrap_or(current);
         self.send(Command::SetTelemetryRate { hz });
@@ -415,7 +423,11 @@ impl App {
             }
             LinkEvent::Robot(e) => self.on_robot_event(e),
             LinkEvent::Log { level, text } => self.note(level.into(), Source::Robot, text),
-            LinkEvent::CommandDone { id, command, outcome } => self.on_done(id, command, outcome),
+            LinkEvent::CommandDone {
+                id,
+                command,
+                outcome,
+            } => self.on_done(id, command, outcome),
             LinkEvent::Transfer(_) => {}
             LinkEvent::Stats(s) => {
                 if self.rx_rate_history.len() == STATS_HISTORY {
@@ -447,7 +459,11 @@ impl App {
         } else if self.teleop.driving {
             // Never resume motion by itself after a reconnect.
             self.teleop = Teleop::default();
-            self.note(Level::Warn, Source::Command, "teleop stopped: link lost".into());
+            self.note(
+                Level::Warn,
+                Source::Command,
+                "teleop stopped: link lost".into(),
+            );
         }
         self.connection = c;
     }
@@ -463,15 +479,23 @@ impl App {
     fn on_robot_event(&mut self, e: Event) {
         let v = e.value;
         let (level, text) = match e.code {
-            EventCode::ModeChanged => (Level::Info, format!("mode changed to {}", mode_name_i32(v))),
+            EventCode::ModeChanged => {
+                (Level::Info, format!("mode changed to {}", mode_name_i32(v)))
+            }
             EventCode::GoalReached => (Level::Info, "goal reached".into()),
-            EventCode::FailsafeStop => (Level::Warn, format!("failsafe stop after {v} ms of silence")),
+            EventCode::FailsafeStop => (
+                Level::Warn,
+                format!("failsafe stop after {v} ms of silence"),
+            ),
             EventCode::Collision => (Level::Warn, "collision".into()),
             EventCode::LineCrossed => (Level::Debug, format!("line crossed ({v} so far)")),
             EventCode::PoseCorrected => (Level::Info, format!("pose corrected by {v} mm")),
             EventCode::BeaconCalibration => (
                 Level::Info,
-                format!("beacon calibration, confidence {:.3}", f64::from(v) / 1000.0),
+                format!(
+                    "beacon calibration, confidence {:.3}",
+                    f64::from(v) / 1000.0
+                ),
             ),
             EventCode::MapUpdated => (Level::Debug, "map updated".into()),
             EventCode::PlanInstalled => (Level::Info, "plan installed".into()),
@@ -483,7 +507,10 @@ impl App {
             ),
             EventCode::ParamChanged => (
                 Level::Info,
-                format!("parameter {} changed", param_name(u16::try_from(v).unwrap_or(u16::MAX))),
+                format!(
+                    "parameter {} changed",
+                    param_name(u16::try_from(v).unwrap_or(u16::MAX))
+                ),
             ),
         };
         self.note(level, Source::Event, text);
@@ -502,10 +529,16 @@ impl App {
                 // Teleop is acked ten times a second: only its failures are news.
                 if !matches!(command, Command::Teleop { .. }) {
                     let detail = match info {
-                        AckInfo::Param { value, .. } => format!(" = {}", params::format_value(value)),
+                        AckInfo::Param { value, .. } => {
+                            format!(" = {}", params::format_value(value))
+                        }
                         _ => String::new(),
                     };
-                    self.note(Level::Info, Source::Command, format!("ok: {what}{detail} ({rtt_ms} ms)"));
+                    self.note(
+                        Level::Info,
+                        Source::Command,
+                        format!("ok: {what}{detail} ({rtt_ms} ms)"),
+                    );
                 }
             }
             CommandOutcome::Nacked { reason, .. } => {
@@ -515,14 +548,22 @@ impl App {
                 if matches!(command, Command::Teleop { .. }) {
                     self.teleop = Teleop::default();
                 }
-                self.note(Level::Error, Source::Command, format!("refused: {what}: {}", nack_text(reason)));
+                self.note(
+                    Level::Error,
+                    Source::Command,
+                    format!("refused: {what}: {}", nack_text(reason)),
+                );
             }
             CommandOutcome::Failed(CommandFailure::Superseded) => {}
             CommandOutcome::Failed(why) => {
                 if let Command::SetParam { id, .. } | Command::GetParam { id } = command {
                     self.params.set_failed(id.0, why.to_string());
                 }
-                self.note(Level::Error, Source::Command, format!("failed: {what}: {why}"));
+                self.note(
+                    Level::Error,
+                    Source::Command,
+                    format!("failed: {what}: {why}"),
+                );
             }
         }
     }

@@ -1,21 +1,18 @@
-//! The built-in default: `station` with no arguments starts an emulator on a pty and connects
-//! to it through the real serial path, exactly as it would to /dev/ttyUSB0.
+//! The built-in default: `station` with no arguments starts the emulator (the real firmware in
+//! a simulated Micro-Rato'99 world) on a pty and connects to it through the real serial path,
+//! exactly as it would to /dev/ttyUSB0.
 //!
-//! Layer: the one place that knows how the built-in emulator is started, so switching to the
-//! emulator's own `emulator::link::spawn(EmulatorOptions)` (being written) touches only
-//! `start_builtin_emulator`. Until that exists, this serves the real firmware (`SimCore`: the
-//! robot code with ideal wheel motion, no walls or sensors of a world) on the emulator's pty
-//! serving loop, and draws the Micro-Rato'99 arena it will run in. The pty's slave is reached
-//! through a symlink in a private directory, so a replugged pty keeps its name.
-//! What can fail: creating the pty or its directory (`BuiltinError`).
+//! Layer: the one place that knows how the built-in emulator is started
+//! (`emulator::link::spawn(EmulatorOptions::builtin_default())`). The pty's slave is reached
+//! through a symlink in a private directory, so a replugged pty keeps its name; the same arena
+//! the emulator simulates is loaded for the map. What can fail: creating the directory,
+//! loading the arena or the simulation, creating the pty (`BuiltinError`).
 
 use std::path::{Path, PathBuf};
 
-use crate::app::arena::ArenaOverlay;
-use crate::link::sim::{SimCore, SimOptions};
+use emulator::link::{spawn, EmulatorOptions, RunningEmulator};
 
-/// The Micro-Rato'99 lab (seed 004), as the emulator ships it.
-const MICRO_RATO_99: &str = include_str!("../../emulator/arenas/wallsMicRato99.xml");
+use crate::app::arena::ArenaOverlay;
 
 /// Why the built-in emulator did not start.
 #[derive(Debug, thiserror::Error)]
@@ -28,7 +25,7 @@ pub enum BuiltinError {
 
 /// A running built-in emulator; stops (and removes its pty) when dropped.
 pub struct BuiltinEmulator {
-    running: emulator::link::Running,
+    running: Option<RunningEmulator>,
     link: PathBuf,
     dir: PathBuf,
     /// The arena the emulator simulates, for the map.
@@ -43,13 +40,17 @@ impl BuiltinEmulator {
 
     /// The pty behind the symlink right now.
     pub fn pty_path(&mut self) -> PathBuf {
-        self.running.path().to_path_buf()
+        self.running
+            .as_mut()
+            .map(|r| r.path().to_path_buf())
+            .unwrap_or_default()
     }
 }
 
 impl Drop for BuiltinEmulator {
     fn drop(&mut self) {
-        // `running` stops on its own drop and removes the symlink; the directory is ours.
+        // Stopping the serving loop removes its symlink; then the directory is empty.
+        drop(self.running.take());
         let _ = std::fs::remove_dir(&self.dir);
     }
 }
@@ -63,29 +64,14 @@ pub fn start_builtin_emulator() -> Result<BuiltinEmulator, BuiltinError> {
     let dir = base.join(format!("station-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(BuiltinError::Dir)?;
     let link = dir.join("robot");
-    let opts = emulator::link::ServeOptions {
-        link: Some(link.clone()),
-        ..emulator::link::ServeOptions::default()
-    };
-    let running = emulator::link::spawn_device(
-        || {
-            Ok(SimCore::new(SimOptions {
-                start: (1.0, 1.0, 0.0),
-                ..SimOptions::default()
-            }))
-        },
-        opts,
-    )
-    .map_err(|e| BuiltinError::Spawn(e.to_string()))?;
-    let arena = emulator::arena::ciberrato::parse_lab(
-        Path::new("wallsMicRato99.xml"),
-        MICRO_RATO_99,
-        emulator::arena::CIBERRATO_UNIT_M,
-    )
-    .ok()
-    .map(|a| ArenaOverlay::from_arena(&a));
+    let mut opts = EmulatorOptions::builtin_default();
+    opts.serve.link = Some(link.clone());
+    let arena = emulator::builtin::load(&opts.arena, &opts.load)
+        .ok()
+        .map(|a| ArenaOverlay::from_arena(&a));
+    let running = spawn(opts).map_err(|e| BuiltinError::Spawn(e.to_string()))?;
     Ok(BuiltinEmulator {
-        running,
+        running: Some(running),
         link,
         dir,
         arena,

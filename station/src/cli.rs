@@ -110,7 +110,7 @@ pub enum SendCmd {
         #[arg(value_parser = parse_metres)]
         y: f64,
     },
-    /// Read or write a parameter (names as in the firmware's table; see `param list`).
+    /// Read or write a parameter by name or id (the firmware's table; a wrong name lists them).
     Param {
         #[command(subcommand)]
         op: ParamOp,
@@ -215,8 +215,8 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
 fn parse_metres(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && v.abs() <= 1000.0 => Ok(v),
-        Ok(v) => Err(format!("{v} m is too far (at most 1000 m)")),
-        Err(_) => Err(format!("{s:?} is not a distance in metres")),
+        Ok(v) if v.is_finite() => Err(format!("{v} m is too far (at most 1000 m)")),
+        _ => Err(format!("{s:?} is not a distance in metres")),
     }
 }
 
@@ -245,7 +245,10 @@ fn parse_param(s: &str) -> Result<u16, String> {
     Err(if close.is_empty() {
         format!("unknown parameter {s:?}; known: {}", all.join(", "))
     } else {
-        format!("unknown parameter {s:?}; did you mean {}?", close.join(", "))
+        format!(
+            "unknown parameter {s:?}; did you mean {}?",
+            close.join(", ")
+        )
     })
 }
 
@@ -322,16 +325,34 @@ mod tests {
     #[test]
     fn bad_arguments_are_refused_with_a_clear_message() {
         let cases: &[(&[&str], &str)] = &[
-            (&["send", "--port", "p", "param", "get", "warp_factor"], "unknown parameter"),
-            (&["send", "--port", "p", "mode", "dance"], "invalid value 'dance'"),
-            (&["send", "--port", "p", "rate", "99"], "99 is not in 0..=50"),
-            (&["send", "--port", "p", "teleop", "fast", "0"], "invalid digit"),
-            (&["send", "--port", "p", "goto", "NaN", "0"], "not a distance"),
+            (
+                &["send", "--port", "p", "param", "get", "warp_factor"],
+                "unknown parameter",
+            ),
+            (
+                &["send", "--port", "p", "mode", "dance"],
+                "invalid value 'dance'",
+            ),
+            (
+                &["send", "--port", "p", "rate", "99"],
+                "99 is not in 0..=50",
+            ),
+            (
+                &["send", "--port", "p", "teleop", "fast", "0"],
+                "invalid digit",
+            ),
+            (
+                &["send", "--port", "p", "goto", "NaN", "0"],
+                "not a distance",
+            ),
             (&["send", "--port", "p", "goto", "1e9", "0"], "too far"),
-            (&["send", "--port", "p", "param", "set", "failsafe_ms", "inf"], "not a finite"),
+            (
+                &["send", "--port", "p", "param", "set", "failsafe_ms", "inf"],
+                "not a finite",
+            ),
             (&["send", "stop"], "--port <PATH>"),
             (&["--baud", "0"], "not a usable baud rate"),
-            (&["stats", "--port", "p", "--seconds", "-1"], "out of range"),
+            (&["stats", "--port", "p", "--seconds", "0"], "out of range"),
             (&["frobnicate"], "unrecognized subcommand"),
         ];
         for (args, needle) in cases {

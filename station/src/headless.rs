@@ -31,7 +31,14 @@ use crate::link::{
 /// Runs what the command line asked for.
 pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
-        None => interactive(cli.port.port.as_deref(), cli.port.baud, cli.arena.as_deref()).await,
+        None => {
+            interactive(
+                cli.port.port.as_deref(),
+                cli.port.baud,
+                cli.arena.as_deref(),
+            )
+            .await
+        }
         Some(Sub::Ports { json }) => ports(json),
         Some(Sub::Send {
             port,
@@ -266,12 +273,19 @@ async fn stats(
             "robot       {} {} {:?}",
             peer.firmware, peer.firmware_version, peer.profile
         );
-        println!("state       {} for {:.1} s", s.state, s.session_ms as f64 / 1000.0);
+        println!(
+            "state       {} for {:.1} s",
+            s.state,
+            s.session_ms as f64 / 1000.0
+        );
         println!(
             "frames      in {} out {}  bytes in {} ({:.0}/s) out {} ({:.0}/s)",
             s.frames_in, s.frames_out, s.bytes_in, s.bytes_in_per_s, s.bytes_out, s.bytes_out_per_s
         );
-        println!("telemetry   {:.1} Hz ({} frames)", s.telemetry_hz, s.telemetry_frames);
+        println!(
+            "telemetry   {:.1} Hz ({} frames)",
+            s.telemetry_hz, s.telemetry_frames
+        );
         println!(
             "loss        robot {} ({:.2}%)  truth {}  duplicates {}",
             s.robot_seq.lost, s.robot_seq.loss_percent, s.truth_seq.lost, s.robot_seq.duplicates

@@ -291,3 +291,44 @@ async fn a_silent_robot_ends_the_session_after_1_5_s_and_the_link_handshakes_aga
     b.connected(Duration::from_secs(1)).await;
     assert_eq!(b.stats().await.link_timeouts, 1);
 }
+
+#[tokio::test(start_paused = true)]
+async fn the_tap_sees_every_byte_both_ways_for_recording() {
+    let (connector, peer) = memory_port();
+    let _sim = FirmwareSim::spawn(peer, SimCore::new(SimOptions::default()));
+    let (tap_tx, mut tap_rx) = tokio::sync::mpsc::unbounded_channel();
+    let mut link = spawn_link(
+        connector,
+        LinkOptions {
+            nonce_seed: Some(1),
+            tap: Some(tap_tx),
+            ..LinkOptions::default()
+        },
+    );
+    let deadline = Instant::now() + Duration::from_secs(1);
+    let mut stats = None;
+    while let Ok(Some(e)) = tokio::time::timeout_at(deadline, link.events.recv()).await {
+        if let LinkEvent::Stats(s) = e {
+            stats = Some(*s);
+        }
+    }
+    let stats = stats.expect("stats");
+    let (mut to_robot, mut from_robot) = (Vec::new(), Vec::new());
+    let mut last_t = 0;
+    while let Ok(r) = tap_rx.try_recv() {
+        assert!(r.t_us >= last_t, "records are in time order");
+        last_t = r.t_us;
+        match r.direction {
+            station::link::TapDirection::ToRobot => to_robot.extend(r.bytes),
+            station::link::TapDirection::FromRobot => from_robot.extend(r.bytes),
+        }
+    }
+    assert_eq!(
+        to_robot.first(),
+        Some(&0),
+        "the flush delimiter is recorded too"
+    );
+    assert!(to_robot.len() as u64 >= stats.bytes_out.saturating_sub(64));
+    assert!(from_robot.len() as u64 >= stats.bytes_in.saturating_sub(256));
+    assert!(!from_robot.is_empty());
+}

@@ -57,6 +57,7 @@ async fn the_station_opens_the_pty_exclusively_and_talks_to_the_firmware() {
     link.handle.shutdown();
     let _ = link.task.await;
     drop(emu);
+    let _ = std::fs::remove_dir_all(path.parent().unwrap());
 }
 
 #[tokio::test]
@@ -102,4 +103,5 @@ async fn the_station_reconnects_when_the_emulator_replugs_its_pty() {
     link.handle.shutdown();
     let _ = link.task.await;
     drop(emu);
+    let _ = std::fs::remove_dir_all(path.parent().unwrap());
 }

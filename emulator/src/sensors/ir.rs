@@ -78,7 +78,7 @@ impl IrCurve {
     /// Noise-free reflected signal at distance `d`, counts, before the floor and gain; may
     /// exceed 1023 (saturation happens at the clamp).
     pub fn signal(&self, d: f64) -> f64 {
-        if !(d < self.range_m) {
+        if d.is_nan() || d >= self.range_m {
             return 0.0;
         }
         let band = (self.range_m - self.saturate_m).max(1e-9);

@@ -69,7 +69,7 @@ impl AmbientLight {
             // Cheap bound first: the brightest any sensor could see this light.
             let dc = (light.position - centre).norm() - self.radius_m;
             let bound = light.intensity * GAIN / (1.0 + (dc.max(0.0) / HALF_M).powi(2));
-            if !(bound > NEGLIGIBLE) || walls.blocks(centre, light.position) {
+            if bound.is_nan() || bound <= NEGLIGIBLE || walls.blocks(centre, light.position) {
                 continue;
             }
             for (slot, &a) in b.iter_mut().zip(&self.angle_rad) {

@@ -114,7 +114,11 @@ impl BeaconSensor {
         let distance = v.norm();
         let bearing = wrap_pi(v.y.atan2(v.x) - pose.heading);
         let farthest = f64::from(self.model.distance_m.last().copied().unwrap_or(0.0));
-        if !(distance <= farthest) || bearing.abs() > BEACON_HALF_FOV_RAD || !b.visible_from(here) {
+        if distance.is_nan()
+            || distance > farthest
+            || bearing.abs() > BEACON_HALF_FOV_RAD
+            || !b.visible_from(here)
+        {
             return Some(none);
         }
         let nominal = f64::from(self.model.strength_at(distance as f32));

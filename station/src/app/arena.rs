@@ -26,7 +26,12 @@ impl ArenaOverlay {
     pub fn from_arena(a: &Arena) -> Self {
         ArenaOverlay {
             name: a.name.clone(),
-            bounds: [a.bounds.min.x, a.bounds.min.y, a.bounds.max.x, a.bounds.max.y],
+            bounds: [
+                a.bounds.min.x,
+                a.bounds.min.y,
+                a.bounds.max.x,
+                a.bounds.max.y,
+            ],
             enclosed: a.enclosed,
             walls: a
                 .walls
@@ -38,7 +43,11 @@ impl ArenaOverlay {
                 .iter()
                 .map(|t| ((t.centre.x, t.centre.y), t.radius_m))
                 .collect(),
-            beacons: a.beacons.iter().map(|b| (b.position.x, b.position.y)).collect(),
+            beacons: a
+                .beacons
+                .iter()
+                .map(|b| (b.position.x, b.position.y))
+                .collect(),
         }
     }
 

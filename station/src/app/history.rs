@@ -92,7 +92,9 @@ impl Series {
             Series::SpeedRight => f64::from(t.wheels.speed_mm_s[1]),
             Series::MotorLeft => f64::from(t.behaviour.motor_mm_s[0]),
             Series::MotorRight => f64::from(t.behaviour.motor_mm_s[1]),
-            Series::HeadingDeg => f64::from(t.pose.heading_mrad) / 1000.0 * 180.0 / std::f64::consts::PI,
+            Series::HeadingDeg => {
+                f64::from(t.pose.heading_mrad) / 1000.0 * 180.0 / std::f64::consts::PI
+            }
             Series::CompassDeg => f64::from(t.compass_ddeg) / 10.0,
             Series::BatteryMv => f64::from(t.battery_mv),
             Series::BeaconStrength => f64::from(t.beacon.strength),
@@ -112,7 +114,12 @@ pub const CHART_PRESETS: &[(&str, &[Series])] = &[
     ),
     (
         "Ambient light",
-        &[Series::Light(0), Series::Light(2), Series::Light(3), Series::Light(5)],
+        &[
+            Series::Light(0),
+            Series::Light(2),
+            Series::Light(3),
+            Series::Light(5),
+        ],
     ),
     (
         "Wheels",
@@ -124,10 +131,16 @@ pub const CHART_PRESETS: &[(&str, &[Series])] = &[
         ],
     ),
     ("Heading", &[Series::HeadingDeg, Series::CompassDeg]),
-    ("Beacon", &[Series::BeaconStrength, Series::BeaconBearingDeg]),
+    (
+        "Beacon",
+        &[Series::BeaconStrength, Series::BeaconBearingDeg],
+    ),
     ("Battery", &[Series::BatteryMv]),
     ("Uncertainty", &[Series::SigmaMm]),
-    ("Control cycle", &[Series::CyclePeriodMs, Series::CycleBusyMs]),
+    (
+        "Control cycle",
+        &[Series::CyclePeriodMs, Series::CycleBusyMs],
+    ),
 ];
 
 /// A polyline of poses, metres.

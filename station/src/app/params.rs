@@ -20,7 +20,10 @@ pub enum ParamStatus {
     /// The value the robot reported in force.
     Value(f32),
     /// The robot refused; the value it had is kept if known.
-    Refused { reason: NackReason, last: Option<f32> },
+    Refused {
+        reason: NackReason,
+        last: Option<f32>,
+    },
     /// No answer (timeout, link lost).
     Failed(String),
 }

@@ -23,14 +23,12 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         .copied()
         .unwrap_or(("none", &[]));
     let block = Block::bordered().title(format!(" Charts — {name} (c: next) "));
-    let Some((_, t_end)) = app.history.span() else {
-        frame.render_widget(
-            Paragraph::new("no telemetry yet").block(block),
-            area,
-        );
+    let Some((t_first, t_end)) = app.history.span() else {
+        frame.render_widget(Paragraph::new("no telemetry yet").block(block), area);
         return;
     };
-    let t0 = t_end - WINDOW_S;
+    // Until a whole window has passed, the data fills the width.
+    let t0 = (t_end - WINDOW_S).max(t_first.min(t_end - 1.0));
     let data: Vec<Vec<(f64, f64)>> = series
         .iter()
         .map(|s| {
@@ -63,7 +61,12 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
                 .name(s.label())
                 .marker(Marker::Braille)
                 .graph_type(GraphType::Line)
-                .style(Style::new().fg(COLORS.get(i % COLORS.len()).copied().unwrap_or(Color::White)))
+                .style(
+                    Style::new().fg(COLORS
+                        .get(i % COLORS.len())
+                        .copied()
+                        .unwrap_or(Color::White)),
+                )
                 .data(d)
         })
         .collect();
@@ -72,7 +75,10 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         .x_axis(
             Axis::default()
                 .bounds([t0, t_end])
-                .labels([Line::from(format!("-{WINDOW_S:.0} s")), Line::from("now")])
+                .labels([
+                    Line::from(format!("-{:.0} s", t_end - t0)),
+                    Line::from("now"),
+                ])
                 .style(Style::new().fg(Color::DarkGray)),
         )
         .y_axis(

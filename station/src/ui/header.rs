@@ -16,10 +16,16 @@ pub fn render_header(app: &App, frame: &mut Frame, area: Rect) {
     let mut spans = match &app.connection {
         Connection::Connected(p) => vec![
             Span::styled("● connected ", Style::new().fg(Color::Green).bold()),
-            Span::raw(format!("{} {} {:?}", p.firmware, p.firmware_version, p.profile)),
+            Span::raw(format!(
+                "{} {} {:?}",
+                p.firmware, p.firmware_version, p.profile
+            )),
         ],
         Connection::Handshaking { .. } => {
-            vec![Span::styled("◌ handshaking", Style::new().fg(Color::Yellow).bold())]
+            vec![Span::styled(
+                "◌ handshaking",
+                Style::new().fg(Color::Yellow).bold(),
+            )]
         }
         Connection::Closed { reason } => vec![Span::styled(
             format!("✕ {reason}"),

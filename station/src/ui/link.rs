@@ -18,7 +18,11 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let lines = lines(app);
-    let spark_h = if inner.height as usize > lines.len() + 2 { 3 } else { 0 };
+    let spark_h = if inner.height as usize > lines.len() + 2 {
+        3
+    } else {
+        0
+    };
     let [text, spark] =
         Layout::vertical([Constraint::Fill(1), Constraint::Length(spark_h)]).areas(inner);
     frame.render_widget(Paragraph::new(lines).wrap(Wrap { trim: true }), text);
@@ -37,7 +41,10 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
 fn lines(app: &App) -> Vec<Line<'static>> {
     let dim = Style::new().fg(Color::DarkGray);
     let l = |s: &str| Span::styled(s.to_string(), dim);
-    let mut out = vec![Line::from(vec![l("port "), Span::raw(app.port_label.clone())])];
+    let mut out = vec![Line::from(vec![
+        l("port "),
+        Span::raw(app.port_label.clone()),
+    ])];
     match &app.connection {
         Connection::Connected(p) => {
             let mut capnames = Vec::new();
@@ -149,7 +156,9 @@ fn lines(app: &App) -> Vec<Line<'static>> {
         Line::from(vec![
             l("RTT "),
             Span::raw(match (s.rtt_ms.p50, s.rtt_ms.p99) {
-                (Some(a), Some(b)) => format!("p50 {a:.0} ms  p99 {b:.0} ms  (n={})", s.rtt_ms.samples),
+                (Some(a), Some(b)) => {
+                    format!("p50 {a:.0} ms  p99 {b:.0} ms  (n={})", s.rtt_ms.samples)
+                }
                 _ => "no samples yet".into(),
             }),
         ]),

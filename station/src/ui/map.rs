@@ -11,8 +11,8 @@ use ratatui::layout::Rect;
 use ratatui::style::{Color, Stylize};
 use ratatui::symbols::Marker;
 use ratatui::text::Line as TLine;
-use ratatui::widgets::canvas::{Circle, Context, Line, Points};
 use ratatui::widgets::canvas::Canvas;
+use ratatui::widgets::canvas::{Circle, Context, Line, Points};
 use ratatui::widgets::Block;
 use ratatui::Frame;
 
@@ -23,7 +23,17 @@ pub trait MapLayer: Sync {
     /// The name used to hide it.
     fn name(&self) -> &'static str;
     /// Paints it; called only when visible.
-    fn paint(&self, app: &App, ctx: &mut Context<'_>);
+    fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>);
+}
+
+/// The world rectangle being drawn, metres, and the cells it covers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapView {
+    pub x: [f64; 2],
+    pub y: [f64; 2],
+    /// Terminal cells across and down (each 2 x 4 braille dots).
+    pub cols: u16,
+    pub rows: u16,
 }
 
 /// The arena's walls, targets and beacons.
@@ -42,8 +52,11 @@ pub static LAYERS: [&dyn MapLayer; 4] = [&ArenaLayer, &TruthLayer, &BelievedLaye
 const MARGIN_M: f64 = 0.1;
 /// Smallest span shown without an arena, metres.
 const MIN_SPAN_M: f64 = 2.0;
-/// Marker radius of a robot, metres (about a Khepera).
+/// Smallest marker radius of a robot, metres (about a Khepera); larger maps draw it larger
+/// so it stays visible.
 const ROBOT_R: f64 = 0.04;
+/// Marker radius as a fraction of the shown span.
+const ROBOT_FRACTION: f64 = 1.0 / 50.0;
 
 pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     let name = app
@@ -57,10 +70,20 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             " ● believed ".cyan(),
             "○ true ".magenta(),
             "× goal ".yellow(),
-            if app.map.cursor_mode { "+ cursor ".green() } else { "g/click: go-to ".dark_gray() },
+            if app.map.cursor_mode {
+                "+ cursor ".green()
+            } else {
+                "g/click: go-to ".dark_gray()
+            },
         ]));
     let inner = block.inner(area);
     let (xb, yb) = view_bounds(app, inner);
+    let view = MapView {
+        x: xb,
+        y: yb,
+        cols: inner.width,
+        rows: inner.height,
+    };
     let canvas = Canvas::default()
         .block(block)
         .marker(Marker::Braille)
@@ -69,7 +92,7 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         .paint(|ctx| {
             for layer in LAYERS.iter() {
                 if app.map.visible(layer.name()) {
-                    layer.paint(app, ctx);
+                    layer.paint(app, &view, ctx);
                     ctx.layer();
                 }
             }
@@ -87,7 +110,10 @@ pub fn view_bounds(app: &App, inner: Rect) -> ([f64; 2], [f64; 2]) {
     y0 -= MARGIN_M;
     x1 += MARGIN_M;
     y1 += MARGIN_M;
-    let (w, h) = (f64::from(inner.width.max(1)), f64::from(inner.height.max(1)));
+    let (w, h) = (
+        f64::from(inner.width.max(1)),
+        f64::from(inner.height.max(1)),
+    );
     // A braille cell is 2 x 4 dots and about 1 x 2 in shape: world span per dot equal in x and y.
     let want = w / (2.0 * h); // x span / y span
     let (xs, ys) = (x1 - x0, y1 - y0);
@@ -146,18 +172,19 @@ fn content_bounds(app: &App) -> [f64; 4] {
     [cx - half_x, cy - half_y, cx + half_x, cy + half_y]
 }
 
-fn robot(ctx: &mut Context<'_>, (x, y, h): (f64, f64, f64), color: Color) {
+fn robot(ctx: &mut Context<'_>, view: &MapView, (x, y, h): (f64, f64, f64), color: Color) {
+    let r = ROBOT_R.max((view.x[1] - view.x[0]) * ROBOT_FRACTION);
     ctx.draw(&Circle {
         x,
         y,
-        radius: ROBOT_R,
+        radius: r,
         color,
     });
     ctx.draw(&Line {
         x1: x,
         y1: y,
-        x2: x + 2.5 * ROBOT_R * h.cos(),
-        y2: y + 2.5 * ROBOT_R * h.sin(),
+        x2: x + 2.0 * r * h.cos(),
+        y2: y + 2.0 * r * h.sin(),
         color,
     });
 }
@@ -167,7 +194,7 @@ impl MapLayer for ArenaLayer {
         "arena"
     }
 
-    fn paint(&self, app: &App, ctx: &mut Context<'_>) {
+    fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {
         let Some(a) = &app.map.arena else { return };
         let [x0, y0, x1, y1] = a.bounds;
         let edge = |ctx: &mut Context<'_>, (ax, ay): (f64, f64), (bx, by): (f64, f64)| {
@@ -209,14 +236,14 @@ impl MapLayer for TruthLayer {
         "truth"
     }
 
-    fn paint(&self, app: &App, ctx: &mut Context<'_>) {
+    fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>) {
         let pts: Vec<(f64, f64)> = app.true_track.points().copied().collect();
         ctx.draw(&Points {
             coords: &pts,
             color: Color::Magenta,
         });
         if let Some(p) = app.true_pose() {
-            robot(ctx, p, Color::Magenta);
+            robot(ctx, view, p, Color::Magenta);
         }
     }
 }
@@ -226,14 +253,14 @@ impl MapLayer for BelievedLayer {
         "believed"
     }
 
-    fn paint(&self, app: &App, ctx: &mut Context<'_>) {
+    fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>) {
         let pts: Vec<(f64, f64)> = app.believed.points().copied().collect();
         ctx.draw(&Points {
             coords: &pts,
             color: Color::Cyan,
         });
         if let Some(p) = app.pose() {
-            robot(ctx, p, Color::Cyan);
+            robot(ctx, view, p, Color::Cyan);
         }
     }
 }
@@ -243,7 +270,7 @@ impl MapLayer for GoalLayer {
         "goal"
     }
 
-    fn paint(&self, app: &App, ctx: &mut Context<'_>) {
+    fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {
         if let Some((x, y)) = app.map.goal {
             ctx.print(x, y, "×".yellow());
         }

@@ -42,7 +42,10 @@ pub struct Areas {
 impl Areas {
     /// Where `panel` is drawn, if it is.
     pub fn find(&self, panel: Panel) -> Option<Rect> {
-        self.panels.iter().find(|(p, _)| *p == panel).map(|(_, r)| *r)
+        self.panels
+            .iter()
+            .find(|(p, _)| *p == panel)
+            .map(|(_, r)| *r)
     }
 }
 
@@ -125,7 +128,47 @@ pub fn render(app: &App, frame: &mut Frame) {
             Panel::Params => params::render(app, frame, *area),
         }
     }
+    if let Some(main) = main_area(&a) {
+        notice(app, frame, main);
+    }
     if app.help {
         help::render(frame, frame.area());
     }
+}
+
+fn main_area(a: &Areas) -> Option<Rect> {
+    a.panels
+        .iter()
+        .map(|(_, r)| *r)
+        .reduce(|acc, r| acc.union(r))
+}
+
+/// When the link is down, says why in full over the bottom of the main area: a port held by
+/// another program or a schema mismatch must be readable, not cut off in the header.
+fn notice(app: &App, frame: &mut Frame, main: Rect) {
+    use ratatui::style::{Color, Style};
+    use ratatui::widgets::{Block, Clear, Paragraph, Wrap};
+    let (title, text) = match &app.connection {
+        crate::link::Connection::Closed { reason } => (" Not connected ", reason.clone()),
+        crate::link::Connection::Refused { message } => (" Robot refused ", message.clone()),
+        _ => return,
+    };
+    let width = main.width.saturating_sub(4).max(10);
+    let text = format!("{text}. The station keeps trying.");
+    let lines = (text.chars().count() as u16).div_ceil(width.saturating_sub(2).max(1));
+    let height = (lines + 2).min(main.height);
+    let area = Rect {
+        x: main.x + (main.width - width.min(main.width)) / 2,
+        y: main.y + main.height.saturating_sub(height + 1),
+        width: width.min(main.width),
+        height,
+    };
+    frame.render_widget(Clear, area);
+    frame.render_widget(
+        Paragraph::new(text)
+            .wrap(Wrap { trim: true })
+            .style(Style::new().fg(Color::Red))
+            .block(Block::bordered().title(title)),
+        area,
+    );
 }

@@ -36,7 +36,11 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
                 Cell::from(p.name),
                 Cell::from(Span::styled(status_text(s), Style::new().fg(color))),
                 Cell::from(p.unit),
-                Cell::from(format!("{} .. {}", format_value(p.min), format_value(p.max))),
+                Cell::from(format!(
+                    "{} .. {}",
+                    format_value(p.min),
+                    format_value(p.max)
+                )),
             ])
         })
         .collect();
@@ -44,10 +48,10 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         rows,
         [
             Constraint::Length(3),
-            Constraint::Length(24),
+            Constraint::Length(23),
             Constraint::Fill(1),
-            Constraint::Length(12),
-            Constraint::Length(16),
+            Constraint::Length(11),
+            Constraint::Length(13),
         ],
     )
     .header(
@@ -63,7 +67,12 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             Span::raw(text.clone()),
             Span::styled("▏", Style::new().fg(Color::Yellow)),
             Span::styled(
-                format!("  ({} .. {} {})", format_value(p.min), format_value(p.max), p.unit),
+                format!(
+                    "  ({} .. {} {})",
+                    format_value(p.min),
+                    format_value(p.max),
+                    p.unit
+                ),
                 Style::new().fg(Color::DarkGray),
             ),
         ]),

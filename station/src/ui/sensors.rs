@@ -33,11 +33,12 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     let lines = text_lines(app, profile);
     let text_h = lines.len() as u16;
     let (glyph, text) = if inner.width >= 70 {
-        let [g, t] =
-            Layout::horizontal([Constraint::Percentage(40), Constraint::Percentage(60)]).areas(inner);
+        let [g, t] = Layout::horizontal([Constraint::Percentage(40), Constraint::Percentage(60)])
+            .areas(inner);
         (g, t)
     } else {
-        let [g, t] = Layout::vertical([Constraint::Min(5), Constraint::Length(text_h)]).areas(inner);
+        let [g, t] =
+            Layout::vertical([Constraint::Min(5), Constraint::Length(text_h)]).areas(inner);
         (g, t)
     };
     if glyph.height >= 5 {
@@ -149,7 +150,11 @@ fn text_lines(app: &App, profile: &Profile) -> Vec<Line<'static>> {
                 deg(t.pose.heading_mrad)
             )),
             label("  σ "),
-            Span::raw(format!("{} mm {:.1}°", t.sigma.xy_mm, deg(t.sigma.heading_mrad as i16))),
+            Span::raw(format!(
+                "{} mm {:.1}°",
+                t.sigma.xy_mm,
+                deg(t.sigma.heading_mrad as i16)
+            )),
         ]),
         Line::from(vec![
             label("mode "),
@@ -159,7 +164,10 @@ fn text_lines(app: &App, profile: &Profile) -> Vec<Line<'static>> {
         ]),
         Line::from(vec![
             label("wheels "),
-            Span::raw(format!("{} {} mm/s", t.wheels.speed_mm_s[0], t.wheels.speed_mm_s[1])),
+            Span::raw(format!(
+                "{} {} mm/s",
+                t.wheels.speed_mm_s[0], t.wheels.speed_mm_s[1]
+            )),
             label("  motor "),
             Span::raw(format!(
                 "{} {}",

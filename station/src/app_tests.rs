@@ -1,0 +1,187 @@
+//! Unit tests of `App::update`: teleop repetition and safety, command outcomes, parameters.
+
+use super::*;
+use crate::link::api::CommandFailure;
+use protocol::{MapCapacity, NackReason, ParamId, ProfileId};
+
+fn peer() -> PeerInfo {
+    PeerInfo {
+        session: 1,
+        firmware: "robot-firmware".into(),
+        firmware_version: "0.1.0".into(),
+        profile: ProfileId::Khepera,
+        capabilities: 0,
+        map_capacity: MapCapacity {
+            width: 64,
+            height: 64,
+        },
+        telemetry_hz: 10,
+        failsafe_ms: 300,
+    }
+}
+
+fn connected_app() -> App {
+    let mut app = App::new(AppOptions::default());
+    app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
+        peer(),
+    ))));
+    app
+}
+
+fn teleops(out: &[(CommandId, Command)]) -> usize {
+    out.iter()
+        .filter(|(_, c)| matches!(c, Command::Teleop { .. }))
+        .count()
+}
+
+#[test]
+fn driving_repeats_teleop_at_10_hz_until_space_stops_it() {
+    let mut app = connected_app();
+    app.update(Action::Drive { dv: V_STEP, dw: 0 });
+    let first = app.take_outbox();
+    assert_eq!(
+        first.first().map(|c| c.1),
+        Some(Command::Teleop {
+            v_mm_s: V_STEP,
+            w_mrad_s: 0
+        })
+    );
+    let mut sent = 0;
+    for now_ms in (50..=1000).step_by(50) {
+        app.update(Action::Tick { now_ms });
+        sent += teleops(&app.take_outbox());
+    }
+    assert_eq!(sent, 10, "ten a second while driving");
+    app.update(Action::StopDriving);
+    assert_eq!(app.take_outbox().last().map(|c| c.1), Some(Command::Stop));
+    for now_ms in (1050..=2000).step_by(50) {
+        app.update(Action::Tick { now_ms });
+    }
+    assert_eq!(teleops(&app.take_outbox()), 0, "nothing after a stop");
+}
+
+#[test]
+fn a_lost_link_stops_teleop_and_a_reconnect_does_not_resume_it() {
+    let mut app = connected_app();
+    app.update(Action::Drive { dv: V_STEP, dw: 0 });
+    app.update(Action::Link(LinkEvent::Connection(Connection::Closed {
+        reason: "unplugged".into(),
+    })));
+    assert!(!app.teleop.driving);
+    app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
+        peer(),
+    ))));
+    app.take_outbox();
+    for now_ms in (100..=1000).step_by(100) {
+        app.update(Action::Tick { now_ms });
+    }
+    assert_eq!(teleops(&app.take_outbox()), 0);
+}
+
+#[test]
+fn driving_while_disconnected_sends_nothing_and_says_why() {
+    let mut app = App::new(AppOptions::default());
+    app.update(Action::Drive { dv: V_STEP, dw: 0 });
+    assert!(app.take_outbox().is_empty());
+    assert!(app.log.window(1).any(|l| l.text.contains("not connected")));
+}
+
+#[test]
+fn a_refused_parameter_write_shows_the_robots_reason_in_the_editor_and_the_log() {
+    let mut app = connected_app();
+    app.update(Action::ShowView(View::Params));
+    // Read failsafe_ms (id 0) first: 300.
+    app.update(Action::ParamRead);
+    let (id, cmd) = app.take_outbox()[0];
+    app.update(Action::Link(LinkEvent::CommandDone {
+        id,
+        command: cmd,
+        outcome: CommandOutcome::Acked {
+            info: AckInfo::Param {
+                id: ParamId(0),
+                value: 300.0,
+            },
+            sends: 1,
+            rtt_ms: 5,
+        },
+    }));
+    app.update(Action::ParamEdit);
+    for c in "5".chars() {
+        app.update(Action::ParamInput(c));
+    }
+    app.update(Action::ParamCommit);
+    let (id, cmd) = app.take_outbox()[0];
+    assert_eq!(
+        cmd,
+        Command::SetParam {
+            id: ParamId(0),
+            value: 5.0
+        }
+    );
+    app.update(Action::Link(LinkEvent::CommandDone {
+        id,
+        command: cmd,
+        outcome: CommandOutcome::Nacked {
+            reason: NackReason::OutOfRange,
+            sends: 1,
+        },
+    }));
+    assert_eq!(
+        params::status_text(&app.params.status[0]),
+        "300 (refused: value out of range)"
+    );
+    assert!(app
+        .log
+        .window(1)
+        .any(|l| l.text == "refused: param set failsafe_ms 5: value out of range"));
+}
+
+#[test]
+fn an_unanswered_command_is_logged_as_failed_but_superseded_teleops_are_not() {
+    let mut app = connected_app();
+    let before = app.log.len();
+    app.update(Action::Link(LinkEvent::CommandDone {
+        id: 99,
+        command: Command::Teleop {
+            v_mm_s: 1,
+            w_mrad_s: 0,
+        },
+        outcome: CommandOutcome::Failed(CommandFailure::Superseded),
+    }));
+    assert_eq!(app.log.len(), before);
+    app.update(Action::Link(LinkEvent::CommandDone {
+        id: 100,
+        command: Command::Stop,
+        outcome: CommandOutcome::Failed(CommandFailure::Timeout { sends: 5 }),
+    }));
+    assert!(app
+        .log
+        .window(1)
+        .any(|l| l.text == "failed: stop: no answer after 5 sends"));
+}
+
+#[test]
+fn the_rate_keys_step_through_the_standard_rates() {
+    let mut app = connected_app();
+    app.update(Action::RateStep(1));
+    assert_eq!(app.take_outbox()[0].1, Command::SetTelemetryRate { hz: 20 });
+    app.update(Action::RateStep(-1));
+    assert_eq!(app.take_outbox()[0].1, Command::SetTelemetryRate { hz: 5 });
+}
+
+#[test]
+fn a_click_on_the_map_sends_go_to_in_millimetres() {
+    let mut app = connected_app();
+    app.update(Action::GoToPoint {
+        x_m: 1.25,
+        y_m: -0.5,
+    });
+    assert_eq!(
+        app.take_outbox()[0].1,
+        Command::GoTo(PointMm {
+            x_mm: 1250,
+            y_mm: -500
+        })
+    );
+    assert_eq!(app.map.goal, Some((1.25, -0.5)));
+}
