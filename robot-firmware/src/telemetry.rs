@@ -48,7 +48,13 @@ pub fn build(core: &Core, now_ms: u32) -> Telemetry {
         },
         ir: Packed10x8::new(s.ir),
         light: Packed10x8::new(s.ambient),
-        compass_ddeg: s.compass.map(ddeg).unwrap_or(0),
+        // The compass updates at ~5 Hz (seed 004 §3) and reads None in between: report the
+        // last heading it gave.
+        compass_ddeg: if core.profile.has(protocol::caps::COMPASS) {
+            ddeg(core.compass_heading)
+        } else {
+            0
+        },
         flags: f,
         line_events: core.line_events,
         beacon: s
