@@ -12,11 +12,20 @@ use protocol::{
 /// What the robot sent, owned, with the time it was read.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Received {
-    HelloReply { accepted: bool, session: u32, capabilities: u32 },
+    HelloReply {
+        accepted: bool,
+        session: u32,
+        capabilities: u32,
+    },
     Telemetry(Telemetry),
     Truth(protocol::EmuTruth),
-    Ack { cmd_seq: u16 },
-    Nack { cmd_seq: u16, reason: protocol::NackReason },
+    Ack {
+        cmd_seq: u16,
+    },
+    Nack {
+        cmd_seq: u16,
+        reason: protocol::NackReason,
+    },
     Other(Kind),
 }
 
@@ -45,7 +54,8 @@ impl TestStation {
     /// Sends a message; returns its sequence number.
     pub fn send(&mut self, msg: &Message<'_>) -> std::io::Result<u16> {
         let mut buf = [0u8; MAX_FRAME];
-        let n = encode(self.seq, msg, &mut buf).map_err(|e| std::io::Error::other(e.to_string()))?;
+        let n =
+            encode(self.seq, msg, &mut buf).map_err(|e| std::io::Error::other(e.to_string()))?;
         self.port.write_all(&buf[..n])?;
         let s = self.seq;
         self.seq = self.seq.wrapping_add(1);
@@ -98,7 +108,12 @@ impl TestStation {
             }))
             .ok()?;
             for (_, r) in self.collect(Duration::from_millis(200)) {
-                if let Received::HelloReply { accepted: true, session: s, capabilities } = r {
+                if let Received::HelloReply {
+                    accepted: true,
+                    session: s,
+                    capabilities,
+                } = r
+                {
                     if s == session {
                         return Some(capabilities);
                     }

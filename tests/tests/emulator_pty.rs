@@ -21,7 +21,10 @@ fn handshake_then_telemetry_at_the_configured_rate_within_the_baud_rate() {
     let mut emu = start(baud);
     let mut st = TestStation::open(emu.path(), baud).unwrap();
     let caps_seen = st.handshake(Duration::from_secs(3)).expect("handshake");
-    assert!(caps_seen & caps::EMULATED != 0, "the emulator says it is one");
+    assert!(
+        caps_seen & caps::EMULATED != 0,
+        "the emulator says it is one"
+    );
     assert!(caps_seen & caps::COMPASS != 0, "micro-rato profile");
     st.command(Command::SetTelemetryRate { hz: 50 }).unwrap();
     st.collect(Duration::from_millis(300));
@@ -29,7 +32,8 @@ fn handshake_then_telemetry_at_the_configured_rate_within_the_baud_rate() {
     let mut telemetry = 0;
     let mut truth = 0;
     for _ in 0..8 {
-        st.send(&Message::Heartbeat(Heartbeat { time_ms: 0 })).unwrap();
+        st.send(&Message::Heartbeat(Heartbeat { time_ms: 0 }))
+            .unwrap();
         for (_, r) in st.collect(Duration::from_millis(250)) {
             match r {
                 Received::Telemetry(_) => telemetry += 1,
@@ -40,9 +44,15 @@ fn handshake_then_telemetry_at_the_configured_rate_within_the_baud_rate() {
     }
     let bytes_per_s = (st.bytes_in - before) as f64 / 2.0;
     println!("2 s at 50 Hz: {telemetry} telemetry, {truth} truth frames, {bytes_per_s:.0} B/s");
-    assert!((85..=105).contains(&telemetry), "{telemetry} telemetry frames in 2 s at 50 Hz");
+    assert!(
+        (85..=105).contains(&telemetry),
+        "{telemetry} telemetry frames in 2 s at 50 Hz"
+    );
     assert!(truth >= telemetry - 2, "EmuTruth follows telemetry");
-    assert!(bytes_per_s <= f64::from(baud) / 10.0, "{bytes_per_s} B/s over {baud} baud");
+    assert!(
+        bytes_per_s <= f64::from(baud) / 10.0,
+        "{bytes_per_s} B/s over {baud} baud"
+    );
     assert_eq!(st.decoder_stats().bad_crc, 0);
 }
 
@@ -58,15 +68,22 @@ fn a_slow_baud_rate_throttles_the_link() {
     let before = st.bytes_in;
     let t0 = std::time::Instant::now();
     for _ in 0..16 {
-        st.send(&Message::Heartbeat(Heartbeat { time_ms: 0 })).unwrap();
+        st.send(&Message::Heartbeat(Heartbeat { time_ms: 0 }))
+            .unwrap();
         st.collect(Duration::from_millis(250));
     }
     let secs = t0.elapsed().as_secs_f64();
     let bytes = (st.bytes_in - before) as f64;
-    println!("9600 baud: {bytes} bytes in {secs:.3} s = {:.0} B/s", bytes / secs);
+    println!(
+        "9600 baud: {bytes} bytes in {secs:.3} s = {:.0} B/s",
+        bytes / secs
+    );
     // The UART sends at most 960 B/s; what sat in the pty buffer when the window opened
     // (at most one 256-byte frame plus the 64-byte FIFO) may arrive inside it.
-    assert!(bytes <= 960.0 * secs + 320.0, "{bytes} bytes in {secs} s over 9600 baud");
+    assert!(
+        bytes <= 960.0 * secs + 320.0,
+        "{bytes} bytes in {secs} s over 9600 baud"
+    );
     assert!(bytes / secs > 600.0, "the link is used");
 }
 
@@ -84,7 +101,12 @@ fn teleop_moves_the_simulated_robot_and_truth_shows_it() {
     let before = first_truth(&st.collect(Duration::from_millis(300))).expect("truth frames");
     let mut acked = false;
     for _ in 0..10 {
-        let s = st.command(Command::Teleop { v_mm_s: 200, w_mrad_s: 0 }).unwrap();
+        let s = st
+            .command(Command::Teleop {
+                v_mm_s: 200,
+                w_mrad_s: 0,
+            })
+            .unwrap();
         for (_, r) in st.collect(Duration::from_millis(100)) {
             acked |= r == Received::Ack { cmd_seq: s };
         }
@@ -105,7 +127,9 @@ fn the_station_can_close_and_reopen_the_port() {
         st.handshake(Duration::from_secs(3))
             .unwrap_or_else(|| panic!("handshake on round {round}"));
         let frames = st.collect(Duration::from_millis(300));
-        assert!(frames.iter().any(|(_, r)| matches!(r, Received::Telemetry(_))));
+        assert!(frames
+            .iter()
+            .any(|(_, r)| matches!(r, Received::Telemetry(_))));
         drop(st);
         std::thread::sleep(Duration::from_millis(100));
     }
