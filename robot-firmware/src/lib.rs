@@ -16,9 +16,12 @@
 
 pub mod behaviour;
 pub mod deadreckon;
+pub mod execute;
+pub mod explore;
 pub mod guided;
 pub mod hal;
 pub mod link;
+pub mod localize;
 pub mod nav;
 pub mod odometry;
 pub mod params;
