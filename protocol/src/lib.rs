@@ -9,13 +9,17 @@
 //! - `seq`: loss and duplicate accounting from sequence numbers.
 //! - `packed`: eight 10-bit sensor readings in 10 bytes.
 //! - `fingerprint`: the schema hash exchanged at handshake.
+//! - `transfer`: the chunked-transfer sender and receiver state machines (§8).
+//! - `object`: the byte layouts of the Map, Plan and Regions objects (§12).
 #![no_std]
 #![deny(unsafe_code)]
 
 pub mod frame;
 pub mod msg;
+pub mod object;
 pub mod packed;
 pub mod seq;
+pub mod transfer;
 
 pub use frame::{
     crc32c, encode, encode_raw, parse_raw, DecoderStats, EncodeError, Feed, Frame, FrameDecoder,
