@@ -124,7 +124,12 @@ impl Receiver {
     /// Answers a `TransferChunk`, writing its data to `staging` when it is the next one. When
     /// the object is whole and its CRC matches, calls `install` with it: `true` means
     /// installed (`Complete`), `false` refused as malformed (`Rejected`, old object kept).
-    pub fn on_chunk<F>(&mut self, c: &TransferChunk<'_>, staging: &mut [u8], install: F) -> TransferAck
+    pub fn on_chunk<F>(
+        &mut self,
+        c: &TransferChunk<'_>,
+        staging: &mut [u8],
+        install: F,
+    ) -> TransferAck
     where
         F: FnOnce(Verified<'_>) -> bool,
     {
@@ -142,8 +147,7 @@ impl Receiver {
         let receiving = ack(id, next, TransferStatus::Receiving);
         // Go-back-N: anything but the next chunk is dropped and answered with `next`.
         let end = next as usize + c.data.len();
-        if c.offset != next || c.data.is_empty() || c.data.len() > MAX_CHUNK || end > len as usize
-        {
+        if c.offset != next || c.data.is_empty() || c.data.len() > MAX_CHUNK || end > len as usize {
             return receiving;
         }
         let Some(slot) = staging.get_mut(next as usize..end) else {
@@ -366,7 +370,10 @@ impl Sender {
             return;
         }
         while self.sent < self.begin.len && self.sent.saturating_sub(self.acked) < WINDOW_BYTES {
-            let end = self.begin.len.min(self.sent.saturating_add(MAX_CHUNK as u32));
+            let end = self
+                .begin
+                .len
+                .min(self.sent.saturating_add(MAX_CHUNK as u32));
             let Some(data) = bytes.get(self.sent as usize..end as usize) else {
                 return;
             };
@@ -519,7 +526,10 @@ mod tests {
             len: 300,
             crc,
         };
-        assert_eq!(rx.on_begin(&begin, 100, false).status, TransferStatus::Rejected);
+        assert_eq!(
+            rx.on_begin(&begin, 100, false).status,
+            TransferStatus::Rejected
+        );
         assert_eq!(rx.on_begin(&begin, 300, false).next, 0);
         let mut staging = [0u8; 300];
         let chunk = |offset: u32, d: &'static [u8]| TransferChunk {
@@ -542,6 +552,9 @@ mod tests {
             offset: 0,
             data: &[1],
         };
-        assert_eq!(rx.on_chunk(&other, &mut staging, never).status, TransferStatus::UnknownId);
+        assert_eq!(
+            rx.on_chunk(&other, &mut staging, never).status,
+            TransferStatus::UnknownId
+        );
     }
 }

@@ -7,6 +7,7 @@
 //! - `robot`: `Robot::step`, the main loop over a `Hal`.
 //! - `hal`, `profile`: the hardware boundary and the two robots of the papers.
 //! - `link`, `telemetry`, `params`: the robot's side of the protocol.
+//! - `transfer`: the robot's map, plan and regions objects, their uploads and downloads.
 //! - `odometry`, `deadreckon`: position (seed 000 §3; seed 004 §4).
 //! - `behaviour`, `guided`: reflexive behaviours (seed 000 §4) and guided motion (seed 004 §7).
 //! - `nav`: occupancy grid, square segmentation, A* (seed 004 §5-6).
@@ -20,6 +21,7 @@ pub mod execute;
 pub mod explore;
 pub mod guided;
 pub mod hal;
+pub mod landmarks;
 pub mod link;
 pub mod localize;
 pub mod nav;
@@ -28,7 +30,9 @@ pub mod params;
 pub mod profile;
 pub mod robot;
 pub mod scripted;
+pub mod som;
 pub mod telemetry;
+pub mod transfer;
 
 pub use hal::{BeaconReading, Hal, MotorCommand};
 pub use profile::{Profile, KHEPERA, MICRO_RATO};

@@ -51,7 +51,9 @@ pub const KHEPERA: Profile = Profile {
         | caps::IR_PROXIMITY
         | caps::AMBIENT_LIGHT
         | caps::LINE_SENSOR
-        | caps::BATTERY,
+        | caps::BATTERY
+        | caps::ONBOARD_PLANNING
+        | caps::TRANSFERS,
     // seed 000 §1.1: 55 mm diameter.
     body_diameter_m: 0.055,
     // seed 000 §3: d = 52 mm, dl = 0.08 mm per pulse.
@@ -89,7 +91,9 @@ pub const MICRO_RATO: Profile = Profile {
         | caps::COMPASS
         | caps::GROUND_SENSOR
         | caps::BEACON
-        | caps::BATTERY,
+        | caps::BATTERY
+        | caps::ONBOARD_PLANNING
+        | caps::TRANSFERS,
     // seed 004 §3: round, 24 cm diameter.
     body_diameter_m: 0.24,
     // default: the paper gives no wheel base; 0.20 m fits a 24 cm body.

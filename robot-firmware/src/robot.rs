@@ -10,12 +10,10 @@
 //! Invariants: the motors move only in a mode a handshaken station (or the firmware's own
 //! autonomy) asked for; a refused command changes nothing; every piece of state has a fixed
 //! size (`size_of::<Robot>()` is the firmware's whole RAM use apart from the stack).
+//! Maps, plans and regions live in `transfer::Objects`; plan following is in `robot::follow`.
 
 use heapless::Deque;
-use protocol::{
-    AckInfo, Command, Event, EventCode, Message, Mode, NackReason, ObjectKind, TransferAck,
-    TransferStatus,
-};
+use protocol::{AckInfo, Command, Event, EventCode, Message, Mode, NackReason, PointMm};
 
 use crate::behaviour::{self, Arbiter, ArbiterParams, BehaviourSet, Inputs, Side};
 use crate::deadreckon::{DeadReckonInput, DeadReckonParams, DeadReckoner, DegradeEvent};
@@ -26,6 +24,11 @@ use crate::odometry::{encoder_delta, wrap_angle, Odometry, OdometryParams, Point
 use crate::params::{RobotConfig, Tunables};
 use crate::profile::Profile;
 use crate::telemetry;
+use crate::transfer::{Installed, Objects};
+
+mod follow;
+
+pub use follow::Execution;
 
 /// Events waiting to be sent; a burst larger than this loses its oldest.
 const EVENT_QUEUE: usize = 8;
@@ -110,6 +113,10 @@ pub struct Core {
     next_telemetry_ms: u32,
     events: Deque<Event, EVENT_QUEUE>,
     emulated: bool,
+    /// Map, plan, regions and their transfers (seed 004 §5-7, PROTOCOL.md §8).
+    pub objects: Objects,
+    /// Progress through the installed plan in `Mode::ExecutePlan`.
+    pub exec: Option<Execution>,
 }
 
 /// The whole robot.
@@ -165,6 +172,8 @@ impl Robot {
                 next_telemetry_ms: 0,
                 events: Deque::new(),
                 emulated: opts.emulated,
+                objects: Objects::new(),
+                exec: None,
             },
         }
     }
@@ -184,6 +193,13 @@ impl Robot {
             self.core.control_cycle(hal, now_us);
         }
         self.send_periodic(now_ms);
+        if self.link.connected() {
+            // Download chunks yield to replies and events, like telemetry.
+            let link = &mut self.link;
+            self.core
+                .objects
+                .poll(now_ms, &mut |m| link.send_low_priority(m, now_ms));
+        }
         self.link.flush(&mut |bytes| hal.serial_write(bytes));
     }
 
@@ -264,10 +280,46 @@ impl Core {
                 // A new session starts at the default telemetry rate (PROTOCOL.md §4).
                 self.config.telemetry_hz = protocol::timing::TELEMETRY_DEFAULT_HZ;
                 self.next_telemetry_ms = now_ms;
+                // The new session's station asks again for what it wants; a partial upload
+                // is kept so that it can resume.
+                self.objects.abort_download();
                 Response::Nothing
             }
             Inbound::Command { command, .. } => Response::Reply(self.apply(command, now_ms)),
-            Inbound::Transfer(m) => Response::Send(refuse_transfer(&m)),
+            Inbound::Transfer(m) => self.transfer(&m, now_ms),
+        }
+    }
+
+    /// A transfer frame: uploads to the robot (begin, chunk) and acks of its downloads.
+    fn transfer(&mut self, m: &Message<'_>, now_ms: u32) -> Response {
+        match m {
+            Message::TransferBegin(b) => {
+                Response::Send(Message::TransferAck(self.objects.on_begin(b)))
+            }
+            Message::TransferChunk(c) => {
+                let (ack, installed) = self.objects.on_chunk(c);
+                if let Some(i) = installed {
+                    self.installed(i);
+                }
+                Response::Send(Message::TransferAck(ack))
+            }
+            Message::TransferAck(a) => {
+                self.objects.on_ack(a, now_ms);
+                Response::Nothing
+            }
+            _ => Response::Nothing,
+        }
+    }
+
+    /// Reports a new map or plan; a plan being executed is abandoned when replaced.
+    fn installed(&mut self, what: Installed) {
+        // Event values carry the object id's 32 bits (PROTOCOL.md §8).
+        match what {
+            Installed::Map { id } => self.push_event(EventCode::MapUpdated, id as i32),
+            Installed::Plan { id } => {
+                self.abort_plan();
+                self.push_event(EventCode::PlanInstalled, id as i32);
+            }
         }
     }
 
@@ -338,16 +390,26 @@ impl Core {
                 // Without encoders the heading comes from the compass; only x, y are set.
                 self.dead.set_position(p);
             }
-            // Exploration and plans arrive with the maps/planning and exploration work; until
-            // then the robot says so rather than pretending.
+            // Exploration arrives with the exploration work; until then the robot says so.
             Command::StartExploration => return Err(NackReason::Unsupported),
-            Command::ExecutePlan { .. } => return Err(NackReason::NoPlan),
-            Command::Segment | Command::Plan { .. } => return Err(NackReason::NoMap),
-            Command::Download { object, .. } => {
-                return Err(match object {
-                    ObjectKind::Map | ObjectKind::Regions => NackReason::NoMap,
-                    ObjectKind::Plan => NackReason::NoPlan,
-                })
+            Command::ExecutePlan { plan_id } => self.start_plan(plan_id)?,
+            Command::Segment => {
+                self.objects.segment()?;
+            }
+            Command::Plan { from, to } => {
+                let here = self.pose();
+                let from = from.unwrap_or(PointMm {
+                    x_mm: libm::roundf(here.x * 1000.0) as i32,
+                    y_mm: libm::roundf(here.y * 1000.0) as i32,
+                });
+                for p in [Some(from), to].into_iter().flatten() {
+                    point_from_mm(p.x_mm, p.y_mm)?;
+                }
+                let id = self.objects.plan_route(from, to)?;
+                self.installed(Installed::Plan { id });
+            }
+            Command::Download { object, offset } => {
+                return self.objects.start_download(object, offset);
             }
         }
         Ok(AckInfo::Done)
@@ -398,6 +460,9 @@ impl Core {
                 }
             }
             Mode::Explore => Err(NackReason::Unsupported),
+            // `ExecutePlan { plan_id }` starts a plan: the id proves which one the station
+            // means, so `SetMode` alone is refused.
+            Mode::ExecutePlan if self.objects.has_plan() => Err(NackReason::BadState),
             Mode::ExecutePlan => Err(NackReason::NoPlan),
         }
     }
@@ -418,6 +483,7 @@ impl Core {
                 self.guided_active = true;
                 behaviour::Mode::Idle
             }
+            Mode::ExecutePlan => self.plan_arbiter_mode(),
             _ => behaviour::Mode::Idle,
         };
         self.arbiter.set_mode(arbiter_mode);
@@ -594,7 +660,8 @@ impl Core {
             | Mode::EdgeFollowLeft
             | Mode::EdgeFollowRight
             | Mode::SeekLight => self.behaviour_command(),
-            Mode::Explore | Mode::ExecutePlan => MotorCommand::STOP,
+            Mode::ExecutePlan => self.plan_command(),
+            Mode::Explore => MotorCommand::STOP,
         }
     }
 
@@ -655,15 +722,13 @@ impl Core {
     pub fn behaviour_report(&self) -> (u8, MotorCommand) {
         use protocol::behaviours as b;
         let mut bits = 0u8;
-        if matches!(
-            self.mode,
-            Mode::GoTo
-                | Mode::Wander
-                | Mode::EdgeFollowLeft
-                | Mode::EdgeFollowRight
-                | Mode::SeekLight
-        ) && !self.guided_active
-        {
+        let arbiter_driven = match self.mode {
+            Mode::GoTo => !self.guided_active,
+            Mode::Wander | Mode::EdgeFollowLeft | Mode::EdgeFollowRight | Mode::SeekLight => true,
+            Mode::ExecutePlan => !self.plan_guided(),
+            _ => false,
+        };
+        if arbiter_driven {
             let active = self.arbiter.state().active;
             for (from, to) in [
                 (BehaviourSet::AVOID, b::AVOID),
@@ -677,7 +742,9 @@ impl Core {
                 }
             }
         }
-        if self.guided_active && self.mode == Mode::GoTo {
+        if (self.guided_active && self.mode == Mode::GoTo)
+            || (self.mode == Mode::ExecutePlan && self.plan_guided())
+        {
             bits |= b::GUIDED;
         }
         (bits, self.motor)
@@ -686,21 +753,6 @@ impl Core {
     pub fn emulated(&self) -> bool {
         self.emulated
     }
-}
-
-/// The answer to a transfer frame while this firmware holds no transfer store: refuse.
-fn refuse_transfer(m: &Message<'_>) -> Message<'static> {
-    let (id, status) = match m {
-        Message::TransferBegin(b) => (b.id, TransferStatus::Rejected),
-        Message::TransferChunk(c) => (c.id, TransferStatus::UnknownId),
-        Message::TransferAck(a) => (a.id, TransferStatus::UnknownId),
-        _ => (0, TransferStatus::UnknownId),
-    };
-    Message::TransferAck(TransferAck {
-        id,
-        next: 0,
-        status,
-    })
 }
 
 fn point_from_mm(x_mm: i32, y_mm: i32) -> Result<Point, NackReason> {

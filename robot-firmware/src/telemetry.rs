@@ -23,6 +23,8 @@ pub fn build(core: &Core, now_ms: u32) -> Telemetry {
         (s.line, flags::LINE),
         (core.failsafe, flags::FAILSAFE),
         (core.arrived, flags::ARRIVED),
+        (core.objects.has_map(), flags::HAS_MAP),
+        (core.objects.has_plan(), flags::HAS_PLAN),
     ] {
         if on {
             f |= bit;

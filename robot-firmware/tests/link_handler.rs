@@ -516,6 +516,16 @@ fn go_to_on_the_micro_rato_drives_by_compass_towards_the_goal() {
 }
 
 #[test]
+fn both_robots_announce_on_board_planning_and_transfers() {
+    for profile in [&KHEPERA, &MICRO_RATO] {
+        let mut b = Bench::new(profile);
+        b.handshake();
+        let bits = caps::ONBOARD_PLANNING | caps::TRANSFERS;
+        assert_eq!(b.caps() & bits, bits, "{}", profile.name);
+    }
+}
+
+#[test]
 fn the_whole_robot_state_fits_the_dom_dinis_32_kb() {
     let size = std::mem::size_of::<Robot>();
     println!("size_of::<Robot>() = {size} bytes");

@@ -75,4 +75,11 @@ pub enum Action {
     ToggleLayer(&'static str),
     /// Forget the drawn tracks.
     ClearTracks,
+    /// Plan on the station from the believed pose to the go-to cursor (or goal) and show it.
+    PlanLocal,
+    /// Start or stop recording the link to a file (the TUI loop does the I/O, then reports
+    /// back with `Recording`).
+    ToggleRecording,
+    /// The recorder started, finished or failed.
+    Recording(crate::record::live::RecordingNote),
 }

@@ -99,6 +99,8 @@ pub struct MapState {
     pub goal: Option<(f64, f64)>,
     /// Names of hidden layers.
     pub hidden: Vec<&'static str>,
+    /// Planning on the station: the map's grid and regions, the last plan.
+    pub plan: crate::plan::PlanState,
 }
 
 impl MapState {
@@ -143,6 +145,8 @@ pub struct App {
     pub rate_hz: Option<u8>,
     /// Index into `CHART_PRESETS`.
     pub chart: usize,
+    /// The recording in progress (`R`): file name and station time it started.
+    pub recording: Option<(String, u64)>,
     next_id: CommandId,
     pending: HashMap<CommandId, Pending>,
     outbox: Vec<(CommandId, Command)>,
@@ -185,6 +189,7 @@ impl App {
             params: ParamEditor::default(),
             rate_hz: None,
             chart: 0,
+            recording: None,
             next_id: 1,
             pending: HashMap::new(),
             outbox: Vec::new(),
@@ -295,6 +300,10 @@ impl App {
                 self.believed.clear();
                 self.true_track.clear();
             }
+            Action::PlanLocal => self.plan_locally(),
+            // Done by the TUI loop, which owns the file; it reports with `Recording`.
+            Action::ToggleRecording => {}
+            Action::Recording(note) => self.on_recording(note),
         }
     }
 
@@ -351,6 +360,22 @@ impl App {
     fn stop_driving(&mut self) {
         self.teleop = Teleop::default();
         self.send(Command::Stop);
+    }
+
+    /// Plans on the station from the believed pose (else the map's start) to the cursor while
+    /// it is shown, else the last go-to goal, else the map's goal.
+    fn plan_locally(&mut self) {
+        let from = self.pose().map(|(x, y, _)| (x, y));
+        let to = if self.map.cursor_mode {
+            Some(self.map.cursor)
+        } else {
+            self.map.goal
+        };
+        let (level, text) = match self.map.plan.plan(from, to) {
+            Ok(line) => (Level::Info, line),
+            Err(e) => (Level::Warn, e),
+        };
+        self.note(level, Source::Command, text);
     }
 
     fn go_to(&mut self, x: f64, y: f64) {
@@ -566,6 +591,32 @@ impl App {
                 );
             }
         }
+    }
+
+    fn on_recording(&mut self, note: crate::record::live::RecordingNote) {
+        use crate::record::live::RecordingNote;
+        let (level, text) = match note {
+            RecordingNote::Started { file } => {
+                self.recording = Some((file.clone(), self.now_ms));
+                (Level::Info, format!("recording to {file} (R stops)"))
+            }
+            RecordingNote::Stopped {
+                file,
+                seconds,
+                bytes,
+            } => {
+                self.recording = None;
+                (
+                    Level::Info,
+                    format!("recording saved: {file} ({seconds:.1} s, {bytes} bytes)"),
+                )
+            }
+            RecordingNote::Failed { why } => {
+                self.recording = None;
+                (Level::Error, format!("recording: {why}"))
+            }
+        };
+        self.note(level, Source::Link, text);
     }
 
     fn note(&mut self, level: Level, source: Source, text: String) {

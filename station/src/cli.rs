@@ -1,5 +1,6 @@
 //! The command line: `station [--port P]`, `station ports`, `station send ...`,
-//! `station stats ...`.
+//! `station stats ...`, `station plan ...`, `station segment ...`, `station record ...`,
+//! `station replay ...`, `station export ...`.
 //!
 //! Layer: argument parsing (clap derive) and dispatch; `main.rs` only calls `run`. Parsing
 //! turns every argument into a checked value or a clear error (clap exits 2 on usage errors);
@@ -25,7 +26,8 @@ pub struct Cli {
     pub command: Option<Sub>,
     #[command(flatten)]
     pub port: PortArgs,
-    /// An arena file to draw under the map (CiberRato XML, maze text, ROS YAML, ASCII grid).
+    /// An arena file to draw under the map and plan on with P (CiberRato XML, maze text, ROS
+    /// YAML, ASCII grid).
     #[arg(long, value_name = "FILE", global = false)]
     pub arena: Option<PathBuf>,
 }
@@ -76,6 +78,62 @@ pub enum Sub {
         #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
         timeout: f64,
     },
+    /// Plan a path on a map file with the robot's own planner; no robot needed
+    ///
+    /// Seed 004: the map becomes a grid (0.3 m cells), its free cells squares, and A* finds
+    /// the shortest chain of adjacent squares; the path runs through their centres. Points are
+    /// metres in the map frame. Exit status 1, with the reason, when no plan can be made.
+    ///
+    /// Examples:
+    ///   station plan --map builtin:micro-rato-99 --smooth
+    ///   station plan --map maze.txt --json          (mazes: cells of half the pitch)
+    ///   station plan --map lab.xml --from 0.5,0.5 --to 3.2,2.6 --cell 0.1 --radius 0.12
+    #[command(verbatim_doc_comment)]
+    Plan(crate::plan::command::PlanArgs),
+    /// Segment a map into the free squares the planner searches (seed 004 §6, Fig. 6)
+    ///
+    /// Squares are in cells: x, y of the corner with the smallest column and row (row 0 is
+    /// the smallest y), and the side.
+    ///
+    /// Example:
+    ///   station segment --map builtin:micro-rato-99 --json
+    #[command(verbatim_doc_comment)]
+    Segment(crate::plan::command::SegmentArgs),
+    /// Record the link, both directions with timestamps, to a file
+    ///
+    /// The file is FILE.partial while recording (flushed every second, so a crash loses at
+    /// most that) and is renamed to FILE when the recording ends: at --seconds, or on Ctrl-C.
+    /// Losing and regaining the robot is recorded as a gap. Without --port, the built-in
+    /// emulator is started and recorded. The format is in README.md, "Recordings".
+    ///
+    /// Examples:
+    ///   station record --port /dev/ttyUSB0 --out run.rec --seconds 60
+    ///   station record --out demo.rec --seconds 20 --rate 50 --json
+    #[command(verbatim_doc_comment)]
+    Record(crate::record::command::RecordArgs),
+    /// Replay a recording in the TUI (pause, seek, speed), or summarise it with --json
+    ///
+    /// The robot's recorded bytes go through the station's own link code, so every view
+    /// shows what it showed live. Nothing is sent to any port. Keys: space pause, left/right
+    /// 5 s, Home/End, +/- or 1-9 speed, ? help, q quit. A damaged or unfinished (.partial)
+    /// recording is replayed up to its last good record.
+    ///
+    /// Examples:
+    ///   station replay run.rec
+    ///   station replay run.rec --speed 4 --arena lab.xml
+    ///   station replay run.rec --json        (duration, frames, telemetry rate, gaps, errors)
+    #[command(verbatim_doc_comment)]
+    Replay(crate::replay::command::ReplayArgs),
+    /// Export a recording to MCAP (Foxglove) and/or CSV (telemetry, one row per frame)
+    ///
+    /// Outputs are written to a temporary file and renamed when complete. A damaged
+    /// recording is refused (with the byte offset) unless --salvage is given.
+    ///
+    /// Examples:
+    ///   station export run.rec --mcap run.mcap
+    ///   station export run.rec --csv run.csv --mcap run.mcap
+    #[command(verbatim_doc_comment)]
+    Export(crate::export::ExportArgs),
 }
 
 /// A port that headless commands require.
@@ -196,7 +254,7 @@ impl SendCmd {
     }
 }
 
-fn parse_baud(s: &str) -> Result<u32, String> {
+pub(crate) fn parse_baud(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
         Ok(b) if (50..=4_000_000).contains(&b) => Ok(b),
         Ok(b) => Err(format!("{b} is not a usable baud rate (50 ..= 4000000)")),
@@ -204,7 +262,7 @@ fn parse_baud(s: &str) -> Result<u32, String> {
     }
 }
 
-fn parse_seconds(s: &str) -> Result<f64, String> {
+pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 && v <= 86_400.0 => Ok(v),
         Ok(v) => Err(format!("{v} s is out of range (> 0, at most a day)")),

@@ -27,6 +27,7 @@ use crate::link::{
     spawn_link, CommandOutcome, Connection, LinkEvent, LinkOptions, LinkStats, PeerInfo,
     RunningLink,
 };
+use crate::plan::PlanState;
 
 /// Runs what the command line asked for.
 pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
@@ -52,6 +53,11 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             json,
             timeout,
         }) => stats(&port, seconds, json, timeout).await,
+        Some(Sub::Plan(args)) => crate::plan::command::plan(&args),
+        Some(Sub::Segment(args)) => crate::plan::command::segment(&args),
+        Some(Sub::Record(args)) => crate::record::command::run(&args).await,
+        Some(Sub::Replay(args)) => crate::replay::command::run(&args).await,
+        Some(Sub::Export(args)) => crate::export::run(&args),
     }
 }
 
@@ -63,10 +69,16 @@ async fn interactive(
     if !std::io::stdout().is_terminal() {
         bail!("the TUI needs a terminal; for scripts use `station send` or `station stats`");
     }
+    let arena_path = arena;
+    // One load gives the drawing and the planner's grid (`plan::PlanState::for_arena`).
+    let mut plan = PlanState::default();
     let mut arena = match arena {
-        Some(p) => Some(
-            ArenaOverlay::load(p).with_context(|| format!("cannot load arena {}", p.display()))?,
-        ),
+        Some(p) => {
+            let a = emulator::arena::load(p, &emulator::arena::LoadOptions::default())
+                .with_context(|| format!("cannot load arena {}", p.display()))?;
+            plan = PlanState::for_arena(&a, &p.display().to_string());
+            Some(ArenaOverlay::from_arena(&a))
+        }
         None => None,
     };
     // Keeps the built-in emulator alive for the whole session.
@@ -82,18 +94,38 @@ async fn interactive(
             let label = format!("built-in emulator on {}", emu.pty_path().display());
             if arena.is_none() {
                 arena = emu.arena.clone();
+                plan = PlanState::for_builtin();
             }
             let path = emu.path().to_path_buf();
             builtin = Some(emu);
             (path, label)
         }
     };
-    let link = spawn_link(SerialConnector::new(&path, baud), LinkOptions::default());
-    let app = App::new(AppOptions {
+    // The tap feeds the record key (`R`); the recorder drops it while not recording.
+    let (tap, taps) = tokio::sync::mpsc::unbounded_channel();
+    let mut meta = crate::record::Meta::now(&label, baud);
+    meta.arena = match (arena_path, &builtin) {
+        (Some(p), _) => p.display().to_string(),
+        (None, Some(_)) => emulator::builtin::MICRO_RATO_99.to_string(),
+        (None, None) => String::new(),
+    };
+    let epoch = tokio::time::Instant::now();
+    let link = spawn_link(
+        SerialConnector::new(&path, baud),
+        LinkOptions {
+            tap: Some(tap),
+            ..LinkOptions::default()
+        },
+    );
+    let recorder = crate::record::live::TuiRecorder::new(taps, epoch, meta);
+    let mut app = App::new(AppOptions {
         port_label: label,
         arena,
     });
-    crate::tui::run(app, link).await?;
+    app.map.plan = plan;
+    // The squares are busy on a small map panel: `r` shows them.
+    app.map.hidden.push(crate::ui::map_layers::REGIONS);
+    crate::tui::run(app, link, recorder).await?;
     drop(builtin);
     Ok(ExitCode::SUCCESS)
 }

@@ -13,7 +13,7 @@ use ratatui::layout::Rect;
 
 use crate::action::Action;
 use crate::app::{App, View, MODES, V_STEP, W_STEP};
-use crate::ui::{self, Panel};
+use crate::ui::{self, map_layers, Panel};
 
 /// Cursor step of one arrow press in go-to mode, metres (shift: 5x).
 pub const CURSOR_STEP_M: f64 = 0.1;
@@ -32,7 +32,7 @@ pub fn action_for(app: &App, ev: &Event) -> Option<Action> {
             match m.kind {
                 MouseEventKind::Down(MouseButton::Left) => {
                     let map = areas.find(Panel::Map)?;
-                    let inner = inner_of(map);
+                    let inner = inner_of(ui::plan_panel::split(app, map).0);
                     let (x_m, y_m) = ui::map::to_world(app, inner, m.column, m.row)?;
                     Some(Action::GoToPoint { x_m, y_m })
                 }
@@ -133,6 +133,13 @@ fn global(k: &KeyEvent) -> Option<Action> {
         KeyCode::Char('c') => Some(Action::ChartNext),
         KeyCode::Char('t') => Some(Action::ToggleLayer("truth")),
         KeyCode::Char('x') => Some(Action::ClearTracks),
+        KeyCode::Char('P') => Some(Action::PlanLocal),
+        KeyCode::Char('R') => Some(Action::ToggleRecording),
+        KeyCode::Char('o') => Some(Action::ToggleLayer(map_layers::GRID)),
+        KeyCode::Char('r') => Some(Action::ToggleLayer(map_layers::REGIONS)),
+        KeyCode::Char('n') => Some(Action::ToggleLayer(map_layers::PLAN)),
+        KeyCode::Char('m') => Some(Action::ToggleLayer(map_layers::SMOOTHED)),
+        KeyCode::Char('e') => Some(Action::ToggleLayer(map_layers::ENDS)),
         KeyCode::PageUp => Some(Action::LogScroll(5)),
         KeyCode::PageDown => Some(Action::LogScroll(-5)),
         _ => None,

@@ -6,6 +6,9 @@
 //! - `link`: the port's owner: handshake, heartbeat, retries, reconnect, statistics.
 //! - `action`, `app`, `input`: the UI's state machine and what feeds it.
 //! - `ui`: drawing, pure.
+//! - `plan`: planning on the station with the robot's nav code (`station plan`, map layers).
+//! - `record`, `replay`, `export`: recordings of both directions of a link, the TUI driven by
+//!   one, and their export to MCAP and CSV.
 //! - `tui`: the terminal loop; `cli`, `headless`, `builtin`: the binary's edge.
 #![deny(unsafe_code)]
 
@@ -13,8 +16,12 @@ pub mod action;
 pub mod app;
 pub mod builtin;
 pub mod cli;
+pub mod export;
 pub mod headless;
 pub mod input;
 pub mod link;
+pub mod plan;
+pub mod record;
+pub mod replay;
 pub mod tui;
 pub mod ui;

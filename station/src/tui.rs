@@ -3,7 +3,10 @@
 //! Layer: the TUI's I/O edge. Terminal events come from a reader thread (crossterm's blocking
 //! `read`, as gitui does), link events from the link task; both become `Action`s for
 //! `App::update`, the app's outbox goes to the link, and the screen is redrawn when something
-//! changed (no redraw at all while nothing happens). The terminal is restored on quit, on
+//! changed (no redraw at all while nothing happens): at once after a key, at most `LINK_FPS`
+//! times a second for the link's changes, however fast telemetry comes. The link's tap goes to
+//! the `TuiRecorder` (the `R` key), which writes it only while recording. The terminal is
+//! restored on quit, on
 //! error and on panic (a hook installed before raw mode is entered). What can fail: terminal
 //! I/O (`io::Error`).
 
@@ -21,21 +24,30 @@ use tokio::time::Instant;
 use crate::action::Action;
 use crate::app::App;
 use crate::link::RunningLink;
+use crate::record::live::TuiRecorder;
 use crate::{input, ui};
 
 /// Time between ticks (teleop repetition needs 100 ms; ticks at twice that rate).
 const TICK: Duration = Duration::from_millis(50);
+/// Most redraws a second for changes that come from the link or the clock; a key redraws at
+/// once. 50 Hz telemetry and truth are 100 events a second: drawing each would cost ~5 % of a
+/// core, drawing at this rate ~1 % (measured; README "Performance").
+pub const LINK_FPS: u32 = 12;
 
-/// Runs the TUI until the operator quits. Restores the terminal whatever happens.
-pub async fn run(mut app: App, mut link: RunningLink) -> io::Result<()> {
+/// Runs the TUI until the operator quits. Restores the terminal whatever happens. `recorder`
+/// records the link while the operator asks (`R`); a recording running at quit is saved.
+pub async fn run(mut app: App, mut link: RunningLink, mut recorder: TuiRecorder) -> io::Result<()> {
     install_panic_hook();
     let mut terminal = ratatui::try_init()?;
     let result = async {
         execute!(stdout(), EnableMouseCapture)?;
-        event_loop(&mut terminal, &mut app, &mut link).await
+        event_loop(&mut terminal, &mut app, &mut link, &mut recorder).await
     }
     .await;
     restore();
+    if let Some(note) = recorder.stop() {
+        app.update(Action::Recording(note));
+    }
     // Let the link send a final Stop and close the port.
     link.handle.shutdown();
     let _ = tokio::time::timeout(Duration::from_secs(1), &mut link.task).await;
@@ -48,7 +60,8 @@ pub fn restore() {
     ratatui::restore();
 }
 
-fn install_panic_hook() {
+/// Restores the terminal before a panic message is printed.
+pub(crate) fn install_panic_hook() {
     let previous = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         restore();
@@ -60,6 +73,7 @@ async fn event_loop(
     terminal: &mut DefaultTerminal,
     app: &mut App,
     link: &mut RunningLink,
+    recorder: &mut TuiRecorder,
 ) -> io::Result<()> {
     let size = terminal.size()?;
     app.update(Action::Resize {
@@ -73,27 +87,46 @@ async fn event_loop(
     let mut tick = tokio::time::interval(TICK);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
     let mut dirty = true;
+    // A key's effect is drawn at once; the link's at most `LINK_FPS` times a second.
+    let mut urgent = true;
+    let frame = Duration::from_secs(1) / LINK_FPS;
+    let mut last_draw = Instant::now();
     let result = loop {
-        if dirty {
+        if dirty && (urgent || last_draw.elapsed() >= frame) {
             if let Err(e) = terminal.draw(|f| ui::render(app, f)) {
                 break Err(e);
             }
+            last_draw = Instant::now();
             dirty = false;
+            urgent = false;
         }
         tokio::select! {
             ev = input_rx.recv() => match ev {
                 Some(Ok(ev)) => {
-                    if let Some(a) = input::action_for(app, &ev) {
-                        app.update(a);
+                    match input::action_for(app, &ev) {
+                        // The loop owns the recording's file: it starts or stops it.
+                        Some(Action::ToggleRecording) => {
+                            app.update(Action::Recording(recorder.toggle()));
+                        }
+                        Some(a) => app.update(a),
+                        None => {}
                     }
                     dirty = true;
+                    urgent = true;
                 }
                 Some(Err(e)) => break Err(e),
                 None => break Ok(()),
             },
-            ev = link.events.recv() => {
-                if let Some(ev) = ev {
-                    app.update(Action::Link(ev));
+            Some(ev) = link.events.recv() => {
+                if let Some(note) = recorder.on_link_event(&ev) {
+                    app.update(Action::Recording(note));
+                }
+                app.update(Action::Link(ev));
+                dirty = true;
+            }
+            Some(t) = recorder.next_tap() => {
+                if let Some(note) = recorder.on_tap(&t) {
+                    app.update(Action::Recording(note));
                     dirty = true;
                 }
             }
@@ -101,7 +134,12 @@ async fn event_loop(
                 let driving = app.teleop.driving;
                 app.update(Action::Tick { now_ms: t0.elapsed().as_millis() as u64 });
                 dirty |= driving;
+                if let Some(note) = recorder.tick() {
+                    app.update(Action::Recording(note));
+                    dirty = true;
+                }
             }
+            () = tokio::time::sleep_until(last_draw + frame), if dirty => {}
         }
         for (id, command) in app.take_outbox() {
             link.handle.submit_with_id(id, command);
@@ -116,7 +154,7 @@ async fn event_loop(
 }
 
 /// Reads terminal events on a thread; polls so it notices `stop` within 100 ms.
-fn spawn_reader(
+pub(crate) fn spawn_reader(
     tx: mpsc::UnboundedSender<io::Result<Event>>,
     stop: Arc<AtomicBool>,
 ) -> std::thread::JoinHandle<()> {

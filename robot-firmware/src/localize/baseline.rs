@@ -23,7 +23,12 @@ pub struct NearestLine {
 
 impl NearestLine {
     /// Starts at a known pose.
-    pub fn new(odometry: OdometryParams, grid: GridGeometry, sensor_offset_m: f32, pose: Pose) -> Self {
+    pub fn new(
+        odometry: OdometryParams,
+        grid: GridGeometry,
+        sensor_offset_m: f32,
+        pose: Pose,
+    ) -> Self {
         Self {
             odometry,
             grid,
@@ -63,12 +68,12 @@ mod tests {
             OdometryParams::default(),
             GridGeometry::default(),
             0.0,
-            Pose::new(0.26, 0.03, 0.1),
+            Pose::new(0.26, 0.05, 0.1),
         );
         let p = b.step(100, 100, true);
         // The path ends near x = 0.268; the x = 0.3 band's edge (0.295) is nearer than any
         // y band's, so x moves there and the heading is kept.
-        assert!((p.x + 0.0 - 0.295).abs() < 1e-4, "{p:?}");
+        assert!((p.x - 0.295).abs() < 1e-4, "{p:?}");
         assert!((p.heading - 0.1).abs() < 1e-6);
     }
 }

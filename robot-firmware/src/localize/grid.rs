@@ -7,9 +7,9 @@
 //! short pulse per line, horizontal and vertical look the same).
 //!
 //! A control cycle moves the sensor along a short path; [`GridGeometry::swept`] says which
-//! band that path touched, or how far it would have to be shifted, perpendicular to the
-//! band, to touch the nearest one. Invariants: shifts are the smallest signed moves that make
-//! the path touch a band, 0 when it already does; no function panics on any input (huge or
+//! band that path entered, or how far it would have to be shifted, perpendicular to the
+//! band, to enter the nearest one. Invariants: shifts are the smallest signed moves that make
+//! the path cross the edge of a band it meets first, 0 when it already does; no function panics on any input (huge or
 //! non-finite coordinates give saturated indices and non-finite shifts, never a panic).
 
 use crate::odometry::Point;
@@ -59,7 +59,7 @@ impl Default for GridGeometry {
 pub struct Swept {
     /// The nearest line.
     pub line: GridLine,
-    /// Signed move along the family's axis that makes the path touch the band; 0 if it does.
+    /// Signed move along the family's axis that makes the path enter the band; 0 if it does.
     pub shift_m: f32,
 }
 
@@ -100,19 +100,37 @@ impl GridGeometry {
     }
 }
 
-/// 1-D core of [`GridGeometry::swept_axis`]: bands `[k p - h, k p + h]`, path `[u, v]`.
+/// 1-D core of [`GridGeometry::swept_axis`]: bands `[k p - h, k p + h]`, path `u -> v`.
+///
+/// A pulse starts when the sensor ENTERS a band, so the path must cross the edge it meets
+/// first: `k p - h` when moving up, `k p + h` when moving down (either for a path that does
+/// not move along this axis). Returns the band and the smallest shift that makes the path
+/// cross that edge.
 fn swept_1d(u: f32, v: f32, pitch: f32, half: f32) -> (i32, f32) {
-    let (lo, hi) = if u <= v { (u, v) } else { (v, u) };
-    // The first band whose upper edge is at or above `lo`: k >= (lo - half) / p.
-    // `as` saturates (and maps NaN to 0), so no input can panic.
-    let k = libm::ceilf((lo - half) / pitch) as i32;
-    let lower_edge = k as f32 * pitch - half;
-    if lower_edge <= hi {
+    if v > u {
+        crossing(u, v, pitch, -half)
+    } else if v < u {
+        crossing(v, u, pitch, half)
+    } else {
+        let (a, b) = (crossing(u, v, pitch, -half), crossing(u, v, pitch, half));
+        if libm::fabsf(b.1) < libm::fabsf(a.1) {
+            b
+        } else {
+            a
+        }
+    }
+}
+
+/// Nearest of the lines `k p + e` to the interval `[lo, hi]`: (k, shift to touch it).
+fn crossing(lo: f32, hi: f32, pitch: f32, e: f32) -> (i32, f32) {
+    // First line at or above `lo`. `as` saturates (and maps NaN to 0): no input can panic.
+    let k = libm::ceilf((lo - e) / pitch) as i32;
+    let above = k as f32 * pitch + e;
+    if above <= hi {
         return (k, 0.0);
     }
-    // No overlap: the path lies between band k-1 (below) and band k (above).
-    let up = lower_edge - hi;
-    let down = (k.saturating_sub(1)) as f32 * pitch + half - lo; // negative
+    let below = k.saturating_sub(1) as f32 * pitch + e;
+    let (up, down) = (above - hi, below - lo); // up > 0, down < 0
     if up <= -down {
         (k, up)
     } else {
@@ -135,17 +153,35 @@ mod tests {
         let s = G.swept_axis(Axis::X, Point::new(0.29, 0.0), Point::new(0.301, 0.0));
         assert_eq!(s.line.index, 3);
         assert_eq!(s.shift_m, 0.0);
-        // Entering the band's near edge counts (the pulse starts there).
+        // Entering the band's near edge counts (the pulse starts there)...
         let s = G.swept_axis(Axis::X, Point::new(0.29, 0.0), Point::new(0.2951, 0.0));
         assert_eq!((s.line.index, s.shift_m), (3, 0.0));
+        // ... from either side.
+        let s = G.swept_axis(Axis::X, Point::new(0.31, 0.0), Point::new(0.3049, 0.0));
+        assert_eq!((s.line.index, s.shift_m), (3, 0.0));
+        // A path already inside the band entered it earlier: it must move back to the edge.
+        let s = G.swept_axis(Axis::X, Point::new(0.297, 0.0), Point::new(0.299, 0.0));
+        assert_eq!(s.line.index, 3);
+        assert!((s.shift_m + 0.002).abs() < 1e-6, "{s:?}");
     }
 
     #[test]
     fn a_path_short_of_a_band_is_shifted_to_its_nearer_edge() {
         let s = G.swept_axis(Axis::Y, Point::new(0.0, 0.27), Point::new(0.0, 0.28));
-        assert_eq!(s.line, GridLine { axis: Axis::Y, index: 3 });
+        assert_eq!(
+            s.line,
+            GridLine {
+                axis: Axis::Y,
+                index: 3
+            }
+        );
         assert!((s.shift_m - 0.015).abs() < 1e-6, "{s:?}");
+        // Moving up past band 2 without entering it: back to its lower edge (0.195).
         let s = G.swept_axis(Axis::Y, Point::new(0.0, 0.215), Point::new(0.0, 0.22));
+        assert_eq!(s.line.index, 2);
+        assert!((s.shift_m + 0.02).abs() < 1e-6, "{s:?}");
+        // Moving down towards band 2: on to its upper edge (0.205).
+        let s = G.swept_axis(Axis::Y, Point::new(0.0, 0.22), Point::new(0.0, 0.215));
         assert_eq!(s.line.index, 2);
         assert!((s.shift_m + 0.01).abs() < 1e-6, "{s:?}");
         // Negative coordinates index negative lines.
@@ -158,7 +194,13 @@ mod tests {
     fn the_family_needing_the_smaller_shift_is_chosen() {
         // Near a y line (1 mm short) and far from any x line.
         let s = G.swept(Point::new(0.05, 0.193), Point::new(0.051, 0.194));
-        assert_eq!(s.line, GridLine { axis: Axis::Y, index: 2 });
+        assert_eq!(
+            s.line,
+            GridLine {
+                axis: Axis::Y,
+                index: 2
+            }
+        );
         assert!((s.shift_m - 0.001).abs() < 1e-5);
         assert!((G.coordinate(s.line) - 0.2).abs() < 1e-7);
     }
@@ -166,10 +208,7 @@ mod tests {
     #[test]
     fn non_finite_and_huge_inputs_do_not_panic() {
         let _ = G.swept(Point::new(f32::NAN, 1e30), Point::new(f32::INFINITY, -1e30));
-        let zero = GridGeometry {
-            pitch_m: 0.0,
-            ..G
-        };
+        let zero = GridGeometry { pitch_m: 0.0, ..G };
         let _ = zero.swept(Point::new(0.1, 0.2), Point::new(0.3, 0.4));
     }
 }

@@ -99,12 +99,39 @@ pub fn gauss(rng: &mut XorShift32) -> f32 {
     libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(2.0 * PI * u2)
 }
 
-/// Fills `samples` at `pose` with biases drawn from `N(0, sigma)` per wheel (seed 003
-/// Eq 2-7: sigma = dV/2).
-pub fn seed_prior(samples: &mut [Sample], pose: Pose, sigma: f32, rng: &mut XorShift32) {
+/// How the wheel-bias hypotheses are drawn when the PPD is (re)seeded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Prior {
+    /// `N(0, sigma)` per wheel: seed 003 Eq 2-7's density.
+    Gaussian,
+    /// Uniform in `±2 sigma = ±dV` per wheel: the range the thesis sweeps to draw the PPD
+    /// (App 5.3). It puts more samples at the corners (one wheel fast, the other slow), where
+    /// the heading drifts fastest, so a finite set still covers the worst robots.
+    #[default]
+    Uniform,
+}
+
+/// Fills `samples` at `pose` with biases drawn from `prior` with the given `sigma` per wheel
+/// (seed 003 Eq 2-7: sigma = dV/2).
+pub fn seed_prior(
+    samples: &mut [Sample],
+    pose: Pose,
+    prior: Prior,
+    sigma: f32,
+    rng: &mut XorShift32,
+) {
     for s in samples.iter_mut() {
-        *s = Sample::new(pose, sigma * gauss(rng), sigma * gauss(rng));
+        let (l, r) = match prior {
+            Prior::Gaussian => (gauss(rng), gauss(rng)),
+            Prior::Uniform => (2.0 * symmetric(rng), 2.0 * symmetric(rng)),
+        };
+        *s = Sample::new(pose, sigma * l, sigma * r);
     }
+}
+
+/// Uniform in `[-1, 1)`.
+fn symmetric(rng: &mut XorShift32) -> f32 {
+    2.0 * ((rng.next_u32() >> 8) as f32 / 16_777_216.0) - 1.0
 }
 
 /// Fills `samples` at `pose` with the thesis's sweep (App 5.3: each wheel from `-dv` to

@@ -5,11 +5,11 @@
 //! sensor level into events, see [`super::LineEdge`]). Per cycle it moves every PPD sample and
 //! the plain odometry pose. On a line event (§2.5.2-2.5.3):
 //!
-//! 1. each sample's sensor path over the cycle is matched to the nearest line band of either
+//! 1. each sample's sensor path over the cycle is matched to the nearest line band of each
 //!    family (the PPD is intersected with every line x = k g and y = k g);
-//! 2. samples are weighted by how far they miss their band (a Gaussian of width
-//!    `line_sigma_m`), and the weight is summed per line: the line holding the most PPD mass
-//!    wins, even if another line is nearer the odometry pose (Fig 2-17);
+//! 2. each sample weighs each of its two bands by how far its path misses entering it (a
+//!    Gaussian of width `line_sigma_m`), and the weights are summed per line: the line holding
+//!    the most PPD mass wins, even if another line is nearer the odometry pose (Fig 2-17);
 //! 3. the winning line's samples are moved onto it and resampled (systematic resampling,
 //!    seeded), and the others dropped: the PPD is cut by the line and stays bounded (§2.6.4:
 //!    "the PPD size can be reduced ... the average size of the PPD stays constant");
@@ -22,12 +22,19 @@
 //!
 //! Invariants: N samples always; all weights equal between events (every accepted event
 //! resamples); no heap, no clock, no I/O; a seeded [`XorShift32`] makes runs reproducible.
-//! What can fail: an event whose best line is further than `gate_m` from the PPD is rejected
-//! (returned as [`LineOutcome::Rejected`], state unchanged) - a double detection or a robot
-//! already lost (§2.7: past the maximum odometry error there is no recovery). No panics.
+//! What can fail: a pulse is ignored, as if missed, when its best line is further than
+//! `gate_m` from the PPD (a robot already lost: §2.7, past the maximum odometry error there is
+//! no recovery), or holds less than `min_support` of the weight (samples near a crossing fit
+//! both families: the §2.6 C zone) ([`LineOutcome::Rejected`]), or comes within
+//! `refractory_m` of travel after the last cut (a double detection, [`LineOutcome::Echo`]).
+//! The caller sees which. No panics.
+//!
+//! Tuning (`line_sigma_m`, `roughen_*`, `gate_m`, `min_support`) is not in the thesis; the
+//! values were chosen on the host reproduction runs (tests/paper_003_line_correction.rs).
+//! Stack use on a line event: two scratch arrays of N entries (about 50 bytes per sample).
 
-use super::grid::{Axis, GridGeometry, GridLine};
-use super::ppd::{self, Sample};
+use super::grid::{Axis, GridGeometry, GridLine, Swept};
+use super::ppd::{self, Prior, Sample};
 use crate::behaviour::XorShift32;
 use crate::odometry::{integrate, wrap_angle, OdometryParams, Point, Pose};
 
@@ -43,15 +50,23 @@ pub struct SppsParams {
     /// Standard deviation of each wheel's relative speed error. seed 003 §2.3.3, Eq 2-7:
     /// dV = 1 % of 100 mm/s, sigma = dV/2 = 0.5 %.
     pub bias_sigma: f32,
+    /// How hypotheses are drawn at a reset.
+    pub prior: Prior,
     /// Width of the line likelihood, metres: how far a sample may miss its band and still
     /// count. Covers the sample spacing of a finite PPD; seed 003 gives no value.
     pub line_sigma_m: f32,
     /// An event whose best line is further than this from its samples is rejected, metres.
     pub gate_m: f32,
+    /// An event whose best line holds less than this share of the PPD's weight is rejected
+    /// as ambiguous (seed 003 §2.6: C zones, where lines cross, are "difficult to interpret").
+    pub min_support: f32,
     /// Bias jitter added to every survivor of a cut (relative, 1 sigma).
     pub roughen_bias: f32,
     /// Heading jitter added to every survivor of a cut, radians (1 sigma).
     pub roughen_heading_rad: f32,
+    /// Pulses within this travel after an accepted cut are rejected as double detections,
+    /// metres.
+    pub refractory_m: f32,
 }
 
 impl Default for SppsParams {
@@ -62,14 +77,25 @@ impl Default for SppsParams {
             sensor_offset_m: 0.0,
             // seed 003 Eq 2-7: sigma = dV/2 with dV = 1 %
             bias_sigma: 0.005,
+            // The thesis's ±dV sweep: covers the corners (one wheel fast, one slow) that 64
+            // Gaussian draws leave nearly empty; it lost fewer robots in the reproduction.
+            prior: Prior::Uniform,
+            // 3 mm: a third of one cycle's travel at 100 mm/s and 10 Hz.
             line_sigma_m: 0.003,
-            // 3 cm: beyond this the sample set no longer brackets the robot; a pulse that far
-            // from every sample is more likely a double detection than a line.
-            gate_m: 0.03,
-            // A tenth of the prior per cut: enough to keep diversity over hundreds of cuts.
-            roughen_bias: 0.0005,
-            // 0.1 deg: the heading a 1 % bias drifts over ~5 mm of travel.
-            roughen_heading_rad: 0.0017,
+            // Only pulses no sample comes within 4.5 cm of (nearly half a square: the PPD has
+            // lost the grid). A tighter gate (3 cm was tried) also rejects true lines whenever
+            // the PPD is briefly overconfident, and then the robot never recovers.
+            gate_m: 0.045,
+            // Two lines sharing the weight evenly is a guess; two to one is not.
+            min_support: 0.67,
+            // 0.02 % per cut (1/25 of the prior): the set keeps some spread and can follow a
+            // slowly changing bias; 0.05 % and more let the learnt bias wander off.
+            roughen_bias: 0.0002,
+            // 0.2 deg per cut: a floor under the heading spread, which the cuts alone shrink
+            // below the heading error (tuned on the seed 003 reproduction runs).
+            roughen_heading_rad: 0.0035,
+            // A line plus a cycle's travel: a second pulse sooner is a double detection.
+            refractory_m: 0.02,
         }
     }
 }
@@ -94,11 +120,15 @@ pub struct LineCorrection {
 pub enum LineOutcome {
     /// The PPD was cut with a line and the pose corrected.
     Corrected(LineCorrection),
-    /// No line lay within `gate_m` of the PPD; nothing changed.
+    /// No line lay within `gate_m` of the PPD, or none held `min_support` of it; nothing
+    /// changed.
     Rejected {
         /// Weighted mean distance of the best line's samples from it, metres.
         distance_m: f32,
     },
+    /// A pulse within `refractory_m` of travel after the last cut: taken as a double
+    /// detection and ignored.
+    Echo,
 }
 
 /// Line-event counters, for telemetry.
@@ -108,13 +138,13 @@ pub struct SppsCounters {
     pub cycles: u32,
     /// Line events accepted.
     pub corrections: u32,
-    /// Line events rejected by the gate.
+    /// Line events ignored: gate, support or refractory travel.
     pub rejected: u32,
 }
 
 /// Most distinct lines one event's samples may fall on; more are ignored (a PPD spanning
-/// eight lines is already lost).
-const MAX_LINES: usize = 8;
+/// eight lines of each family is already lost).
+const MAX_LINES: usize = 16;
 
 /// The supervised passive positioning system with `N` PPD samples.
 #[derive(Clone, Debug)]
@@ -124,6 +154,8 @@ pub struct Spps<const N: usize> {
     rng: XorShift32,
     corrected: Pose,
     uncorrected: Pose,
+    /// Travel since the last accepted cut, metres (for `refractory_m`).
+    since_cut_m: f32,
     counters: SppsCounters,
 }
 
@@ -140,10 +172,26 @@ impl<const N: usize> Spps<N> {
             rng: XorShift32::new(seed),
             corrected: pose,
             uncorrected: pose,
+            since_cut_m: f32::INFINITY,
             counters: SppsCounters::default(),
         };
         s.reset(pose);
         s
+    }
+
+    /// Starts from given samples (a PPD saved earlier, or a test's hand-made one); the
+    /// corrected and uncorrected poses start at their mean.
+    pub fn with_samples(params: SppsParams, samples: [Sample; N], seed: u32) -> Self {
+        let pose = ppd::mean_pose(&samples).unwrap_or_default();
+        Self {
+            params,
+            samples,
+            rng: XorShift32::new(seed),
+            corrected: pose,
+            uncorrected: pose,
+            since_cut_m: f32::INFINITY,
+            counters: SppsCounters::default(),
+        }
     }
 
     /// Re-seeds the PPD at a known pose (e.g. a global fix); the plain odometry pose is reset
@@ -153,11 +201,13 @@ impl<const N: usize> Spps<N> {
         ppd::seed_prior(
             &mut self.samples,
             pose,
+            self.params.prior,
             self.params.bias_sigma,
             &mut self.rng,
         );
         self.corrected = pose;
         self.uncorrected = pose;
+        self.since_cut_m = f32::INFINITY;
     }
 
     /// Re-seeds the PPD as the thesis's sweep of each wheel over `±dv` (App 5.3), for drawing
@@ -166,6 +216,7 @@ impl<const N: usize> Spps<N> {
         ppd::seed_lattice(&mut self.samples, pose, dv);
         self.corrected = pose;
         self.uncorrected = pose;
+        self.since_cut_m = f32::INFINITY;
     }
 
     /// One control cycle: encoder counts since the last cycle, and whether a line pulse was
@@ -174,46 +225,50 @@ impl<const N: usize> Spps<N> {
         let p = self.params;
         self.counters.cycles = self.counters.cycles.wrapping_add(1);
         self.uncorrected = integrate(self.uncorrected, n_l, n_r, &p.odometry);
-        if !line {
+        let travel = (n_l as f32 + n_r as f32) / 2.0 * p.odometry.mm_per_pulse * 1e-3;
+        self.since_cut_m += libm::fabsf(travel);
+        let echo = line && self.since_cut_m < p.refractory_m;
+        if !line || echo {
             for s in self.samples.iter_mut() {
                 s.step(n_l, n_r, &p.odometry);
             }
             self.corrected = ppd::mean_pose(&self.samples).unwrap_or(self.corrected);
-            return None;
+            if !echo {
+                return None;
+            }
+            self.counters.rejected = self.counters.rejected.wrapping_add(1);
+            return Some(LineOutcome::Echo);
         }
-        // Each sample's sensor path over this cycle, and the band it is nearest to.
-        let mut hits = [Hit::default(); N];
+        // Each sample's sensor path over this cycle, and the nearest band of each family.
+        let mut hits = [[Cand::default(); 2]; N];
         for (s, hit) in self.samples.iter_mut().zip(hits.iter_mut()) {
             let before = s.sensor(p.sensor_offset_m);
             s.step(n_l, n_r, &p.odometry);
-            let sw = p.grid.swept(before, s.sensor(p.sensor_offset_m));
-            *hit = Hit {
-                line: sw.line,
-                shift_m: sw.shift_m,
-                weight: 0.0,
-            };
+            let after = s.sensor(p.sensor_offset_m);
+            *hit = [Axis::X, Axis::Y].map(|axis| Cand::new(p.grid.swept_axis(axis, before, after)));
         }
         let before = ppd::mean_pose(&self.samples).unwrap_or(self.corrected);
         let outcome = self.cut(&mut hits, before);
         self.corrected = match outcome {
             LineOutcome::Corrected(c) => c.pose,
-            LineOutcome::Rejected { .. } => before,
+            LineOutcome::Rejected { .. } | LineOutcome::Echo => before,
         };
         Some(outcome)
     }
 
     /// Steps 2-4 of the module doc on this cycle's `hits`.
-    fn cut(&mut self, hits: &mut [Hit; N], before: Pose) -> LineOutcome {
+    fn cut(&mut self, hits: &mut [[Cand; 2]; N], before: Pose) -> LineOutcome {
         let p = self.params;
-        // Likelihoods relative to the best sample, so at least one is 1 (no underflow to 0).
+        // Likelihoods relative to the best candidate, so at least one is 1 (no underflow).
         let best = hits
             .iter()
-            .map(|h| libm::fabsf(h.shift_m))
+            .flatten()
+            .map(|c| libm::fabsf(c.shift_m))
             .fold(f32::INFINITY, f32::min);
         let two_var = 2.0 * p.line_sigma_m * p.line_sigma_m;
-        for h in hits.iter_mut() {
-            let d = libm::fabsf(h.shift_m);
-            h.weight = libm::expf(-(d * d - best * best) / two_var);
+        for c in hits.iter_mut().flatten() {
+            let d = libm::fabsf(c.shift_m);
+            c.weight = libm::expf(-(d * d - best * best) / two_var);
         }
         let Some((line, mass, total)) = winning_line(hits) else {
             return LineOutcome::Rejected {
@@ -221,16 +276,19 @@ impl<const N: usize> Spps<N> {
             };
         };
         let mut miss = 0.0;
-        for h in hits.iter().filter(|h| h.line == line) {
-            miss += h.weight * libm::fabsf(h.shift_m);
+        for c in hits.iter().flatten().filter(|c| c.line == line) {
+            miss += c.weight * libm::fabsf(c.shift_m);
         }
         let distance_m = miss / mass;
-        // `!(a <= b)` also rejects NaN distances.
-        if !(distance_m <= p.gate_m) {
+        // A sample near a crossing fits both families and adds to both lines, so at a C zone
+        // the support falls towards 1/2 and the event is rejected. A NaN fails both tests.
+        let accept = distance_m <= p.gate_m && mass >= p.min_support * total;
+        if !accept {
             self.counters.rejected = self.counters.rejected.wrapping_add(1);
             return LineOutcome::Rejected { distance_m };
         }
         self.resample_onto(line, hits, mass);
+        self.since_cut_m = 0.0;
         self.counters.corrections = self.counters.corrections.wrapping_add(1);
         let pose = ppd::mean_pose(&self.samples).unwrap_or(before);
         LineOutcome::Corrected(LineCorrection {
@@ -242,9 +300,9 @@ impl<const N: usize> Spps<N> {
         })
     }
 
-    /// Systematic resampling of the samples on `line` by weight; each copy is moved onto the
-    /// line and roughened.
-    fn resample_onto(&mut self, line: GridLine, hits: &[Hit; N], mass: f32) {
+    /// Systematic resampling of the samples by their weight on `line`; each copy is moved
+    /// onto the line and roughened.
+    fn resample_onto(&mut self, line: GridLine, hits: &[[Cand; 2]; N], mass: f32) {
         let p = self.params;
         let old = self.samples;
         let step = mass / N as f32;
@@ -252,38 +310,39 @@ impl<const N: usize> Spps<N> {
         let mut target = step * ((self.rng.next_u32() >> 8) as f32 / 16_777_216.0);
         let mut cum = 0.0f32;
         let mut src = 0usize;
+        let mut last = None;
         let limit = p.bias_sigma * 10.0;
         for slot in self.samples.iter_mut() {
-            // Advance to the sample whose cumulative weight covers `target`; rounding can
-            // leave the last pointer past the end, so fall back to the last one on the line.
-            while src < N {
-                let w = if hits[src].line == line {
-                    hits[src].weight
-                } else {
-                    0.0
-                };
+            // Advance to the sample whose cumulative weight covers `target`; f32 rounding can
+            // run the last pointer past the end: it then reuses the last sample taken.
+            while let Some(h) = hits.get(src) {
+                let w = on_line(h, line).map_or(0.0, |c| c.weight);
                 if w > 0.0 && cum + w > target {
+                    last = Some(src);
                     break;
                 }
                 cum += w;
                 src += 1;
             }
-            let pick = if src < N { src } else { last_on(line, hits) };
-            let (Some(&s), Some(h)) = (old.get(pick), hits.get(pick)) else {
+            let Some(pick) = last else {
+                continue;
+            };
+            let (Some(&s), Some(c)) =
+                (old.get(pick), hits.get(pick).and_then(|h| on_line(h, line)))
+            else {
                 continue;
             };
             let mut s = s;
             match line.axis {
-                Axis::X => s.pose.x += h.shift_m,
-                Axis::Y => s.pose.y += h.shift_m,
+                Axis::X => s.pose.x += c.shift_m,
+                Axis::Y => s.pose.y += c.shift_m,
             }
-            s.bias_left = (s.bias_left + p.roughen_bias * ppd::gauss(&mut self.rng))
-                .clamp(-limit, limit);
-            s.bias_right = (s.bias_right + p.roughen_bias * ppd::gauss(&mut self.rng))
-                .clamp(-limit, limit);
-            s.pose.heading = wrap_angle(
-                s.pose.heading + p.roughen_heading_rad * ppd::gauss(&mut self.rng),
-            );
+            s.bias_left =
+                (s.bias_left + p.roughen_bias * ppd::gauss(&mut self.rng)).clamp(-limit, limit);
+            s.bias_right =
+                (s.bias_right + p.roughen_bias * ppd::gauss(&mut self.rng)).clamp(-limit, limit);
+            s.pose.heading =
+                wrap_angle(s.pose.heading + p.roughen_heading_rad * ppd::gauss(&mut self.rng));
             *slot = s;
             target += step;
         }
@@ -334,15 +393,25 @@ impl<const N: usize> Spps<N> {
     }
 }
 
-/// One sample's relation to this cycle's line event.
+/// One sample's relation to the nearest band of one family at this cycle's line event.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Hit {
+struct Cand {
     line: GridLine,
     shift_m: f32,
     weight: f32,
 }
 
-impl Default for Hit {
+impl Cand {
+    fn new(s: Swept) -> Self {
+        Self {
+            line: s.line,
+            shift_m: s.shift_m,
+            weight: 0.0,
+        }
+    }
+}
+
+impl Default for Cand {
     fn default() -> Self {
         Self {
             line: GridLine {
@@ -355,34 +424,33 @@ impl Default for Hit {
     }
 }
 
+/// The candidate of `hit` on `line`, if it has one.
+fn on_line(hit: &[Cand; 2], line: GridLine) -> Option<&Cand> {
+    hit.iter().find(|c| c.line == line)
+}
+
 /// The line holding the most weight: (line, its weight, all weight). `None` if no weight.
-fn winning_line(hits: &[Hit]) -> Option<(GridLine, f32, f32)> {
-    let mut lines = [(Hit::default().line, 0.0f32); MAX_LINES];
+fn winning_line<const N: usize>(hits: &[[Cand; 2]; N]) -> Option<(GridLine, f32, f32)> {
+    let mut lines = [(Cand::default().line, 0.0f32); MAX_LINES];
     let mut used = 0usize;
     let mut total = 0.0f32;
-    for h in hits {
-        total += h.weight;
-        if let Some(slot) = lines[..used].iter_mut().find(|(l, _)| *l == h.line) {
-            slot.1 += h.weight;
+    for c in hits.iter().flatten() {
+        total += c.weight;
+        if let Some(slot) = lines[..used].iter_mut().find(|(l, _)| *l == c.line) {
+            slot.1 += c.weight;
         } else if let Some(slot) = lines.get_mut(used) {
-            *slot = (h.line, h.weight);
+            *slot = (c.line, c.weight);
             used += 1;
         }
     }
-    let (line, mass) = lines[..used]
-        .iter()
-        .copied()
-        .fold(None, |best: Option<(GridLine, f32)>, c| match best {
+    let (line, mass) = lines[..used].iter().copied().fold(
+        None,
+        |best: Option<(GridLine, f32)>, c| match best {
             Some(b) if b.1 >= c.1 => Some(b),
             _ => Some(c),
-        })?;
+        },
+    )?;
     (mass > 0.0).then_some((line, mass, total))
-}
-
-fn last_on(line: GridLine, hits: &[Hit]) -> usize {
-    hits.iter()
-        .rposition(|h| h.line == line && h.weight > 0.0)
-        .unwrap_or(0)
 }
 
 #[cfg(test)]
@@ -401,31 +469,87 @@ mod tests {
         }
         // 0.8 m straight: uncorrected is exact; the PPD mean is near it, the PPD has spread.
         let u = s.uncorrected();
-        assert!((u.x - 0.85).abs() < 1e-4 && (u.y - 0.05).abs() < 1e-6, "{u:?}");
-        assert!(s.pose().point().distance_to(u.point()) < 0.03, "{:?}", s.pose());
+        assert!(
+            (u.x - 0.85).abs() < 1e-4 && (u.y - 0.05).abs() < 1e-6,
+            "{u:?}"
+        );
+        assert!(
+            s.pose().point().distance_to(u.point()) < 0.03,
+            "{:?}",
+            s.pose()
+        );
         assert!(s.size_m() > 0.01 && s.size_m() < 0.2, "{}", s.size_m());
     }
 
     #[test]
-    fn a_line_event_puts_the_pose_on_the_line_and_shrinks_the_ppd() {
-        let mut s = Spps64::new(params(), Pose::new(0.05, 0.02, 0.3), 5);
-        // Drive about 0.5 m so the PPD has grown, then report a line.
-        for _ in 0..60 {
-            s.step(80, 80, false);
+    fn a_line_event_puts_the_pose_on_the_line_it_crossed() {
+        // Heading +x from x = 0.02: 7 cycles of 10 mm reach x = 0.09, the 8th enters the
+        // x = 0.1 band at its near edge (0.095).
+        let mut s = Spps64::new(params(), Pose::new(0.02, 0.05, 0.0), 5);
+        for _ in 0..7 {
+            s.step(125, 125, false);
         }
         let size = s.size_m();
-        let out = s.step(10, 10, true);
+        let out = s.step(125, 125, true);
         let Some(LineOutcome::Corrected(c)) = out else {
             panic!("{out:?}");
         };
-        let on = match c.line.axis {
-            Axis::X => c.pose.x,
-            Axis::Y => c.pose.y,
-        };
-        // Mean of sensor paths touching a 1 cm band: within the band plus one cycle's travel.
-        assert!((on - s.params().grid.coordinate(c.line)).abs() < 0.006, "{c:?}");
-        assert!(s.size_m() < size, "{} -> {}", size, s.size_m());
+        assert_eq!(
+            c.line,
+            GridLine {
+                axis: Axis::X,
+                index: 1
+            }
+        );
+        // Where the path crossed the edge: within one cycle's travel past it.
+        assert!((0.094..0.106).contains(&c.pose.x), "{c:?}");
+        assert!(
+            size < 0.002 && s.size_m() < 0.002,
+            "{} -> {}",
+            size,
+            s.size_m()
+        );
         assert_eq!(s.counters().corrections, 1);
+        // A second pulse 1 cm later is an echo.
+        assert_eq!(s.step(125, 125, true), Some(LineOutcome::Echo));
+    }
+
+    #[test]
+    fn the_line_with_the_most_ppd_mass_wins_over_the_nearest_one() {
+        // seed 003 Fig 2-5/2-17: the intersection of highest density wins, not the nearest
+        // line. 12 samples (heading +x) enter the x = 0.1 band exactly this cycle; 52 samples
+        // (heading +y, bent by drift) stop 2 mm short of the y = 0.1 band. Each of the 52 is
+        // less likely than each of the 12, but together they hold most of the PPD.
+        let mut samples = [Sample::default(); 64];
+        for (k, q) in samples.iter_mut().enumerate() {
+            let pose = if k < 12 {
+                Pose::new(0.09, 0.05, 0.0)
+            } else {
+                Pose::new(0.15, 0.083, core::f32::consts::FRAC_PI_2)
+            };
+            *q = Sample::new(pose, 0.0, 0.0);
+        }
+        let mut s = Spps::with_samples(params(), samples, 1);
+        let out = s.step(125, 125, true);
+        let Some(LineOutcome::Corrected(c)) = out else {
+            panic!("{out:?}");
+        };
+        assert_eq!(
+            c.line,
+            GridLine {
+                axis: Axis::Y,
+                index: 1
+            },
+            "{c:?}"
+        );
+        assert!(c.support > 0.75 && c.support < 0.8, "{c:?}");
+        // The cut keeps only the y-line samples, moved 2 mm onto the band's edge.
+        assert!(
+            s.samples().iter().all(|q| (q.pose.y - 0.095).abs() < 1e-4),
+            "{:?}",
+            s.samples()[0]
+        );
+        assert!((s.pose().heading - core::f32::consts::FRAC_PI_2).abs() < 0.02);
     }
 
     #[test]
@@ -438,7 +562,8 @@ mod tests {
         let mut s = Spps64::new(p, Pose::new(0.05, 0.05, 0.0), 9);
         let out = s.step(0, 0, true);
         assert!(matches!(out, Some(LineOutcome::Rejected { distance_m }) if distance_m > 0.03));
-        assert_eq!(s.pose(), Pose::new(0.05, 0.05, 0.0));
+        let q = s.pose();
+        assert!((q.x - 0.05).abs() < 1e-6 && (q.y - 0.05).abs() < 1e-6 && q.heading == 0.0);
         assert_eq!(s.counters().rejected, 1);
     }
 

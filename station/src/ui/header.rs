@@ -54,6 +54,17 @@ pub fn render_header(app: &App, frame: &mut Frame, area: Rect) {
             Style::new().fg(Color::Magenta).bold(),
         ));
     }
+    if let Some((file, since_ms)) = &app.recording {
+        let s = app.now_ms.saturating_sub(*since_ms) / 1000;
+        let name = std::path::Path::new(file)
+            .file_name()
+            .map_or_else(|| file.clone(), |n| n.to_string_lossy().into_owned());
+        spans.push(sep());
+        spans.push(Span::styled(
+            format!("● REC {name} {}:{:02}", s / 60, s % 60),
+            Style::new().fg(Color::Red).bold(),
+        ));
+    }
     if let Some(hz) = app.rate_hz {
         spans.push(sep());
         spans.push(Span::raw(format!("{hz} Hz")));

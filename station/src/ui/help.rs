@@ -32,7 +32,16 @@ pub const KEYS: &[(&str, &str)] = &[
     ("+  -", "telemetry rate (0 1 2 5 10 20 50 Hz)"),
     ("c", "next chart series"),
     ("t  x", "show or hide the true pose / clear the tracks"),
+    (
+        "P",
+        "plan on the station: robot (or map start) to cursor / goal",
+    ),
+    (
+        "o r n m e",
+        "map layers: grid regions plan smoothed start/goal",
+    ),
     ("PgUp PgDn", "scroll the log"),
+    ("R", "record the link to a file here; R again saves it"),
 ];
 
 pub fn render(frame: &mut Frame, screen: Rect) {

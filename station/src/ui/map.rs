@@ -3,7 +3,7 @@
 //!
 //! Layer: presentation, built from layers. A `MapLayer` paints one kind of thing from the app
 //! state onto the canvas, in `LAYERS` order (later layers on top); the occupancy grid,
-//! segmentation regions and plans are meant to be added as more layers. Layers can be hidden
+//! segmentation regions and plans are layers of `map_layers`. Layers can be hidden
 //! by name (`MapState::hidden`). `view_bounds` fits the arena (or the tracks) into the panel
 //! with square cells, and `to_world` inverts it for mouse clicks.
 
@@ -16,6 +16,7 @@ use ratatui::widgets::canvas::{Circle, Context, Line, Points};
 use ratatui::widgets::Block;
 use ratatui::Frame;
 
+use super::map_layers;
 use crate::app::App;
 
 /// One kind of thing on the map.
@@ -45,8 +46,18 @@ pub struct BelievedLayer;
 /// The go-to goal and the cursor.
 pub struct GoalLayer;
 
-/// Layers in drawing order.
-pub static LAYERS: [&dyn MapLayer; 4] = [&ArenaLayer, &TruthLayer, &BelievedLayer, &GoalLayer];
+/// Layers in drawing order: the planner's grid and squares under the arena, plans above it.
+pub static LAYERS: [&dyn MapLayer; 9] = [
+    &map_layers::GridLayer,
+    &map_layers::RegionsLayer,
+    &ArenaLayer,
+    &map_layers::PlanLayer,
+    &map_layers::SmoothedLayer,
+    &TruthLayer,
+    &BelievedLayer,
+    &GoalLayer,
+    &map_layers::EndsLayer,
+];
 
 /// Extra margin around what is shown, metres.
 const MARGIN_M: f64 = 0.1;
@@ -59,13 +70,34 @@ const ROBOT_R: f64 = 0.04;
 const ROBOT_FRACTION: f64 = 1.0 / 50.0;
 
 pub fn render(app: &App, frame: &mut Frame, area: Rect) {
+    // A wide panel gives its spare columns to the plan panel (the same split maps clicks).
+    let (area, side) = super::plan_panel::split(app, area);
+    if let Some(side) = side {
+        super::plan_panel::render(app, frame, side);
+    }
     let name = app
         .map
         .arena
         .as_ref()
-        .map_or("no arena".to_string(), |a| a.name.clone());
+        .map(|a| a.name.clone())
+        .or_else(|| app.map.plan.map().map(|m| m.name.clone()))
+        .unwrap_or_else(|| "no arena".to_string());
     let block = Block::bordered()
         .title(format!(" Map — {name} "))
+        .title_top(
+            // The plan panel, when drawn, says it all; else a status that fits the title row.
+            side.map_or_else(
+                || {
+                    map_layers::status(
+                        app,
+                        area.width.saturating_sub(name.chars().count() as u16 + 12),
+                    )
+                },
+                |_| None,
+            )
+            .unwrap_or_default()
+            .right_aligned(),
+        )
         .title_bottom(TLine::from(vec![
             " ● believed ".cyan(),
             "○ true ".magenta(),
@@ -104,7 +136,11 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
 pub fn view_bounds(app: &App, inner: Rect) -> ([f64; 2], [f64; 2]) {
     let [mut x0, mut y0, mut x1, mut y1] = match &app.map.arena {
         Some(a) => a.bounds,
-        None => content_bounds(app),
+        None => app
+            .map
+            .plan
+            .map()
+            .map_or_else(|| content_bounds(app), |m| m.bounds()),
     };
     x0 -= MARGIN_M;
     y0 -= MARGIN_M;

@@ -12,7 +12,9 @@ pub mod help;
 pub mod link;
 pub mod log;
 pub mod map;
+pub mod map_layers;
 pub mod params;
+pub mod plan_panel;
 pub mod sensors;
 
 use ratatui::layout::{Constraint, Layout, Rect};

@@ -1,0 +1,175 @@
+//! Plan following (seed 004 §7): drive through the installed plan's waypoints in order.
+//!
+//! Layer: part of the control cycle (`Core::decide` in `Mode::ExecutePlan`). The waypoints are
+//! read straight out of the installed Plan object (`transfer::Objects`), in millimetres. Each
+//! leg uses the robot's existing way of reaching a point: guided motion on a compass robot
+//! (seed 004 §7 `guided_motion()`, micro-rato) or the behaviour arbiter's `GoTo` on a robot
+//! with encoders (seed 000 §4, khepera). Reaching the last waypoint sends `PlanFinished` and
+//! `GoalReached` and stops; replacing the plan while it runs sends `PlanAborted`.
+//!
+//! Not here: seed 004 §7's exception heuristics (turning orthogonally when more than 0.6 m off
+//! the ideal segment, splitting long segments). They belong to the exploration work's
+//! `crate::execute::Executor`, which can replace `guided_leg` (it takes the waypoints as a
+//! `&[Point]`, which `Objects::plan_points` fills).
+//!
+//! What can fail: `ExecutePlan` is refused (`NoPlan`, `PlanIdMismatch`, `Unsupported`) and
+//! then changes nothing; a plan that vanishes mid-run stops the robot. Never a panic.
+
+use protocol::{EventCode, Mode, NackReason};
+
+use super::Core;
+use crate::behaviour::{self, drift::DriftPhase};
+use crate::guided::{guided_step, GuidedPhase};
+use crate::hal::MotorCommand;
+use crate::odometry::Point;
+
+/// Where the robot is in the plan it executes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Execution {
+    /// The id of the plan being executed.
+    pub plan_id: u32,
+    /// Index of the waypoint being driven to.
+    pub next: u16,
+    /// Number of waypoints.
+    pub count: u16,
+}
+
+impl Core {
+    /// `Command::ExecutePlan`: starts the installed plan if it has this id.
+    pub(super) fn start_plan(&mut self, plan_id: u32) -> Result<(), NackReason> {
+        let (id, view) = self.objects.plan().ok_or(NackReason::NoPlan)?;
+        if id != plan_id {
+            return Err(NackReason::PlanIdMismatch);
+        }
+        if !self.profile.has(protocol::caps::ENCODERS) && !self.profile.has(protocol::caps::COMPASS)
+        {
+            return Err(NackReason::Unsupported);
+        }
+        self.exec = Some(Execution {
+            plan_id,
+            next: 0,
+            count: view.waypoint_count(),
+        });
+        // Entering the mode (again) starts from the first waypoint.
+        self.enter(Mode::ExecutePlan);
+        Ok(())
+    }
+
+    /// Whether legs are driven by guided motion (no encoders) rather than the arbiter.
+    pub(super) fn plan_guided(&self) -> bool {
+        !self.profile.has(protocol::caps::ENCODERS)
+    }
+
+    /// The arbiter's mode on entering `ExecutePlan`.
+    pub(super) fn plan_arbiter_mode(&self) -> behaviour::Mode {
+        match self.exec.and_then(|e| self.waypoint(e.next)) {
+            Some(p) if !self.plan_guided() => behaviour::Mode::GoTo(p),
+            _ => behaviour::Mode::Idle,
+        }
+    }
+
+    /// Waypoint `i` of the plan being executed, metres; `None` if that plan is gone.
+    fn waypoint(&self, i: u16) -> Option<Point> {
+        let exec = self.exec?;
+        let (id, view) = self.objects.plan()?;
+        let p = view.waypoint(i).filter(|_| id == exec.plan_id)?;
+        Some(Point::new(p.x_mm as f32 / 1000.0, p.y_mm as f32 / 1000.0))
+    }
+
+    /// This cycle's motor command in `Mode::ExecutePlan`.
+    pub(super) fn plan_command(&mut self) -> MotorCommand {
+        let Some(exec) = self.exec else {
+            return MotorCommand::STOP;
+        };
+        if self.arrived {
+            return MotorCommand::STOP;
+        }
+        if self.waypoint(exec.next).is_none() {
+            self.abort_plan();
+            return MotorCommand::STOP;
+        }
+        if self.plan_guided() {
+            self.guided_leg()
+        } else {
+            self.arbiter_leg()
+        }
+    }
+
+    /// Guided motion towards the current waypoint; passes every waypoint already reached in
+    /// the same cycle (bounded by the waypoint count) so the robot does not pause at each.
+    fn guided_leg(&mut self) -> MotorCommand {
+        let mut ir = [(0u16, 0.0f32); 8];
+        let n = self.profile.ir.count.min(8);
+        for (i, slot) in ir.iter_mut().enumerate().take(n) {
+            *slot = (self.sensors.ir[i], self.profile.ir.angle_rad[i]);
+        }
+        let count = self.exec.map_or(0, |e| e.count);
+        for _ in 0..=count {
+            let Some(target) = self.exec.and_then(|e| self.waypoint(e.next)) else {
+                return MotorCommand::STOP;
+            };
+            let (cmd, phase) = guided_step(self.pose(), target, &ir[..n], &self.guided);
+            if phase != GuidedPhase::Arrived {
+                return cmd;
+            }
+            if self.advance().is_none() {
+                break;
+            }
+        }
+        MotorCommand::STOP
+    }
+
+    /// The arbiter's `GoTo` towards the current waypoint; the next one is set when the drift
+    /// behaviour reports it reached. Waypoints already within the arrival radius (the start,
+    /// a centre the robot sits on) are passed first, so the robot does not stop a cycle at each.
+    fn arbiter_leg(&mut self) -> MotorCommand {
+        let radius = self.arbiter.params.drift.arrival_radius_m;
+        let count = self.exec.map_or(0, |e| e.count);
+        for _ in 0..count {
+            let Some(target) = self.exec.and_then(|e| self.waypoint(e.next)) else {
+                return MotorCommand::STOP;
+            };
+            if self.pose().point().distance_to(target) >= radius {
+                break;
+            }
+            match self.advance() {
+                Some(next) => self.arbiter.set_mode(behaviour::Mode::GoTo(next)),
+                None => return MotorCommand::STOP,
+            }
+        }
+        let cmd = self.behaviour_command();
+        if self.arbiter.state().drift_phase != DriftPhase::Reached {
+            return cmd;
+        }
+        if let Some(next) = self.advance() {
+            self.arbiter.set_mode(behaviour::Mode::GoTo(next));
+        }
+        MotorCommand::STOP
+    }
+
+    /// Moves to the next waypoint and returns it; after the last, reports the plan finished.
+    fn advance(&mut self) -> Option<Point> {
+        let exec = self.exec.as_mut()?;
+        exec.next = exec.next.saturating_add(1);
+        if exec.next < exec.count {
+            return self.waypoint(self.exec?.next);
+        }
+        let count = i32::from(exec.count);
+        self.push_event(EventCode::PlanFinished, count);
+        self.mark_arrived();
+        None
+    }
+
+    /// Abandons the plan being executed (it was replaced or vanished): `PlanAborted` with the
+    /// waypoint index, motors stopped, mode `Idle`.
+    pub(super) fn abort_plan(&mut self) {
+        if self.mode == Mode::ExecutePlan {
+            if !self.arrived {
+                let at = self.exec.map_or(0, |e| i32::from(e.next));
+                self.push_event(EventCode::PlanAborted, at);
+            }
+            self.enter(Mode::Idle);
+        }
+        self.exec = None;
+    }
+}

@@ -1,0 +1,491 @@
+//! Maps, segmentation and plans across the link, through the robot's serial port: a scripted
+//! station uploads and downloads objects with the protocol's own `Sender` and `Receiver`, and
+//! the plan the robot makes is compared byte for byte with the one the host makes with the
+//! same nav code over `Vec` storage (the "firmware and station produce identical plans" proof).
+#![allow(clippy::unwrap_used, clippy::panic)]
+
+mod scripted_station;
+
+use protocol::object::{MapView, PlanView, RegionsView};
+use protocol::transfer::{Outcome, Sender};
+use protocol::*;
+use robot_firmware::nav::{grid_bytes, Cell, Geometry, Grid};
+use robot_firmware::transfer::{encode_map_object, map_object_crc, MAP_OBJECT_MAX};
+use robot_firmware::{KHEPERA, MICRO_RATO};
+use scripted_station::{host_plan, micro_rato_map, mm, picture, In, Station};
+
+#[test]
+fn the_plan_made_on_the_robot_is_byte_identical_to_the_hosts() {
+    let (grid, map, start, goal) = micro_rato_map();
+    let map_id = crc32c(&map);
+    assert_eq!(map_object_crc(&grid, Some(start), Some(goal)), Ok(map_id));
+    let mut st = Station::new(&MICRO_RATO);
+    assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
+    assert!(st.events.contains(&Event {
+        code: EventCode::MapUpdated,
+        value: map_id as i32
+    }));
+    assert_eq!(st.command(Command::Segment), Ok(AckInfo::Done));
+    // From the believed pose (0.5 m, 0.5 m) to the map's goal.
+    assert_eq!(
+        st.command(Command::Plan {
+            from: None,
+            to: None
+        }),
+        Ok(AckInfo::Done)
+    );
+    let (host_plan_obj, host_regions) = host_plan(&grid, map_id, mm(500, 500), goal);
+
+    let (info, plan) = st.download(ObjectKind::Plan).unwrap();
+    assert_eq!(plan, host_plan_obj, "robot and host plans differ");
+    let plan_id = crc32c(&plan);
+    assert_eq!(
+        info,
+        AckInfo::Object {
+            object: ObjectKind::Plan,
+            id: plan_id,
+            len: plan.len() as u32,
+            crc: plan_id
+        }
+    );
+    assert_eq!(st.plan_event_id(), plan_id, "PlanInstalled carries the id");
+    let view = PlanView::parse(&plan).unwrap();
+    println!(
+        "Micro-Rato'99 plan: {} regions, {} waypoints, {} bytes, id {plan_id:#010x}",
+        view.nav.regions,
+        view.waypoint_count(),
+        plan.len()
+    );
+    assert_eq!(view.meta.map_id, map_id);
+    assert_eq!(view.waypoint(view.waypoint_count() - 1), Some(goal));
+
+    let (_, regions) = st.download(ObjectKind::Regions).unwrap();
+    assert_eq!(regions, host_regions, "robot and host segmentations differ");
+    assert_eq!(RegionsView::parse(&regions).unwrap().header.map_id, map_id);
+    let (info, map_back) = st.download(ObjectKind::Map).unwrap();
+    assert_eq!(map_back, map);
+    assert!(matches!(info, AckInfo::Object { id, .. } if id == map_id));
+    st.run(200);
+    let flags = st.telemetry.unwrap().flags;
+    assert_eq!(
+        flags & (flags::HAS_MAP | flags::HAS_PLAN),
+        flags::HAS_MAP | flags::HAS_PLAN
+    );
+}
+
+#[test]
+fn the_same_map_uploaded_again_is_already_held_and_nothing_is_resent() {
+    let (_, map, _, _) = micro_rato_map();
+    let mut st = Station::new(&KHEPERA);
+    assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
+    let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &map).unwrap(), &map);
+    assert_eq!((outcome, sent), (Outcome::AlreadyHave, 0));
+}
+
+#[test]
+fn an_interrupted_upload_resumes_from_the_robots_next() {
+    let (_, map, _, _) = micro_rato_map();
+    // A 64 x 64 map: 1060 bytes, five chunks.
+    let mut big = Grid::new(64, 64, Geometry::SEED_004, vec![0; grid_bytes(64, 64)]).unwrap();
+    big.fill(Cell::Free);
+    let mut bytes = vec![0; MAP_OBJECT_MAX];
+    let n = encode_map_object(&big, None, None, &mut bytes).unwrap();
+    bytes.truncate(n);
+    let mut st = Station::new(&MICRO_RATO);
+    assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
+    let mut first = Sender::for_object(ObjectKind::Map, &bytes).unwrap();
+    while st.robot.core.objects.upload_progress().map_or(0, |p| p.2) < 448 {
+        first.poll(st.now_ms(), &bytes, |m| {
+            st.send(m);
+            true
+        });
+        st.run(1);
+        while let Some(In::TAck(a)) = st.inbox.pop_front() {
+            first.on_ack(&a, st.now_ms());
+        }
+    }
+    // The station goes away mid-transfer (`first` is abandoned); the old map is still in use.
+    st.inbox.clear();
+    st.run(100);
+    assert_eq!(st.map_bytes(), map);
+    let held = st.robot.core.objects.upload_progress().unwrap().2;
+    let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &bytes).unwrap(), &bytes);
+    assert_eq!(outcome, Outcome::Complete);
+    assert_eq!(
+        sent,
+        bytes.len() - held as usize,
+        "only the missing bytes were sent"
+    );
+    assert_eq!(st.map_bytes(), bytes);
+}
+
+#[test]
+fn a_corrupted_object_is_a_crc_mismatch_and_the_old_map_stays() {
+    let (_, map, _, _) = micro_rato_map();
+    let mut st = Station::new(&MICRO_RATO);
+    assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
+    let mut other = map.clone();
+    other[40] ^= 0x01;
+    // The bytes changed after their CRC was taken (id and CRC of the original).
+    let id = crc32c(&map) ^ 1;
+    let sender = Sender::new(ObjectKind::Map, id, other.len() as u32, crc32c(&map));
+    assert_eq!(st.upload(sender, &other).0, Outcome::CrcMismatch);
+    assert_eq!(st.map_bytes(), map);
+    // A well-formed CRC over a malformed object (reserved cell code 3) is refused too.
+    let mut bad = map.clone();
+    bad[40] |= 0b11;
+    assert_eq!(st.upload_object(ObjectKind::Map, &bad), Outcome::Rejected);
+    assert_eq!(st.map_bytes(), map);
+}
+
+#[test]
+fn oversize_objects_and_uploaded_regions_are_rejected_before_any_chunk() {
+    let mut st = Station::new(&MICRO_RATO);
+    let huge = vec![0u8; MAP_OBJECT_MAX + 1];
+    let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &huge).unwrap(), &huge);
+    assert_eq!((outcome, sent), (Outcome::Rejected, 0));
+    let small = [1u8, 2, 0, 0];
+    let (outcome, sent) = st.upload(
+        Sender::for_object(ObjectKind::Regions, &small).unwrap(),
+        &small,
+    );
+    assert_eq!((outcome, sent), (Outcome::Rejected, 0));
+    // A 100 x 10 map is small in bytes but wider than the robot's 64 x 64 grid: it travels,
+    // then is refused at install.
+    let g = Grid::new(100, 10, Geometry::SEED_004, vec![0; grid_bytes(100, 10)]).unwrap();
+    let mut bytes = vec![0; 2048];
+    let n = encode_map_object(&g, None, None, &mut bytes).unwrap();
+    assert!(st.upload_object(ObjectKind::Map, &bytes[..n]) == Outcome::Rejected);
+    assert!(!st.robot.core.objects.has_map());
+}
+
+#[test]
+fn chunks_with_an_unknown_id_are_answered_unknown_id() {
+    let mut st = Station::new(&KHEPERA);
+    st.send(&Message::TransferChunk(TransferChunk {
+        id: 0xdead_beef,
+        offset: 0,
+        data: &[1, 2, 3],
+    }));
+    st.run(5);
+    assert_eq!(
+        st.inbox.pop_front(),
+        Some(In::TAck(TransferAck {
+            id: 0xdead_beef,
+            next: 0,
+            status: TransferStatus::UnknownId
+        }))
+    );
+}
+
+#[test]
+fn an_upload_with_ten_percent_of_frames_lost_both_ways_completes_byte_identical() {
+    let (grid, map, _, goal) = micro_rato_map();
+    let (plan, _) = host_plan(&grid, crc32c(&map), mm(450, 450), goal);
+    let mut lost = 0;
+    for seed in 1..=20u32 {
+        let mut st = Station::new(&MICRO_RATO);
+        st.rng = seed.wrapping_mul(0x9E37_79B9) | 1;
+        st.drop = 0.10;
+        // A full 64 x 64 map of random cells (five chunks), then the arena, planned on.
+        let mut big = Grid::new(64, 64, Geometry::SEED_004, vec![0; grid_bytes(64, 64)]).unwrap();
+        for i in 0..64 * 64 {
+            let c = [Cell::Free, Cell::Obstacle, Cell::Unknown][(i * seed as usize) % 7 % 3];
+            big.set(i % 64, i / 64, c).unwrap();
+        }
+        let mut bytes = vec![0; MAP_OBJECT_MAX];
+        let n = encode_map_object(&big, None, None, &mut bytes).unwrap();
+        assert_eq!(
+            st.upload_object(ObjectKind::Map, &bytes[..n]),
+            Outcome::Complete
+        );
+        assert_eq!(st.map_bytes(), &bytes[..n]);
+        assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
+        assert_eq!(st.map_bytes(), map);
+        let from = Some(mm(450, 450));
+        let c = Command::Plan { from, to: None };
+        assert_eq!(st.command(c), Ok(AckInfo::Done));
+        assert_eq!(st.download(ObjectKind::Plan).unwrap().1, plan);
+        let (_, back) = st.download(ObjectKind::Map).unwrap();
+        assert_eq!(MapView::parse(&back).unwrap().cells(), &map[36..]);
+        lost += st.lost;
+    }
+    assert!(lost > 50, "the line lost only {lost} frames");
+}
+
+#[test]
+fn map_and_plan_commands_are_refused_precisely_and_change_nothing() {
+    let mut st = Station::new(&MICRO_RATO);
+    let none = [
+        (Command::Segment, NackReason::NoMap),
+        (
+            Command::Plan {
+                from: None,
+                to: None,
+            },
+            NackReason::NoMap,
+        ),
+        (Command::ExecutePlan { plan_id: 1 }, NackReason::NoPlan),
+        (Command::SetMode(Mode::ExecutePlan), NackReason::NoPlan),
+    ];
+    for (c, reason) in none {
+        assert_eq!(st.command(c), Err(reason), "{c:?}");
+    }
+    for (object, reason) in [
+        (ObjectKind::Map, NackReason::NoMap),
+        (ObjectKind::Plan, NackReason::NoPlan),
+        (ObjectKind::Regions, NackReason::NoMap),
+    ] {
+        let c = Command::Download { object, offset: 0 };
+        assert_eq!(st.command(c), Err(reason));
+    }
+    let (_, map, start, _) = micro_rato_map();
+    assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
+    let regions = Command::Download {
+        object: ObjectKind::Regions,
+        offset: 0,
+    };
+    assert_eq!(
+        st.command(regions),
+        Err(NackReason::BadState),
+        "not segmented yet"
+    );
+    let plan_to = |x, y| Command::Plan {
+        from: Some(start),
+        to: Some(mm(x, y)),
+    };
+    // Cell (3, 0) is wall 1; (9000, 150) is off the map; the top right room is reachable.
+    assert_eq!(st.command(plan_to(1050, 150)), Err(NackReason::BadPoint));
+    assert_eq!(st.command(plan_to(9000, 150)), Err(NackReason::BadPoint));
+    assert_eq!(st.command(plan_to(i32::MAX, 0)), Err(NackReason::BadPoint));
+    assert!(
+        !st.robot.core.objects.has_plan(),
+        "refused plans install nothing"
+    );
+    assert_eq!(st.command(plan_to(4350, 4350)), Ok(AckInfo::Done));
+    let id = st.plan_event_id();
+    let len = st.robot.core.objects.plan_bytes().len() as u32;
+    assert_eq!(
+        st.command(Command::ExecutePlan { plan_id: id ^ 1 }),
+        Err(NackReason::PlanIdMismatch)
+    );
+    let past = Command::Download {
+        object: ObjectKind::Plan,
+        offset: len + 1,
+    };
+    assert_eq!(st.command(past), Err(NackReason::OutOfRange));
+    assert_eq!(
+        st.command(Command::SetMode(Mode::ExecutePlan)),
+        Err(NackReason::BadState)
+    );
+    assert_eq!(st.robot.core.mode, Mode::Idle);
+
+    // Two rooms with no door: unreachable. The old plan stays installed.
+    let (split, _) = picture("..#..\n..#..\n");
+    let mut bytes = vec![0; 256];
+    let n = encode_map_object(&split, None, None, &mut bytes).unwrap();
+    assert_eq!(
+        st.upload_object(ObjectKind::Map, &bytes[..n]),
+        Outcome::Complete
+    );
+    let across = Command::Plan {
+        from: Some(mm(150, 150)),
+        to: Some(mm(1350, 150)),
+    };
+    assert_eq!(st.command(across), Err(NackReason::Unreachable));
+    assert_eq!(st.robot.core.objects.plan().unwrap().0, id);
+
+    // A 64 x 64 checkerboard has 2048 one-cell regions, more than the robot's 511.
+    let mut board = Grid::new(64, 64, Geometry::SEED_004, vec![0; grid_bytes(64, 64)]).unwrap();
+    for y in 0..64 {
+        for x in 0..64 {
+            let c = if (x + y) % 2 == 0 {
+                Cell::Free
+            } else {
+                Cell::Obstacle
+            };
+            board.set(x, y, c).unwrap();
+        }
+    }
+    let mut bytes = vec![0; MAP_OBJECT_MAX];
+    let n = encode_map_object(&board, None, None, &mut bytes).unwrap();
+    assert_eq!(
+        st.upload_object(ObjectKind::Map, &bytes[..n]),
+        Outcome::Complete
+    );
+    assert_eq!(
+        st.command(Command::Segment),
+        Err(NackReason::CapacityExceeded)
+    );
+    assert_eq!(st.command(across), Err(NackReason::CapacityExceeded));
+}
+
+/// Plans on the robot, starts it, and moves the believed pose onto each waypoint in turn.
+fn execute_by_teleport(profile: &'static robot_firmware::Profile) {
+    let (_, map, start, goal) = micro_rato_map();
+    let mut st = Station::new(profile);
+    assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
+    let set_pose = |p: PointMm| Command::SetPose {
+        pose: Pose {
+            x_mm: p.x_mm,
+            y_mm: p.y_mm,
+            heading_mrad: 0,
+        },
+    };
+    assert_eq!(st.command(set_pose(start)), Ok(AckInfo::Done));
+    assert_eq!(
+        st.command(Command::Plan {
+            from: None,
+            to: None
+        }),
+        Ok(AckInfo::Done)
+    );
+    let id = st.plan_event_id();
+    let waypoints: Vec<PointMm> = {
+        let (_, view) = st.robot.core.objects.plan().unwrap();
+        view.waypoints().collect()
+    };
+    assert_eq!(
+        st.command(Command::ExecutePlan { plan_id: id }),
+        Ok(AckInfo::Done)
+    );
+    st.run(200);
+    assert_eq!(st.robot.core.mode, Mode::ExecutePlan);
+    // The start is the first region's centre here, so waypoints 0 and 1 are passed at once.
+    assert_ne!(
+        st.hal.motors,
+        robot_firmware::MotorCommand::STOP,
+        "driving to the next"
+    );
+    let mut legs = 0;
+    while !st.robot.core.arrived {
+        let next = st.robot.core.exec.unwrap().next;
+        assert_eq!(
+            st.command(set_pose(waypoints[usize::from(next)])),
+            Ok(AckInfo::Done)
+        );
+        st.run(200);
+        assert!(st.robot.core.arrived || st.robot.core.exec.unwrap().next > next);
+        legs += 1;
+        assert!(legs < waypoints.len(), "no progress");
+    }
+    let finished = Event {
+        code: EventCode::PlanFinished,
+        value: waypoints.len() as i32,
+    };
+    assert!(st.events.contains(&finished), "{:?}", st.events);
+    assert!(st.events.iter().any(|e| e.code == EventCode::GoalReached));
+    assert_eq!(st.hal.motors, robot_firmware::MotorCommand::STOP);
+    assert_eq!(waypoints.last(), Some(&goal));
+}
+
+#[test]
+fn a_plan_is_executed_waypoint_by_waypoint_with_guided_motion_on_the_micro_rato() {
+    execute_by_teleport(&MICRO_RATO);
+}
+
+#[test]
+fn a_plan_is_executed_waypoint_by_waypoint_with_the_arbiter_on_the_khepera() {
+    execute_by_teleport(&KHEPERA);
+}
+
+#[test]
+fn an_uploaded_plan_replaces_the_one_being_executed_which_is_aborted() {
+    let (grid, map, start, goal) = micro_rato_map();
+    let mut st = Station::new(&MICRO_RATO);
+    assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
+    let id = crc32c(&map);
+    let (plan, _) = host_plan(&grid, id, start, goal);
+    assert_eq!(st.upload_object(ObjectKind::Plan, &plan), Outcome::Complete);
+    let plan_id = crc32c(&plan);
+    assert_eq!(st.plan_event_id(), plan_id);
+    assert_eq!(
+        st.command(Command::ExecutePlan { plan_id }),
+        Ok(AckInfo::Done)
+    );
+    st.run(100);
+    assert_eq!(st.robot.core.mode, Mode::ExecutePlan);
+    let (other, _) = host_plan(&grid, id, mm(450, 4350), goal);
+    assert_eq!(
+        st.upload_object(ObjectKind::Plan, &other),
+        Outcome::Complete
+    );
+    st.run(100);
+    assert!(st.events.iter().any(|e| e.code == EventCode::PlanAborted));
+    assert_eq!(st.robot.core.mode, Mode::Idle);
+    assert_eq!(st.hal.motors, robot_firmware::MotorCommand::STOP);
+    assert_eq!(st.robot.core.objects.plan_bytes(), &other[..]);
+    assert_eq!(
+        st.command(Command::ExecutePlan { plan_id }),
+        Err(NackReason::PlanIdMismatch)
+    );
+}
+
+/// PROTOCOL.md §12's example map: a 6 x 4 picture (first line = top row y = 3).
+const EXAMPLE: &str = "\
+##.?..
+......
+...#..
+...#..
+";
+
+/// The example's Map, Regions and Plan objects, made by the nav code.
+fn example_objects() -> [(&'static str, Vec<u8>); 3] {
+    let (rows, _) = picture(EXAMPLE);
+    let geo = Geometry::new(300, -900, 0).unwrap();
+    let grid = Grid::new(6, 4, geo, rows.into_storage()).unwrap();
+    let (start, goal) = (mm(-750, 150), mm(750, 150));
+    let mut map = vec![0; 256];
+    let n = encode_map_object(&grid, Some(start), Some(goal), &mut map).unwrap();
+    map.truncate(n);
+    let (plan, regions) = host_plan(&grid, crc32c(&map), start, goal);
+    [("map", map), ("regions", regions), ("plan", plan)]
+}
+
+/// The hex lines of object `name` in PROTOCOL.md (`0000: 01 00 ...`).
+fn documented_object(doc: &str, name: &str) -> Option<Vec<u8>> {
+    let start = doc.find(&format!("\nobject `{name}`\n"))?;
+    let mut bytes = Vec::new();
+    for line in doc[start + 1..].lines().skip(1) {
+        let t = line.trim();
+        if t.is_empty() && bytes.is_empty() {
+            continue;
+        }
+        let Some((off, hex)) = t.split_once(": ") else {
+            break;
+        };
+        if off.len() != 4 || usize::from_str_radix(off, 16) != Ok(bytes.len()) {
+            break;
+        }
+        for h in hex.split_whitespace() {
+            bytes.push(u8::from_str_radix(h, 16).ok()?);
+        }
+    }
+    Some(bytes)
+}
+
+#[test]
+fn protocol_md_object_examples_are_what_the_nav_code_produces() {
+    let doc = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../protocol/PROTOCOL.md"
+    ))
+    .unwrap();
+    for (name, bytes) in example_objects() {
+        if std::env::var_os("PRINT_OBJECTS").is_some() {
+            println!(
+                "object `{name}`: {} bytes, id {:#010x}\n",
+                bytes.len(),
+                crc32c(&bytes)
+            );
+            for (i, row) in bytes.chunks(16).enumerate() {
+                let hex: Vec<String> = row.iter().map(|b| format!("{b:02x}")).collect();
+                println!("    {:04x}: {}", i * 16, hex.join(" "));
+            }
+            println!("\n{:?}\n", protocol::object::parse(&bytes).unwrap());
+            continue;
+        }
+        let documented = documented_object(&doc, name).unwrap_or_default();
+        assert_eq!(documented, bytes, "PROTOCOL.md object `{name}` differs");
+    }
+}

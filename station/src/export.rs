@@ -1,0 +1,252 @@
+//! `station export`: a recording to MCAP (for Foxglove) and to CSV (for a spreadsheet or
+//! pandas), written atomically.
+//!
+//! Layer: a walk over a parsed `Recording` that decodes both directions with the protocol's
+//! `FrameDecoder` (one per direction, the robot's reset when a port closed, as live) and hands
+//! each message to a writer (`csv`, `mcap`), plus the file I/O: each output is written to a
+//! hidden temporary file beside it and synced, and the outputs are renamed to their final names
+//! only when all of them are complete.
+//! Invariants: bad input (not a recording, another version, a torn or corrupted record) is
+//! refused before any output file is created, with the byte offset, unless `--salvage` asks
+//! for everything before the damage; a failed export leaves no file behind. What can fail:
+//! reading the input (`RecordError`), writing the outputs (`ExportError`).
+
+pub mod csv;
+pub mod mcap;
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::bail;
+use clap::Args;
+use protocol::{Feed, FrameDecoder, FrameError, Message};
+
+use crate::record::{LinkState, RecordKind, Recording};
+
+/// Arguments of `station export`.
+#[derive(Debug, Args, Clone)]
+#[command(group(clap::ArgGroup::new("output").required(true).multiple(true).args(["mcap", "csv"])))]
+pub struct ExportArgs {
+    /// The recording to export.
+    #[arg(value_name = "FILE")]
+    pub file: PathBuf,
+    /// Write an MCAP file (JSON channels: /telemetry, /pose, /truth, /truth_pose, /events,
+    /// /log, /link, /commands, /replies), for Foxglove.
+    #[arg(long, value_name = "OUT")]
+    pub mcap: Option<PathBuf>,
+    /// Write the telemetry as CSV, one row per frame (columns in README.md, "Recordings").
+    #[arg(long, value_name = "OUT")]
+    pub csv: Option<PathBuf>,
+    /// Export a damaged or torn recording up to its last good record instead of refusing it.
+    #[arg(long)]
+    pub salvage: bool,
+}
+
+/// Why an export failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: MCAP: {message}")]
+    Mcap { path: PathBuf, message: String },
+}
+
+/// Which way a frame went.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Direction {
+    FromRobot,
+    ToRobot,
+}
+
+/// One step of the walk over a recording.
+#[derive(Debug)]
+pub enum Item<'a> {
+    /// A good frame.
+    Frame {
+        t_us: u64,
+        dir: Direction,
+        seq: u16,
+        msg: &'a Message<'a>,
+    },
+    /// A frame that did not decode.
+    BadFrame {
+        t_us: u64,
+        dir: Direction,
+        error: FrameError,
+    },
+    /// A connection change.
+    Link {
+        t_us: u64,
+        state: LinkState,
+        text: &'a str,
+    },
+}
+
+/// Decodes every frame of a recording, both ways, in recorded order.
+pub fn walk(rec: &Recording, mut f: impl FnMut(Item<'_>)) {
+    let mut from = FrameDecoder::new();
+    let mut to = FrameDecoder::new();
+    for r in &rec.records {
+        let t_us = r.t_us;
+        let (dec, dir) = match r.kind {
+            RecordKind::FromRobot => (&mut from, Direction::FromRobot),
+            RecordKind::ToRobot => (&mut to, Direction::ToRobot),
+            RecordKind::Link => {
+                if let Some((state, text)) = r.link() {
+                    if state == LinkState::Closed {
+                        from.reset();
+                    }
+                    f(Item::Link {
+                        t_us,
+                        state,
+                        text: &text,
+                    });
+                }
+                continue;
+            }
+            RecordKind::End | RecordKind::Unknown(_) => continue,
+        };
+        let mut input = r.data.as_slice();
+        loop {
+            match dec.feed(input) {
+                Feed::NeedMore => break,
+                Feed::Error { error, rest } => {
+                    input = rest;
+                    f(Item::BadFrame { t_us, dir, error });
+                }
+                Feed::Frame { frame, rest } => {
+                    input = rest;
+                    f(Item::Frame {
+                        t_us,
+                        dir,
+                        seq: frame.header.seq,
+                        msg: &frame.message,
+                    });
+                }
+            }
+        }
+    }
+}
+
+/// Runs `station export`.
+pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
+    let outs: Vec<&Path> = [args.mcap.as_deref(), args.csv.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    for out in &outs {
+        check_out(out, &args.file)?;
+    }
+    if outs.len() == 2 && args.mcap == args.csv {
+        bail!("--mcap and --csv name the same file");
+    }
+    let rec = Recording::open(&args.file)?;
+    if let Some(d) = &rec.damage {
+        if !args.salvage {
+            bail!(
+                "{}: {d}; nothing was written (--salvage exports the {} records before it)",
+                args.file.display(),
+                rec.records.len()
+            );
+        }
+        eprintln!(
+            "station: {}: {d}; exporting the {} records before it",
+            args.file.display(),
+            rec.records.len()
+        );
+    }
+    // Both outputs are complete before either takes its final name.
+    let mut done = Vec::new();
+    let mut notes = Vec::new();
+    let result = (|| {
+        if let Some(out) = &args.mcap {
+            let (tmp, n) = write_temp(out, |w| mcap::write(&rec, w, out))?;
+            done.push((tmp, out.clone()));
+            notes.push(format!("wrote {} ({n} messages)", out.display()));
+        }
+        if let Some(out) = &args.csv {
+            let (tmp, n) = write_temp(out, |w| csv::write(&rec, w).map_err(|e| io(out, e)))?;
+            done.push((tmp, out.clone()));
+            notes.push(format!("wrote {} ({n} telemetry rows)", out.display()));
+        }
+        commit(&done)
+    })();
+    if let Err(e) = result {
+        for (tmp, _) in &done {
+            let _ = std::fs::remove_file(tmp);
+        }
+        return Err(e.into());
+    }
+    for n in notes {
+        eprintln!("{n}");
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn check_out(out: &Path, input: &Path) -> anyhow::Result<()> {
+    if out.is_dir() {
+        bail!("{} is a directory; give a file name", out.display());
+    }
+    let dir = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        bail!("the directory {} does not exist", dir.display());
+    }
+    let same = match (out.canonicalize(), input.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => out == input,
+    };
+    if same {
+        bail!("the output {} is the input", out.display());
+    }
+    Ok(())
+}
+
+fn io(path: &Path, source: std::io::Error) -> ExportError {
+    ExportError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Writes a hidden temporary file beside `out` through `body` and syncs it; returns its path.
+/// On failure the temporary file is removed.
+pub fn write_temp<T>(
+    out: &Path,
+    body: impl FnOnce(&mut BufWriter<File>) -> Result<T, ExportError>,
+) -> Result<(PathBuf, T), ExportError> {
+    let name = out
+        .file_name()
+        .map_or_else(|| "export".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = out.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let result = (|| {
+        let file = File::create(&tmp).map_err(|e| io(&tmp, e))?;
+        let mut w = BufWriter::new(file);
+        let value = body(&mut w)?;
+        w.flush().map_err(|e| io(&tmp, e))?;
+        w.get_ref().sync_all().map_err(|e| io(&tmp, e))?;
+        Ok(value)
+    })();
+    match result {
+        Ok(v) => Ok((tmp, v)),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+/// Renames each temporary file to its final name.
+fn commit(done: &[(PathBuf, PathBuf)]) -> Result<(), ExportError> {
+    for (tmp, out) in done {
+        std::fs::rename(tmp, out).map_err(|e| io(out, e))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,296 @@
+//! A recording as MCAP, for Foxglove: JSON messages on JSON-schema channels, logged at the
+//! time they crossed the link.
+//!
+//! Layer: formatting over `export::walk`, writing through the `mcap` crate to any seekable
+//! writer. Channels (all `json`, each with a `jsonschema`):
+//! - `/telemetry`: every telemetry frame, the fields of `csv::TelemetryRow` (SI-ish units);
+//! - `/pose`, `/truth_pose`: the believed and the true pose as `foxglove.PoseInFrame` in frame
+//!   `map`, so the 3D panel draws them;
+//! - `/truth`: the emulator's `EmuTruth`;
+//! - `/events`: robot events; `/log`: robot log lines as `foxglove.Log` (the Log panel);
+//! - `/link`: connection changes, gap markers included;
+//! - `/commands`: the station's own commands (decoded from its recorded bytes), with their
+//!   sequence numbers; `/replies`: the robot's Acks and Nacks naming them.
+//!
+//! `log_time` and `publish_time` are the recording's start (wall clock, from its header) plus
+//! the record's time, in nanoseconds. Chunks are not compressed (no C dependencies). What can
+//! fail: the writer (`ExportError::Mcap`).
+
+use std::collections::BTreeMap;
+use std::io::{Seek, Write};
+use std::path::Path;
+
+use mcap::records::MessageHeader;
+use mcap::{WriteOptions, Writer};
+use protocol::{LogLevel, Message, Pose};
+use serde_json::{json, Value};
+
+use super::csv::TelemetryRow;
+use super::{walk, Direction, ExportError, Item};
+use crate::link::api::command_text;
+use crate::record::Recording;
+
+/// The channels, in the order they are added: topic, schema name, JSON schema.
+fn channels() -> Vec<(&'static str, &'static str, Value)> {
+    let num = || json!({"type": "number"});
+    let int = || json!({"type": "integer"});
+    let string = || json!({"type": "string"});
+    let obj = |props: Value| json!({"type": "object", "properties": props});
+    let pose = obj(json!({
+        "timestamp": obj(json!({"sec": int(), "nsec": int()})),
+        "frame_id": string(),
+        "pose": obj(json!({
+            "position": obj(json!({"x": num(), "y": num(), "z": num()})),
+            "orientation": obj(json!({"x": num(), "y": num(), "z": num(), "w": num()})),
+        })),
+    }));
+    let mut telemetry = serde_json::Map::new();
+    for c in super::csv::COLUMNS {
+        if !c.starts_with("ir") && !c.starts_with("light") {
+            telemetry.insert((*c).to_string(), num());
+        }
+    }
+    telemetry.insert("mode".into(), string());
+    let readings = json!({"type": "array", "items": int(), "minItems": 8, "maxItems": 8});
+    telemetry.insert("ir".into(), readings.clone());
+    telemetry.insert("light".into(), readings);
+    for b in ["on_goal", "on_line", "contact", "failsafe", "goal_reached"] {
+        telemetry.insert(b.into(), json!({"type": "boolean"}));
+    }
+    vec![
+        (
+            "/telemetry",
+            "station.Telemetry",
+            obj(Value::Object(telemetry)),
+        ),
+        ("/pose", "foxglove.PoseInFrame", pose.clone()),
+        ("/truth_pose", "foxglove.PoseInFrame", pose),
+        (
+            "/truth",
+            "station.Truth",
+            obj(json!({"robot_time_s": num(), "x_m": num(), "y_m": num(),
+                       "heading_rad": num(), "collisions": int()})),
+        ),
+        (
+            "/events",
+            "station.Event",
+            obj(json!({"code": string(), "value": int()})),
+        ),
+        (
+            "/log",
+            "foxglove.Log",
+            obj(json!({
+                "timestamp": obj(json!({"sec": int(), "nsec": int()})),
+                "level": int(), "message": string(), "name": string(),
+                "file": string(), "line": int(),
+            })),
+        ),
+        (
+            "/link",
+            "station.Link",
+            obj(json!({"state": string(), "text": string()})),
+        ),
+        (
+            "/commands",
+            "station.Command",
+            obj(json!({"seq": int(), "text": string(), "command": {"type": "object"}})),
+        ),
+        (
+            "/replies",
+            "station.Reply",
+            obj(json!({"cmd_seq": int(), "outcome": string(), "detail": {}})),
+        ),
+    ]
+}
+
+/// Writes `rec` as MCAP to `w`; returns the number of messages.
+pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64, ExportError> {
+    let err = |e: mcap::McapError| ExportError::Mcap {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let opts = WriteOptions::new()
+        .compression(None)
+        .profile("")
+        .library(format!("station {}", env!("CARGO_PKG_VERSION")));
+    let mut out = Writer::with_options(w, opts).map_err(err)?;
+    let mut ids = BTreeMap::new();
+    for (topic, name, schema) in channels() {
+        let data = serde_json::to_vec(&schema).unwrap_or_default();
+        let schema_id = out.add_schema(name, "jsonschema", &data).map_err(err)?;
+        let id = out
+            .add_channel(schema_id, topic, "json", &BTreeMap::new())
+            .map_err(err)?;
+        ids.insert(topic, id);
+    }
+    let meta = serde_json::to_value(&rec.meta).unwrap_or(Value::Null);
+    let meta: BTreeMap<String, String> = meta
+        .as_object()
+        .map(|m| {
+            m.iter()
+                .map(|(k, v)| (k.clone(), v.as_str().map_or(v.to_string(), str::to_string)))
+                .collect()
+        })
+        .unwrap_or_default();
+    out.write_metadata(&mcap::records::Metadata {
+        name: "recording".into(),
+        metadata: meta,
+    })
+    .map_err(err)?;
+
+    let base_ns = rec.meta.created_unix_ms.saturating_mul(1_000_000);
+    let mut seq: BTreeMap<u16, u32> = BTreeMap::new();
+    let mut count = 0u64;
+    let mut failure = None;
+    walk(rec, |item| {
+        if failure.is_some() {
+            return;
+        }
+        let (t_us, messages) = messages(&item);
+        let ns = base_ns.saturating_add(t_us.saturating_mul(1000));
+        for (topic, mut value) in messages {
+            let Some(&channel_id) = ids.get(topic) else {
+                continue;
+            };
+            stamp(&mut value, ns);
+            let n = seq.entry(channel_id).or_insert(0);
+            *n += 1;
+            let header = MessageHeader {
+                channel_id,
+                sequence: *n,
+                log_time: ns,
+                publish_time: ns,
+            };
+            let data = serde_json::to_vec(&value).unwrap_or_default();
+            if let Err(e) = out.write_to_known_channel(&header, &data) {
+                failure = Some(err(e));
+                return;
+            }
+            count += 1;
+        }
+    });
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    out.finish().map_err(err)?;
+    Ok(count)
+}
+
+/// Fills in `timestamp` fields (foxglove schemas) with the log time.
+fn stamp(v: &mut Value, ns: u64) {
+    if let Some(t) = v.get_mut("timestamp") {
+        *t = json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000});
+    }
+}
+
+fn pose_in_frame(p: &Pose) -> Value {
+    let h = f64::from(p.heading_mrad) / 1000.0;
+    json!({
+        "timestamp": null,
+        "frame_id": "map",
+        "pose": {
+            "position": {"x": f64::from(p.x_mm) / 1000.0, "y": f64::from(p.y_mm) / 1000.0, "z": 0.0},
+            "orientation": {"x": 0.0, "y": 0.0, "z": (h / 2.0).sin(), "w": (h / 2.0).cos()},
+        },
+    })
+}
+
+/// The messages one walk item becomes, and its time.
+fn messages(item: &Item<'_>) -> (u64, Vec<(&'static str, Value)>) {
+    match item {
+        Item::Link { t_us, state, text } => (
+            *t_us,
+            vec![("/link", json!({"state": state, "text": text}))],
+        ),
+        Item::BadFrame { t_us, dir, error } => (
+            *t_us,
+            vec![(
+                "/link",
+                json!({"state": "bad_frame", "text": format!("{}: {error}", dir_name(*dir))}),
+            )],
+        ),
+        Item::Frame {
+            t_us,
+            dir,
+            seq,
+            msg,
+        } => (*t_us, frame_messages(*t_us, *dir, *seq, msg)),
+    }
+}
+
+fn dir_name(d: Direction) -> &'static str {
+    match d {
+        Direction::FromRobot => "from robot",
+        Direction::ToRobot => "to robot",
+    }
+}
+
+fn frame_messages(
+    t_us: u64,
+    dir: Direction,
+    seq: u16,
+    msg: &Message<'_>,
+) -> Vec<(&'static str, Value)> {
+    match (dir, msg) {
+        (Direction::FromRobot, Message::Telemetry(t)) => vec![
+            (
+                "/telemetry",
+                serde_json::to_value(TelemetryRow::new(t_us, t)).unwrap_or(Value::Null),
+            ),
+            ("/pose", pose_in_frame(&t.pose)),
+        ],
+        (Direction::FromRobot, Message::EmuTruth(t)) => vec![
+            (
+                "/truth",
+                json!({
+                    "robot_time_s": f64::from(t.time_ms) / 1000.0,
+                    "x_m": f64::from(t.pose.x_mm) / 1000.0,
+                    "y_m": f64::from(t.pose.y_mm) / 1000.0,
+                    "heading_rad": f64::from(t.pose.heading_mrad) / 1000.0,
+                    "collisions": t.collisions,
+                }),
+            ),
+            ("/truth_pose", pose_in_frame(&t.pose)),
+        ],
+        (Direction::FromRobot, Message::Event(e)) => vec![(
+            "/events",
+            json!({"code": format!("{:?}", e.code), "value": e.value}),
+        )],
+        (Direction::FromRobot, Message::Log(l)) => {
+            // foxglove.Log levels: 1 debug, 2 info, 3 warning, 4 error, 5 fatal.
+            let level = match l.level {
+                LogLevel::Debug => 1,
+                LogLevel::Info => 2,
+                LogLevel::Warn => 3,
+                LogLevel::Error => 4,
+            };
+            vec![(
+                "/log",
+                json!({"timestamp": null, "level": level, "message": l.text,
+                       "name": "robot", "file": "", "line": 0}),
+            )]
+        }
+        (Direction::FromRobot, Message::Ack(a)) => vec![(
+            "/replies",
+            json!({"cmd_seq": a.cmd_seq, "outcome": "ack", "detail": a.info}),
+        )],
+        (Direction::FromRobot, Message::Nack(n)) => vec![(
+            "/replies",
+            json!({"cmd_seq": n.cmd_seq, "outcome": "nack", "detail": n.reason}),
+        )],
+        (Direction::FromRobot, Message::HelloReply(r)) => vec![(
+            "/link",
+            json!({"state": "hello_reply", "text": format!(
+                "{} {} {:?}, accepted {}", r.firmware, r.firmware_version, r.profile, r.accepted)}),
+        )],
+        (Direction::ToRobot, Message::Command(c)) => vec![(
+            "/commands",
+            json!({"seq": seq, "text": command_text(c), "command": c}),
+        )],
+        (Direction::ToRobot, Message::Hello(h)) => vec![(
+            "/link",
+            json!({"state": "hello", "text": format!("session {:#010x} from {}", h.session, h.station)}),
+        )],
+        _ => Vec::new(),
+    }
+}

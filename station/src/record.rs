@@ -1,0 +1,665 @@
+//! Recordings: the raw bytes of both directions of a link, timestamped, in an append-only file
+//! that survives a crash; and the reader that checks every byte of one.
+//!
+//! Layer: a file format (pure encode/parse over byte slices, like the wire code in
+//! `protocol::frame`) plus the I/O around it in submodules: `writer` (the `.partial` file and
+//! its rename), `live` (the link's tap and connection events to records), `command`
+//! (`station record`). Invariants: times in a file never decrease; the final name only ever
+//! holds a file that was finished cleanly (it was written as `FILE.partial` and renamed);
+//! every record carries a CRC, so a torn or damaged tail is found at its exact byte offset.
+//! What can fail: parsing a file that is not a recording, of another version, truncated or
+//! corrupted (`ReadError`, each with the byte offset), and file I/O (`RecordError`).
+//!
+//! # File format, version 1
+//!
+//! All integers are little-endian; "varint" is unsigned LEB128 (7 bits a byte, least
+//! significant group first, high bit set on every byte but the last, at most 10 bytes), as in
+//! PROTOCOL.md §5. CRC is CRC-32C (PROTOCOL.md §2, the same function as the frames').
+//!
+//! ```text
+//! header   magic     8 bytes  89 53 54 52 45 43 0d 0a   ("\x89STREC\r\n")
+//!          version   u16      1
+//!          flags     u16      0 (reserved; readers ignore it)
+//!          meta_len  u32      length of meta, at most 65536
+//!          meta      bytes    a UTF-8 JSON object (see `Meta`; unknown keys are ignored)
+//!          crc       u32      CRC-32C of every header byte before it
+//! record   t_us      varint   microseconds since the recording started, never decreasing
+//!          kind      u8       0 from robot, 1 to robot, 2 link event, 3 end (below)
+//!          len       varint   length of data, at most 1 MiB
+//!          data      len bytes
+//!          crc       u32      CRC-32C of the record's bytes from t_us through data
+//! ```
+//!
+//! Record kinds:
+//! - 0 `FromRobot`: bytes as the station read them from the port (robot to station).
+//! - 1 `ToRobot`: bytes as the station wrote them (its `Hello`s, commands, heartbeats, ...).
+//! - 2 `Link`: the connection changed. `data[0]` is the state: 0 closed (the port closed or
+//!   could not be opened: the start of a gap), 1 handshaking (a port is open), 2 connected,
+//!   3 refused; the rest is UTF-8 text (the reason, the port, the robot, the refusal).
+//! - 3 `End`: the recording was finished cleanly; UTF-8 text says why (time limit, stopped,
+//!   interrupted). Nothing may follow it.
+//! - 4..=255: reserved for later additions to version 1; a reader skips records of a kind it
+//!   does not know (after checking their CRC). A change to anything above is a new version.
+//!
+//! A recording is written as `FILE.partial`, flushed every second, synced to disk every five,
+//! and renamed to `FILE` when it ends cleanly. After a crash `FILE.partial` holds everything up
+//! to the last flush; a reader accepts it up to the last good record and reports the rest.
+
+pub mod command;
+pub mod live;
+pub mod synth;
+pub mod writer;
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+pub use writer::RecordWriter;
+
+/// The first 8 bytes of every recording. The high first byte catches 7-bit transfers and the
+/// CR LF catches newline conversion, as PNG's signature does.
+pub const MAGIC: [u8; 8] = *b"\x89STREC\r\n";
+/// The format version this code writes and reads.
+pub const VERSION: u16 = 1;
+/// Bytes of the fixed header before `meta`.
+pub const HEADER_FIXED: usize = 16;
+/// Longest `meta` accepted.
+pub const MAX_META: usize = 64 * 1024;
+/// Longest record data accepted.
+pub const MAX_DATA: usize = 1024 * 1024;
+/// What a finished recording's name gets while it is written.
+pub const PARTIAL_SUFFIX: &str = ".partial";
+
+/// What a record holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum RecordKind {
+    FromRobot,
+    ToRobot,
+    Link,
+    End,
+    /// A kind this reader does not know (skipped by consumers).
+    Unknown(u8),
+}
+
+impl RecordKind {
+    /// The kind's byte.
+    pub fn code(self) -> u8 {
+        match self {
+            RecordKind::FromRobot => 0,
+            RecordKind::ToRobot => 1,
+            RecordKind::Link => 2,
+            RecordKind::End => 3,
+            RecordKind::Unknown(c) => c,
+        }
+    }
+
+    /// The kind for a byte.
+    pub fn from_code(c: u8) -> RecordKind {
+        match c {
+            0 => RecordKind::FromRobot,
+            1 => RecordKind::ToRobot,
+            2 => RecordKind::Link,
+            3 => RecordKind::End,
+            c => RecordKind::Unknown(c),
+        }
+    }
+}
+
+/// The connection states a `Link` record names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LinkState {
+    Closed,
+    Handshaking,
+    Connected,
+    Refused,
+}
+
+impl LinkState {
+    pub fn code(self) -> u8 {
+        match self {
+            LinkState::Closed => 0,
+            LinkState::Handshaking => 1,
+            LinkState::Connected => 2,
+            LinkState::Refused => 3,
+        }
+    }
+
+    pub fn from_code(c: u8) -> Option<LinkState> {
+        Some(match c {
+            0 => LinkState::Closed,
+            1 => LinkState::Handshaking,
+            2 => LinkState::Connected,
+            3 => LinkState::Refused,
+            _ => return None,
+        })
+    }
+}
+
+/// One record.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Record {
+    pub t_us: u64,
+    pub kind: RecordKind,
+    pub data: Vec<u8>,
+}
+
+impl Record {
+    /// A `Link` record's state and text, if this is one and it is well formed.
+    pub fn link(&self) -> Option<(LinkState, String)> {
+        if self.kind != RecordKind::Link {
+            return None;
+        }
+        let (&code, text) = self.data.split_first()?;
+        Some((
+            LinkState::from_code(code)?,
+            String::from_utf8_lossy(text).into_owned(),
+        ))
+    }
+
+    /// A `Link` record.
+    pub fn link_event(t_us: u64, state: LinkState, text: &str) -> Record {
+        let mut data = Vec::with_capacity(1 + text.len());
+        data.push(state.code());
+        data.extend_from_slice(text.as_bytes());
+        Record {
+            t_us,
+            kind: RecordKind::Link,
+            data,
+        }
+    }
+}
+
+/// What the header's JSON says about a recording. Every field is optional to a reader.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Meta {
+    /// Wall-clock time of `t_us = 0`, milliseconds since the Unix epoch.
+    #[serde(default)]
+    pub created_unix_ms: u64,
+    /// The program and version that wrote it.
+    #[serde(default)]
+    pub writer: String,
+    /// The port recorded ("/dev/ttyUSB0", "built-in emulator on /dev/pts/3").
+    #[serde(default)]
+    pub port: String,
+    #[serde(default)]
+    pub baud: u32,
+    /// The link protocol version and schema fingerprint (hex) of the station that recorded.
+    #[serde(default)]
+    pub protocol: u8,
+    #[serde(default)]
+    pub fingerprint: String,
+    /// The arena drawn under the map (a file, or the emulator's built-in name), if known.
+    #[serde(default)]
+    pub arena: String,
+}
+
+impl Meta {
+    /// Metadata for a recording starting now.
+    pub fn now(port: &str, baud: u32) -> Meta {
+        Meta {
+            created_unix_ms: std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_millis() as u64),
+            writer: format!("station {}", env!("CARGO_PKG_VERSION")),
+            port: port.to_string(),
+            baud,
+            protocol: protocol::PROTOCOL_VERSION,
+            fingerprint: crate::link::machine::hex(&protocol::FINGERPRINT),
+            arena: String::new(),
+        }
+    }
+}
+
+/// Why a recording could not be read (fully). Offsets are bytes from the file's start.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ReadError {
+    #[error("not a station recording (byte 0: the file does not start with the recording magic)")]
+    NotARecording,
+    #[error("recording format version {version} (byte 8); this station reads version {VERSION}")]
+    UnsupportedVersion { version: u16 },
+    #[error("bad header at byte {offset}: {why}")]
+    BadHeader { offset: u64, why: String },
+    #[error("truncated at byte {offset}: the file ends inside a record (a torn tail)")]
+    Truncated { offset: u64 },
+    #[error("corrupted record at byte {offset}: CRC {stored:08x} stored, {computed:08x} computed")]
+    BadCrc {
+        offset: u64,
+        stored: u32,
+        computed: u32,
+    },
+    #[error("bad record at byte {offset}: {why}")]
+    BadRecord { offset: u64, why: String },
+}
+
+impl ReadError {
+    /// Where the problem is.
+    pub fn offset(&self) -> u64 {
+        match self {
+            ReadError::NotARecording => 0,
+            ReadError::UnsupportedVersion { .. } => 8,
+            ReadError::BadHeader { offset, .. }
+            | ReadError::Truncated { offset }
+            | ReadError::BadCrc { offset, .. }
+            | ReadError::BadRecord { offset, .. } => *offset,
+        }
+    }
+}
+
+/// Why a recording file could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {source}")]
+    Read { path: PathBuf, source: ReadError },
+    #[error("{path} does not exist{hint}")]
+    Missing { path: PathBuf, hint: String },
+    #[error("{path} already exists (use --force to overwrite it)")]
+    Exists { path: PathBuf },
+    #[error(
+        "{path} exists: an unfinished recording (a crash?); replay or rename it, then try again"
+    )]
+    PartialExists { path: PathBuf },
+}
+
+/// A parsed recording: everything up to the last good record, and what stopped the reading.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recording {
+    pub meta: Meta,
+    pub records: Vec<Record>,
+    /// The `End` record's text, when the recording was finished cleanly.
+    pub end: Option<String>,
+    /// Why reading stopped before the end of the file, if it did.
+    pub damage: Option<ReadError>,
+    /// Bytes in the file.
+    pub file_len: u64,
+}
+
+impl Recording {
+    /// Reads a whole recording: the first damage is an error.
+    pub fn parse_strict(bytes: &[u8]) -> Result<Recording, ReadError> {
+        let r = Recording::parse(bytes)?;
+        match r.damage {
+            Some(e) => Err(e),
+            None => Ok(r),
+        }
+    }
+
+    /// Reads a recording up to its last good record; damage after the header is reported in
+    /// `damage`, not as an error. A bad header is an error.
+    pub fn parse(bytes: &[u8]) -> Result<Recording, ReadError> {
+        let (meta, mut at) = parse_header(bytes)?;
+        let mut records = Vec::new();
+        let mut end = None;
+        let mut damage = None;
+        let mut last_t = 0u64;
+        while at < bytes.len() {
+            if end.is_some() {
+                damage = Some(ReadError::BadRecord {
+                    offset: at as u64,
+                    why: "data after the end record".into(),
+                });
+                break;
+            }
+            match parse_record(bytes, at) {
+                Ok((rec, next)) => {
+                    if rec.t_us < last_t {
+                        damage = Some(ReadError::BadRecord {
+                            offset: at as u64,
+                            why: format!("time goes back from {last_t} us to {} us", rec.t_us),
+                        });
+                        break;
+                    }
+                    last_t = rec.t_us;
+                    if rec.kind == RecordKind::End {
+                        end = Some(String::from_utf8_lossy(&rec.data).into_owned());
+                    }
+                    records.push(rec);
+                    at = next;
+                }
+                Err(e) => {
+                    damage = Some(e);
+                    break;
+                }
+            }
+        }
+        Ok(Recording {
+            meta,
+            records,
+            end,
+            damage,
+            file_len: bytes.len() as u64,
+        })
+    }
+
+    /// Reads a file leniently (see `parse`). A missing `FILE` whose `FILE.partial` exists is
+    /// reported with a hint to use the partial one.
+    pub fn open(path: &Path) -> Result<Recording, RecordError> {
+        let bytes = std::fs::read(path).map_err(|source| {
+            if source.kind() == std::io::ErrorKind::NotFound {
+                let partial = partial_path(path);
+                let hint = if partial.exists() {
+                    format!(
+                        "; an unfinished recording {} does (replay or export that)",
+                        partial.display()
+                    )
+                } else {
+                    String::new()
+                };
+                RecordError::Missing {
+                    path: path.to_path_buf(),
+                    hint,
+                }
+            } else {
+                RecordError::Io {
+                    path: path.to_path_buf(),
+                    source,
+                }
+            }
+        })?;
+        Recording::parse(&bytes).map_err(|source| RecordError::Read {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    /// Time of the last record, µs.
+    pub fn duration_us(&self) -> u64 {
+        self.records.last().map_or(0, |r| r.t_us)
+    }
+}
+
+/// `FILE.partial` for `FILE`.
+pub fn partial_path(path: &Path) -> PathBuf {
+    let mut s = path.as_os_str().to_os_string();
+    s.push(PARTIAL_SUFFIX);
+    PathBuf::from(s)
+}
+
+/// The header's bytes.
+pub fn encode_header(meta: &Meta) -> Vec<u8> {
+    let json = serde_json::to_vec(meta).unwrap_or_else(|_| b"{}".to_vec());
+    let mut out = Vec::with_capacity(HEADER_FIXED + json.len() + 4);
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&0u16.to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(&json);
+    let crc = protocol::crc32c(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out
+}
+
+/// Appends one record's bytes to `out`. Data longer than `MAX_DATA` must be split by the
+/// caller (`writer` does).
+pub fn encode_record(out: &mut Vec<u8>, t_us: u64, kind: RecordKind, data: &[u8]) {
+    let start = out.len();
+    put_varint(out, t_us);
+    out.push(kind.code());
+    put_varint(out, data.len() as u64);
+    out.extend_from_slice(data);
+    let crc = protocol::crc32c(out.get(start..).unwrap_or(&[]));
+    out.extend_from_slice(&crc.to_le_bytes());
+}
+
+fn put_varint(out: &mut Vec<u8>, mut v: u64) {
+    loop {
+        let b = (v & 0x7f) as u8;
+        v >>= 7;
+        if v == 0 {
+            out.push(b);
+            return;
+        }
+        out.push(b | 0x80);
+    }
+}
+
+/// Reads a varint at `at`: the value and the next offset. `Ok(None)` when the input ends.
+fn get_varint(bytes: &[u8], at: usize) -> Result<Option<(u64, usize)>, String> {
+    let mut v = 0u64;
+    for i in 0..10 {
+        let Some(&b) = bytes.get(at + i) else {
+            return Ok(None);
+        };
+        let part = u64::from(b & 0x7f);
+        if i == 9 && part > 1 {
+            return Err("varint overflows 64 bits".into());
+        }
+        v |= part << (7 * i);
+        if b & 0x80 == 0 {
+            return Ok(Some((v, at + i + 1)));
+        }
+    }
+    Err("varint longer than 10 bytes".into())
+}
+
+fn le_u16(b: &[u8], at: usize) -> Option<u16> {
+    Some(u16::from_le_bytes(b.get(at..at + 2)?.try_into().ok()?))
+}
+
+fn le_u32(b: &[u8], at: usize) -> Option<u32> {
+    Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?))
+}
+
+/// Parses the header: the metadata and the offset of the first record.
+pub fn parse_header(bytes: &[u8]) -> Result<(Meta, usize), ReadError> {
+    let short = |offset: usize| ReadError::BadHeader {
+        offset: offset as u64,
+        why: "the file ends inside the header".into(),
+    };
+    match bytes.get(..MAGIC.len()) {
+        Some(m) if m == MAGIC => {}
+        Some(_) => return Err(ReadError::NotARecording),
+        None if MAGIC.starts_with(bytes) && !bytes.is_empty() => return Err(short(bytes.len())),
+        None => return Err(ReadError::NotARecording),
+    }
+    let version = le_u16(bytes, 8).ok_or_else(|| short(bytes.len()))?;
+    if version != VERSION {
+        return Err(ReadError::UnsupportedVersion { version });
+    }
+    let meta_len = le_u32(bytes, 12).ok_or_else(|| short(bytes.len()))? as usize;
+    if meta_len > MAX_META {
+        return Err(ReadError::BadHeader {
+            offset: 12,
+            why: format!("metadata length {meta_len} is over {MAX_META}"),
+        });
+    }
+    let crc_at = HEADER_FIXED + meta_len;
+    let stored = le_u32(bytes, crc_at).ok_or_else(|| short(bytes.len()))?;
+    let covered = bytes.get(..crc_at).ok_or_else(|| short(bytes.len()))?;
+    let computed = protocol::crc32c(covered);
+    if stored != computed {
+        return Err(ReadError::BadHeader {
+            offset: crc_at as u64,
+            why: format!("header CRC {stored:08x} stored, {computed:08x} computed"),
+        });
+    }
+    let json = bytes.get(HEADER_FIXED..crc_at).unwrap_or(&[]);
+    let meta = serde_json::from_slice(json).map_err(|e| ReadError::BadHeader {
+        offset: HEADER_FIXED as u64,
+        why: format!("metadata is not a JSON object: {e}"),
+    })?;
+    Ok((meta, crc_at + 4))
+}
+
+/// Parses the record at `at`: the record and the offset after it.
+pub fn parse_record(bytes: &[u8], at: usize) -> Result<(Record, usize), ReadError> {
+    let offset = at as u64;
+    let bad = |why: String| ReadError::BadRecord { offset, why };
+    let truncated = ReadError::Truncated { offset };
+    let (t_us, p) = get_varint(bytes, at)
+        .map_err(bad)?
+        .ok_or(truncated.clone())?;
+    let code = *bytes.get(p).ok_or(truncated.clone())?;
+    let (len, p) = get_varint(bytes, p + 1)
+        .map_err(bad)?
+        .ok_or(truncated.clone())?;
+    let len = usize::try_from(len).unwrap_or(usize::MAX);
+    if len > MAX_DATA {
+        return Err(bad(format!("record length {len} is over {MAX_DATA}")));
+    }
+    let data = bytes.get(p..p + len).ok_or(truncated.clone())?;
+    let stored = le_u32(bytes, p + len).ok_or(truncated)?;
+    let computed = protocol::crc32c(bytes.get(at..p + len).unwrap_or(&[]));
+    if stored != computed {
+        return Err(ReadError::BadCrc {
+            offset,
+            stored,
+            computed,
+        });
+    }
+    let kind = RecordKind::from_code(code);
+    if kind == RecordKind::Link
+        && data
+            .first()
+            .and_then(|&c| LinkState::from_code(c))
+            .is_none()
+    {
+        return Err(bad("link record without a known state".into()));
+    }
+    Ok((
+        Record {
+            t_us,
+            kind,
+            data: data.to_vec(),
+        },
+        p + len + 4,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Vec<u8> {
+        let mut b = encode_header(&Meta {
+            port: "memory".into(),
+            ..Meta::default()
+        });
+        encode_record(&mut b, 0, RecordKind::Link, &[1, b'm']);
+        encode_record(&mut b, 10, RecordKind::ToRobot, &[0, 1, 2]);
+        encode_record(&mut b, 300, RecordKind::FromRobot, &[5; 200]);
+        encode_record(&mut b, 301, RecordKind::End, b"done");
+        b
+    }
+
+    #[test]
+    fn a_record_has_the_documented_bytes() {
+        let mut b = Vec::new();
+        encode_record(&mut b, 300, RecordKind::ToRobot, &[0xaa, 0x00]);
+        let crc = protocol::crc32c(&[0xac, 0x02, 0x01, 0x02, 0xaa, 0x00]).to_le_bytes();
+        let mut want = vec![0xac, 0x02, 0x01, 0x02, 0xaa, 0x00];
+        want.extend_from_slice(&crc);
+        assert_eq!(b, want);
+    }
+
+    #[test]
+    fn the_header_starts_with_magic_and_version() {
+        let h = encode_header(&Meta::default());
+        assert_eq!(&h[..8], b"\x89STREC\r\n");
+        assert_eq!(&h[8..12], &[1, 0, 0, 0]);
+        let (meta, at) = parse_header(&h).unwrap();
+        assert_eq!(meta, Meta::default());
+        assert_eq!(at, h.len());
+    }
+
+    #[test]
+    fn a_whole_recording_reads_back() {
+        let r = Recording::parse_strict(&sample()).unwrap();
+        assert_eq!(r.records.len(), 4);
+        assert_eq!(r.end.as_deref(), Some("done"));
+        assert_eq!(r.meta.port, "memory");
+        assert_eq!(r.duration_us(), 301);
+        assert_eq!(
+            r.records[0].link(),
+            Some((LinkState::Handshaking, "m".into()))
+        );
+    }
+
+    #[test]
+    fn every_truncation_reads_up_to_the_last_whole_record() {
+        let full = sample();
+        let (_, first) = parse_header(&full).unwrap();
+        for cut in first..full.len() {
+            let r = Recording::parse(&full[..cut]).unwrap();
+            let whole = r.records.len();
+            if let Some(e) = &r.damage {
+                assert!(matches!(e, ReadError::Truncated { .. }), "{cut}: {e}");
+            }
+            assert!(whole < 4, "{cut}");
+        }
+        for cut in 0..first {
+            assert!(Recording::parse(&full[..cut]).is_err(), "{cut}");
+        }
+    }
+
+    #[test]
+    fn a_flipped_bit_is_found_at_its_record() {
+        let full = sample();
+        let (_, first) = parse_header(&full).unwrap();
+        for i in first..full.len() {
+            for bit in 0..8 {
+                let mut b = full.clone();
+                b[i] ^= 1 << bit;
+                let r = Recording::parse(&b).unwrap();
+                let e = r.damage.expect("damage found");
+                assert!(e.offset() as usize <= i, "{i}.{bit}: {e}");
+                assert!(r.records.len() < 4);
+            }
+        }
+    }
+
+    #[test]
+    fn bad_headers_are_named() {
+        assert_eq!(Recording::parse(b"hello"), Err(ReadError::NotARecording));
+        assert_eq!(Recording::parse(b""), Err(ReadError::NotARecording));
+        let mut v2 = sample();
+        v2[8] = 2;
+        assert_eq!(
+            Recording::parse(&v2),
+            Err(ReadError::UnsupportedVersion { version: 2 })
+        );
+        let mut meta = sample();
+        meta[HEADER_FIXED] ^= 0x20;
+        assert!(matches!(
+            Recording::parse(&meta),
+            Err(ReadError::BadHeader { .. })
+        ));
+    }
+
+    #[test]
+    fn unknown_kinds_are_kept_for_consumers_to_skip() {
+        let mut b = encode_header(&Meta::default());
+        encode_record(&mut b, 5, RecordKind::Unknown(200), b"future");
+        let r = Recording::parse_strict(&b).unwrap();
+        assert_eq!(r.records[0].kind, RecordKind::Unknown(200));
+    }
+
+    #[test]
+    fn overlong_varints_and_huge_lengths_are_refused() {
+        let mut b = encode_header(&Meta::default());
+        let at = b.len();
+        b.extend_from_slice(&[0xff; 11]);
+        let r = Recording::parse(&b).unwrap();
+        assert!(
+            matches!(r.damage, Some(ReadError::BadRecord { offset, .. }) if offset == at as u64)
+        );
+        let mut b = encode_header(&Meta::default());
+        b.extend_from_slice(&[0x00, 0x00, 0xff, 0xff, 0xff, 0x7f]);
+        let r = Recording::parse(&b).unwrap();
+        assert!(matches!(r.damage, Some(ReadError::BadRecord { .. })));
+    }
+
+    #[test]
+    fn records_after_the_end_are_damage() {
+        let mut b = sample();
+        encode_record(&mut b, 400, RecordKind::FromRobot, &[1]);
+        let r = Recording::parse(&b).unwrap();
+        assert!(matches!(r.damage, Some(ReadError::BadRecord { .. })));
+        assert_eq!(r.records.len(), 4);
+    }
+}

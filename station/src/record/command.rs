@@ -1,0 +1,234 @@
+//! `station record`: record a link to a file, headless.
+//!
+//! Layer: the binary's edge (anyhow). Checks everything it can before it creates a file (the
+//! output name, the port), then runs the link with its tap into a `LiveRecorder` until the time
+//! is up or Ctrl-C, and finishes the file cleanly either way. The link reconnects by itself
+//! while it records; every loss and return of the session is a link record (a gap marker).
+//! Exit codes: 0 recorded, 1 no file could be made or written, or no robot ever answered (the
+//! file is kept: it shows what the port said), 2 usage.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::{bail, Context as _};
+use clap::Args;
+use protocol::Command;
+use serde_json::json;
+use tokio::sync::mpsc;
+use tokio::time::Instant;
+
+use super::live::LiveRecorder;
+use super::writer::Written;
+use super::{partial_path, Meta};
+use crate::builtin::start_builtin_emulator;
+use crate::cli::{parse_baud, parse_seconds};
+use crate::link::serial::{open_exclusive, SerialConnector, DEFAULT_BAUD};
+use crate::link::{spawn_link, Connection, LinkEvent, LinkOptions};
+
+/// Arguments of `station record`.
+#[derive(Debug, Args, Clone)]
+pub struct RecordArgs {
+    /// Serial port (or pty) of the robot. Without it, the built-in emulator is started and
+    /// recorded.
+    #[arg(long, short = 'p', value_name = "PATH")]
+    pub port: Option<PathBuf>,
+    /// Baud rate (ignored by ptys).
+    #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
+    pub baud: u32,
+    /// The recording to write. It is FILE.partial until the recording ends, then renamed.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub out: PathBuf,
+    /// Seconds to record; without it, until Ctrl-C.
+    #[arg(long, short = 's', value_parser = parse_seconds)]
+    pub seconds: Option<f64>,
+    /// Ask the robot for this telemetry rate (Hz, 1..=50) at every handshake.
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=50))]
+    pub rate: Option<u8>,
+    /// Overwrite FILE if it exists.
+    #[arg(long)]
+    pub force: bool,
+    /// Print a JSON summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `station record`.
+pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
+    check_out(&args.out, args.force)?;
+    let mut builtin = None;
+    let (path, label) = match &args.port {
+        Some(p) => {
+            drop(open_exclusive(p, args.baud)?);
+            (p.clone(), p.display().to_string())
+        }
+        None => {
+            let mut emu = start_builtin_emulator()?;
+            let label = format!("built-in emulator on {}", emu.pty_path().display());
+            let path = emu.path().to_path_buf();
+            builtin = Some(emu);
+            (path, label)
+        }
+    };
+    let mut meta = Meta::now(&label, args.baud);
+    if builtin.is_some() {
+        meta.arena = emulator::builtin::MICRO_RATO_99.to_string();
+    }
+    let epoch = Instant::now();
+    let mut rec = LiveRecorder::start(
+        &args.out,
+        &meta,
+        args.force,
+        epoch,
+        &Connection::Closed {
+            reason: "starting".into(),
+        },
+    )?;
+    let (tap_tx, mut tap) = mpsc::unbounded_channel();
+    let mut link = spawn_link(
+        SerialConnector::new(&path, args.baud),
+        LinkOptions {
+            station: format!("station-record {}", env!("CARGO_PKG_VERSION")),
+            tap: Some(tap_tx),
+            ..LinkOptions::default()
+        },
+    );
+    if !args.json {
+        eprintln!(
+            "recording {} to {} ({})",
+            label,
+            rec.path().display(),
+            match args.seconds {
+                Some(s) => format!("{s} s"),
+                None => "Ctrl-C stops".into(),
+            }
+        );
+    }
+    let deadline = args.seconds.map(|s| epoch + Duration::from_secs_f64(s));
+    let mut flush = tokio::time::interval(Duration::from_millis(250));
+    let ctrl_c = tokio::signal::ctrl_c();
+    tokio::pin!(ctrl_c);
+    let mut failure: Option<anyhow::Error> = None;
+    let reason = loop {
+        let until = async {
+            match deadline {
+                Some(d) => tokio::time::sleep_until(d).await,
+                None => std::future::pending().await,
+            }
+        };
+        let step = tokio::select! {
+            Some(t) = tap.recv() => rec.on_tap(&t),
+            Some(ev) = link.events.recv() => match ev {
+                LinkEvent::Connection(c) => {
+                    if let (Connection::Connected(_), Some(hz)) = (&c, args.rate) {
+                        link.handle.submit(Command::SetTelemetryRate { hz });
+                    }
+                    rec.on_connection(&c)
+                }
+                _ => Ok(()),
+            },
+            _ = flush.tick() => rec.tick(Instant::now()),
+            () = until => break "time limit",
+            _ = &mut ctrl_c => break "interrupted",
+        };
+        if let Err(e) = step {
+            failure = Some(e.into());
+            break "write failed";
+        }
+    };
+    // Stop the link, keeping the bytes of its last moments (its final writes to the port).
+    link.handle.shutdown();
+    let _ = tokio::time::timeout(Duration::from_secs(1), &mut link.task).await;
+    while let Ok(t) = tap.try_recv() {
+        if failure.is_none() {
+            if let Err(e) = rec.on_tap(&t) {
+                failure = Some(e.into());
+            }
+        }
+    }
+    // The link's own "stopped" is not a gap: the end record says why the recording ended.
+    drop(builtin);
+    if let Some(e) = failure {
+        return Err(e.context(format!(
+            "recording stopped; what was written is in {}",
+            partial_path(&args.out).display()
+        )));
+    }
+    let counts = rec.counts();
+    let written = rec.finish(reason)?;
+    report(args, &written, counts, reason)?;
+    if !counts.connected {
+        eprintln!(
+            "station: no robot answered on {label}; the recording holds only what the port said"
+        );
+        return Ok(ExitCode::FAILURE);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Refuses an output that cannot be written, before a port is opened or a file created.
+fn check_out(out: &Path, force: bool) -> anyhow::Result<()> {
+    if out.is_dir() {
+        bail!("{} is a directory; give a file name", out.display());
+    }
+    if out.exists() && !force {
+        bail!(
+            "{} already exists (use --force to overwrite it)",
+            out.display()
+        );
+    }
+    let partial = partial_path(out);
+    if partial.exists() {
+        bail!(
+            "{} exists: an unfinished recording (a crash?); replay or rename it, then try again",
+            partial.display()
+        );
+    }
+    let dir = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        bail!("the directory {} does not exist", dir.display());
+    }
+    Ok(())
+}
+
+fn report(
+    args: &RecordArgs,
+    w: &Written,
+    counts: super::live::LiveCounts,
+    reason: &str,
+) -> anyhow::Result<()> {
+    let duration_s = w.duration_us as f64 / 1e6;
+    if args.json {
+        let v = json!({
+            "file": w.path.display().to_string(),
+            "records": w.records,
+            "bytes": w.bytes,
+            "duration_s": duration_s,
+            "bytes_from_robot": counts.bytes_from_robot,
+            "bytes_to_robot": counts.bytes_to_robot,
+            "link_events": counts.link_events,
+            "gaps": counts.gaps,
+            "connected": counts.connected,
+            "end": reason,
+        });
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&v).context("cannot print JSON")?
+        );
+    } else {
+        println!(
+            "recorded {:.1} s to {} ({reason}): {} records, {} bytes from the robot, {} to it, \
+             {} gap(s)",
+            duration_s,
+            w.path.display(),
+            w.records,
+            counts.bytes_from_robot,
+            counts.bytes_to_robot,
+            counts.gaps
+        );
+    }
+    Ok(())
+}

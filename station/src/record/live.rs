@@ -1,0 +1,394 @@
+//! Recording a live link: the link task's tap (every byte both ways) and its connection
+//! changes, turned into records on one clock.
+//!
+//! Layer: glue between the link's outputs and `RecordWriter`, used by `station record` and by
+//! the TUI's record key. The tap stamps bytes with the link task's clock (µs since the task
+//! started); connection changes are stamped when they arrive, on the same clock (`epoch` is
+//! taken just before the link is spawned, so both clocks agree within microseconds). A
+//! recording started while a port is open begins the robot's bytes at a frame boundary (the
+//! bytes up to the first 0x00, the tail of a frame already half received, are skipped; the
+//! station's own writes are whole frames) and with a link record
+//! of the current state, so a replay knows the robot without having seen the handshake.
+//! `TuiRecorder` is the TUI's record key around it. What can fail: the writer's file I/O
+//! (`RecordError`), reported to the app as a `RecordingNote`, never a panic.
+
+use std::path::Path;
+
+use serde::Serialize;
+use tokio::time::Instant;
+
+use super::writer::{RecordWriter, Written};
+use super::{LinkState, Meta, RecordError, RecordKind};
+use crate::link::{Connection, PeerInfo, TapDirection, TapRecord};
+
+/// Byte and event counts of a recording in progress.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct LiveCounts {
+    pub bytes_from_robot: u64,
+    pub bytes_to_robot: u64,
+    pub link_events: u64,
+    /// Times the session was lost (left `connected`).
+    pub gaps: u64,
+    /// Whether a session was up at any time.
+    pub connected: bool,
+}
+
+/// A recording of a running link.
+pub struct LiveRecorder {
+    writer: RecordWriter,
+    epoch: Instant,
+    start_us: u64,
+    /// Skip bytes up to the first delimiter, per direction (from robot, to robot).
+    align: [bool; 2],
+    was_connected: bool,
+    counts: LiveCounts,
+}
+
+impl LiveRecorder {
+    /// Starts recording to `path` (written as `path.partial`). `epoch` is the link's clock
+    /// origin; `current` the connection state now.
+    pub fn start(
+        path: &Path,
+        meta: &Meta,
+        overwrite: bool,
+        epoch: Instant,
+        current: &Connection,
+    ) -> Result<LiveRecorder, RecordError> {
+        let writer = RecordWriter::create(path, meta, overwrite)?;
+        let mid_stream = !matches!(current, Connection::Closed { .. });
+        let mut r = LiveRecorder {
+            writer,
+            epoch,
+            start_us: epoch.elapsed().as_micros() as u64,
+            // The station writes whole frames; the robot's bytes arrive in arbitrary pieces.
+            align: [mid_stream, false],
+            was_connected: false,
+            counts: LiveCounts::default(),
+        };
+        if mid_stream {
+            r.on_connection(current)?;
+        }
+        Ok(r)
+    }
+
+    /// The final name.
+    pub fn path(&self) -> &Path {
+        self.writer.path()
+    }
+
+    /// Recording time now, µs.
+    pub fn elapsed_us(&self) -> u64 {
+        (self.epoch.elapsed().as_micros() as u64).saturating_sub(self.start_us)
+    }
+
+    pub fn counts(&self) -> LiveCounts {
+        self.counts
+    }
+
+    /// Records tapped bytes.
+    pub fn on_tap(&mut self, rec: &TapRecord) -> Result<(), RecordError> {
+        let (kind, i) = match rec.direction {
+            TapDirection::FromRobot => (RecordKind::FromRobot, 0),
+            TapDirection::ToRobot => (RecordKind::ToRobot, 1),
+        };
+        let mut bytes = rec.bytes.as_slice();
+        if self.align.get(i).copied().unwrap_or(false) {
+            match bytes.iter().position(|&b| b == 0) {
+                Some(p) => {
+                    bytes = bytes.get(p + 1..).unwrap_or(&[]);
+                    if let Some(a) = self.align.get_mut(i) {
+                        *a = false;
+                    }
+                }
+                None => return Ok(()),
+            }
+        }
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        match kind {
+            RecordKind::FromRobot => self.counts.bytes_from_robot += bytes.len() as u64,
+            _ => self.counts.bytes_to_robot += bytes.len() as u64,
+        }
+        let t = rec.t_us.saturating_sub(self.start_us);
+        self.writer.append(t, kind, bytes)
+    }
+
+    /// Records a connection change (a gap marker when the session is lost).
+    pub fn on_connection(&mut self, c: &Connection) -> Result<(), RecordError> {
+        let (state, text) = link_record(c);
+        let connected = state == LinkState::Connected;
+        if self.was_connected && !connected {
+            self.counts.gaps += 1;
+        }
+        self.was_connected = connected;
+        self.counts.connected |= connected;
+        self.counts.link_events += 1;
+        let mut data = Vec::with_capacity(1 + text.len());
+        data.push(state.code());
+        data.extend_from_slice(text.as_bytes());
+        let t = self.elapsed_us();
+        self.writer.append(t, RecordKind::Link, &data)
+    }
+
+    /// Flushes and syncs when due.
+    pub fn tick(&mut self, now: Instant) -> Result<(), RecordError> {
+        self.writer.tick(now)
+    }
+
+    /// Ends the recording cleanly: end record, sync, rename.
+    pub fn finish(self, reason: &str) -> Result<Written, RecordError> {
+        let t = self.elapsed_us().max(self.writer.last_t_us());
+        self.writer.finish(t, reason)
+    }
+}
+
+/// What a `Link` record says for a connection state. A connected state carries the robot as a
+/// JSON object (`PeerRecord`), so a replay can show it even without the handshake's frames.
+pub fn link_record(c: &Connection) -> (LinkState, String) {
+    match c {
+        Connection::Closed { reason } => (LinkState::Closed, reason.clone()),
+        Connection::Handshaking { port } => (LinkState::Handshaking, port.clone()),
+        Connection::Connected(p) => (
+            LinkState::Connected,
+            serde_json::to_string(&PeerRecord::from(p)).unwrap_or_default(),
+        ),
+        Connection::Refused { message } => (LinkState::Refused, message.clone()),
+    }
+}
+
+/// The robot of a `connected` link record, as JSON.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct PeerRecord {
+    pub session: u32,
+    pub firmware: String,
+    pub firmware_version: String,
+    /// "Khepera" or "MicroRato".
+    pub profile: protocol::ProfileId,
+    pub capabilities: u32,
+    pub map_capacity: [u16; 2],
+    pub telemetry_hz: u8,
+    pub failsafe_ms: u16,
+}
+
+impl From<&PeerInfo> for PeerRecord {
+    fn from(p: &PeerInfo) -> Self {
+        PeerRecord {
+            session: p.session,
+            firmware: p.firmware.clone(),
+            firmware_version: p.firmware_version.clone(),
+            profile: p.profile,
+            capabilities: p.capabilities,
+            map_capacity: [p.map_capacity.width, p.map_capacity.height],
+            telemetry_hz: p.telemetry_hz,
+            failsafe_ms: p.failsafe_ms,
+        }
+    }
+}
+
+impl PeerRecord {
+    /// Back to the link's type.
+    pub fn to_peer(&self) -> PeerInfo {
+        PeerInfo {
+            session: self.session,
+            firmware: self.firmware.clone(),
+            firmware_version: self.firmware_version.clone(),
+            profile: self.profile,
+            capabilities: self.capabilities,
+            map_capacity: protocol::MapCapacity {
+                width: self.map_capacity[0],
+                height: self.map_capacity[1],
+            },
+            telemetry_hz: self.telemetry_hz,
+            failsafe_ms: self.failsafe_ms,
+        }
+    }
+}
+
+/// What the TUI's recorder tells the app.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RecordingNote {
+    /// Recording to `file` started.
+    Started { file: String },
+    /// The recording was finished and renamed to `file`.
+    Stopped {
+        file: String,
+        seconds: f64,
+        bytes: u64,
+    },
+    /// Recording could not start, or stopped on an error (what was written is kept).
+    Failed { why: String },
+}
+
+/// The TUI's record key: the link's tap, always drained, written to a file while recording.
+///
+/// Layer: I/O, owned by the TUI loop (the I/O edge); the app only hears `RecordingNote`s. Taps
+/// arriving while not recording are dropped at once, so the channel never grows.
+pub struct TuiRecorder {
+    tap: Option<tokio::sync::mpsc::UnboundedReceiver<TapRecord>>,
+    epoch: Instant,
+    meta: Meta,
+    dir: std::path::PathBuf,
+    connection: Connection,
+    active: Option<LiveRecorder>,
+}
+
+impl TuiRecorder {
+    /// A recorder over a link started at `epoch` with this tap; `meta` describes the port.
+    pub fn new(
+        tap: tokio::sync::mpsc::UnboundedReceiver<TapRecord>,
+        epoch: Instant,
+        meta: Meta,
+    ) -> TuiRecorder {
+        TuiRecorder {
+            tap: Some(tap),
+            epoch,
+            meta,
+            dir: std::path::PathBuf::from("."),
+            connection: Connection::Closed {
+                reason: "starting".into(),
+            },
+            active: None,
+        }
+    }
+
+    /// A recorder that cannot record (no tap).
+    pub fn disabled() -> TuiRecorder {
+        TuiRecorder {
+            tap: None,
+            epoch: Instant::now(),
+            meta: Meta::default(),
+            dir: std::path::PathBuf::from("."),
+            connection: Connection::Closed {
+                reason: "starting".into(),
+            },
+            active: None,
+        }
+    }
+
+    /// Records into `dir` instead of the current directory.
+    pub fn in_dir(mut self, dir: &Path) -> TuiRecorder {
+        self.dir = dir.to_path_buf();
+        self
+    }
+
+    pub fn recording(&self) -> bool {
+        self.active.is_some()
+    }
+
+    /// The next tapped bytes; never resolves without a tap.
+    pub async fn next_tap(&mut self) -> Option<TapRecord> {
+        match &mut self.tap {
+            Some(t) => t.recv().await,
+            None => std::future::pending().await,
+        }
+    }
+
+    /// Records tapped bytes if recording.
+    pub fn on_tap(&mut self, t: &TapRecord) -> Option<RecordingNote> {
+        let r = self.active.as_mut()?.on_tap(t);
+        self.check(r)
+    }
+
+    /// Notes a link event: connection changes are recorded.
+    pub fn on_link_event(&mut self, ev: &crate::link::LinkEvent) -> Option<RecordingNote> {
+        let crate::link::LinkEvent::Connection(c) = ev else {
+            return None;
+        };
+        self.connection = c.clone();
+        let r = self.active.as_mut()?.on_connection(c);
+        self.check(r)
+    }
+
+    /// Flushes when due.
+    pub fn tick(&mut self) -> Option<RecordingNote> {
+        let r = self.active.as_mut()?.tick(Instant::now());
+        self.check(r)
+    }
+
+    fn check(&mut self, r: Result<(), RecordError>) -> Option<RecordingNote> {
+        let e = r.err()?;
+        let path = self.active.take().map(|a| a.path().to_path_buf());
+        Some(RecordingNote::Failed {
+            why: format!(
+                "{e}; what was written is in {}",
+                path.map(|p| super::partial_path(&p).display().to_string())
+                    .unwrap_or_default()
+            ),
+        })
+    }
+
+    /// Starts a recording to a new timestamped file, or finishes the one running.
+    pub fn toggle(&mut self) -> RecordingNote {
+        match self.stop() {
+            Some(note) => note,
+            None => self.start(),
+        }
+    }
+
+    fn start(&mut self) -> RecordingNote {
+        if self.tap.is_none() {
+            return RecordingNote::Failed {
+                why: "this link has no tap to record".into(),
+            };
+        }
+        let mut meta = self.meta.clone();
+        let now = Meta::now(&meta.port, meta.baud);
+        meta.created_unix_ms = now.created_unix_ms;
+        let path = free_name(&self.dir, meta.created_unix_ms);
+        match LiveRecorder::start(&path, &meta, false, self.epoch, &self.connection) {
+            Ok(r) => {
+                self.active = Some(r);
+                RecordingNote::Started {
+                    file: path.display().to_string(),
+                }
+            }
+            Err(e) => RecordingNote::Failed {
+                why: format!("cannot record: {e}"),
+            },
+        }
+    }
+
+    /// Finishes a running recording (on the key, or when the TUI quits).
+    pub fn stop(&mut self) -> Option<RecordingNote> {
+        let rec = self.active.take()?;
+        let path = rec.path().to_path_buf();
+        Some(match rec.finish("stopped by the operator") {
+            Ok(w) => RecordingNote::Stopped {
+                file: w.path.display().to_string(),
+                seconds: w.duration_us as f64 / 1e6,
+                bytes: w.bytes,
+            },
+            Err(e) => RecordingNote::Failed {
+                why: format!(
+                    "{e}; what was written is in {}",
+                    super::partial_path(&path).display()
+                ),
+            },
+        })
+    }
+}
+
+/// `dir/station-YYYYMMDD-HHMMSS.rec`, with `-2`, `-3`, ... if taken.
+fn free_name(dir: &Path, unix_ms: u64) -> std::path::PathBuf {
+    let stamp: String = crate::replay::summary::utc(unix_ms)
+        .chars()
+        .filter(char::is_ascii_digit)
+        .collect();
+    let (date, time) = stamp.split_at(stamp.len().min(8));
+    let base = format!("station-{date}-{time}");
+    let join = |name: String| {
+        if dir == Path::new(".") {
+            std::path::PathBuf::from(name)
+        } else {
+            dir.join(name)
+        }
+    };
+    let mut path = join(format!("{base}.rec"));
+    let mut n = 2;
+    while path.exists() || super::partial_path(&path).exists() {
+        path = join(format!("{base}-{n}.rec"));
+        n += 1;
+    }
+    path
+}

@@ -1,0 +1,233 @@
+//! Recordings made from messages instead of a link: known content for tests, benchmarks and
+//! examples.
+//!
+//! Layer: pure; builds the bytes of a recording file with the real frame encoder, each side
+//! numbering its frames as PROTOCOL.md §3 says (the emulator's `EmuTruth` on its own counter).
+//! `demo` is a whole session: handshake, telemetry and truth at a rate, a command and its ack,
+//! a log line and an event. Cannot fail: every message built here fits a frame.
+
+use protocol::{
+    caps, encode, Ack, AckInfo, Command, EmuTruth, Event, EventCode, HelloReply, Log, LogLevel,
+    MapCapacity, Message, Mode, Packed10x8, Pose, ProfileId, Telemetry, FINGERPRINT, MAX_FRAME,
+    PROTOCOL_VERSION,
+};
+
+use super::live::link_record;
+use super::{encode_header, encode_record, Meta, RecordKind};
+use crate::link::{Connection, PeerInfo};
+
+/// A recording being built.
+pub struct Synth {
+    bytes: Vec<u8>,
+    robot_seq: u16,
+    truth_seq: u16,
+    station_seq: u16,
+}
+
+impl Synth {
+    pub fn new(meta: &Meta) -> Synth {
+        Synth {
+            bytes: encode_header(meta),
+            robot_seq: 0,
+            truth_seq: 0,
+            station_seq: 0,
+        }
+    }
+
+    fn frame(seq: u16, msg: &Message<'_>) -> Vec<u8> {
+        let mut buf = [0u8; MAX_FRAME];
+        let n = encode(seq, msg, &mut buf).unwrap_or(0);
+        buf.get(..n).unwrap_or(&[]).to_vec()
+    }
+
+    /// Raw bytes in a record.
+    pub fn raw(&mut self, t_us: u64, kind: RecordKind, data: &[u8]) {
+        encode_record(&mut self.bytes, t_us, kind, data);
+    }
+
+    /// A frame from the robot (truth frames on their own counter).
+    pub fn from_robot(&mut self, t_us: u64, msg: &Message<'_>) {
+        let seq = if matches!(msg, Message::EmuTruth(_)) {
+            self.truth_seq = self.truth_seq.wrapping_add(1);
+            self.truth_seq.wrapping_sub(1)
+        } else {
+            self.robot_seq = self.robot_seq.wrapping_add(1);
+            self.robot_seq.wrapping_sub(1)
+        };
+        let f = Self::frame(seq, msg);
+        self.raw(t_us, RecordKind::FromRobot, &f);
+    }
+
+    /// A frame from the station; returns its sequence number.
+    pub fn to_robot(&mut self, t_us: u64, msg: &Message<'_>) -> u16 {
+        let seq = self.station_seq;
+        self.station_seq = seq.wrapping_add(1);
+        let f = Self::frame(seq, msg);
+        self.raw(t_us, RecordKind::ToRobot, &f);
+        seq
+    }
+
+    /// A connection change.
+    pub fn link(&mut self, t_us: u64, c: &Connection) {
+        let (state, text) = link_record(c);
+        let mut data = vec![state.code()];
+        data.extend_from_slice(text.as_bytes());
+        self.raw(t_us, RecordKind::Link, &data);
+    }
+
+    /// The file's bytes, finished with an end record.
+    pub fn finish(mut self, t_us: u64, reason: &str) -> Vec<u8> {
+        encode_record(&mut self.bytes, t_us, RecordKind::End, reason.as_bytes());
+        self.bytes
+    }
+
+    /// The file's bytes without an end record (as a crash leaves a `.partial`).
+    pub fn unfinished(self) -> Vec<u8> {
+        self.bytes
+    }
+}
+
+/// The robot a demo recording talks to.
+pub fn demo_peer() -> PeerInfo {
+    PeerInfo {
+        session: 0x5eed,
+        firmware: "robot-firmware".into(),
+        firmware_version: "0.1.0".into(),
+        profile: ProfileId::Khepera,
+        capabilities: caps::ENCODERS | caps::IR_PROXIMITY | caps::AMBIENT_LIGHT | caps::EMULATED,
+        map_capacity: MapCapacity {
+            width: 64,
+            height: 64,
+        },
+        telemetry_hz: 10,
+        failsafe_ms: 300,
+    }
+}
+
+/// Telemetry number `i` of a robot driving a slow circle.
+pub fn telemetry(i: u32, hz: u32) -> Telemetry {
+    let t = f64::from(i) / f64::from(hz.max(1));
+    let a = t * 0.2;
+    Telemetry {
+        time_ms: (t * 1000.0) as u32,
+        mode: Mode::Wander,
+        pose: Pose {
+            x_mm: (1000.0 + 500.0 * a.cos()) as i32,
+            y_mm: (1000.0 + 500.0 * a.sin()) as i32,
+            heading_mrad: ((a + std::f64::consts::FRAC_PI_2)
+                .sin()
+                .atan2((a + std::f64::consts::FRAC_PI_2).cos())
+                * 1000.0) as i16,
+        },
+        ir: Packed10x8::new([(i % 1024) as u16, 10, 20, 30, 40, 50, 60, 70]),
+        light: Packed10x8::new([500; 8]),
+        compass_ddeg: ((a.to_degrees().rem_euclid(360.0)) * 10.0) as u16,
+        battery_mv: 7400,
+        ..Telemetry::default()
+    }
+}
+
+/// A whole session of `seconds` at `hz`: the handshake (both sides), telemetry and truth,
+/// heartbeats, a `SetMode` answered by an Ack, a log line and an event.
+pub fn demo(seconds: u32, hz: u32) -> Vec<u8> {
+    let meta = Meta {
+        created_unix_ms: 1_700_000_000_000,
+        writer: "synth".into(),
+        port: "memory".into(),
+        baud: 115_200,
+        protocol: PROTOCOL_VERSION,
+        ..Meta::default()
+    };
+    let mut s = Synth::new(&meta);
+    let peer = demo_peer();
+    s.link(
+        0,
+        &Connection::Handshaking {
+            port: "memory".into(),
+        },
+    );
+    s.raw(100, RecordKind::ToRobot, &[0]);
+    s.to_robot(
+        100,
+        &Message::Hello(protocol::Hello {
+            fingerprint: FINGERPRINT,
+            protocol: PROTOCOL_VERSION,
+            session: peer.session,
+            station: "synth",
+        }),
+    );
+    s.from_robot(
+        5_000,
+        &Message::HelloReply(HelloReply {
+            fingerprint: FINGERPRINT,
+            protocol: PROTOCOL_VERSION,
+            session: peer.session,
+            accepted: true,
+            firmware: "robot-firmware",
+            firmware_version: "0.1.0",
+            profile: peer.profile,
+            capabilities: peer.capabilities,
+            map_capacity: peer.map_capacity,
+            telemetry_hz: 10,
+            failsafe_ms: 300,
+        }),
+    );
+    s.link(5_100, &Connection::Connected(peer));
+    let period_us = 1_000_000 / u64::from(hz.max(1));
+    let mut cmd_seq = None;
+    for i in 0..seconds * hz {
+        let t_us = 10_000 + u64::from(i) * period_us;
+        let tm = telemetry(i, hz);
+        s.from_robot(t_us, &Message::Telemetry(tm));
+        s.from_robot(
+            t_us + 200,
+            &Message::EmuTruth(EmuTruth {
+                time_ms: tm.time_ms,
+                pose: Pose {
+                    x_mm: tm.pose.x_mm + 7,
+                    ..tm.pose
+                },
+                collisions: 0,
+            }),
+        );
+        if i % (hz / 4).max(1) == 0 {
+            s.to_robot(
+                t_us + 300,
+                &Message::Heartbeat(protocol::Heartbeat {
+                    time_ms: (t_us / 1000) as u32,
+                }),
+            );
+        }
+        if i == hz {
+            cmd_seq = Some(s.to_robot(
+                t_us + 400,
+                &Message::Command(Command::SetMode(Mode::Wander)),
+            ));
+        }
+        if let (Some(seq), true) = (cmd_seq, i == hz + 1) {
+            s.from_robot(
+                t_us + 400,
+                &Message::Ack(Ack {
+                    cmd_seq: seq,
+                    info: AckInfo::Done,
+                }),
+            );
+            s.from_robot(
+                t_us + 500,
+                &Message::Event(Event {
+                    code: EventCode::ModeChanged,
+                    value: 3,
+                }),
+            );
+            s.from_robot(
+                t_us + 600,
+                &Message::Log(Log {
+                    level: LogLevel::Info,
+                    text: "wandering",
+                }),
+            );
+        }
+    }
+    let end = 10_000 + u64::from(seconds * hz) * period_us;
+    s.finish(end, "synthetic")
+}

@@ -1,0 +1,182 @@
+//! `station export` of a known recording (`record::synth::demo`): the MCAP read back with the
+//! mcap crate, message by message and channel by channel; the CSV row by row; and bad input
+//! refused with its byte offset and no output file left behind.
+#![allow(clippy::unwrap_used, clippy::panic)]
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use station::export::csv::COLUMNS;
+use station::record::synth::demo;
+
+/// 10 s at 20 Hz: 200 telemetry frames, 200 truth frames, 40 heartbeats, one command.
+const SECONDS: u32 = 10;
+const HZ: u32 = 20;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("export-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn station(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_station"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .unwrap()
+}
+
+fn files(d: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn mcap_export_has_every_message_on_its_channel_at_its_recorded_time() {
+    let d = dir("mcap");
+    std::fs::write(d.join("demo.rec"), demo(SECONDS, HZ)).unwrap();
+    let o = station(&["export", "demo.rec", "--mcap", "demo.mcap"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        files(&d),
+        ["demo.mcap", "demo.rec"],
+        "no temporary file is left"
+    );
+
+    let bytes = std::fs::read(d.join("demo.mcap")).unwrap();
+    let mut per_topic: BTreeMap<String, usize> = BTreeMap::new();
+    let mut first_telemetry = None;
+    let mut last_time = 0;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        assert_eq!(m.channel.message_encoding, "json");
+        let schema = m.channel.schema.as_ref().unwrap();
+        assert_eq!(schema.encoding, "jsonschema");
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        assert!(m.log_time >= last_time, "messages in time order");
+        last_time = m.log_time;
+        if m.channel.topic == "/telemetry" && first_telemetry.is_none() {
+            first_telemetry = Some((m.log_time, v.clone()));
+        }
+        if m.channel.topic == "/pose" {
+            assert_eq!(schema.name, "foxglove.PoseInFrame");
+            assert_eq!(v["frame_id"], "map");
+            assert!(v["timestamp"]["sec"].as_u64().unwrap() >= 1_700_000_000);
+        }
+        *per_topic.entry(m.channel.topic.clone()).or_default() += 1;
+    }
+    let n = (SECONDS * HZ) as usize;
+    let want: BTreeMap<String, usize> = [
+        ("/telemetry", n),
+        ("/pose", n),
+        ("/truth", n),
+        ("/truth_pose", n),
+        ("/events", 1),
+        ("/log", 1),
+        ("/commands", 1),
+        ("/replies", 1),
+        // handshaking, hello, hello reply, connected
+        ("/link", 4),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    assert_eq!(per_topic, want);
+    let (t, v) = first_telemetry.unwrap();
+    // Recording start 1_700_000_000_000 ms, first telemetry at 10 ms.
+    assert_eq!(t, 1_700_000_000_000 * 1_000_000 + 10_000_000);
+    assert_eq!(v["mode"], "Wander");
+    assert_eq!(v["x_m"], 1.5);
+    assert_eq!(v["ir"].as_array().unwrap().len(), 8);
+
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let stats = summary.stats.unwrap();
+    assert_eq!(
+        stats.message_count as usize,
+        per_topic.values().sum::<usize>()
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn csv_export_has_one_row_per_telemetry_frame_with_truth_alongside() {
+    let d = dir("csv");
+    std::fs::write(d.join("demo.rec"), demo(SECONDS, HZ)).unwrap();
+    let o = station(&["export", "demo.rec", "--csv", "demo.csv"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(d.join("demo.csv")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 1 + (SECONDS * HZ) as usize);
+    assert_eq!(lines[0], COLUMNS.join(","));
+    let col = |name: &str| COLUMNS.iter().position(|c| *c == name).unwrap();
+    let row: Vec<&str> = lines[1].split(',').collect();
+    assert_eq!(row.len(), COLUMNS.len());
+    assert_eq!(row[col("time_s")], "0.010000");
+    assert_eq!(row[col("mode")], "Wander");
+    assert_eq!(row[col("x_m")], "1.500");
+    assert_eq!(row[col("true_x_m")], "1.507", "truth joined by robot time");
+    assert_eq!(row[col("battery_v")], "7.400");
+    assert_eq!(row[col("light3")], "500");
+    let last: Vec<&str> = lines.last().unwrap().split(',').collect();
+    assert_eq!(last[col("robot_time_s")], "9.950");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_corrupted_recording_is_refused_with_its_offset_and_nothing_is_written() {
+    let d = dir("bad");
+    let good = demo(SECONDS, HZ);
+    let mut bad = good.clone();
+    let at = good.len() / 2;
+    bad[at] ^= 0x40;
+    std::fs::write(d.join("bad.rec"), &bad).unwrap();
+    std::fs::write(d.join("torn.rec"), &good[..good.len() - 3]).unwrap();
+    std::fs::write(d.join("text.rec"), b"hello, world\n").unwrap();
+    let mut v2 = good.clone();
+    v2[8] = 2;
+    std::fs::write(d.join("v2.rec"), &v2).unwrap();
+    let before = files(&d);
+    let cases = [
+        ("bad.rec", "corrupted record at byte"),
+        ("torn.rec", "truncated at byte"),
+        ("text.rec", "not a station recording"),
+        ("v2.rec", "recording format version 2"),
+        ("missing.rec", "does not exist"),
+    ];
+    for (file, needle) in cases {
+        let o = station(&["export", file, "--mcap", "o.mcap", "--csv", "o.csv"], &d);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{file}: {err}");
+        assert!(err.contains(needle), "{file}: {err}");
+        assert!(!err.contains("panicked"), "{file}: {err}");
+        assert_eq!(files(&d), before, "{file}: no output, no temporary file");
+    }
+    // The offset named is where the damage is, not somewhere after it.
+    let o = station(&["export", "bad.rec", "--csv", "o.csv"], &d);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let offset: usize = err
+        .split("at byte ")
+        .nth(1)
+        .and_then(|s| s.split(|c: char| !c.is_ascii_digit()).next())
+        .and_then(|s| s.parse().ok())
+        .unwrap();
+    assert!(offset <= at && at - offset < 300, "{offset} vs {at}");
+
+    // --salvage exports what comes before the damage.
+    let o = station(&["export", "bad.rec", "--csv", "o.csv", "--salvage"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = std::fs::read_to_string(d.join("o.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    assert!(rows > 0 && rows < (SECONDS * HZ) as usize, "{rows}");
+    let _ = std::fs::remove_dir_all(&d);
+}
