@@ -168,6 +168,10 @@ pub struct RunArgs {
 pub enum TaskArg {
     /// Drive to --goal (default: the arena's target).
     GoTo,
+    /// Reactive goal search with mapping, start to goal area (seed 004 Fig. 4).
+    ReachBeacon,
+    /// Run 1 explores; the robot plans on its own map; run 2 executes the plan (seed 004).
+    ExploreThenPlan,
 }
 
 impl WorldArgs {
@@ -303,6 +307,13 @@ impl RunArgs {
         }
         let task = match self.task {
             TaskArg::GoTo => Task::GoTo(self.goal.map(|[x, y]| GoalPoint { x_m: x, y_m: y })),
+            TaskArg::ReachBeacon | TaskArg::ExploreThenPlan if self.goal.is_some() => {
+                return Err("--goal is for --task go-to; the search tasks head for the \
+                            arena's beacon"
+                    .to_string())
+            }
+            TaskArg::ReachBeacon => Task::ReachBeacon,
+            TaskArg::ExploreThenPlan => Task::ExploreThenPlan,
         };
         let mut o = ScenarioOptions::new(self.world.profile.profile(), task);
         o.seed = self.world.seed;

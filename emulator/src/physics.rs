@@ -210,6 +210,19 @@ impl Body {
         }
     }
 
+    /// Lifts the robot and sets it down at rest at `pose` (an operator carrying it back to
+    /// the start between runs). Encoders and counters keep their values; the caller has
+    /// checked the pose is free.
+    pub fn place(&mut self, pose: Pose) {
+        self.pose = pose;
+        self.rotation_mps = [0.0; 2];
+        self.in_contact = false;
+        self.clearance_m = 0.0;
+        self.moved_m = 0.0;
+        self.dir = (pose.heading.cos(), pose.heading.sin());
+        self.resync = 0;
+    }
+
     /// The parameters in force.
     pub fn params(&self) -> &PhysicsParams {
         &self.params

@@ -10,8 +10,8 @@
 //! task's goal; the arrival radius (Khepera: parameter 14, drift arrival; micro-rato:
 //! parameter 26, guided arrival); for a robot with a beacon sensor the beacon position
 //! (parameters 21/22) and the arena's bounds (the dead reckoning's validation rectangle, seed
-//! 004 §4; the firmware has no link parameter for it yet, so it is written into
-//! `DeadReckonParams` directly). Never the pose.
+//! 004 §4, parameters 27-30). Never the pose, except where an operator would: between the
+//! two runs of explore-then-plan the robot is carried back to the start and told so.
 //!
 //! "Reached" (decided here, documented in [`ScenarioReport::reached`]): the firmware reported
 //! arrival AND its TRUE position is within the tolerance of the goal. Default tolerance:
@@ -32,9 +32,7 @@
 use std::time::Instant;
 
 use protocol::{Command, NackReason, ParamId, PointMm};
-use robot_firmware::deadreckon::Bounds;
 use robot_firmware::link::Reply;
-use robot_firmware::odometry::Point as FwPoint;
 use robot_firmware::Profile;
 use serde::Serialize;
 use thiserror::Error;
@@ -52,6 +50,11 @@ pub const RATO_POINT_TOLERANCE_M: f64 = 0.3;
 /// Firmware parameter ids of the beacon position (robot-firmware `params::PARAMS`).
 const PARAM_BEACON_X: u16 = 21;
 const PARAM_BEACON_Y: u16 = 22;
+/// Firmware parameter ids of the dead reckoning's validation rectangle (seed 004 §4).
+const PARAM_ARENA_MIN_X: u16 = 27;
+const PARAM_ARENA_MIN_Y: u16 = 28;
+const PARAM_ARENA_MAX_X: u16 = 29;
+const PARAM_ARENA_MAX_Y: u16 = 30;
 /// Firmware parameter ids of the arrival radii (drift: Khepera; guided: micro-rato).
 const PARAM_DRIFT_ARRIVAL: u16 = 14;
 const PARAM_GUIDED_ARRIVAL: u16 = 26;
@@ -65,12 +68,42 @@ pub struct GoalPoint {
     pub y_m: f64,
 }
 
-/// What the robot is asked to do. Reach-beacon, explore and forage come later.
+/// What the robot is asked to do.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Task {
     /// Go to a point; `None` = the arena's goal (its marked goal, else its target's centre).
     GoTo(Option<GoalPoint>),
+    /// Seed 004 §5, Fig. 4: the reactive goal search (with mapping) from the start to the
+    /// goal area, which the ground sensor detects.
+    ReachBeacon,
+    /// Seed 004 §5-7: run 1 explores as `ReachBeacon`; the robot then segments the map it
+    /// built and plans from the start to where it found the goal; it is carried back to the
+    /// start and run 2 executes the plan.
+    ExploreThenPlan,
+}
+
+/// One run of a scenario (explore-then-plan has two).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunReport {
+    /// `explore`, `execute_plan` or `go_to`.
+    pub kind: &'static str,
+    /// The firmware reported arrival in the goal area.
+    pub arrived: bool,
+    /// Arrived, and the TRUE position is within the tolerance of the goal.
+    pub reached: bool,
+    /// Simulated seconds of this run.
+    pub sim_s: f64,
+    /// Wall contacts during this run.
+    pub collisions: u32,
+    /// Ground distance of this run, metres.
+    pub distance_m: f64,
+    /// Distance between true and believed position at the end, metres.
+    pub pose_error_m: f64,
+    /// Known (free or obstacle) cells of the robot's map at the end, if it has one.
+    pub map_known_cells: Option<u32>,
+    /// Regions and waypoints of the plan run 2 executed.
+    pub plan_regions: Option<u32>,
 }
 
 /// How a scenario is run. [`ScenarioOptions::new`] gives the defaults.
@@ -175,6 +208,9 @@ pub struct ScenarioReport {
     pub final_true: PoseReport,
     /// Final believed pose.
     pub final_believed: PoseReport,
+    /// Each run of the task, in order (one for go-to and reach-beacon, two for
+    /// explore-then-plan); the top-level figures describe the last.
+    pub runs: Vec<RunReport>,
 }
 
 /// Why a scenario could not run.
@@ -204,10 +240,17 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
     if !(opts.timeout_s.is_finite() && opts.timeout_s > 0.0) {
         return Err(ScenarioError::BadTimeout(opts.timeout_s));
     }
-    let Task::GoTo(given) = opts.task;
     let target = arena.target().copied();
+    let given = match opts.task {
+        Task::GoTo(g) => g,
+        Task::ReachBeacon | Task::ExploreThenPlan => None,
+    };
     let goal = given
-        .or_else(|| arena.goal.map(|g| GoalPoint { x_m: g.x, y_m: g.y }))
+        .or_else(|| {
+            // The goal area's centre for the search tasks; a marked goal for go-to.
+            let marked = arena.goal.filter(|_| matches!(opts.task, Task::GoTo(_)));
+            marked.map(|g| GoalPoint { x_m: g.x, y_m: g.y })
+        })
         .or_else(|| {
             target.map(|t| GoalPoint {
                 x_m: t.centre.x,
@@ -240,27 +283,43 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
     let mut sim = Sim::new(arena, cfg)?;
     brief_firmware(&mut sim)?;
     set_arrival(&mut sim, opts.arrival_m, tolerance_m)?;
-    let cmd = Command::GoTo(PointMm {
-        x_mm: mm(goal.x_m),
-        y_mm: mm(goal.y_m),
-    });
-    apply(&mut sim, cmd, "GoTo")?;
-
     let started = Instant::now();
-    // Whole milliseconds; the float-to-int cast saturates for absurd timeouts.
     let timeout_ms = (opts.timeout_s * 1000.0).ceil() as u64;
-    let mut arrived = false;
-    for _ in 0..timeout_ms {
-        sim.step();
-        if sim.robot().core.arrived {
-            arrived = true;
-            sim.run_for(SETTLE_MS);
-            break;
+    let judge = Judge { goal, tolerance_m };
+    let mut runs = Vec::new();
+    match opts.task {
+        Task::GoTo(_) => {
+            let cmd = Command::GoTo(PointMm {
+                x_mm: mm(goal.x_m),
+                y_mm: mm(goal.y_m),
+            });
+            apply(&mut sim, cmd, "GoTo")?;
+            runs.push(run_until_arrived(&mut sim, "go_to", timeout_ms, &judge));
+        }
+        Task::ReachBeacon => {
+            apply(&mut sim, Command::StartExploration, "StartExploration")?;
+            runs.push(run_until_arrived(&mut sim, "explore", timeout_ms, &judge));
+        }
+        Task::ExploreThenPlan => {
+            let start = sim.truth();
+            apply(&mut sim, Command::StartExploration, "StartExploration")?;
+            let first = run_until_arrived(&mut sim, "explore", timeout_ms, &judge);
+            let explored = first.arrived;
+            runs.push(first);
+            if explored {
+                runs.push(plan_and_execute(&mut sim, start, timeout_ms, &judge)?);
+            }
         }
     }
     let wall_s = started.elapsed().as_secs_f64();
     let t = sim.truth();
+    let last = runs.last().cloned();
     let goal_error_m = (t.x - goal.x_m).hypot(t.y - goal.y_m);
+    let (arrived, reached) = match (&last, opts.task) {
+        (Some(r), Task::ExploreThenPlan) => (r.arrived, runs.len() == 2 && r.reached),
+        (Some(r), _) => (r.arrived, r.reached),
+        (None, _) => (false, false),
+    };
     Ok(ScenarioReport {
         arena: name,
         profile: opts.profile.name,
@@ -268,7 +327,7 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
         task: opts.task,
         goal,
         tolerance_m,
-        reached: arrived && goal_error_m <= tolerance_m,
+        reached,
         arrived,
         sim_s: sim.now_us() as f64 * 1e-6,
         wall_s,
@@ -278,7 +337,105 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
         distance_m: sim.distance_m(),
         final_true: t.into(),
         final_believed: sim.believed().into(),
+        runs,
     })
+}
+
+/// What "reached" means for a run.
+struct Judge {
+    goal: GoalPoint,
+    tolerance_m: f64,
+}
+
+/// Steps until the firmware reports arrival (then settles) or the timeout.
+fn run_until_arrived(
+    sim: &mut Sim,
+    kind: &'static str,
+    timeout_ms: u64,
+    judge: &Judge,
+) -> RunReport {
+    let (t0, c0, d0) = (sim.now_us(), sim.collisions(), sim.distance_m());
+    let mut arrived = false;
+    for _ in 0..timeout_ms {
+        sim.step();
+        if sim.robot().core.arrived {
+            arrived = true;
+            sim.run_for(SETTLE_MS);
+            break;
+        }
+    }
+    let t = sim.truth();
+    let goal_error = (t.x - judge.goal.x_m).hypot(t.y - judge.goal.y_m);
+    let known = sim.robot().core.objects.nav().grid();
+    let map_known_cells = sim.robot().core.objects.has_map().then(|| {
+        (0..usize::from(known.height()))
+            .flat_map(|y| (0..usize::from(known.width())).map(move |x| (x, y)))
+            .filter(|&(x, y)| known.get(x, y) != crate::arena::Cell::Unknown)
+            .count() as u32
+    });
+    RunReport {
+        kind,
+        arrived,
+        reached: arrived && goal_error <= judge.tolerance_m,
+        sim_s: (sim.now_us() - t0) as f64 * 1e-6,
+        collisions: sim.collisions() - c0,
+        distance_m: sim.distance_m() - d0,
+        pose_error_m: sim.pose_error_m(),
+        map_known_cells,
+        plan_regions: None,
+    }
+}
+
+/// Seed 004 §6-7 after an exploration run: segment the robot's own map, plan from the start
+/// to where it found the goal, carry it back to the start, and execute the plan.
+fn plan_and_execute(
+    sim: &mut Sim,
+    start: Pose,
+    timeout_ms: u64,
+    judge: &Judge,
+) -> Result<RunReport, ScenarioError> {
+    // Where the robot believes it met the goal area: a free cell it has visited.
+    let found = sim.believed();
+    apply(sim, Command::Stop, "Stop")?;
+    apply(sim, Command::Segment, "Segment")?;
+    let from = PointMm {
+        x_mm: mm(start.x),
+        y_mm: mm(start.y),
+    };
+    let to = PointMm {
+        x_mm: mm(found.x),
+        y_mm: mm(found.y),
+    };
+    apply(
+        sim,
+        Command::Plan {
+            from: Some(from),
+            to: Some(to),
+        },
+        "Plan",
+    )?;
+    let (plan_id, regions) = match sim.robot().core.objects.plan() {
+        Some((id, view)) => (id, view.waypoint_count().saturating_sub(2)),
+        None => {
+            return Err(ScenarioError::Refused {
+                what: "Plan",
+                reason: NackReason::NoPlan,
+            })
+        }
+    };
+    // The operator carries the robot back and tells it where it is (seed 004: the start is
+    // known); the compass gives the heading.
+    sim.place(start)?;
+    let pose = protocol::Pose {
+        x_mm: mm(start.x),
+        y_mm: mm(start.y),
+        heading_mrad: (start.heading * 1000.0).round() as i16,
+    };
+    apply(sim, Command::SetPose { pose }, "SetPose")?;
+    apply(sim, Command::ExecutePlan { plan_id }, "ExecutePlan")?;
+    let mut run = run_until_arrived(sim, "execute_plan", timeout_ms, judge);
+    run.plan_regions = Some(u32::from(regions));
+    Ok(run)
 }
 
 /// Tells the firmware what an operator would: the beacon position and the arena's bounds.
@@ -295,13 +452,19 @@ fn brief_firmware(sim: &mut Sim) -> Result<(), ScenarioError> {
             apply(sim, cmd, "SetParam(beacon)")?;
         }
     }
-    let bounds = sim.world().arena().bounds;
-    let dead = &mut sim.robot_mut().core.dead.params.bounds;
-    *dead = Bounds {
-        min: FwPoint::new(bounds.min.x as f32, bounds.min.y as f32),
-        max: FwPoint::new(bounds.max.x as f32, bounds.max.y as f32),
-        ..*dead
-    };
+    let b = sim.world().arena().bounds;
+    for (id, v) in [
+        (PARAM_ARENA_MIN_X, b.min.x),
+        (PARAM_ARENA_MIN_Y, b.min.y),
+        (PARAM_ARENA_MAX_X, b.max.x),
+        (PARAM_ARENA_MAX_Y, b.max.y),
+    ] {
+        let cmd = Command::SetParam {
+            id: ParamId(id),
+            value: v as f32,
+        };
+        apply(sim, cmd, "SetParam(arena bounds)")?;
+    }
     Ok(())
 }
 

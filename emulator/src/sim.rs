@@ -345,6 +345,16 @@ impl Sim {
         self.hal.now_us
     }
 
+    /// Carries the robot to `pose` and sets it down at rest (between two runs, as an
+    /// operator does). Only the world changes: what the robot believes is the robot's
+    /// business (a station would tell it with `SetPose`).
+    pub fn place(&mut self, pose: Pose) -> Result<(), SimError> {
+        let radius = f64::from(self.hal.profile.body_diameter_m) / 2.0;
+        let pose = start_pose(&self.hal.world, Some(pose), radius)?;
+        self.hal.body.place(pose);
+        Ok(())
+    }
+
     /// The true pose.
     pub fn truth(&self) -> Pose {
         self.hal.body.pose()

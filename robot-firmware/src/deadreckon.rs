@@ -248,8 +248,10 @@ pub struct DeadReckonInput {
     /// Compass heading θ, radians counter-clockwise from +x (the profile converts compass
     /// degrees to this).
     pub heading_rad: f32,
-    /// Nominal speed command in force (seed 004 §4: 25, 50, 75; negative = reverse).
-    pub nominal_speed: f32,
+    /// Nominal speed command of each wheel, left and right (seed 004 §4: 25, 50, 75;
+    /// negative = reverse). Each wheel goes through the speed table before averaging, since
+    /// the table is not linear: a turning robot's forward speed is the mean of its wheels'.
+    pub nominal: [f32; 2],
     /// Battery level, same scale as [`SpeedTable::battery`].
     pub battery: f32,
 }
@@ -310,10 +312,10 @@ impl DeadReckoner {
             None => 0,
         };
         self.last_ms = Some(now_ms);
-        let v = self
-            .params
-            .speed
-            .speed_mps(input.nominal_speed, input.battery);
+        let [l, r] = input
+            .nominal
+            .map(|n| self.params.speed.speed_mps(n, input.battery));
+        let v = (l + r) * 0.5;
         // seed 004 §4: Δs = v Δt; x += Δs cos θ; y += Δs sin θ
         let ds = v * dt_ms as f32 * 1e-3;
         let moved = Point::new(
@@ -396,7 +398,7 @@ mod tests {
     fn input(heading_rad: f32, nominal_speed: f32) -> DeadReckonInput {
         DeadReckonInput {
             heading_rad,
-            nominal_speed,
+            nominal: [nominal_speed; 2],
             battery: 0.5,
         }
     }

@@ -158,9 +158,16 @@ impl Executor {
             };
             return self.escape(pose, ir, guided, index, heading, false, here);
         }
-        // Heuristic 2: aim at the next sub-point, not the far end.
+        // Heuristic 2: aim at the next sub-point, not the far end. Sub-points the robot is
+        // already past (measured along the segment) are skipped, so it never turns back.
         let seg_len = self.seg_from.distance_to(end);
         let subs = sub_count(seg_len, p.sub_segment_m);
+        let along = progress(self.seg_from, end, here) + p.pass_m / seg_len.max(1e-3);
+        let past = libm::floorf(along * subs as f32).max(0.0) as u32;
+        let sub = u16::try_from(past.min(subs.saturating_sub(1)))
+            .unwrap_or(u16::MAX)
+            .max(sub);
+        self.phase = ExecPhase::Driving { index, sub };
         let target = if u32::from(sub) + 1 >= subs {
             end
         } else {
@@ -239,6 +246,17 @@ impl Executor {
         // Drive along the orthogonal; guided motion's reactions still avoid what it meets.
         let ahead = Point::new(pose.x + libm::cosf(heading), pose.y + libm::sinf(heading));
         guided_step(pose, ahead, ir, guided).0
+    }
+}
+
+/// How far along `a`-`b` the projection of `p` lies, 0..=1.
+fn progress(a: Point, b: Point, p: Point) -> f32 {
+    let (dx, dy) = (b.x - a.x, b.y - a.y);
+    let len2 = dx * dx + dy * dy;
+    if len2 > 0.0 {
+        (((p.x - a.x) * dx + (p.y - a.y) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        1.0
     }
 }
 

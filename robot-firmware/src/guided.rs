@@ -47,6 +47,9 @@ impl Default for GuidedParams {
     }
 }
 
+/// Sensors within this of straight ahead see what blocks the way, radians (20 degrees).
+const FRONT_RAD: f32 = 0.35;
+
 /// What guided motion did this cycle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum GuidedPhase {
@@ -76,10 +79,12 @@ pub fn guided_step(
     // Obstacle pressure: left sensors push right, right sensors push left.
     let mut left_pressure = 0.0f32;
     let mut right_pressure = 0.0f32;
+    let mut front = false;
     let mut seen = false;
     for &(reading, angle) in ir {
         if reading >= p.obstacle_ir {
             seen = true;
+            front |= libm::fabsf(angle) < FRONT_RAD;
             let w = f32::from(reading);
             if angle >= 0.0 {
                 left_pressure += w;
@@ -89,13 +94,18 @@ pub fn guided_step(
         }
     }
     if seen {
-        // Turn away from the side that reads more; a dead-ahead obstacle (equal pressure)
-        // is passed on the right-hand side, consistently, so the robot does not dither.
+        // Away from the side that reads more; a dead-ahead obstacle (equal pressure) is
+        // passed on the right-hand side, consistently, so the robot does not dither.
+        let away_right = left_pressure >= right_pressure;
         let turn = p.slow_speed;
-        let cmd = if left_pressure >= right_pressure {
-            MotorCommand::new(units(turn), units(-turn * 0.5))
-        } else {
-            MotorCommand::new(units(-turn * 0.5), units(turn))
+        let cmd = match (front, away_right) {
+            // Blocked ahead: turn on the spot.
+            (true, true) => MotorCommand::new(units(turn), units(-turn * 0.5)),
+            (true, false) => MotorCommand::new(units(-turn * 0.5), units(turn)),
+            // A wall beside: keep going at reduced speed, veering off it (seed 004 §7:
+            // "reduces speed and stops applying the speed correction").
+            (false, true) => MotorCommand::new(units(turn), units(turn * 0.3)),
+            (false, false) => MotorCommand::new(units(turn * 0.3), units(turn)),
         };
         return (cmd, GuidedPhase::Avoiding);
     }

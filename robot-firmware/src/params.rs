@@ -74,7 +74,7 @@ const fn pi(id: u16, name: &'static str, unit: &'static str, min: f32, max: f32)
 }
 
 /// Every parameter, by id.
-pub const PARAMS: [ParamInfo; 27] = [
+pub const PARAMS: [ParamInfo; 31] = [
     pi(0, "failsafe_ms", "ms", 50.0, 10_000.0),
     pi(1, "telemetry_hz", "Hz", 0.0, 50.0),
     p(2, "teleop_max_mm_s", "mm/s", 0.0, 2000.0),
@@ -102,6 +102,11 @@ pub const PARAMS: [ParamInfo; 27] = [
     p(24, "guided_heading_gain", "nominal/rad", 0.0, 500.0),
     pi(25, "guided_obstacle_ir", "counts", 0.0, 1023.0),
     p(26, "guided_arrival_m", "m", 0.01, 2.0),
+    // seed 004 §4: a position outside the labyrinth is replaced by the closest inside point.
+    p(27, "arena_min_x_m", "m", -100.0, 100.0),
+    p(28, "arena_min_y_m", "m", -100.0, 100.0),
+    p(29, "arena_max_x_m", "m", -100.0, 100.0),
+    p(30, "arena_max_y_m", "m", -100.0, 100.0),
 ];
 
 /// The description of parameter `id`.
@@ -161,6 +166,10 @@ impl Tunables<'_> {
             24 => Slot::F32(&mut self.guided.heading_gain),
             25 => Slot::U16(&mut self.guided.obstacle_ir),
             26 => Slot::F32(&mut self.guided.arrival_m),
+            27 => Slot::F32(&mut self.dead_reckon.bounds.min.x),
+            28 => Slot::F32(&mut self.dead_reckon.bounds.min.y),
+            29 => Slot::F32(&mut self.dead_reckon.bounds.max.x),
+            30 => Slot::F32(&mut self.dead_reckon.bounds.max.y),
             _ => return None,
         })
     }

@@ -17,6 +17,8 @@ use protocol::{AckInfo, Command, Event, EventCode, Message, Mode, NackReason, Po
 
 use crate::behaviour::{self, Arbiter, ArbiterParams, BehaviourSet, Inputs, Side};
 use crate::deadreckon::{DeadReckonInput, DeadReckonParams, DeadReckoner, DegradeEvent};
+use crate::execute::{ExecuteParams, Executor};
+use crate::explore::{ExploreParams, Explorer};
 use crate::guided::{guided_step, GuidedParams, GuidedPhase};
 use crate::hal::{BeaconReading, Hal, MotorCommand};
 use crate::link::{Identity, Inbound, Link, LinkStatus, Reply, Response};
@@ -26,6 +28,7 @@ use crate::profile::Profile;
 use crate::telemetry;
 use crate::transfer::{Installed, Objects};
 
+mod explore;
 mod follow;
 
 pub use follow::Execution;
@@ -117,7 +120,19 @@ pub struct Core {
     pub objects: Objects,
     /// Progress through the installed plan in `Mode::ExecutePlan`.
     pub exec: Option<Execution>,
+    /// Seed 004 §7 heuristics for guided plan legs.
+    pub executor: Executor,
+    /// The executing plan's waypoints, metres (copied from the plan object at start).
+    plan_points: [Point; MAX_PLAN_POINTS],
+    plan_points_len: usize,
+    /// Seed 004 §5 reactive search with mapping.
+    pub explorer: Explorer,
+    /// Time of the current control cycle, ms.
+    cycle_ms: u32,
 }
+
+/// Waypoints the robot keeps for execution: start, 256 region centres, goal.
+pub const MAX_PLAN_POINTS: usize = 258;
 
 /// The whole robot.
 pub struct Robot {
@@ -174,6 +189,11 @@ impl Robot {
                 emulated: opts.emulated,
                 objects: Objects::new(),
                 exec: None,
+                executor: Executor::new(ExecuteParams::default(), opts.start.point()),
+                plan_points: [Point::new(0.0, 0.0); MAX_PLAN_POINTS],
+                plan_points_len: 0,
+                explorer: Explorer::new(ExploreParams::default(), opts.seed ^ 0x5EED_0004),
+                cycle_ms: 0,
             },
         }
     }
@@ -333,6 +353,7 @@ impl Core {
 
     fn try_apply(&mut self, command: Command, now_ms: u32) -> Result<AckInfo, NackReason> {
         match command {
+            Command::SetMode(Mode::Explore) => self.start_exploration()?,
             Command::SetMode(mode) => {
                 self.check_mode(mode)?;
                 if mode == Mode::GoTo && self.goal.is_none() {
@@ -390,8 +411,7 @@ impl Core {
                 // Without encoders the heading comes from the compass; only x, y are set.
                 self.dead.set_position(p);
             }
-            // Exploration arrives with the exploration work; until then the robot says so.
-            Command::StartExploration => return Err(NackReason::Unsupported),
+            Command::StartExploration => self.start_exploration()?,
             Command::ExecutePlan { plan_id } => self.start_plan(plan_id)?,
             Command::Segment => {
                 self.objects.segment()?;
@@ -459,7 +479,8 @@ impl Core {
                     Err(NackReason::Unsupported)
                 }
             }
-            Mode::Explore => Err(NackReason::Unsupported),
+            // Handled by `start_exploration`, which `SetMode(Explore)` is routed to.
+            Mode::Explore => Err(NackReason::BadState),
             // `ExecutePlan { plan_id }` starts a plan: the id proves which one the station
             // means, so `SetMode` alone is refused.
             Mode::ExecutePlan if self.objects.has_plan() => Err(NackReason::BadState),
@@ -525,6 +546,7 @@ impl Core {
 
     fn control_cycle<H: Hal>(&mut self, hal: &mut H, now_us: u64) {
         let now_ms = ms(now_us);
+        self.cycle_ms = now_ms;
         let t = &mut self.timing;
         let cycle_us = u64::from(self.profile.cycle_us);
         if let Some(last) = t.last_cycle_us {
@@ -592,13 +614,12 @@ impl Core {
             if let Some(h) = self.sensors.compass {
                 self.compass_heading = wrap_angle(h);
             }
-            let nominal = (f32::from(self.motor.left) + f32::from(self.motor.right)) * 0.5;
             let battery = self.battery_level();
             self.dead.step(
                 now_ms,
                 DeadReckonInput {
                     heading_rad: self.compass_heading,
-                    nominal_speed: nominal,
+                    nominal: [f32::from(self.motor.left), f32::from(self.motor.right)],
                     battery,
                 },
             );
@@ -661,7 +682,7 @@ impl Core {
             | Mode::EdgeFollowRight
             | Mode::SeekLight => self.behaviour_command(),
             Mode::ExecutePlan => self.plan_command(),
-            Mode::Explore => MotorCommand::STOP,
+            Mode::Explore => self.explore_command(),
         }
     }
 

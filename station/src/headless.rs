@@ -114,6 +114,7 @@ async fn interactive(
         SerialConnector::new(&path, baud),
         LinkOptions {
             tap: Some(tap),
+            read_coalesce: crate::tui::READ_COALESCE,
             ..LinkOptions::default()
         },
     );

@@ -32,7 +32,10 @@ const TICK: Duration = Duration::from_millis(50);
 /// Most redraws a second for changes that come from the link or the clock; a key redraws at
 /// once. 50 Hz telemetry and truth are 100 events a second: drawing each would cost ~5 % of a
 /// core, drawing at this rate ~1 % (measured; README "Performance").
-pub const LINK_FPS: u32 = 12;
+pub const LINK_FPS: u32 = 10;
+/// The TUI's link reads at most this often (`LinkOptions::read_coalesce`): an emulator or UART
+/// delivers a 50 Hz telemetry stream in ~340 small reads a second; this makes it ~100.
+pub const READ_COALESCE: Duration = Duration::from_millis(10);
 
 /// Runs the TUI until the operator quits. Restores the terminal whatever happens. `recorder`
 /// records the link while the operator asks (`R`); a recording running at quit is saved.

@@ -300,3 +300,20 @@ fn text_output_is_a_summary_and_a_picture() {
         assert!(text.contains(needle), "{needle}: {text}");
     }
 }
+
+#[test]
+fn ascii_grids_plan_from_their_s_to_their_g() {
+    let dir = std::env::temp_dir().join(format!("station-plan-ascii-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("room.txt");
+    std::fs::write(
+        &file,
+        "# cell 0.3\n#########\n#S..#...#\n#...#.G.#\n#.......#\n#########\n",
+    )
+    .unwrap();
+    let v = ok_json(&["plan", "--map", file.to_str().unwrap(), "--json"]);
+    let w = polyline(&v["waypoints"]);
+    assert_eq!(w.first(), Some(&(0.45, 1.05)));
+    assert_eq!(w.last(), Some(&(1.95, 0.75)));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -11,7 +11,7 @@ use station::action::Action;
 use station::app::arena::ArenaOverlay;
 use station::app::{App, AppOptions, View};
 use station::link::{Connection, LinkEvent, PeerInfo};
-use station::plan::{NavMap, PlanState};
+use station::plan::PlanState;
 
 fn connect(app: &mut App) {
     let peer = PeerInfo {
@@ -199,19 +199,26 @@ fn a_map_object_from_the_robot_is_shown_through_the_seam() {
     for y in 0..3 {
         g.set(3, y, Cell::Obstacle).unwrap();
     }
-    let map = NavMap::from_packed(
-        "from robot",
-        6,
-        4,
-        250,
-        (-500, 0),
-        Some((-375, 125)),
-        Some((875, 125)),
-        g.as_bytes(),
-    )
-    .unwrap();
+    use protocol::object::{encode_map, MapHeader};
+    use protocol::PointMm;
+    let pt = |x_mm, y_mm| PointMm { x_mm, y_mm };
+    let header = MapHeader {
+        width: 6,
+        height: 4,
+        cell_mm: 250,
+        origin: pt(-500, 0),
+        start: Some(pt(-375, 125)),
+        goal: Some(pt(875, 125)),
+    };
+    let mut bytes = vec![0u8; header.object_len()];
+    encode_map(&header, g.as_bytes(), &mut bytes).unwrap();
     let mut app = App::new(AppOptions::default());
-    app.map.plan.show_map(map).unwrap();
+    assert!(app
+        .map
+        .plan
+        .show_map_object("from robot", &bytes[..10])
+        .is_err());
+    app.map.plan.show_map_object("from robot", &bytes).unwrap();
     app.update(Action::ShowView(View::Map));
     app.update(Action::PlanLocal);
     let r = app.map.plan.result.clone().unwrap();

@@ -7,10 +7,11 @@
 //! with encoders (seed 000 §4, khepera). Reaching the last waypoint sends `PlanFinished` and
 //! `GoalReached` and stops; replacing the plan while it runs sends `PlanAborted`.
 //!
-//! Not here: seed 004 §7's exception heuristics (turning orthogonally when more than 0.6 m off
-//! the ideal segment, splitting long segments). They belong to the exploration work's
-//! `crate::execute::Executor`, which can replace `guided_leg` (it takes the waypoints as a
-//! `&[Point]`, which `Objects::plan_points` fills).
+//! On a compass robot the legs go through `crate::execute::Executor`, which adds seed 004
+//! §7's exception heuristics to guided motion: never more than 0.6 m from the ideal segment
+//! (at the limit, turn orthogonally back towards it) and long segments split into
+//! sub-segments. The plan's waypoints are copied out of the plan object when execution
+//! starts, so a plan replaced mid-run cannot change the points being driven to.
 //!
 //! What can fail: `ExecutePlan` is refused (`NoPlan`, `PlanIdMismatch`, `Unsupported`) and
 //! then changes nothing; a plan that vanishes mid-run stops the robot. Never a panic.
@@ -19,6 +20,7 @@ use protocol::{EventCode, Mode, NackReason};
 
 use super::Core;
 use crate::behaviour::{self, drift::DriftPhase};
+use crate::execute::{ExecPhase, Executor};
 use crate::guided::{guided_step, GuidedPhase};
 use crate::hal::MotorCommand;
 use crate::odometry::Point;
@@ -32,6 +34,8 @@ pub struct Execution {
     pub next: u16,
     /// Number of waypoints.
     pub count: u16,
+    /// Past the last waypoint without seeing the goal area: heading for the goal light.
+    pub approaching: bool,
 }
 
 impl Core {
@@ -45,11 +49,15 @@ impl Core {
         {
             return Err(NackReason::Unsupported);
         }
+        let count = view.waypoint_count();
         self.exec = Some(Execution {
             plan_id,
             next: 0,
-            count: view.waypoint_count(),
+            count,
+            approaching: false,
         });
+        self.plan_points_len = self.objects.plan_points(&mut self.plan_points);
+        self.executor = Executor::new(self.executor.params, self.pose().point());
         // Entering the mode (again) starts from the first waypoint.
         self.enter(Mode::ExecutePlan);
         Ok(())
@@ -84,7 +92,7 @@ impl Core {
         if self.arrived {
             return MotorCommand::STOP;
         }
-        if self.waypoint(exec.next).is_none() {
+        if !exec.approaching && self.waypoint(exec.next).is_none() {
             self.abort_plan();
             return MotorCommand::STOP;
         }
@@ -95,28 +103,74 @@ impl Core {
         }
     }
 
-    /// Guided motion towards the current waypoint; passes every waypoint already reached in
-    /// the same cycle (bounded by the waypoint count) so the robot does not pause at each.
+    /// Guided motion through the waypoints with the §7 heuristics (`Executor`).
     fn guided_leg(&mut self) -> MotorCommand {
         let mut ir = [(0u16, 0.0f32); 8];
         let n = self.profile.ir.count.min(8);
         for (i, slot) in ir.iter_mut().enumerate().take(n) {
             *slot = (self.sensors.ir[i], self.profile.ir.angle_rad[i]);
         }
-        let count = self.exec.map_or(0, |e| e.count);
-        for _ in 0..=count {
-            let Some(target) = self.exec.and_then(|e| self.waypoint(e.next)) else {
-                return MotorCommand::STOP;
-            };
-            let (cmd, phase) = guided_step(self.pose(), target, &ir[..n], &self.guided);
-            if phase != GuidedPhase::Arrived {
-                return cmd;
+        if self.profile.has(protocol::caps::GROUND_SENSOR) && self.sensors.ground {
+            // In the goal area (seed 004 §3 ground sensor): the task is done, wherever the
+            // plan's last point was.
+            if let Some(exec) = self.exec.as_mut() {
+                exec.next = exec.count;
             }
-            if self.advance().is_none() {
-                break;
+            self.finish_plan();
+            return MotorCommand::STOP;
+        }
+        if self.exec.is_some_and(|e| e.approaching) {
+            return self.final_approach(&ir[..n]);
+        }
+        let points = self.plan_points.get(..self.plan_points_len).unwrap_or(&[]);
+        let (cmd, report) = self
+            .executor
+            .step(self.pose(), &ir[..n], points, &self.guided);
+        if let (Some(i), Some(exec)) = (report.passed, self.exec.as_mut()) {
+            exec.next = u16::try_from(i + 1).unwrap_or(u16::MAX).min(exec.count);
+        }
+        if report.phase == ExecPhase::Finished {
+            let approach = self
+                .profile
+                .has(protocol::caps::GROUND_SENSOR | protocol::caps::BEACON);
+            if let Some(exec) = self.exec.as_mut() {
+                exec.next = exec.count;
+                if approach && !exec.approaching {
+                    // The plan ends near where the goal area was found; the area itself is
+                    // what counts (seed 004 §2), so finish the approach towards the light.
+                    exec.approaching = true;
+                    let count = i32::from(exec.count);
+                    self.push_event(EventCode::PlanFinished, count);
+                    return self.final_approach(&ir[..n]);
+                }
+            }
+            self.finish_plan();
+            return MotorCommand::STOP;
+        }
+        cmd
+    }
+
+    /// After the last waypoint: guided motion towards the goal light until the ground sensor
+    /// sees the goal area.
+    fn final_approach(&mut self, ir: &[(u16, f32)]) -> MotorCommand {
+        let (cmd, phase) = guided_step(self.pose(), self.dead.params.beacon, ir, &self.guided);
+        if phase == GuidedPhase::Arrived {
+            // At the light without seeing the area: nothing more to drive to.
+            self.finish_plan();
+            return MotorCommand::STOP;
+        }
+        cmd
+    }
+
+    /// The task is done: `PlanFinished` (unless the approach already sent it), then
+    /// `GoalReached`, and stop.
+    fn finish_plan(&mut self) {
+        if let Some(exec) = self.exec {
+            if !exec.approaching {
+                self.push_event(EventCode::PlanFinished, i32::from(exec.count));
             }
         }
-        MotorCommand::STOP
+        self.mark_arrived();
     }
 
     /// The arbiter's `GoTo` towards the current waypoint; the next one is set when the drift

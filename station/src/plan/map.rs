@@ -226,6 +226,25 @@ impl NavMap {
         ))
     }
 
+    /// A Map object's bytes (PROTOCOL.md §12, e.g. downloaded from the robot), checked by
+    /// `protocol::object::MapView::parse`.
+    pub fn from_map_object(name: &str, bytes: &[u8]) -> Result<NavMap, NavError> {
+        let v = protocol::object::MapView::parse(bytes)
+            .map_err(|e| NavError::BadOption(format!("not a usable map object: {e}")))?;
+        let h = v.header;
+        let mm = |p: protocol::PointMm| (p.x_mm, p.y_mm);
+        NavMap::from_packed(
+            name,
+            h.width,
+            h.height,
+            h.cell_mm,
+            mm(h.origin),
+            h.start.map(mm),
+            h.goal.map(mm),
+            v.cells(),
+        )
+    }
+
     /// Cell side, metres.
     pub fn cell_m(&self) -> f64 {
         f64::from(self.grid.geometry().cell_mm()) / 1000.0

@@ -3,9 +3,9 @@
 //!
 //! Layer: app state, no I/O and no clock of its own (timings are measured around the nav
 //! calls, for display only). The map comes from `--arena FILE` or the built-in emulator's
-//! arena ([`PlanState::from_map`]); a map received from the robot enters through
-//! [`PlanState::show_map`] (the seam for the map/plan transfers: parse the Map object, build a
-//! [`NavMap::from_packed`], call it). Planning is always smoothed too: the map layers choose
+//! arena ([`PlanState::for_arena`]); a map received from the robot enters through
+//! [`PlanState::show_map_object`] (the seam for map downloads: the Map object's bytes, parsed
+//! by `protocol::object::MapView`), or [`PlanState::show_map`] for a map built otherwise. Planning is always smoothed too: the map layers choose
 //! what to show. Cannot fail: failures become a message for the log and the map title.
 
 use super::map::{MapOptions, NavMap};
@@ -64,6 +64,12 @@ impl PlanState {
             ..PlanState::default()
         };
         Ok(())
+    }
+
+    /// The seam for map downloads: shows the Map object `bytes` (PROTOCOL.md §12) as the
+    /// planning map. On an error the current map stays.
+    pub fn show_map_object(&mut self, name: &str, bytes: &[u8]) -> Result<(), NavError> {
+        self.show_map(NavMap::from_map_object(name, bytes)?)
     }
 
     /// The segmented map, if there is one.
