@@ -82,4 +82,6 @@ pub enum Action {
     ToggleRecording,
     /// The recorder started, finished or failed.
     Recording(crate::record::live::RecordingNote),
+    /// Upload, download, plan on the robot, execute, explore (`app::transfers`).
+    Transfer(crate::app::transfers::TransferAction),
 }

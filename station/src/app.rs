@@ -12,6 +12,7 @@ pub mod arena;
 pub mod history;
 pub mod log;
 pub mod params;
+pub mod transfers;
 
 use std::collections::HashMap;
 
@@ -147,6 +148,8 @@ pub struct App {
     pub chart: usize,
     /// The recording in progress (`R`): file name and station time it started.
     pub recording: Option<(String, u64)>,
+    /// Map and plan transfers, the robot's objects, the upload prompt (`app::transfers`).
+    pub transfers: transfers::Transfers,
     next_id: CommandId,
     pending: HashMap<CommandId, Pending>,
     outbox: Vec<(CommandId, Command)>,
@@ -190,6 +193,7 @@ impl App {
             rate_hz: None,
             chart: 0,
             recording: None,
+            transfers: transfers::Transfers::default(),
             next_id: 1,
             pending: HashMap::new(),
             outbox: Vec::new(),
@@ -304,6 +308,7 @@ impl App {
             // Done by the TUI loop, which owns the file; it reports with `Recording`.
             Action::ToggleRecording => {}
             Action::Recording(note) => self.on_recording(note),
+            Action::Transfer(a) => self.on_transfer_action(a),
         }
     }
 
@@ -316,6 +321,7 @@ impl App {
         if self.teleop.driving && due {
             self.send_teleop();
         }
+        self.transfers_tick();
     }
 
     fn back(&mut self) {
@@ -438,6 +444,9 @@ impl App {
     }
 
     fn on_link(&mut self, ev: LinkEvent) {
+        if self.transfers_on_link(&ev) {
+            return;
+        }
         match ev {
             LinkEvent::Connection(c) => self.on_connection(c),
             LinkEvent::Telemetry(t) => self.on_telemetry(t),

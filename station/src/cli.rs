@@ -1,5 +1,6 @@
 //! The command line: `station [--port P]`, `station ports`, `station send ...`,
-//! `station stats ...`, `station plan ...`, `station segment ...`, `station record ...`,
+//! `station stats ...`, `station upload-map ...`, `station download-map ...`,
+//! `station upload-plan ...`, `station plan ...`, `station segment ...`, `station record ...`,
 //! `station replay ...`, `station export ...`.
 //!
 //! Layer: argument parsing (clap derive) and dispatch; `main.rs` only calls `run`. Parsing
@@ -78,6 +79,43 @@ pub enum Sub {
         #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
         timeout: f64,
     },
+    /// Upload a map to the robot: any map file `station plan` reads, or a Map object file
+    ///
+    /// The map is gridded as `station plan` grids it (--cell, --radius) and sent as a Map
+    /// object, with its start marker and its goal (the point `station plan` plans to), in
+    /// windowed, resumable, CRC-checked chunks. A map larger than the robot holds (the
+    /// map_capacity of its HelloReply: 64 x 64 cells on the robot firmware) is refused
+    /// before anything is sent, with a cell size that fits. Exit status 0 when the robot
+    /// holds the map (installed now, or held already: then nothing is sent), else 1.
+    ///
+    /// Examples:
+    ///   station upload-map --port /dev/ttyUSB0 --map builtin:micro-rato-99
+    ///   station upload-map --port /dev/ttyUSB0 --map lab.xml --cell 0.25 --json
+    #[command(verbatim_doc_comment)]
+    UploadMap(crate::transfer::command::UploadMapArgs),
+    /// Download the robot's map (the one uploaded, or the one it built exploring)
+    ///
+    /// The file is a Map object (PROTOCOL.md §12), written to a temporary file and renamed
+    /// when complete; --ascii prints the map (# obstacle, . free, ? unknown, S start, G
+    /// goal, top row first). Exit status 1 when the robot holds no map or the transfer fails.
+    ///
+    /// Examples:
+    ///   station download-map --port /dev/ttyUSB0 --out robot-map.obj
+    ///   station download-map --port /dev/ttyUSB0 --ascii
+    #[command(verbatim_doc_comment)]
+    DownloadMap(crate::transfer::command::DownloadMapArgs),
+    /// Upload a plan to the robot: a Plan object file from `station plan --out-object`
+    ///
+    /// The robot installs it (any plan it was executing is aborted); `station send execute
+    /// ID` then drives it. The plan's map id should be the robot's map's (upload that map
+    /// with the same --cell and --radius first).
+    ///
+    /// Examples:
+    ///   station plan --map builtin:micro-rato-99 --out-object plan.obj
+    ///   station upload-plan --port /dev/ttyUSB0 --plan plan.obj
+    ///   station send --port /dev/ttyUSB0 execute 0x1234abcd
+    #[command(verbatim_doc_comment)]
+    UploadPlan(crate::transfer::command::UploadPlanArgs),
     /// Plan a path on a map file with the robot's own planner; no robot needed
     ///
     /// Seed 004: the map becomes a grid (0.3 m cells), its free cells squares, and A* finds
@@ -180,6 +218,35 @@ pub enum SendCmd {
         #[arg(value_parser = clap::value_parser!(u8).range(0..=50))]
         hz: u8,
     },
+    /// Start exploring: the robot searches for the goal and maps the arena as it goes
+    ///
+    /// Mode Explore (seed 004 §5); needs a compass and a beacon sensor (micro-rato). Follow
+    /// the map it builds with `station download-map --ascii`.
+    Explore,
+    /// Segment the robot's map into free squares (seed 004 §6).
+    Segment,
+    /// Plan on the robot; prints the new plan's id, which `execute` takes
+    ///
+    /// From where the robot believes it is to its map's goal, unless --from / --to say
+    /// otherwise. The robot segments its map first if needed.
+    Plan {
+        /// Start, metres in the map frame [default: where the robot believes it is].
+        #[arg(long, value_name = "X,Y", value_parser = crate::plan::command::parse_point,
+              allow_hyphen_values = true)]
+        from: Option<(f64, f64)>,
+        /// Goal, metres [default: the goal of the robot's map].
+        #[arg(long, value_name = "X,Y", value_parser = crate::plan::command::parse_point,
+              allow_hyphen_values = true)]
+        to: Option<(f64, f64)>,
+    },
+    /// Execute the robot's installed plan, named by its id
+    ///
+    /// ID is 0x-hex or decimal, as `send plan` and `upload-plan` print it; another id is
+    /// refused (plan id mismatch), so the robot never drives a plan you did not mean.
+    Execute {
+        #[arg(value_name = "ID", value_parser = parse_plan_id)]
+        plan_id: u32,
+    },
 }
 
 #[derive(Debug, Subcommand, Clone, PartialEq)]
@@ -250,8 +317,32 @@ impl SendCmd {
             } => Command::GetParam { id: ParamId(name) },
             SendCmd::Stop => Command::Stop,
             SendCmd::Rate { hz } => Command::SetTelemetryRate { hz },
+            SendCmd::Explore => Command::StartExploration,
+            SendCmd::Segment => Command::Segment,
+            SendCmd::Plan { from, to } => Command::Plan {
+                from: from.map(point_mm),
+                to: to.map(point_mm),
+            },
+            SendCmd::Execute { plan_id } => Command::ExecutePlan { plan_id },
         }
     }
+}
+
+fn point_mm((x, y): (f64, f64)) -> PointMm {
+    PointMm {
+        x_mm: (x * 1000.0).round() as i32,
+        y_mm: (y * 1000.0).round() as i32,
+    }
+}
+
+/// A plan id: `0x`-prefixed hex (as printed) or decimal.
+fn parse_plan_id(s: &str) -> Result<u32, String> {
+    let t = s.trim();
+    let parsed = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(hex) => u32::from_str_radix(hex, 16),
+        None => t.parse::<u32>(),
+    };
+    parsed.map_err(|_| format!("{s:?} is not a plan id (0x-hex like 0x7692f253, or decimal)"))
 }
 
 pub(crate) fn parse_baud(s: &str) -> Result<u32, String> {
@@ -368,6 +459,25 @@ mod tests {
             (&["param", "get", "7"], Command::GetParam { id: ParamId(7) }),
             (&["stop"], Command::Stop),
             (&["rate", "20"], Command::SetTelemetryRate { hz: 20 }),
+            (&["explore"], Command::StartExploration),
+            (&["segment"], Command::Segment),
+            (
+                &["plan", "--to", "4.35,-0.45"],
+                Command::Plan {
+                    from: None,
+                    to: Some(PointMm {
+                        x_mm: 4350,
+                        y_mm: -450,
+                    }),
+                },
+            ),
+            (
+                &["execute", "0x7692f253"],
+                Command::ExecutePlan {
+                    plan_id: 0x7692_f253,
+                },
+            ),
+            (&["execute", "42"], Command::ExecutePlan { plan_id: 42 }),
         ];
         for (args, want) in cases {
             let mut full = vec!["send", "--port", "/dev/null"];
@@ -412,6 +522,9 @@ mod tests {
             (&["--baud", "0"], "not a usable baud rate"),
             (&["stats", "--port", "p", "--seconds", "0"], "out of range"),
             (&["frobnicate"], "unrecognized subcommand"),
+            (&["send", "--port", "p", "execute", "0xzz"], "not a plan id"),
+            (&["download-map", "--port", "p"], "--out <FILE>"),
+            (&["upload-map", "--port", "p"], "--map <FILE>"),
         ];
         for (args, needle) in cases {
             match parse(args) {

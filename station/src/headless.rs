@@ -53,6 +53,9 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             json,
             timeout,
         }) => stats(&port, seconds, json, timeout).await,
+        Some(Sub::UploadMap(args)) => crate::transfer::command::upload_map(&args).await,
+        Some(Sub::DownloadMap(args)) => crate::transfer::command::download_map(&args).await,
+        Some(Sub::UploadPlan(args)) => crate::transfer::command::upload_plan(&args).await,
         Some(Sub::Plan(args)) => crate::plan::command::plan(&args),
         Some(Sub::Segment(args)) => crate::plan::command::segment(&args),
         Some(Sub::Record(args)) => crate::record::command::run(&args).await,
@@ -114,7 +117,6 @@ async fn interactive(
         SerialConnector::new(&path, baud),
         LinkOptions {
             tap: Some(tap),
-            read_coalesce: crate::tui::READ_COALESCE,
             ..LinkOptions::default()
         },
     );
@@ -186,7 +188,10 @@ fn ports(json: bool) -> anyhow::Result<ExitCode> {
 
 /// Starts a link and waits for the handshake; fails fast on a port that cannot be opened or a
 /// robot that refuses us.
-async fn connect(port: &RequiredPort, timeout_s: f64) -> anyhow::Result<(RunningLink, PeerInfo)> {
+pub(crate) async fn connect(
+    port: &RequiredPort,
+    timeout_s: f64,
+) -> anyhow::Result<(RunningLink, PeerInfo)> {
     let mut link = spawn_link(
         SerialConnector::new(&port.port, port.baud),
         LinkOptions {
@@ -220,9 +225,16 @@ async fn send(
     timeout: f64,
     cmd: &SendCmd,
 ) -> anyhow::Result<ExitCode> {
-    let (link, _peer) = connect(port, timeout).await?;
+    let (mut link, _peer) = connect(port, timeout).await?;
     let command = cmd.to_command();
     let outcome = link.handle.call(command).await;
+    // A plan made on the robot is named by its PlanInstalled event: `execute` needs the id.
+    let plan_id = match (command, outcome.is_ack()) {
+        (protocol::Command::Plan { .. }, true) => {
+            crate::transfer::command::plan_id_after(&mut link.events).await
+        }
+        _ => None,
+    };
     link.handle.shutdown();
     let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;
     let what = command_text(&command);
@@ -246,7 +258,13 @@ async fn send(
                     format!("ack: {what}: object {object:?} id {id:#010x}, {len} bytes"),
                     json!({"object": format!("{object:?}"), "id": id, "len": len, "crc": crc}),
                 ),
-                AckInfo::Done => (format!("ack: {what}"), json!(null)),
+                AckInfo::Done => match plan_id {
+                    Some(id) => (
+                        format!("ack: {what}: plan id {id:#010x}"),
+                        json!({"plan_id": id, "plan_id_hex": format!("{id:#010x}")}),
+                    ),
+                    None => (format!("ack: {what}"), json!(null)),
+                },
             };
             let v = json!({"outcome": "ack", "command": what, "sends": sends, "rtt_ms": rtt_ms,
                            "info": detail});

@@ -2,8 +2,9 @@
 //!
 //! Layer: the first step of the one-way flow. It reads the app (which mode the keys are in,
 //! where the map is drawn) but changes nothing. Key bindings depend on the context, innermost
-//! first: help open, typing a parameter value, the go-to cursor, the parameter view, then the
-//! global keys. Key release events (kitty protocol terminals) are ignored.
+//! first: help open, typing a path in the upload prompt, typing a parameter value, the go-to
+//! cursor, the parameter view, then the global keys. Key release events (kitty protocol
+//! terminals) are ignored.
 
 use protocol::Mode;
 use ratatui::crossterm::event::{
@@ -12,6 +13,7 @@ use ratatui::crossterm::event::{
 use ratatui::layout::Rect;
 
 use crate::action::Action;
+use crate::app::transfers::TransferAction;
 use crate::app::{App, View, MODES, V_STEP, W_STEP};
 use crate::ui::{self, map_layers, Panel};
 
@@ -60,6 +62,15 @@ fn key(app: &App, k: &KeyEvent) -> Option<Action> {
             KeyCode::Char('q') => Action::Quit,
             _ => Action::ToggleHelp,
         });
+    }
+    if app.transfers.prompt.is_some() {
+        return match k.code {
+            KeyCode::Char(c) => Some(Action::Transfer(TransferAction::PromptInput(c))),
+            KeyCode::Backspace => Some(Action::Transfer(TransferAction::PromptBackspace)),
+            KeyCode::Enter => Some(Action::Transfer(TransferAction::PromptCommit)),
+            KeyCode::Esc => Some(Action::Transfer(TransferAction::PromptCancel)),
+            _ => None,
+        };
     }
     if app.params.input.is_some() {
         return match k.code {
@@ -135,6 +146,11 @@ fn global(k: &KeyEvent) -> Option<Action> {
         KeyCode::Char('x') => Some(Action::ClearTracks),
         KeyCode::Char('P') => Some(Action::PlanLocal),
         KeyCode::Char('R') => Some(Action::ToggleRecording),
+        KeyCode::Char('u') => Some(Action::Transfer(TransferAction::OpenPrompt)),
+        KeyCode::Char('M') => Some(Action::Transfer(TransferAction::DownloadMap)),
+        KeyCode::Char('O') => Some(Action::Transfer(TransferAction::PlanOnRobot)),
+        KeyCode::Char('X') => Some(Action::Transfer(TransferAction::ExecutePlan)),
+        KeyCode::Char('E') => Some(Action::Transfer(TransferAction::StartExploration)),
         KeyCode::Char('o') => Some(Action::ToggleLayer(map_layers::GRID)),
         KeyCode::Char('r') => Some(Action::ToggleLayer(map_layers::REGIONS)),
         KeyCode::Char('n') => Some(Action::ToggleLayer(map_layers::PLAN)),

@@ -9,6 +9,7 @@
 //! - `plan`: planning on the station with the robot's nav code (`station plan`, map layers).
 //! - `record`, `replay`, `export`: recordings of both directions of a link, the TUI driven by
 //!   one, and their export to MCAP and CSV.
+//! - `transfer`: map and plan uploads and downloads (the engine, `station upload-map` ...).
 //! - `tui`: the terminal loop; `cli`, `headless`, `builtin`: the binary's edge.
 #![deny(unsafe_code)]
 
@@ -23,5 +24,6 @@ pub mod link;
 pub mod plan;
 pub mod record;
 pub mod replay;
+pub mod transfer;
 pub mod tui;
 pub mod ui;

@@ -33,9 +33,6 @@ const TICK: Duration = Duration::from_millis(50);
 /// once. 50 Hz telemetry and truth are 100 events a second: drawing each would cost ~5 % of a
 /// core, drawing at this rate ~1 % (measured; README "Performance").
 pub const LINK_FPS: u32 = 10;
-/// The TUI's link reads at most this often (`LinkOptions::read_coalesce`): an emulator or UART
-/// delivers a 50 Hz telemetry stream in ~340 small reads a second; this makes it ~100.
-pub const READ_COALESCE: Duration = Duration::from_millis(10);
 
 /// Runs the TUI until the operator quits. Restores the terminal whatever happens. `recorder`
 /// records the link while the operator asks (`R`); a recording running at quit is saved.
@@ -94,6 +91,9 @@ async fn event_loop(
     let mut urgent = true;
     let frame = Duration::from_secs(1) / LINK_FPS;
     let mut last_draw = Instant::now();
+    // One timer for the next allowed redraw, re-armed only when that time changes.
+    let redraw = tokio::time::sleep_until(last_draw + frame);
+    tokio::pin!(redraw);
     let result = loop {
         if dirty && (urgent || last_draw.elapsed() >= frame) {
             if let Err(e) = terminal.draw(|f| ui::render(app, f)) {
@@ -102,6 +102,9 @@ async fn event_loop(
             last_draw = Instant::now();
             dirty = false;
             urgent = false;
+        }
+        if dirty && redraw.deadline() != last_draw + frame {
+            redraw.as_mut().reset(last_draw + frame);
         }
         tokio::select! {
             ev = input_rx.recv() => match ev {
@@ -121,31 +124,35 @@ async fn event_loop(
                 None => break Ok(()),
             },
             Some(ev) = link.events.recv() => {
-                if let Some(note) = recorder.on_link_event(&ev) {
+                // Everything already queued in one go: one wake-up, one redraw decision.
+                on_link(app, recorder, ev);
+                while let Ok(ev) = link.events.try_recv() {
+                    on_link(app, recorder, ev);
+                }
+                // The tap's records carry their own times: taking them here, with the
+                // events that follow them, costs no wake-up of its own.
+                if let Some(note) = recorder.drain_taps() {
                     app.update(Action::Recording(note));
                 }
-                app.update(Action::Link(ev));
                 dirty = true;
-            }
-            Some(t) = recorder.next_tap() => {
-                if let Some(note) = recorder.on_tap(&t) {
-                    app.update(Action::Recording(note));
-                    dirty = true;
-                }
             }
             _ = tick.tick() => {
                 let driving = app.teleop.driving;
                 app.update(Action::Tick { now_ms: t0.elapsed().as_millis() as u64 });
                 dirty |= driving;
-                if let Some(note) = recorder.tick() {
+                let note = recorder.drain_taps().or_else(|| recorder.tick());
+                if let Some(note) = note {
                     app.update(Action::Recording(note));
                     dirty = true;
                 }
             }
-            () = tokio::time::sleep_until(last_draw + frame), if dirty => {}
+            () = &mut redraw, if dirty => {}
         }
         for (id, command) in app.take_outbox() {
             link.handle.submit_with_id(id, command);
+        }
+        for t in app.transfers.take_frames() {
+            link.handle.transfer(t);
         }
         if app.quit {
             break Ok(());
@@ -154,6 +161,14 @@ async fn event_loop(
     stop.store(true, Ordering::Relaxed);
     let _ = reader.join();
     result
+}
+
+/// One link event: to the recorder (connection changes), then to the app.
+fn on_link(app: &mut App, recorder: &mut TuiRecorder, ev: crate::link::LinkEvent) {
+    if let Some(note) = recorder.on_link_event(&ev) {
+        app.update(Action::Recording(note));
+    }
+    app.update(Action::Link(ev));
 }
 
 /// Reads terminal events on a thread; polls so it notices `stop` within 100 ms.

@@ -36,10 +36,6 @@ pub struct LinkOptions {
     pub write_timeout: Duration,
     /// Every byte read or written, timestamped, for recording (None: no tap).
     pub tap: Option<mpsc::UnboundedSender<TapRecord>>,
-    /// After a read, wait this long before reading again, so bytes that trickle in at the baud
-    /// rate are taken in fewer, larger reads (a USB serial adapter's latency timer does the
-    /// same). Zero: read as soon as anything arrives. Writes and timers are never delayed.
-    pub read_coalesce: Duration,
 }
 
 impl Default for LinkOptions {
@@ -50,7 +46,6 @@ impl Default for LinkOptions {
             reopen_every: Duration::from_millis(100),
             write_timeout: Duration::from_millis(500),
             tap: None,
-            read_coalesce: Duration::ZERO,
         }
     }
 }
@@ -233,26 +228,16 @@ impl Task {
         let mut buf = vec![0u8; 4096];
         let mut presence = tokio::time::interval(self.opts.reopen_every);
         presence.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-        let mut read_at: Option<Instant> = None;
         loop {
             if let Err(reason) = self.flush(&mut port).await {
                 return Ended::Closed(reason);
             }
             self.forward();
             let deadline = self.t0 + Duration::from_millis(self.machine.next_deadline());
-            let read = async {
-                if let Some(t) = read_at {
-                    tokio::time::sleep_until(t).await;
-                }
-                port.read(&mut buf).await
-            };
             tokio::select! {
-                r = read => match r {
+                r = port.read(&mut buf) => match r {
                     Ok(0) => return Ended::Closed(format!("{} closed", connector.name())),
                     Ok(n) => {
-                        if !self.opts.read_coalesce.is_zero() {
-                            read_at = Some(Instant::now() + self.opts.read_coalesce);
-                        }
                         let bytes = buf.get(..n).unwrap_or(&[]);
                         self.tap(TapDirection::FromRobot, bytes);
                         let now = self.now_ms();

@@ -49,6 +49,10 @@ pub struct PlanArgs {
     /// Print JSON: regions, waypoints, length_m, segment_us, search_us (and smoothed).
     #[arg(long)]
     pub json: bool,
+    /// Also write the plan as a Plan object (PROTOCOL.md §12) for `station upload-plan`; its
+    /// map id is that of this map as `station upload-map` sends it (same --cell, --radius).
+    #[arg(long, value_name = "FILE")]
+    pub out_object: Option<std::path::PathBuf>,
 }
 
 /// `station segment`.
@@ -122,16 +126,32 @@ pub fn plan(args: &PlanArgs) -> anyhow::Result<ExitCode> {
     let r = planner
         .plan(args.from, args.to, args.smooth)
         .map_err(|e| failure(&args.map.map, &e))?;
+    let object = match &args.out_object {
+        Some(path) => Some(crate::transfer::command::write_plan_object(
+            &planner, &r, path,
+        )?),
+        None => None,
+    };
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&plan_json(&planner, &r))?
-        );
+        let mut v = plan_json(&planner, &r);
+        if let (Some(o), Some(m)) = (object, v.as_object_mut()) {
+            m.insert("object".into(), o);
+        }
+        println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         print!(
             "{}",
             plan_text(&planner, &r, &goal_note(planner.map(), args.to, r.goal()))
         );
+        if let Some(o) = object {
+            println!(
+                "plan object: {} bytes, id {}, map id {} -> {}",
+                o["bytes"],
+                o["id_hex"].as_str().unwrap_or(""),
+                o["map_id_hex"].as_str().unwrap_or(""),
+                o["path"].as_str().unwrap_or("")
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

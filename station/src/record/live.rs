@@ -222,8 +222,9 @@ pub enum RecordingNote {
 
 /// The TUI's record key: the link's tap, always drained, written to a file while recording.
 ///
-/// Layer: I/O, owned by the TUI loop (the I/O edge); the app only hears `RecordingNote`s. Taps
-/// arriving while not recording are dropped at once, so the channel never grows.
+/// Layer: I/O, owned by the TUI loop (the I/O edge); the app only hears `RecordingNote`s. The
+/// loop drains the tap whenever it wakes (link events come with every read, ticks 20 times a
+/// second), so the channel stays short; taps arriving while not recording are dropped.
 pub struct TuiRecorder {
     tap: Option<tokio::sync::mpsc::UnboundedReceiver<TapRecord>>,
     epoch: Instant,
@@ -276,12 +277,16 @@ impl TuiRecorder {
         self.active.is_some()
     }
 
-    /// The next tapped bytes; never resolves without a tap.
-    pub async fn next_tap(&mut self) -> Option<TapRecord> {
-        match &mut self.tap {
-            Some(t) => t.recv().await,
-            None => std::future::pending().await,
+    /// Takes every tapped record waiting (recording them if recording, dropping them if
+    /// not); call whenever the loop wakes. The records carry their own times.
+    pub fn drain_taps(&mut self) -> Option<RecordingNote> {
+        let mut note = None;
+        while let Some(t) = self.tap.as_mut().and_then(|r| r.try_recv().ok()) {
+            if let Some(n) = self.on_tap(&t) {
+                note = Some(n);
+            }
         }
+        note
     }
 
     /// Records tapped bytes if recording.

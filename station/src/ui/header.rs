@@ -83,6 +83,12 @@ pub fn render_header(app: &App, frame: &mut Frame, area: Rect) {
 pub fn render_footer(app: &App, frame: &mut Frame, area: Rect) {
     let hints: &[(&str, &str)] = if app.help {
         &[("Esc", "close help"), ("q", "quit")]
+    } else if app.transfers.prompt.is_some() {
+        &[
+            ("path", "map file or map/plan object"),
+            ("Enter", "upload"),
+            ("Esc", "cancel"),
+        ]
     } else if app.params.input.is_some() {
         &[("0-9 . - e", "type"), ("Enter", "send"), ("Esc", "cancel")]
     } else if app.map.cursor_mode {

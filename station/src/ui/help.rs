@@ -40,6 +40,14 @@ pub const KEYS: &[(&str, &str)] = &[
         "o r n m e",
         "map layers: grid regions plan smoothed start/goal",
     ),
+    (
+        "u  M",
+        "upload a map/plan file (progress bar) / show the robot's map",
+    ),
+    (
+        "E  O  X",
+        "robot: explore (its map grows live) / plan on board / execute",
+    ),
     ("PgUp PgDn", "scroll the log"),
     ("R", "record the link to a file here; R again saves it"),
 ];

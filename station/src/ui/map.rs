@@ -47,12 +47,13 @@ pub struct BelievedLayer;
 pub struct GoalLayer;
 
 /// Layers in drawing order: the planner's grid and squares under the arena, plans above it.
-pub static LAYERS: [&dyn MapLayer; 9] = [
+pub static LAYERS: [&dyn MapLayer; 10] = [
     &map_layers::GridLayer,
     &map_layers::RegionsLayer,
     &ArenaLayer,
     &map_layers::PlanLayer,
     &map_layers::SmoothedLayer,
+    &super::transfer::RobotPlanLayer,
     &TruthLayer,
     &BelievedLayer,
     &GoalLayer,

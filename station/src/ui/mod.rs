@@ -16,6 +16,7 @@ pub mod map_layers;
 pub mod params;
 pub mod plan_panel;
 pub mod sensors;
+pub mod transfer;
 
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::Frame;
@@ -132,6 +133,7 @@ pub fn render(app: &App, frame: &mut Frame) {
     }
     if let Some(main) = main_area(&a) {
         notice(app, frame, main);
+        transfer::render(app, frame, main);
     }
     if app.help {
         help::render(frame, frame.area());

@@ -113,6 +113,15 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         }
         None => lines.push(Line::from("no plan yet".dark_gray())),
     }
+    if let Some((id, points)) = &app.transfers.robot_plan {
+        lines.push(Line::from(vec![
+            Span::styled(format!("{:<9}", "robot"), Style::new().fg(Color::DarkGray)),
+            Span::styled(
+                format!("plan {id:#010x}, {} points (X runs it)", points.len()),
+                Style::new().fg(super::transfer::ROBOT_PLAN),
+            ),
+        ]));
+    }
     lines.push(Line::from(""));
     lines.extend(layers(app));
     lines.push(Line::from(" P plan to the cursor (g) or goal".dark_gray()));

@@ -1,0 +1,420 @@
+//! The TUI's side of transfers: upload a file, download the robot's map (live while it
+//! explores), plan on the robot and draw its plan, execute it, start exploring.
+//!
+//! Layer: app state, part of `App::update` (no I/O, time from `Action::Tick`). The
+//! [`TransferEngine`] runs here: it sees every link event first (`App::on_link` hands them
+//! over), its `Download` commands join the app's outbox under their own ids, and its frames
+//! wait in [`Transfers::take_frames`] for the TUI loop to hand to the link. Keys (see
+//! `input.rs` and the help): `u` opens a path prompt (a map file in any arena format, or a
+//! Map or Plan object file; prefilled with the last one, or the arena shown) and uploads it
+//! with a progress bar; `M` downloads the robot's map and shows it (the station's planner and
+//! the grid layer then use it); `E` sends `StartExploration`; `O` sends `Segment` and `Plan`
+//! (to the go-to cursor or goal if set, else the map's goal); `X` sends `ExecutePlan` with
+//! the installed plan's id.
+//!
+//! Live map: while telemetry says the robot is in Explore mode, the map is downloaded every
+//! [`LIVE_MAP_PERIOD_MS`] (nothing travels when its id is unchanged: the engine answers the
+//! robot's `TransferBegin` with `AlreadyHave`), once more when exploring ends, and shown, so
+//! the map grows on screen as the robot marks it (seed 004 §5, Fig. 5). Every `PlanInstalled`
+//! event downloads the plan the same way and draws it (the robot-plan layer).
+//!
+//! Invariant: every job's outcome reaches the log, except the live map's repeated successes
+//! (its first success and every failure are logged). Cannot fail.
+
+use std::collections::HashMap;
+
+use protocol::{Command, EventCode, Mode, ObjectKind, PointMm};
+
+use super::log::{Level, Source};
+use super::App;
+use crate::link::{CommandOutcome, LinkEvent, TransferOut};
+use crate::plan::MapOptions;
+use crate::transfer::objects::{check_capacity, load_for_upload, plan_waypoints};
+use crate::transfer::{
+    object_name, EngineOut, JobId, JobOutcome, JobReport, JobSpec, Progress, TransferEngine,
+    TransferEvent,
+};
+
+/// Period of map downloads while the robot explores, ms.
+pub const LIVE_MAP_PERIOD_MS: u64 = 1000;
+/// Longest path the prompt takes.
+const PROMPT_MAX: usize = 1024;
+/// What the station calls a map it received from the robot.
+pub const ROBOT_MAP_NAME: &str = "robot map";
+
+/// A transfer key or prompt edit.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum TransferAction {
+    /// `u`: open the upload prompt.
+    OpenPrompt,
+    PromptInput(char),
+    PromptBackspace,
+    /// Enter: upload the file named in the prompt.
+    PromptCommit,
+    /// Esc: close the prompt.
+    PromptCancel,
+    /// `M`: download the robot's map and show it.
+    DownloadMap,
+    /// `O`: segment and plan on the robot, then download and draw the plan.
+    PlanOnRobot,
+    /// `X`: execute the robot's installed plan.
+    ExecutePlan,
+    /// `E`: start exploring.
+    StartExploration,
+}
+
+/// Why a job was started.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Purpose {
+    /// A file the operator chose: its path and the object sent.
+    Upload(String, Vec<u8>),
+    /// The operator asked for the map.
+    Map,
+    /// The live map while exploring.
+    LiveMap,
+    /// The plan a `PlanInstalled` announced.
+    Plan,
+}
+
+impl Purpose {
+    /// Jobs the operator started get a progress bar; background ones do not.
+    fn shown(&self) -> bool {
+        !matches!(self, Purpose::LiveMap)
+    }
+}
+
+/// What the TUI keeps about transfers and the robot's objects.
+#[derive(Debug, Default)]
+pub struct Transfers {
+    pub engine: TransferEngine,
+    /// The upload prompt's text while it is open.
+    pub prompt: Option<String>,
+    /// The file uploaded last (the prompt's next default).
+    pub last_path: Option<String>,
+    /// The robot's map as last shown: (id, CRC).
+    pub map_have: Option<(u32, u32)>,
+    /// The robot's installed plan's id, from `PlanInstalled` or an upload.
+    pub plan_id: Option<u32>,
+    /// The robot's plan as downloaded or uploaded: its id and waypoints, metres.
+    pub robot_plan: Option<(u32, Vec<(f64, f64)>)>,
+    purposes: HashMap<JobId, Purpose>,
+    frames: Vec<TransferOut>,
+    next_map_ms: u64,
+    was_exploring: bool,
+    /// The live map has been shown once (later successes are not logged).
+    live_shown: bool,
+    /// The last live-map download failed (repeats are not logged).
+    live_failed: bool,
+}
+
+impl Transfers {
+    /// Transfer frames for `LinkHandle::transfer`; empties the buffer.
+    pub fn take_frames(&mut self) -> Vec<TransferOut> {
+        std::mem::take(&mut self.frames)
+    }
+
+    /// The running job's progress, if the operator started it (for the progress bar), with
+    /// what it is.
+    pub fn shown_progress(&self) -> Option<(Progress, String)> {
+        let p = self.engine.progress()?;
+        let purpose = self.purposes.get(&p.job).filter(|p| p.shown())?;
+        let what = match purpose {
+            Purpose::Upload(path, _) => format!("upload {} {path}", object_name(p.object)),
+            Purpose::Map | Purpose::LiveMap => "download robot map".into(),
+            Purpose::Plan => "download robot plan".into(),
+        };
+        Some((p, what))
+    }
+
+    fn has(&self, purpose: &Purpose) -> bool {
+        self.purposes.values().any(|p| p == purpose)
+    }
+
+    fn submit(&mut self, spec: JobSpec, purpose: Purpose) {
+        let job = self.engine.submit(spec);
+        self.purposes.insert(job, purpose);
+    }
+}
+
+impl App {
+    /// Applies a transfer key or prompt edit.
+    pub(super) fn on_transfer_action(&mut self, a: TransferAction) {
+        match a {
+            TransferAction::OpenPrompt => {
+                let default = self.transfers.last_path.clone().or_else(|| {
+                    let m = self.map.plan.map()?;
+                    (m.source != ROBOT_MAP_NAME).then(|| m.source.clone())
+                });
+                self.transfers.prompt = Some(default.unwrap_or_default());
+            }
+            TransferAction::PromptInput(c) => {
+                if let Some(p) = self.transfers.prompt.as_mut() {
+                    if p.len() < PROMPT_MAX && !c.is_control() {
+                        p.push(c);
+                    }
+                }
+            }
+            TransferAction::PromptBackspace => {
+                if let Some(p) = self.transfers.prompt.as_mut() {
+                    p.pop();
+                }
+            }
+            TransferAction::PromptCancel => self.transfers.prompt = None,
+            TransferAction::PromptCommit => {
+                if let Some(path) = self.transfers.prompt.take() {
+                    self.upload_file(path.trim());
+                }
+            }
+            TransferAction::DownloadMap => {
+                let have = self.transfers.map_have;
+                let spec = JobSpec::Download {
+                    object: ObjectKind::Map,
+                    have,
+                };
+                self.transfers.submit(spec, Purpose::Map);
+            }
+            TransferAction::PlanOnRobot => self.plan_on_robot(),
+            TransferAction::ExecutePlan => match self.transfers.plan_id {
+                Some(plan_id) => {
+                    self.send(Command::ExecutePlan { plan_id });
+                }
+                None => self.note(
+                    Level::Warn,
+                    Source::Command,
+                    "no plan on the robot yet: O plans on it, u uploads one".into(),
+                ),
+            },
+            TransferAction::StartExploration => {
+                self.send(Command::StartExploration);
+                self.transfers.next_map_ms = self.now_ms;
+            }
+        }
+        self.pump_transfers();
+    }
+
+    fn upload_file(&mut self, path: &str) {
+        if path.is_empty() {
+            return;
+        }
+        self.transfers.last_path = Some(path.to_string());
+        let loaded = match load_for_upload(path, &MapOptions::default()) {
+            Ok(l) => l,
+            Err(e) => {
+                self.note(Level::Error, Source::Command, format!("upload: {e}"));
+                return;
+            }
+        };
+        if let (Some(m), Some(peer)) = (&loaded.map, &self.peer) {
+            if let Err(e) = check_capacity(m.width, m.height, m.cell_mm, peer.map_capacity) {
+                self.note(
+                    Level::Error,
+                    Source::Command,
+                    format!("upload refused: {e}"),
+                );
+                return;
+            }
+        }
+        self.note(
+            Level::Info,
+            Source::Command,
+            format!("uploading {}", loaded.summary),
+        );
+        let bytes = loaded.bytes;
+        let spec = JobSpec::Upload {
+            object: loaded.object,
+            bytes: bytes.clone(),
+        };
+        self.transfers
+            .submit(spec, Purpose::Upload(path.to_string(), bytes));
+    }
+
+    /// `Segment`, then `Plan` to the cursor (while shown), else the last go-to goal, else the
+    /// map's goal; the plan is downloaded when the robot announces it.
+    fn plan_on_robot(&mut self) {
+        let to = if self.map.cursor_mode {
+            Some(self.map.cursor)
+        } else {
+            self.map.goal
+        };
+        let mm = |(x, y): (f64, f64)| PointMm {
+            x_mm: (x * 1000.0).round() as i32,
+            y_mm: (y * 1000.0).round() as i32,
+        };
+        self.send(Command::Segment);
+        self.send(Command::Plan {
+            from: None,
+            to: to.map(mm),
+        });
+    }
+
+    /// Called with every link event before the app looks at it; true when the event was the
+    /// engine's own (a transfer frame, its commands' outcomes) and needs nothing else.
+    pub(super) fn transfers_on_link(&mut self, ev: &LinkEvent) -> bool {
+        let now = self.now_ms;
+        let consumed = self.transfers.engine.on_link_event(now, ev);
+        match ev {
+            LinkEvent::Robot(e) if e.code == EventCode::PlanInstalled => {
+                let id = e.value as u32;
+                self.transfers.plan_id = Some(id);
+                let have = self
+                    .transfers
+                    .robot_plan
+                    .as_ref()
+                    .filter(|(held, _)| *held == id)
+                    .map(|(held, _)| (*held, *held));
+                if have.is_none() {
+                    let spec = JobSpec::Download {
+                        object: ObjectKind::Plan,
+                        have,
+                    };
+                    self.transfers.submit(spec, Purpose::Plan);
+                }
+            }
+            LinkEvent::CommandDone {
+                command: Command::Plan { .. },
+                outcome: CommandOutcome::Acked { .. },
+                ..
+            } => {
+                // The robot planned: its PlanInstalled follows and brings the plan here.
+                self.transfers.robot_plan = None;
+            }
+            _ => {}
+        }
+        self.pump_transfers();
+        consumed
+    }
+
+    /// Runs the engine's timers and the live map (called at every tick).
+    pub(super) fn transfers_tick(&mut self) {
+        let now = self.now_ms;
+        let exploring = self.connected()
+            && self
+                .telemetry
+                .as_ref()
+                .is_some_and(|t| t.mode == Mode::Explore);
+        let connected = self.connected();
+        let t = &mut self.transfers;
+        let ended = t.was_exploring && !exploring && connected;
+        if (exploring && now >= t.next_map_ms || ended) && !t.has(&Purpose::LiveMap) {
+            t.next_map_ms = now + LIVE_MAP_PERIOD_MS;
+            let spec = JobSpec::Download {
+                object: ObjectKind::Map,
+                have: t.map_have,
+            };
+            t.submit(spec, Purpose::LiveMap);
+        }
+        t.was_exploring = exploring;
+        t.engine.poll(now);
+        self.pump_transfers();
+    }
+
+    /// Moves the engine's output to the outboxes and acts on its reports.
+    fn pump_transfers(&mut self) {
+        for o in self.transfers.engine.take_output() {
+            match o {
+                EngineOut::Frame(f) => self.transfers.frames.push(f),
+                EngineOut::Command { id, command } => self.outbox.push((id, command)),
+            }
+        }
+        for ev in self.transfers.engine.take_events() {
+            if let TransferEvent::Finished(r) = ev {
+                let purpose = self.transfers.purposes.remove(&r.job);
+                self.on_job_finished(r, purpose);
+            }
+        }
+    }
+
+    fn on_job_finished(&mut self, r: JobReport, purpose: Option<Purpose>) {
+        let live = purpose == Some(Purpose::LiveMap);
+        if let JobOutcome::Failed(_) = r.outcome {
+            if !(live && self.transfers.live_failed) {
+                self.note(Level::Error, Source::Command, r.text());
+            }
+            self.transfers.live_failed |= live;
+            return;
+        }
+        if live {
+            self.transfers.live_failed = false;
+        }
+        let held = r.id.zip(r.crc);
+        let bytes = match (&r.outcome, &r.bytes, &purpose) {
+            (JobOutcome::Complete, Some(b), _) => Some(b.clone()),
+            _ => None,
+        };
+        match (r.direction, r.object) {
+            (crate::transfer::Direction::Download, ObjectKind::Map) => {
+                if let Some(b) = bytes {
+                    self.show_robot_map(&b, held, live);
+                } else if !live {
+                    self.note(Level::Info, Source::Command, r.text());
+                }
+            }
+            (crate::transfer::Direction::Download, ObjectKind::Plan) => {
+                if let Some(b) = bytes {
+                    self.set_robot_plan(r.id, &b);
+                }
+            }
+            (crate::transfer::Direction::Upload, object) => {
+                self.note(Level::Info, Source::Command, r.text());
+                if let Some(Purpose::Upload(_, bytes)) = &purpose {
+                    self.after_upload(object, r.id, bytes);
+                }
+            }
+            (_, ObjectKind::Regions) => {}
+        }
+    }
+
+    /// The robot holds what was uploaded: show it as the robot's.
+    fn after_upload(&mut self, object: ObjectKind, id: Option<u32>, bytes: &[u8]) {
+        let held = id.map(|i| (i, i));
+        match object {
+            ObjectKind::Map => self.show_robot_map(bytes, held, true),
+            ObjectKind::Plan => {
+                self.transfers.plan_id = id;
+                self.set_robot_plan(id, bytes);
+            }
+            ObjectKind::Regions => {}
+        }
+    }
+
+    fn show_robot_map(&mut self, bytes: &[u8], held: Option<(u32, u32)>, quiet: bool) {
+        match self.map.plan.show_map_object(ROBOT_MAP_NAME, bytes) {
+            Ok(()) => {
+                self.transfers.map_have = held;
+                let first = !self.transfers.live_shown;
+                self.transfers.live_shown = true;
+                if !quiet || first {
+                    let counts = self.map.plan.map().map(|m| m.counts());
+                    let (f, o, u) = counts.unwrap_or_default();
+                    self.note(
+                        Level::Info,
+                        Source::Command,
+                        format!(
+                            "showing the robot's map: {f} free, {o} obstacle, {u} unknown cells"
+                        ),
+                    );
+                }
+            }
+            Err(e) => self.note(Level::Error, Source::Command, format!("robot map: {e}")),
+        }
+    }
+
+    fn set_robot_plan(&mut self, id: Option<u32>, bytes: &[u8]) {
+        match plan_waypoints(bytes) {
+            Ok(points) => {
+                let id = id.unwrap_or_else(|| protocol::crc32c(bytes));
+                let length: f64 = crate::plan::solve::length(&points);
+                self.note(
+                    Level::Info,
+                    Source::Command,
+                    format!(
+                        "robot plan {id:#010x}: {} waypoints, {length:.2} m; X executes it",
+                        points.len()
+                    ),
+                );
+                self.transfers.robot_plan = Some((id, points));
+            }
+            Err(e) => self.note(Level::Error, Source::Command, format!("robot plan: {e}")),
+        }
+    }
+}

@@ -1,0 +1,375 @@
+//! Objects from the station's planner, checked before they travel, and written safely.
+//!
+//! Layer: std glue between `plan` (the station's [`NavMap`] and [`Planner`]) and the object
+//! encoders the robot uses (`robot_firmware::transfer::encode_map_object`,
+//! `encode_plan_object`), so the station and the robot make the same bytes, hence the same
+//! ids, from the same grid. Conventions:
+//! - a map file becomes a Map object whose start is the map's start marker and whose goal is
+//!   the planner's default goal (the marker, or the free point of the goal area nearest it,
+//!   PROTOCOL.md §12 and `plan::map`): so `Plan` on the robot with no `to` plans to the same
+//!   goal as `station plan`;
+//! - a plan's `map_id` is the id of that Map object, so a plan made here for an uploaded map
+//!   names it exactly as the robot's own plan would.
+//!
+//! What can fail: a file that cannot be read or is neither an object nor a map
+//! ([`ObjectFileError`]), a map larger than the robot holds ([`CapacityError`]), an object
+//! that cannot be encoded (`ObjectError`), an I/O error writing a file.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use protocol::object::{
+    kind_of, parse, plan_object_len, MapView, ObjectError, PlanView, MAP_HEADER_LEN, OBJECT_VERSION,
+};
+use protocol::{crc32c, MapCapacity, ObjectKind, PointMm};
+use robot_firmware::nav::grid_bytes;
+use robot_firmware::transfer::{encode_map_object, encode_plan_object};
+
+use super::object_name;
+use crate::plan::{MapOptions, NavError, NavMap, PlanResult, Planner};
+
+/// A Map object built from a [`NavMap`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapObject {
+    pub bytes: Vec<u8>,
+    /// CRC-32C of the bytes: the id it travels under.
+    pub id: u32,
+    pub width: u16,
+    pub height: u16,
+    pub cell_mm: u32,
+    pub start: Option<PointMm>,
+    pub goal: Option<PointMm>,
+}
+
+/// A map the robot cannot hold.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "the map is {width} x {height} cells of {cell_m} m; the robot holds at most {cap_w} x \
+     {cap_h} cells: use --cell {suggest_m} or larger, or a smaller map"
+)]
+pub struct CapacityError {
+    pub width: u16,
+    pub height: u16,
+    pub cell_m: f64,
+    pub cap_w: u16,
+    pub cap_h: u16,
+    pub suggest_m: f64,
+}
+
+/// Why a file cannot be uploaded.
+#[derive(Debug, thiserror::Error)]
+pub enum ObjectFileError {
+    #[error("cannot read {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path} is a {found} object, not a {expected} object")]
+    WrongKind {
+        path: PathBuf,
+        found: &'static str,
+        expected: &'static str,
+    },
+    #[error("{path} is not a valid object: {source}")]
+    Object { path: PathBuf, source: ObjectError },
+    #[error("{0}")]
+    Map(#[from] NavError),
+    #[error("cannot encode the object: {0}")]
+    Encode(ObjectError),
+    #[error("the planner holds no segmentation for this map")]
+    NotSegmented,
+    #[error(
+        "regions cannot be uploaded: the robot segments its own map (send `segment` or `plan`)"
+    )]
+    Regions,
+}
+
+fn mm((x_mm, y_mm): (i32, i32)) -> PointMm {
+    PointMm { x_mm, y_mm }
+}
+
+/// The Map object of `map` (see the module notes for its start and goal).
+pub fn map_object(map: &NavMap) -> Result<MapObject, ObjectFileError> {
+    let start = map.resolve_start(None).ok().map(|e| mm(e.mm));
+    let goal = map.resolve_goal(None).ok().map(|e| mm(e.mm));
+    let (w, h) = (map.grid.width(), map.grid.height());
+    let mut bytes = vec![0u8; MAP_HEADER_LEN + grid_bytes(w.into(), h.into())];
+    let n =
+        encode_map_object(&map.grid, start, goal, &mut bytes).map_err(ObjectFileError::Encode)?;
+    bytes.truncate(n);
+    Ok(MapObject {
+        id: crc32c(&bytes),
+        width: w,
+        height: h,
+        cell_mm: map.grid.geometry().cell_mm(),
+        start,
+        goal,
+        bytes,
+    })
+}
+
+/// Refuses a map larger than `cap`, suggesting the cell size that would fit.
+pub fn check_capacity(
+    width: u16,
+    height: u16,
+    cell_mm: u32,
+    cap: MapCapacity,
+) -> Result<(), CapacityError> {
+    if width <= cap.width && height <= cap.height {
+        return Ok(());
+    }
+    let cell_m = f64::from(cell_mm) / 1000.0;
+    let ratio = (f64::from(width) / f64::from(cap.width.max(1)))
+        .max(f64::from(height) / f64::from(cap.height.max(1)));
+    // Whole centimetres, rounded up, plus one: the raster's edge cells need a little room.
+    let suggest_m = ((cell_m * ratio * 100.0).ceil() + 1.0) / 100.0;
+    Err(CapacityError {
+        width,
+        height,
+        cell_m,
+        cap_w: cap.width,
+        cap_h: cap.height,
+        suggest_m,
+    })
+}
+
+/// The Plan object of a plan made by `planner` on its map, naming the map by `map_id`.
+pub fn plan_object(
+    planner: &Planner,
+    r: &PlanResult,
+    map_id: u32,
+) -> Result<Vec<u8>, ObjectFileError> {
+    let regions = planner.regions().ok_or(ObjectFileError::NotSegmented)?;
+    let n = plan_object_len(r.plan.len, r.plan.waypoint_count())
+        .ok_or(ObjectFileError::NotSegmented)?;
+    let mut out = vec![0u8; n];
+    let k = encode_plan_object(&regions, &r.plan, &r.path[..], map_id, &mut out)
+        .map_err(ObjectFileError::Encode)?;
+    out.truncate(k);
+    Ok(out)
+}
+
+/// What a file holds, ready to upload.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Loaded {
+    pub object: ObjectKind,
+    pub bytes: Vec<u8>,
+    /// The map's size when it was built from a map file (for the capacity check).
+    pub map: Option<MapObject>,
+    /// One line saying what it is.
+    pub summary: String,
+}
+
+/// Loads `path` for upload: an object file (`station download-map --out`, `station plan
+/// --out-object`) is taken as it is, after `protocol::object::parse` accepts it; anything
+/// else is read as a map (any arena format `station plan` reads, or builtin:micro-rato-99)
+/// and encoded with `opts`.
+pub fn load_for_upload(path: &str, opts: &MapOptions) -> Result<Loaded, ObjectFileError> {
+    if let Some(bytes) = read_object_file(Path::new(path))? {
+        let object = kind_of(&bytes).map_err(|source| ObjectFileError::Object {
+            path: path.into(),
+            source,
+        })?;
+        if object == ObjectKind::Regions {
+            return Err(ObjectFileError::Regions);
+        }
+        let summary = format!(
+            "{} object {path}, {} bytes, id {:#010x}",
+            object_name(object),
+            bytes.len(),
+            crc32c(&bytes)
+        );
+        let map = match object {
+            ObjectKind::Map => MapView::parse(&bytes).ok().map(|v| MapObject {
+                id: crc32c(&bytes),
+                width: v.header.width,
+                height: v.header.height,
+                cell_mm: v.header.cell_mm,
+                start: v.header.start,
+                goal: v.header.goal,
+                bytes: bytes.clone(),
+            }),
+            _ => None,
+        };
+        return Ok(Loaded {
+            object,
+            bytes,
+            map,
+            summary,
+        });
+    }
+    let map = NavMap::load(path, opts)?;
+    let m = map_object(&map)?;
+    let summary = format!(
+        "map {} ({} x {} cells of {} m), {} bytes, id {:#010x}",
+        map.name,
+        m.width,
+        m.height,
+        f64::from(m.cell_mm) / 1000.0,
+        m.bytes.len(),
+        m.id
+    );
+    Ok(Loaded {
+        object: ObjectKind::Map,
+        bytes: m.bytes.clone(),
+        map: Some(m),
+        summary,
+    })
+}
+
+/// The bytes of `path` if it looks like an object file (format version, then a kind), checked
+/// by `protocol::object::parse`; `None` if it does not look like one (a map file).
+pub fn read_object_file(path: &Path) -> Result<Option<Vec<u8>>, ObjectFileError> {
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let bytes = std::fs::read(path).map_err(|source| ObjectFileError::Read {
+        path: path.into(),
+        source,
+    })?;
+    let looks = bytes.first() == Some(&OBJECT_VERSION) && bytes.get(1).is_some_and(|k| *k <= 2);
+    if !looks {
+        return Ok(None);
+    }
+    parse(&bytes).map_err(|source| ObjectFileError::Object {
+        path: path.into(),
+        source,
+    })?;
+    Ok(Some(bytes))
+}
+
+/// Reads a Plan object file, refusing anything else with the byte offset of the problem.
+pub fn read_plan_file(path: &Path) -> Result<Vec<u8>, ObjectFileError> {
+    let bytes = std::fs::read(path).map_err(|source| ObjectFileError::Read {
+        path: path.into(),
+        source,
+    })?;
+    let bad = |source| ObjectFileError::Object {
+        path: path.into(),
+        source,
+    };
+    match kind_of(&bytes).map_err(bad)? {
+        ObjectKind::Plan => {}
+        other => {
+            return Err(ObjectFileError::WrongKind {
+                path: path.into(),
+                found: object_name(other),
+                expected: "plan",
+            })
+        }
+    }
+    PlanView::parse(&bytes).map_err(bad)?;
+    Ok(bytes)
+}
+
+/// A Map object drawn as text, top row (largest y) first: `#` obstacle, `.` free, `?`
+/// unknown, `S` and `G` the start and goal cells.
+pub fn map_ascii(bytes: &[u8]) -> Result<Vec<String>, ObjectError> {
+    let v = MapView::parse(bytes)?;
+    let h = v.header;
+    let cell = |p: Option<PointMm>| {
+        p.and_then(|p| {
+            let c = i64::from(h.cell_mm);
+            let x = (i64::from(p.x_mm) - i64::from(h.origin.x_mm)).div_euclid(c);
+            let y = (i64::from(p.y_mm) - i64::from(h.origin.y_mm)).div_euclid(c);
+            Some((u16::try_from(x).ok()?, u16::try_from(y).ok()?))
+        })
+    };
+    let (start, goal) = (cell(h.start), cell(h.goal));
+    Ok((0..h.height)
+        .rev()
+        .map(|y| {
+            (0..h.width)
+                .map(|x| match (Some((x, y)) == start, Some((x, y)) == goal) {
+                    (_, true) => 'G',
+                    (true, _) => 'S',
+                    _ => match v.cell(x, y) {
+                        Some(1) => '.',
+                        Some(2) => '#',
+                        _ => '?',
+                    },
+                })
+                .collect()
+        })
+        .collect())
+}
+
+/// A Plan object's waypoints in metres.
+pub fn plan_waypoints(bytes: &[u8]) -> Result<Vec<(f64, f64)>, ObjectError> {
+    let v = PlanView::parse(bytes)?;
+    Ok(v.waypoints()
+        .map(|p| (f64::from(p.x_mm) / 1000.0, f64::from(p.y_mm) / 1000.0))
+        .collect())
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same directory, flushed to
+/// disk, then renamed over `path`. A reader sees the old file or the new one, never a part.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let name = path
+        .file_name()
+        .map_or_else(|| "object".into(), |n| n.to_string_lossy().into_owned());
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let tmp = dir.join(format!(".{name}.{}.partial", std::process::id()));
+    let write = || -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    };
+    write().inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_builtin_arena_becomes_a_map_object_that_fits_the_robot_and_draws() {
+        let map = NavMap::load(emulator::builtin::MICRO_RATO_99, &MapOptions::default())
+            .expect("built in");
+        let m = map_object(&map).expect("encodes");
+        assert_eq!(m.id, crc32c(&m.bytes));
+        let cap = MapCapacity {
+            width: 64,
+            height: 64,
+        };
+        assert_eq!(check_capacity(m.width, m.height, m.cell_mm, cap), Ok(()));
+        assert!(m.start.is_some() && m.goal.is_some());
+        let art = map_ascii(&m.bytes).expect("parses");
+        assert_eq!(art.len(), usize::from(m.height));
+        let text = art.concat();
+        assert_eq!(text.matches('S').count(), 1, "{art:?}");
+        assert_eq!(text.matches('G').count(), 1, "{art:?}");
+        assert!(text.contains('#') && text.contains('.'));
+    }
+
+    #[test]
+    fn a_map_too_large_for_the_robot_is_refused_with_a_cell_size_that_fits() {
+        let cap = MapCapacity {
+            width: 64,
+            height: 64,
+        };
+        let e = check_capacity(100, 40, 100, cap).expect_err("too wide");
+        assert!(e.to_string().contains("at most 64 x 64"), "{e}");
+        // 100 cells of 0.1 m = 10 m; 64 cells need 0.157 m: 0.16 m plus a centimetre.
+        assert_eq!(e.suggest_m, 0.17);
+    }
+
+    #[test]
+    fn an_atomic_write_leaves_no_temporary_file() {
+        let dir = std::env::temp_dir().join(format!("station-objects-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("map.obj");
+        write_atomically(&path, b"one").expect("writes");
+        write_atomically(&path, b"two").expect("replaces");
+        assert_eq!(std::fs::read(&path).expect("reads"), b"two");
+        let names: Vec<_> = std::fs::read_dir(&dir).expect("lists").flatten().collect();
+        assert_eq!(names.len(), 1);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
