@@ -30,8 +30,8 @@ use crate::{input, ui};
 /// Time between ticks (teleop repetition needs 100 ms; ticks at twice that rate).
 const TICK: Duration = Duration::from_millis(50);
 /// Most redraws a second for changes that come from the link or the clock; a key redraws at
-/// once. 50 Hz telemetry and truth are 100 events a second: drawing each would cost ~5 % of a
-/// core, drawing at this rate ~1 % (measured; README "Performance").
+/// once. 50 Hz telemetry and truth are 100 events a second: drawing each took the whole TUI to
+/// ~5 % of a core; at this rate it is ~2 %, of which drawing ~0.6 % (README "Performance").
 pub const LINK_FPS: u32 = 10;
 
 /// Runs the TUI until the operator quits. Restores the terminal whatever happens. `recorder`
