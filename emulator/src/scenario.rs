@@ -33,6 +33,7 @@ use std::time::Instant;
 
 use protocol::{Command, NackReason, ParamId, PointMm};
 use robot_firmware::link::Reply;
+use robot_firmware::params::id as param;
 use robot_firmware::Profile;
 use serde::Serialize;
 use thiserror::Error;
@@ -47,17 +48,6 @@ pub const SETTLE_MS: u64 = 500;
 pub const KHEPERA_TOLERANCE_M: f64 = 0.05;
 /// Micro-rato tolerance for a goal that is not the arena's target. seed 004 §4: 0.3 m.
 pub const RATO_POINT_TOLERANCE_M: f64 = 0.3;
-/// Firmware parameter ids of the beacon position (robot-firmware `params::PARAMS`).
-const PARAM_BEACON_X: u16 = 21;
-const PARAM_BEACON_Y: u16 = 22;
-/// Firmware parameter ids of the dead reckoning's validation rectangle (seed 004 §4).
-const PARAM_ARENA_MIN_X: u16 = 27;
-const PARAM_ARENA_MIN_Y: u16 = 28;
-const PARAM_ARENA_MAX_X: u16 = 29;
-const PARAM_ARENA_MAX_Y: u16 = 30;
-/// Firmware parameter ids of the arrival radii (drift: Khepera; guided: micro-rato).
-const PARAM_DRIFT_ARRIVAL: u16 = 14;
-const PARAM_GUIDED_ARRIVAL: u16 = 26;
 
 /// A point in the map frame, metres.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -444,7 +434,7 @@ fn brief_firmware(sim: &mut Sim) -> Result<(), ScenarioError> {
         return Ok(());
     }
     if let Some(b) = sim.world().beacon().map(|b| b.position) {
-        for (id, v) in [(PARAM_BEACON_X, b.x), (PARAM_BEACON_Y, b.y)] {
+        for (id, v) in [(param::BEACON_X_M, b.x), (param::BEACON_Y_M, b.y)] {
             let cmd = Command::SetParam {
                 id: ParamId(id),
                 value: v as f32,
@@ -454,10 +444,10 @@ fn brief_firmware(sim: &mut Sim) -> Result<(), ScenarioError> {
     }
     let b = sim.world().arena().bounds;
     for (id, v) in [
-        (PARAM_ARENA_MIN_X, b.min.x),
-        (PARAM_ARENA_MIN_Y, b.min.y),
-        (PARAM_ARENA_MAX_X, b.max.x),
-        (PARAM_ARENA_MAX_Y, b.max.y),
+        (param::ARENA_MIN_X_M, b.min.x),
+        (param::ARENA_MIN_Y_M, b.min.y),
+        (param::ARENA_MAX_X_M, b.max.x),
+        (param::ARENA_MAX_Y_M, b.max.y),
     ] {
         let cmd = Command::SetParam {
             id: ParamId(id),
@@ -477,11 +467,11 @@ fn set_arrival(
     let core = &sim.robot().core;
     let (id, default) = if core.profile.has(protocol::caps::ENCODERS) {
         (
-            PARAM_DRIFT_ARRIVAL,
+            param::DRIFT_ARRIVAL_RADIUS_M,
             f64::from(core.arbiter.params.drift.arrival_radius_m),
         )
     } else {
-        (PARAM_GUIDED_ARRIVAL, f64::from(core.guided.arrival_m))
+        (param::GUIDED_ARRIVAL_M, f64::from(core.guided.arrival_m))
     };
     let value = arrival_m.unwrap_or_else(|| default.min(tolerance_m / 2.0));
     let cmd = Command::SetParam {

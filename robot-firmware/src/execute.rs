@@ -11,7 +11,7 @@
 //!
 //! Pure: pose, IR and waypoints in; motor command and progress out. Cannot fail or panic.
 
-use crate::behaviour::MotorCommand;
+use crate::behaviour::{units, MotorCommand};
 use crate::guided::{guided_step, GuidedParams, GuidedPhase};
 use crate::odometry::{wrap_angle, Point, Pose};
 
@@ -283,10 +283,6 @@ fn sub_count(len: f32, max: f32) -> u32 {
 
 fn lerp(a: Point, b: Point, t: f32) -> Point {
     Point::new(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t)
-}
-
-fn units(v: f32) -> i16 {
-    libm::roundf(v) as i16
 }
 
 #[cfg(test)]

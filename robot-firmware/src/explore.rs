@@ -15,7 +15,7 @@
 //!
 //! Pure: pose, readings and time in; motor command and map marks out. Cannot fail or panic.
 
-use crate::behaviour::{MotorCommand, XorShift32};
+use crate::behaviour::{units, MotorCommand, XorShift32};
 use crate::nav::{Cell, Grid};
 use crate::odometry::{wrap_angle, Point, Pose};
 
@@ -390,11 +390,6 @@ fn mark_map(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) 
             }
         }
     }
-}
-
-fn units(v: f32) -> i16 {
-    // `as` saturates and maps NaN to 0.
-    libm::roundf(v) as i16
 }
 
 #[cfg(test)]

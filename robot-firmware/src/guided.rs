@@ -7,7 +7,7 @@
 //! until the sensors clear, then resumes. A large heading error is first removed by turning on
 //! the spot. Pure: pose and IR in, motor command out; no clock, no I/O, cannot fail.
 
-use crate::behaviour::MotorCommand;
+use crate::behaviour::{units, MotorCommand};
 use crate::odometry::{wrap_angle, Point, Pose};
 
 /// Guided-motion parameters. The paper gives the method, not the numbers: every value here is
@@ -131,11 +131,6 @@ pub fn guided_step(
         MotorCommand::new(units(speed - correction), units(speed + correction)),
         GuidedPhase::Driving,
     )
-}
-
-fn units(v: f32) -> i16 {
-    // `as` saturates and maps NaN to 0.
-    libm::roundf(v) as i16
 }
 
 #[cfg(test)]

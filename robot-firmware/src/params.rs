@@ -109,6 +109,19 @@ pub const PARAMS: [ParamInfo; 31] = [
     p(30, "arena_max_y_m", "m", -100.0, 100.0),
 ];
 
+/// Ids of the parameters other crates set by name in code (the emulator's scenario runner
+/// briefs the robot as an operator would). A test checks each against `PARAMS`.
+pub mod id {
+    pub const DRIFT_ARRIVAL_RADIUS_M: u16 = 14;
+    pub const BEACON_X_M: u16 = 21;
+    pub const BEACON_Y_M: u16 = 22;
+    pub const GUIDED_ARRIVAL_M: u16 = 26;
+    pub const ARENA_MIN_X_M: u16 = 27;
+    pub const ARENA_MIN_Y_M: u16 = 28;
+    pub const ARENA_MAX_X_M: u16 = 29;
+    pub const ARENA_MAX_Y_M: u16 = 30;
+}
+
 /// The description of parameter `id`.
 pub fn info(id: u16) -> Option<&'static ParamInfo> {
     PARAMS.iter().find(|p| p.id == id)
@@ -240,6 +253,22 @@ mod tests {
             }
             assert_eq!(t.get(PARAMS.len() as u16), Err(NackReason::UnknownParam));
         });
+    }
+
+    #[test]
+    fn named_ids_point_at_their_parameters() {
+        for (i, name) in [
+            (id::DRIFT_ARRIVAL_RADIUS_M, "drift_arrival_radius_m"),
+            (id::BEACON_X_M, "beacon_x_m"),
+            (id::BEACON_Y_M, "beacon_y_m"),
+            (id::GUIDED_ARRIVAL_M, "guided_arrival_m"),
+            (id::ARENA_MIN_X_M, "arena_min_x_m"),
+            (id::ARENA_MIN_Y_M, "arena_min_y_m"),
+            (id::ARENA_MAX_X_M, "arena_max_x_m"),
+            (id::ARENA_MAX_Y_M, "arena_max_y_m"),
+        ] {
+            assert_eq!(info(i).map(|p| p.name), Some(name));
+        }
     }
 
     #[test]

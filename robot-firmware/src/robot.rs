@@ -603,8 +603,8 @@ impl Core {
                 if period_s > 0.0 {
                     let mm = self.odometry.params.mm_per_pulse;
                     self.wheel_speed_mm_s = [
-                        sat_i16(dl as f32 * mm / period_s),
-                        sat_i16(dr as f32 * mm / period_s),
+                        behaviour::units(dl as f32 * mm / period_s),
+                        behaviour::units(dr as f32 * mm / period_s),
                     ];
                 }
             }
@@ -625,7 +625,7 @@ impl Core {
             );
             let speed = |u: i16| {
                 let mps = self.dead.params.speed.speed_mps(f32::from(u), battery);
-                sat_i16(mps * 1000.0)
+                behaviour::units(mps * 1000.0)
             };
             self.wheel_speed_mm_s = [speed(self.motor.left), speed(self.motor.right)];
             self.calibrate_on_beacon(now_ms);
@@ -716,15 +716,22 @@ impl Core {
         cmd
     }
 
-    fn guided_command(&mut self) -> MotorCommand {
-        let Some(goal) = self.goal else {
-            return MotorCommand::STOP;
-        };
+    /// The IR readings with their mounting directions (radians, positive to the left), as
+    /// guided motion, plan execution and exploration take them; `n` of the slots are in use.
+    fn ir_rays(&self) -> ([(u16, f32); 8], usize) {
         let mut ir = [(0u16, 0.0f32); 8];
         let n = self.profile.ir.count.min(8);
         for (i, slot) in ir.iter_mut().enumerate().take(n) {
             *slot = (self.sensors.ir[i], self.profile.ir.angle_rad[i]);
         }
+        (ir, n)
+    }
+
+    fn guided_command(&mut self) -> MotorCommand {
+        let Some(goal) = self.goal else {
+            return MotorCommand::STOP;
+        };
+        let (ir, n) = self.ir_rays();
         let (cmd, phase) = guided_step(self.pose(), goal, &ir[..n], &self.guided);
         if phase == GuidedPhase::Arrived {
             self.mark_arrived();
@@ -793,9 +800,4 @@ fn ms(us: u64) -> u32 {
 /// Whether wrapping time `now` has reached `deadline`.
 fn due(now: u32, deadline: u32) -> bool {
     now.wrapping_sub(deadline) < 0x8000_0000
-}
-
-fn sat_i16(v: f32) -> i16 {
-    // `as` saturates at the i16 range and maps NaN to 0.
-    libm::roundf(v) as i16
 }

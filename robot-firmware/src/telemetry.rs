@@ -9,6 +9,7 @@ use protocol::{
     Wheels,
 };
 
+use crate::behaviour::units;
 use crate::robot::Core;
 
 /// The telemetry frame for the robot's current state.
@@ -37,7 +38,7 @@ pub fn build(core: &Core, now_ms: u32) -> Telemetry {
         pose: WirePose {
             x_mm: sat_i32(pose.x * 1000.0),
             y_mm: sat_i32(pose.y * 1000.0),
-            heading_mrad: sat_i16(pose.heading * 1000.0),
+            heading_mrad: units(pose.heading * 1000.0),
         },
         sigma: PoseSigma {
             xy_mm: sat_u16(sigma_xy_m * 1000.0),
@@ -62,7 +63,7 @@ pub fn build(core: &Core, now_ms: u32) -> Telemetry {
         beacon: s
             .beacon
             .map(|b| Beacon {
-                bearing_ddeg: sat_i16(b.bearing_rad.to_degrees() * 10.0),
+                bearing_ddeg: units(b.bearing_rad.to_degrees() * 10.0),
                 strength: b.strength,
             })
             .unwrap_or_default(),
@@ -70,8 +71,8 @@ pub fn build(core: &Core, now_ms: u32) -> Telemetry {
         behaviour: BehaviourOut {
             active,
             motor_mm_s: [
-                sat_i16(core.profile.motor_mm_s(motor.left)),
-                sat_i16(core.profile.motor_mm_s(motor.right)),
+                units(core.profile.motor_mm_s(motor.left)),
+                units(core.profile.motor_mm_s(motor.right)),
             ],
         },
         cycle: CycleTiming {
@@ -107,10 +108,6 @@ fn sat_i32(v: f32) -> i32 {
     libm::roundf(v) as i32
 }
 
-fn sat_i16(v: f32) -> i16 {
-    libm::roundf(v) as i16
-}
-
 fn sat_u16(v: f32) -> u16 {
     libm::roundf(v) as u16
 }
@@ -129,7 +126,7 @@ mod tests {
 
     #[test]
     fn out_of_range_values_saturate() {
-        assert_eq!(sat_i16(1e9), i16::MAX);
+        assert_eq!(units(1e9), i16::MAX);
         assert_eq!(sat_u16(-5.0), 0);
         assert_eq!(sat_i32(f32::NAN), 0);
     }

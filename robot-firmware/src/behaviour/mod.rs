@@ -77,7 +77,8 @@ impl MotorCommand {
     }
 }
 
-/// Rounds a speed in units to the nearest command value (saturating).
+/// Rounds to the nearest i16, saturating at its range (NaN gives 0): speeds to motor
+/// command units, and firmware values to the wire's integer fields.
 pub(crate) fn units(v: f32) -> i16 {
     // `as` saturates and maps NaN to 0, so no value can panic here.
     libm::roundf(v) as i16

@@ -70,11 +70,7 @@ impl Core {
 
     /// This cycle's motor command in `Mode::Explore`.
     pub(super) fn explore_command(&mut self) -> MotorCommand {
-        let mut ir = [(0u16, 0.0f32); 8];
-        let n = self.profile.ir.count.min(8);
-        for (i, slot) in ir.iter_mut().enumerate().take(n) {
-            *slot = (self.sensors.ir[i], self.profile.ir.angle_rad[i]);
-        }
+        let (ir, n) = self.ir_rays();
         let input = ExploreInput {
             now_ms: self.cycle_ms,
             pose: self.pose(),

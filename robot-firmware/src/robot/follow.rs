@@ -105,11 +105,7 @@ impl Core {
 
     /// Guided motion through the waypoints with the §7 heuristics (`Executor`).
     fn guided_leg(&mut self) -> MotorCommand {
-        let mut ir = [(0u16, 0.0f32); 8];
-        let n = self.profile.ir.count.min(8);
-        for (i, slot) in ir.iter_mut().enumerate().take(n) {
-            *slot = (self.sensors.ir[i], self.profile.ir.angle_rad[i]);
-        }
+        let (ir, n) = self.ir_rays();
         if self.profile.has(protocol::caps::GROUND_SENSOR) && self.sensors.ground {
             // In the goal area (seed 004 §3 ground sensor): the task is done, wherever the
             // plan's last point was.
