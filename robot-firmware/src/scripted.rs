@@ -63,18 +63,23 @@ impl ScriptedHal {
 
     /// Takes up to `out.len()` bytes the robot sent.
     pub fn take_tx(&mut self, out: &mut [u8]) -> usize {
-        let mut n = 0;
-        for slot in out.iter_mut() {
-            match self.tx.pop_front() {
-                Some(b) => {
-                    *slot = b;
-                    n += 1;
-                }
-                None => break,
-            }
-        }
-        n
+        drain_into(&mut self.tx, out)
     }
+}
+
+/// Moves bytes from the front of `q` into `out`; returns how many.
+fn drain_into(q: &mut Deque<u8, SCRIPTED_PORT>, out: &mut [u8]) -> usize {
+    let mut n = 0;
+    for slot in out.iter_mut() {
+        match q.pop_front() {
+            Some(b) => {
+                *slot = b;
+                n += 1;
+            }
+            None => break,
+        }
+    }
+    n
 }
 
 impl Hal for ScriptedHal {
@@ -122,17 +127,7 @@ impl Hal for ScriptedHal {
     }
 
     fn serial_read(&mut self, buf: &mut [u8]) -> usize {
-        let mut n = 0;
-        for slot in buf.iter_mut() {
-            match self.rx.pop_front() {
-                Some(b) => {
-                    *slot = b;
-                    n += 1;
-                }
-                None => break,
-            }
-        }
-        n
+        drain_into(&mut self.rx, buf)
     }
 
     fn serial_write(&mut self, bytes: &[u8]) -> usize {
