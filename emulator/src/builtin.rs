@@ -7,6 +7,13 @@
 use std::path::Path;
 
 use crate::arena::{ciberrato, Arena, ArenaError, LoadOptions};
+use crate::geometry::{Aabb, Point};
+
+/// Name of the built-in floor-grid arena (seed 003): an empty walled square over a floor grid.
+pub const FLOOR_GRID: &str = "builtin:floor-grid";
+/// Side of the floor-grid arena, metres: room for the survey's 0.8 m disc around the centre
+/// start, with a robot's turning margin before the walls.
+pub const FLOOR_GRID_SIDE_M: f64 = 2.4;
 
 /// Name the command line uses for the built-in Micro-Rato'99 arena.
 pub const MICRO_RATO_99: &str = "builtin:micro-rato-99";
@@ -32,10 +39,104 @@ pub fn micro_rato_99(opts: &LoadOptions) -> Result<Arena, ArenaError> {
     Ok(arena)
 }
 
+/// The floor-grid arena: walls around a square with its lower-left corner at the origin (so
+/// the grid's lines are at whole multiples of the pitch, where the firmware assumes them),
+/// the start near the centre, off every line, heading 23 degrees.
+pub fn floor_grid() -> Arena {
+    let side = FLOOR_GRID_SIDE_M;
+    Arena {
+        name: "Floor grid (seed 003)".to_string(),
+        source: Path::new(FLOOR_GRID).to_path_buf(),
+        format: crate::arena::ArenaFormat::AsciiGrid,
+        bounds: Aabb::from_corners(Point::new(0.0, 0.0), Point::new(side, side)),
+        enclosed: true,
+        walls: Vec::new(),
+        raster: None,
+        beacons: Vec::new(),
+        targets: Vec::new(),
+        lights: Vec::new(),
+        starts: vec![crate::arena::Pose {
+            x: side / 2.0 + 0.03,
+            y: side / 2.0 + 0.04,
+            heading: 0.4,
+        }],
+        goal: None,
+        unit_m: 0.01,
+        warnings: Vec::new(),
+    }
+}
+
+/// The floor grid pitch a built-in arena comes with (seed 003 §2.6.4: 10 cm squares).
+pub fn floor_grid_pitch(name: &str) -> Option<f64> {
+    (name == FLOOR_GRID).then_some(crate::world::GRID_PITCH_M)
+}
+
+/// The foraging arena of seed 000 §7 (`builtin:forage`, see `crate::forage`): a 1.0 x 0.8 m
+/// box (the paper's arenas are 75 x 60 and 80 x 80 cm) with one block in the middle, the home
+/// base (the target circle, 10 cm radius) in the lower-left corner where the robot starts,
+/// and three lamps, each with an object under it. The landmarks are outside the walls
+/// (`ForageSite::for_arena`).
+pub fn forage() -> Result<Arena, ArenaError> {
+    let mut arena = crate::arena::ascii::parse(
+        Path::new(crate::forage::BUILTIN_FORAGE),
+        FORAGE_GRID,
+        &LoadOptions::default(),
+    )?;
+    arena.source = Path::new(crate::forage::BUILTIN_FORAGE).to_path_buf();
+    let home = arena
+        .starts
+        .first()
+        .map_or(Point::new(0.125, 0.125), |s| Point::new(s.x, s.y));
+    arena.targets = vec![crate::arena::Target {
+        centre: home,
+        radius_m: crate::forage::HOME_RADIUS_M,
+    }];
+    arena.goal = Some(home);
+    arena.lights = [(0.82, 0.64), (0.22, 0.62), (0.80, 0.18)]
+        .into_iter()
+        .map(|(x, y)| crate::arena::Light {
+            position: Point::new(x, y),
+            height_m: 0.05,
+            intensity: 1.0,
+        })
+        .collect();
+    Ok(arena)
+}
+
+/// 5 cm cells, the border outside the 1.0 x 0.8 m floor; `S` is the home base's centre.
+const FORAGE_GRID: &str = "\
+# name Foraging (seed 000)
+# cell 0.05
+# origin -0.05 -0.05
+# heading 45
+######################
+#....................#
+#....................#
+#....................#
+#....................#
+#....................#
+#....................#
+#....................#
+#........####........#
+#........####........#
+#....................#
+#....................#
+#....................#
+#....................#
+#..S.................#
+#....................#
+#....................#
+######################
+";
+
 /// Loads `name`: a built-in arena name or a file path.
 pub fn load(name: &str, opts: &LoadOptions) -> Result<Arena, ArenaError> {
     if name == MICRO_RATO_99 {
         micro_rato_99(opts)
+    } else if name == FLOOR_GRID {
+        Ok(floor_grid())
+    } else if name == crate::forage::BUILTIN_FORAGE {
+        forage()
     } else {
         crate::arena::load(Path::new(name), opts)
     }

@@ -79,6 +79,12 @@ pub struct WorldArgs {
     /// Per-wheel speed error, relative sigma (MotorsNoise).
     #[arg(long, value_name = "SIGMA")]
     pub motors_noise: Option<f64>,
+    /// Probability that the floor sensor misses a line (default 0.02).
+    #[arg(long, value_name = "P")]
+    pub line_miss: Option<f64>,
+    /// Probability that the floor sensor reports a line twice (default 0.02).
+    #[arg(long, value_name = "P")]
+    pub line_double: Option<f64>,
     /// True wheel distance in metres, if not the profile's nominal one.
     #[arg(long, value_name = "M")]
     pub true_wheel_distance: Option<f64>,
@@ -143,6 +149,10 @@ pub struct ServeArgs {
     /// On exit, print what the run measured (bytes, faults, cycle jitter) as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Link authentication key: a file holding 64 hex digits (PROTOCOL.md §13). The robot
+    /// then signs every frame and accepts only frames signed with this key.
+    #[arg(long, value_name = "PATH")]
+    pub key_file: Option<PathBuf>,
 }
 
 /// `run` options.
@@ -162,6 +172,9 @@ pub struct RunArgs {
     /// Print the report as one JSON object (otherwise a readable summary).
     #[arg(long)]
     pub json: bool,
+    /// line-correct: true distance to drive, metres.
+    #[arg(long, default_value_t = 40.0, value_name = "M")]
+    pub distance: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -172,6 +185,13 @@ pub enum TaskArg {
     ReachBeacon,
     /// Run 1 explores; the robot plans on its own map; run 2 executes the plan (seed 004).
     ExploreThenPlan,
+    /// Survey a floor grid for --distance metres; report line-corrected, plain-odometry and
+    /// nearest-line errors against the truth (seed 003; use --arena builtin:floor-grid).
+    LineCorrect,
+    /// Carry the objects at the lit sources to the home base (seed 000 §7). Runs the khepera
+    /// (the profile with a gripper) in `builtin:forage` unless --arena names another arena
+    /// (which then gets three lamps with objects drawn from --seed, home at the start).
+    Forage,
 }
 
 impl WorldArgs {
@@ -198,6 +218,15 @@ impl WorldArgs {
             &mut n.obstacle_counts,
         )?;
         set(self.motors_noise, "motors-noise", &mut n.motors)?;
+        for (v, name, slot) in [
+            (self.line_miss, "line-miss", &mut n.line_miss),
+            (self.line_double, "line-double", &mut n.line_double),
+        ] {
+            if v.is_some_and(|p| !(0.0..=1.0).contains(&p)) {
+                return Err(format!("--{name} {}: must be a probability in [0, 1]", v.unwrap_or_default()));
+            }
+            set(v, name, slot)?;
+        }
         Ok(n)
     }
 
@@ -244,7 +273,9 @@ impl WorldArgs {
         cfg.start = self.start_pose();
         cfg.true_wheel_distance_m = self.true_wheel_distance;
         cfg.slip = self.slip;
-        cfg.floor_grid_m = self.floor_grid;
+        cfg.floor_grid_m = self
+            .floor_grid
+            .or_else(|| crate::builtin::floor_grid_pitch(&self.arena));
         cfg.baud = baud;
         Ok(cfg)
     }
@@ -290,12 +321,26 @@ impl ServeArgs {
                 reconnect_after_s: self.reconnect_after,
                 link: self.link.clone(),
                 seed: self.world.seed,
+                key: match &self.key_file {
+                    Some(p) => Some(crate::link::read_key_file(p)?),
+                    None => None,
+                },
             },
         })
     }
 }
 
 impl RunArgs {
+    /// The arena to load: `--arena`, except that foraging replaces the default
+    /// (Micro-Rato'99) with `builtin:forage`.
+    pub fn arena(&self) -> &str {
+        if self.task == TaskArg::Forage && self.world.arena == crate::builtin::MICRO_RATO_99 {
+            crate::forage::BUILTIN_FORAGE
+        } else {
+            &self.world.arena
+        }
+    }
+
     /// The scenario these arguments describe.
     pub fn options(&self) -> Result<ScenarioOptions, String> {
         self.world.check()?;
@@ -314,14 +359,53 @@ impl RunArgs {
             }
             TaskArg::ReachBeacon => Task::ReachBeacon,
             TaskArg::ExploreThenPlan => Task::ExploreThenPlan,
+            TaskArg::Forage if self.goal.is_some() => {
+                return Err("--goal is for --task go-to; foraging heads for the lamps".to_string())
+            }
+            TaskArg::Forage => Task::Forage,
+            TaskArg::LineCorrect => {
+                return Err("--task line-correct is run by `line_correct_options`".to_string())
+            }
         };
-        let mut o = ScenarioOptions::new(self.world.profile.profile(), task);
+        let profile = if task == Task::Forage {
+            &KHEPERA
+        } else {
+            self.world.profile.profile()
+        };
+        let mut o = ScenarioOptions::new(profile, task);
         o.seed = self.world.seed;
         o.timeout_s = self.timeout;
         o.noise = self.world.noise()?;
         o.start = self.world.start_pose();
         o.true_wheel_distance_m = self.world.true_wheel_distance;
         o.slip = self.world.slip;
+        Ok(o)
+    }
+}
+
+impl RunArgs {
+    /// The line-correction run these arguments describe (`--task line-correct`).
+    pub fn line_correct_options(&self) -> Result<crate::line_correct::LineCorrectOptions, String> {
+        self.world.check()?;
+        if self.goal.is_some() {
+            return Err("--goal is for --task go-to; line-correct surveys the grid".to_string());
+        }
+        if !(self.distance.is_finite() && self.distance > 0.0) {
+            return Err(format!("--distance {}: must be positive metres", self.distance));
+        }
+        if !(self.timeout.is_finite() && self.timeout > 0.0) {
+            return Err(format!("--timeout {}: must be positive seconds", self.timeout));
+        }
+        let mut o = crate::line_correct::LineCorrectOptions::new(self.world.profile.profile());
+        o.seed = self.world.seed;
+        o.distance_m = self.distance;
+        // A 40 m survey at 0.1 m/s takes 400 s: the go-to default (300 s) would cut it.
+        o.timeout_s = self.timeout.max(self.distance / 0.1 * 1.5);
+        o.noise = self.world.noise()?;
+        o.start = self.world.start_pose();
+        if let Some(g) = self.world.floor_grid {
+            o.floor_grid_m = g;
+        }
         Ok(o)
     }
 }

@@ -33,6 +33,8 @@ pub trait Device {
     fn cycles(&self) -> u32;
     /// The control-cycle period, microseconds.
     fn cycle_us(&self) -> u32;
+    /// Gives the robot its link key (PROTOCOL.md §13); `serve` calls it before the first byte.
+    fn set_link_key(&mut self, _key: Option<&[u8; protocol::sign::KEY_LEN]>) {}
 }
 
 /// How fast simulated time runs.
@@ -59,6 +61,9 @@ pub struct ServeOptions {
     /// A symlink kept pointing at the current pty.
     pub link: Option<PathBuf>,
     pub seed: u64,
+    /// The link key (PROTOCOL.md §13): the robot then signs everything and accepts only
+    /// frames signed with it.
+    pub key: Option<[u8; protocol::sign::KEY_LEN]>,
 }
 
 impl Default for ServeOptions {
@@ -71,6 +76,7 @@ impl Default for ServeOptions {
             reconnect_after_s: None,
             link: None,
             seed: 0,
+            key: None,
         }
     }
 }
@@ -162,6 +168,7 @@ pub fn serve<D: Device>(
     stop: &AtomicBool,
     on_ready: &mut dyn FnMut(&Path),
 ) -> Result<ServeStats, PtyError> {
+    dev.set_link_key(opts.key.as_ref());
     let mut pty = Some(Pty::open(opts.link.as_deref())?);
     if let Some(p) = &pty {
         on_ready(p.slave_path());
@@ -397,6 +404,12 @@ impl Device for crate::sim::Sim {
     fn cycle_us(&self) -> u32 {
         self.robot().core.profile.cycle_us
     }
+
+    fn set_link_key(&mut self, key: Option<&[u8; protocol::sign::KEY_LEN]>) {
+        self.robot_mut().link.set_key(key);
+        self.uart_mut()
+            .set_truth_key(key.map(protocol::LinkKey::new));
+    }
 }
 
 /// Everything needed to start a served emulator.
@@ -437,4 +450,12 @@ pub fn spawn(opts: EmulatorOptions) -> Result<RunningEmulator, SpawnError> {
         crate::builtin::load(&arena, &load).map_err(|e| SpawnError::Arena(e.to_string()))?;
     let sim = crate::sim::Sim::new(arena, sim).map_err(|e| SpawnError::Sim(e.to_string()))?;
     spawn_device(move || Ok(sim), serve)
+}
+
+/// Reads a link key file: 64 hex digits (surrounding white space ignored). The error names
+/// the file and what is wrong with it.
+pub fn read_key_file(path: &Path) -> Result<[u8; protocol::sign::KEY_LEN], String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read key file {}: {e}", path.display()))?;
+    protocol::sign::parse_key_hex(&text).map_err(|e| format!("key file {}: {e}", path.display()))
 }

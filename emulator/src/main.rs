@@ -62,6 +62,12 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
 }
 
 fn run(args: &RunArgs) -> Result<(), String> {
+    if args.task == emulator::cli::TaskArg::LineCorrect {
+        return line_correct(args);
+    }
+    if args.task == emulator::cli::TaskArg::Forage {
+        return forage(args);
+    }
     let opts = args.options()?;
     let arena = emulator::builtin::load(&args.world.arena, &load_options(args))
         .map_err(|e| e.to_string())?;
@@ -87,6 +93,78 @@ fn run(args: &RunArgs) -> Result<(), String> {
             report.distance_m,
             report.pose_error_m,
             report.goal_error_m
+        );
+    }
+    Ok(())
+}
+
+fn forage(args: &RunArgs) -> Result<(), String> {
+    let opts = args.options()?;
+    let arena =
+        emulator::builtin::load(args.arena(), &load_options(args)).map_err(|e| e.to_string())?;
+    let r = emulator::scenario::forage::run_forage(arena, opts).map_err(|e| e.to_string())?;
+    if args.json {
+        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        return Ok(());
+    }
+    println!(
+        "{}: {} of {} objects delivered in {:.1} s simulated ({:.2} s wall), {} collisions, \
+         {:.2} m travelled",
+        r.arena, r.delivered, r.objects, r.sim_s, r.wall_s, r.collisions, r.distance_m
+    );
+    for (i, h) in r.returns.iter().enumerate() {
+        println!(
+            "  put-down {}: t {:.1} s, {}, {:.3} m from home centre, pose error {:.3} m, \
+             heading error {:+.1} deg",
+            i + 1,
+            h.time_s,
+            if h.delivered {
+                "delivered"
+            } else {
+                "outside home"
+            },
+            h.from_home_m,
+            h.pose_error_m,
+            h.heading_error_deg
+        );
+    }
+    Ok(())
+}
+
+fn line_correct(args: &RunArgs) -> Result<(), String> {
+    let opts = args.line_correct_options()?;
+    let arena = emulator::builtin::load(&args.world.arena, &load_options(args))
+        .map_err(|e| e.to_string())?;
+    let r = emulator::line_correct::run_line_correct(arena, &opts).map_err(|e| e.to_string())?;
+    if args.json {
+        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+    } else {
+        println!(
+            "{}: {:.1} m in {:.0} s simulated ({:.2} s wall), wheel bias {:+.2}/{:+.2} %, \
+             {} pulses of {} true crossings, {} corrections, {} ignored\n\
+             position error, mm      max    mean   final\n\
+             line-corrected      {:>7.1} {:>7.1} {:>7.1}\n\
+             uncorrected         {:>7.1} {:>7.1} {:>7.1}\n\
+             nearest-line        {:>7.1} {:>7.1} {:>7.1}",
+            r.arena,
+            r.distance_m,
+            r.sim_s,
+            r.wall_s,
+            r.wheel_bias[0] * 100.0,
+            r.wheel_bias[1] * 100.0,
+            r.pulses,
+            r.true_crossings,
+            r.corrections,
+            r.rejected,
+            r.corrected.max_mm,
+            r.corrected.mean_mm,
+            r.corrected.final_mm,
+            r.uncorrected.max_mm,
+            r.uncorrected.mean_mm,
+            r.uncorrected.final_mm,
+            r.baseline.max_mm,
+            r.baseline.mean_mm,
+            r.baseline.final_mm,
         );
     }
     Ok(())

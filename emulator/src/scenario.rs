@@ -42,6 +42,8 @@ use crate::arena::{Arena, Pose};
 use crate::sensors::Noise;
 use crate::sim::{Sim, SimConfig, SimError};
 
+pub mod forage;
+
 /// Settle time after the firmware reports arrival, ms (a few motor time constants).
 pub const SETTLE_MS: u64 = 500;
 /// Khepera go-to tolerance, metres. seed 000 §4.4 / Fig. 17: 5 cm.
@@ -71,6 +73,9 @@ pub enum Task {
     /// built and plans from the start to where it found the goal; it is carried back to the
     /// start and run 2 executes the plan.
     ExploreThenPlan,
+    /// Seed 000 §7 foraging: objects from lit sources to the home base ([`forage::run_forage`],
+    /// which has its own report; [`run_scenario`] refuses it).
+    Forage,
 }
 
 /// One run of a scenario (explore-then-plan has two).
@@ -223,6 +228,12 @@ pub enum ScenarioError {
     /// The timeout is not a finite positive number of seconds.
     #[error("timeout {0} s must be finite and > 0")]
     BadTimeout(f64),
+    /// The task has its own runner (foraging: [`forage::run_forage`]).
+    #[error("task {0:?} has its own runner")]
+    OtherRunner(Task),
+    /// Foraging in an arena with no room for a light source.
+    #[error("arena {0:?} has no lamps and no free spot 0.3 m from home for one")]
+    NoSources(String),
 }
 
 /// Runs one scenario to arrival or timeout.
@@ -234,6 +245,7 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
     let given = match opts.task {
         Task::GoTo(g) => g,
         Task::ReachBeacon | Task::ExploreThenPlan => None,
+        Task::Forage => return Err(ScenarioError::OtherRunner(opts.task)),
     };
     let goal = given
         .or_else(|| {
@@ -300,6 +312,7 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
                 runs.push(plan_and_execute(&mut sim, start, timeout_ms, &judge)?);
             }
         }
+        Task::Forage => return Err(ScenarioError::OtherRunner(opts.task)),
     }
     let wall_s = started.elapsed().as_secs_f64();
     let t = sim.truth();

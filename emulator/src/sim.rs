@@ -17,11 +17,13 @@
 //! What can fail: [`Sim::new`] with an invalid configuration or a start pose inside (or
 //! overlapping) a wall ([`SimError`]). Stepping cannot fail.
 
+use robot_firmware::hal::{GripperCommand, GripperState, CAMERA_PIXELS};
 use robot_firmware::odometry::Pose as FwPose;
 use robot_firmware::{BeaconReading, Hal, MotorCommand, Profile, Robot, RobotOptions};
 use thiserror::Error;
 
 use crate::arena::{Arena, Light, Pose};
+use crate::forage::{ForageSite, Gripper, LineCamera};
 use crate::geometry::Point;
 use crate::physics::{Body, PhysicsError, PhysicsParams};
 use crate::rng::{stream, SimRng};
@@ -61,6 +63,10 @@ pub struct SimConfig {
     pub floor_grid_m: Option<f64>,
     /// Light sources added to the arena's.
     pub lights: Vec<Light>,
+    /// Seed 000 §7 foraging: objects, home base, landmarks; default the built-in forage
+    /// arena's own site, none elsewhere. Its drawn sources (if any) join the lights. Objects
+    /// need a robot with a gripper.
+    pub forage: Option<ForageSite>,
     /// Serial line rate.
     pub baud: u32,
 }
@@ -78,6 +84,7 @@ impl SimConfig {
             slip: 0.0,
             floor_grid_m: None,
             lights: Vec::new(),
+            forage: None,
             baud: DEFAULT_BAUD,
         }
     }
@@ -136,6 +143,8 @@ pub struct SimHal {
     battery: Battery,
     uart: Uart,
     slip_rng: SimRng,
+    gripper: Gripper,
+    camera: LineCamera,
 }
 
 impl Hal for SimHal {
@@ -183,6 +192,18 @@ impl Hal for SimHal {
         self.battery.read()
     }
 
+    fn gripper(&mut self) -> Option<GripperState> {
+        self.gripper.read(self.body.pose())
+    }
+
+    fn set_gripper(&mut self, cmd: GripperCommand) {
+        self.gripper.command(cmd);
+    }
+
+    fn camera(&mut self, image: &mut [u8; CAMERA_PIXELS]) -> bool {
+        self.camera.read(self.body.pose(), image)
+    }
+
     fn serial_read(&mut self, buf: &mut [u8]) -> usize {
         self.uart.serial_read(buf)
     }
@@ -208,6 +229,8 @@ impl SimHal {
             + f64::from(self.motor.right.unsigned_abs()))
             / (2.0 * max);
         self.battery.drain(STEP_S, effort);
+        self.gripper
+            .step(self.body.pose(), STEP_S, self.now_us / 1000 + 1);
         if self.line.present() {
             let p = self.body.pose();
             self.line.update(self.world.on_line(Point::new(p.x, p.y)));
@@ -223,6 +246,7 @@ pub struct Sim {
     truth: TruthHistory,
     seed: u64,
     wheel_bias: [f64; 2],
+    forage: Option<ForageSite>,
 }
 
 impl Sim {
@@ -234,7 +258,12 @@ impl Sim {
             Some(pitch) => Some(FloorGrid::new(pitch, arena.bounds.min)?),
             None => None,
         };
-        let world = World::new(arena, cfg.lights.clone(), floor)?;
+        let mut lights = cfg.lights.clone();
+        if let Some(site) = cfg.forage.as_ref().filter(|s| s.sources_added) {
+            lights.extend(site.sources.iter().copied());
+        }
+        let world = World::new(arena, lights, floor)?;
+        let forage = cfg.forage.clone().or_else(|| ForageSite::builtin(&world));
         let radius = f64::from(profile.body_diameter_m) / 2.0;
         let start = start_pose(&world, cfg.start, radius)?;
 
@@ -295,6 +324,18 @@ impl Sim {
             ),
             uart: Uart::new(cfg.baud, true)?,
             slip_rng: SimRng::new(seed, stream::SLIP),
+            gripper: Gripper::new(has(protocol::caps::GRIPPER), radius, forage.as_ref()),
+            camera: LineCamera::new(
+                has(protocol::caps::CAMERA),
+                forage.as_ref().map_or(&[], |s| &s.landmarks[..]),
+                // With the other sensors' noise on (`Noise::none` leaves it exact).
+                if noise.light_counts > 0.0 {
+                    crate::forage::CAMERA_NOISE_COUNTS
+                } else {
+                    0.0
+                },
+                SimRng::new(seed, crate::forage::CAMERA_STREAM),
+            ),
             world,
         };
         let firmware_seed = SimRng::new(seed, stream::FIRMWARE).next_u64() as u32;
@@ -312,6 +353,7 @@ impl Sim {
             truth: TruthHistory::default(),
             seed,
             wheel_bias,
+            forage,
         };
         sim.record_truth();
         Ok(sim)
@@ -414,6 +456,16 @@ impl Sim {
     /// The world.
     pub fn world(&self) -> &World {
         &self.hal.world
+    }
+
+    /// The gripper turret and the objects (seed 000 §7).
+    pub fn gripper(&self) -> &Gripper {
+        &self.hal.gripper
+    }
+
+    /// The foraging site, if the run has one.
+    pub fn forage_site(&self) -> Option<&ForageSite> {
+        self.forage.as_ref()
     }
 
     /// The firmware.

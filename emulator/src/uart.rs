@@ -130,6 +130,8 @@ pub struct Uart {
     decoder: FrameDecoder,
     truth_enabled: bool,
     truth_seq: u16,
+    /// Signs `EmuTruth` frames on their own link (PROTOCOL.md §13) when the robot is keyed.
+    truth_key: Option<protocol::LinkKey>,
     stats: UartStats,
 }
 
@@ -164,8 +166,15 @@ impl Uart {
             decoder: FrameDecoder::new(),
             truth_enabled: truth,
             truth_seq: 0,
+            truth_key: None,
             stats: UartStats::default(),
         })
+    }
+
+    /// Signs `EmuTruth` frames with `key`, each with the timestamp of the telemetry frame it
+    /// follows, so they pass a keyed station like the robot's own frames.
+    pub fn set_truth_key(&mut self, key: Option<protocol::LinkKey>) {
+        self.truth_key = key;
     }
 
     /// The line rate.
@@ -311,15 +320,16 @@ impl Uart {
         if !self.truth_enabled {
             return;
         }
-        let time_ms = match self.decoder.feed(&[byte]) {
+        let (time_ms, timestamp) = match self.decoder.feed(&[byte]) {
             Feed::Frame {
                 frame:
                     protocol::Frame {
                         message: Message::Telemetry(t),
+                        signature,
                         ..
                     },
                 ..
-            } => t.time_ms,
+            } => (t.time_ms, signature.map(|s| s.timestamp)),
             _ => return,
         };
         let Some(s) = truth.at(time_ms) else { return };
@@ -329,7 +339,20 @@ impl Uart {
             collisions: s.collisions,
         });
         let mut buf = [0u8; MAX_FRAME];
-        if let Ok(n) = encode(self.truth_seq, &msg, &mut buf) {
+        let encoded = match (&self.truth_key, timestamp) {
+            (Some(key), Some(ts)) => protocol::encode_signed(
+                self.truth_seq,
+                &msg,
+                key,
+                protocol::sign::TRUTH_LINK,
+                ts,
+                &mut buf,
+            ),
+            // A keyed station would refuse unsigned truth; an unkeyed one, signed truth.
+            (Some(_), None) | (None, Some(_)) => return,
+            (None, None) => encode(self.truth_seq, &msg, &mut buf),
+        };
+        if let Ok(n) = encoded {
             self.truth_seq = self.truth_seq.wrapping_add(1);
             self.truth_queue.extend(buf.iter().take(n));
             self.stats.truth_frames = self.stats.truth_frames.wrapping_add(1);

@@ -9,7 +9,9 @@
 //!
 //! Decoded frame layout (before COBS):
 //! `[version u8][kind u8][seq u16 LE][payload: postcard][crc32c u32 LE]`, with the CRC taken
-//! over version..payload.
+//! over version..payload. A signed frame (PROTOCOL.md §13) has `SIGNED_FLAG` in the version
+//! byte and `[link id u8][timestamp u48 LE][mac 6]` between payload and CRC, the CRC then
+//! covering the trailer too; the decoder parses the trailer, `sign::LinkAuth` judges it.
 
 use core::fmt;
 
@@ -17,6 +19,7 @@ use crate::msg::{
     Ack, Command, EmuTruth, Event, Heartbeat, Hello, HelloReply, Kind, Log, Message, Nack,
     Telemetry, TransferAck, TransferBegin, TransferChunk,
 };
+use crate::sign::{LinkKey, Signature, MAC_LEN, SIGNATURE_LEN, SIGNED_FLAG, TIMESTAMP_MAX};
 
 /// The protocol version carried in every header.
 pub const PROTOCOL_VERSION: u8 = 1;
@@ -32,6 +35,8 @@ pub const MAX_ENCODED: usize = MAX_FRAME - 1;
 pub const MAX_RAW: usize = 254;
 /// Largest postcard payload.
 pub const MAX_PAYLOAD: usize = MAX_RAW - HEADER_LEN - CRC_LEN;
+/// Largest postcard payload of a signed frame.
+pub const MAX_SIGNED_PAYLOAD: usize = MAX_PAYLOAD - SIGNATURE_LEN;
 
 // COBS adds at most one byte per 254: a 254-byte raw frame encodes to 255, plus the 0x00.
 const _: () = assert!(cobs::max_encoding_length(MAX_RAW) <= MAX_ENCODED);
@@ -53,11 +58,13 @@ pub struct Header {
     pub seq: u16,
 }
 
-/// A decoded, verified frame. Borrowed strings and byte slices point into the decoder.
+/// A decoded frame that passed the CRC and decoded. Borrowed strings and byte slices point
+/// into the decoder. A signature is parsed, not yet verified: `sign::LinkAuth::verify` does.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame<'a> {
     pub header: Header,
     pub message: Message<'a>,
+    pub signature: Option<Signature<'a>>,
 }
 
 /// Why a frame could not be encoded.
@@ -173,6 +180,48 @@ pub fn encode(seq: u16, msg: &Message<'_>, out: &mut [u8]) -> Result<usize, Enco
     finish_raw(&mut raw, PROTOCOL_VERSION, msg.kind() as u8, seq, n, out)
 }
 
+/// Encodes `msg` as a signed frame (PROTOCOL.md §13) with the given link id and timestamp.
+/// The payload budget is `MAX_SIGNED_PAYLOAD`. Callers keep timestamps increasing; use
+/// `sign::LinkAuth::encode`, which does.
+pub fn encode_signed(
+    seq: u16,
+    msg: &Message<'_>,
+    key: &LinkKey,
+    link_id: u8,
+    timestamp: u64,
+    out: &mut [u8],
+) -> Result<usize, EncodeError> {
+    let mut raw = [0u8; MAX_RAW];
+    let body = raw
+        .get_mut(HEADER_LEN..HEADER_LEN + MAX_SIGNED_PAYLOAD)
+        .ok_or(EncodeError::PayloadTooLarge)?;
+    let n = serialize_payload(msg, body)?;
+    let version = PROTOCOL_VERSION | SIGNED_FLAG;
+    let [s0, s1] = seq.to_le_bytes();
+    raw[..HEADER_LEN].copy_from_slice(&[version, msg.kind() as u8, s0, s1]);
+    let trailer_at = HEADER_LEN + n;
+    let mac_at = trailer_at + SIGNATURE_LEN - MAC_LEN;
+    let ts = timestamp.min(TIMESTAMP_MAX).to_le_bytes();
+    let trailer = raw
+        .get_mut(trailer_at..mac_at)
+        .ok_or(EncodeError::PayloadTooLarge)?;
+    trailer[0] = link_id;
+    trailer[1..].copy_from_slice(&ts[..6]);
+    let mac = key.mac(raw.get(..mac_at).ok_or(EncodeError::PayloadTooLarge)?);
+    raw.get_mut(mac_at..mac_at + MAC_LEN)
+        .ok_or(EncodeError::PayloadTooLarge)?
+        .copy_from_slice(&mac);
+    let crc_at = mac_at + MAC_LEN;
+    let crc = crc32c(raw.get(..crc_at).ok_or(EncodeError::PayloadTooLarge)?);
+    let end = crc_at + CRC_LEN;
+    raw.get_mut(crc_at..end)
+        .ok_or(EncodeError::PayloadTooLarge)?
+        .copy_from_slice(&crc.to_le_bytes());
+    let n = cobs::try_encode(&raw[..end], out).map_err(|_| EncodeError::OutputTooSmall)?;
+    *out.get_mut(n).ok_or(EncodeError::OutputTooSmall)? = 0;
+    Ok(n + 1)
+}
+
 /// Encodes a frame from raw parts: any version, any kind byte, any payload bytes. For tests,
 /// test vectors and tools that speak the framing without the message set.
 pub fn encode_raw(
@@ -232,6 +281,7 @@ fn serialize_payload(msg: &Message<'_>, body: &mut [u8]) -> Result<usize, Encode
         Message::Event(m) => ser(m, body),
         Message::Log(m) => ser(m, body),
         Message::EmuTruth(m) => ser(m, body),
+        Message::Localization(m) => ser(m, body),
     }
 }
 
@@ -261,6 +311,7 @@ pub fn decode_payload(kind: Kind, payload: &[u8]) -> Result<Message<'_>, Payload
         Kind::Event => Message::Event(de::<Event>(payload)?),
         Kind::Log => Message::Log(de::<Log>(payload)?),
         Kind::EmuTruth => Message::EmuTruth(de::<EmuTruth>(payload)?),
+        Kind::Localization => Message::Localization(de::<crate::msg::Localization>(payload)?),
     })
 }
 
@@ -279,19 +330,51 @@ pub fn parse_raw(raw: &[u8]) -> Result<Frame<'_>, FrameError> {
         return Err(FrameError::BadCrc { stated, computed });
     }
     let (head, payload) = body.split_at(HEADER_LEN);
-    let (version, kind_byte, seq) = match head {
+    let (version_byte, kind_byte, seq) = match head {
         [v, k, s0, s1] => (*v, *k, u16::from_le_bytes([*s0, *s1])),
         _ => return Err(FrameError::TooShort { len }),
     };
+    let version = version_byte & !SIGNED_FLAG;
     if version != PROTOCOL_VERSION {
-        return Err(FrameError::UnsupportedVersion { version });
+        return Err(FrameError::UnsupportedVersion {
+            version: version_byte,
+        });
     }
+    let (payload, signature) = if version_byte & SIGNED_FLAG == 0 {
+        (payload, None)
+    } else {
+        let Some(trailer_at) = payload.len().checked_sub(SIGNATURE_LEN) else {
+            return Err(FrameError::TooShort { len });
+        };
+        let (payload, trailer) = payload.split_at(trailer_at);
+        let mac_at = body.len() - MAC_LEN;
+        let mut ts = [0u8; 8];
+        let mut mac = [0u8; MAC_LEN];
+        let (link_id, ts_bytes, mac_bytes) = (
+            trailer.first().copied().unwrap_or(0),
+            trailer.get(1..1 + 6).unwrap_or(&[]),
+            trailer.get(1 + 6..).unwrap_or(&[]),
+        );
+        if ts_bytes.len() != 6 || mac_bytes.len() != MAC_LEN {
+            return Err(FrameError::TooShort { len });
+        }
+        ts[..6].copy_from_slice(ts_bytes);
+        mac.copy_from_slice(mac_bytes);
+        let sig = Signature {
+            link_id,
+            timestamp: u64::from_le_bytes(ts),
+            mac,
+            covered: body.get(..mac_at).unwrap_or(&[]),
+        };
+        (payload, Some(sig))
+    };
     let kind = Kind::from_u8(kind_byte).ok_or(FrameError::UnknownKind { kind: kind_byte })?;
     let message =
         decode_payload(kind, payload).map_err(|reason| FrameError::Undecodable { kind, reason })?;
     Ok(Frame {
         header: Header { version, kind, seq },
         message,
+        signature,
     })
 }
 

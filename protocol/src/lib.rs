@@ -9,6 +9,7 @@
 //! - `seq`: loss and duplicate accounting from sequence numbers.
 //! - `packed`: eight 10-bit sensor readings in 10 bytes.
 //! - `fingerprint`: the schema hash exchanged at handshake.
+//! - `sign`: optional link authentication, HMAC-SHA256 signatures and replay windows (§13).
 //! - `transfer`: the chunked-transfer sender and receiver state machines (§8).
 //! - `object`: the byte layouts of the Map, Plan and Regions objects (§12).
 #![no_std]
@@ -19,15 +20,18 @@ pub mod msg;
 pub mod object;
 pub mod packed;
 pub mod seq;
+pub mod sign;
 pub mod transfer;
 
 pub use frame::{
-    crc32c, encode, encode_raw, parse_raw, DecoderStats, EncodeError, Feed, Frame, FrameDecoder,
-    FrameError, Header, PayloadError, MAX_FRAME, MAX_PAYLOAD, PROTOCOL_VERSION,
+    crc32c, encode, encode_raw, encode_signed, parse_raw, DecoderStats, EncodeError, Feed, Frame,
+    FrameDecoder, FrameError, Header, PayloadError, MAX_FRAME, MAX_PAYLOAD, MAX_SIGNED_PAYLOAD,
+    PROTOCOL_VERSION,
 };
 pub use msg::*;
 pub use packed::Packed10x8;
 pub use seq::{SeqEvent, SeqTracker};
+pub use sign::{AuthError, AuthStats, KeyError, LinkAuth, LinkKey, Signature};
 
 /// The schema fingerprint: FNV-1a 64 over the protocol name, version and the full postcard
 /// schema of `Message` (every variant, field name and type, in order). Two builds whose

@@ -79,6 +79,10 @@ pub mod caps {
     pub const ONBOARD_PLANNING: u32 = 1 << 9;
     /// The robot accepts map and plan transfers.
     pub const TRANSFERS: u32 = 1 << 10;
+    /// The robot corrects its odometry with a floor grid and sends `Localization` (seed 003).
+    pub const LINE_CORRECTION: u32 = 1 << 11;
+    /// The K213 line camera turret (seed 000 §1.1, §6.2: landmark bearings).
+    pub const CAMERA: u32 = 1 << 13;
     /// The peer is the emulator and sends `EmuTruth`.
     pub const EMULATED: u32 = 1 << 31;
 }
@@ -119,6 +123,14 @@ pub enum Mode {
     Explore,
     /// Follow the installed plan's waypoints (seed 004 §7).
     ExecutePlan,
+    /// Seed 000 §7 foraging: find lit sources, grip their objects, carry them home, drop.
+    Forage,
+    /// Seed 003 §2.6-2.7: a long random walk over the floor grid, the grid fitter steering so
+    /// lines are crossed at an angle; starts floor-grid line correction.
+    Survey,
+    /// Seed 000 §5.3: turn on the spot next to a light and train the light -> angle map
+    /// online; back to `Idle` with `EventCode::LightCalibrated` when done.
+    CalibrateLight,
 }
 
 /// Robot pose estimate in the map frame: x right, y up, heading counter-clockwise from +x.
@@ -170,6 +182,16 @@ pub mod flags {
     pub const HAS_MAP: u8 = 1 << 5;
     /// The robot holds a plan.
     pub const HAS_PLAN: u8 = 1 << 6;
+    /// The gripper holds an object (its object-present sensor, seed 000 §7).
+    pub const CARRYING: u8 = 1 << 7;
+}
+
+/// Failure values of `EventCode::LightCalibrated` (success is the number of examples, > 0).
+pub mod calibration {
+    /// No reading brighter than T1 = 470 during the first turn: no light near the robot.
+    pub const NO_LIGHT: i32 = -1;
+    /// The first turn did not give the light's direction (readings without a bright side).
+    pub const NO_DIRECTION: i32 = -2;
 }
 
 /// Bits of `BehaviourOut::active` (seed 000 §4).
@@ -428,6 +450,19 @@ pub enum EventCode {
     HandshakeRefused,
     /// A parameter changed; value = parameter id.
     ParamChanged,
+    /// Foraging (seed 000 §7): the gripper closed on an object at a light source; value =
+    /// objects grasped so far.
+    ObjectGrasped,
+    /// Foraging: an object was put down at the home base; value = objects delivered so far.
+    ObjectDelivered,
+    /// Foraging: a light source held no object (already emptied); value = empty sources known.
+    SourceEmpty,
+    /// Light calibration (seed 000 §5.3) finished; value = training examples used, or a
+    /// negative `calibration::*` failure code.
+    LightCalibrated,
+    /// The calibrated light -> angle map sees a light; value = its bearing from the heading,
+    /// decidegrees, counter-clockwise (-900 right .. 900 left). At most 2 per second.
+    LightBearing,
 }
 
 /// Log severity.
@@ -455,6 +490,86 @@ pub struct EmuTruth {
     pub collisions: u32,
 }
 
+/// Which family of floor lines (seed 003 §2.6): `X` lines lie at x = k * pitch and fix x (the
+/// thesis's "V" lines), `Y` lines fix y ("H").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub enum LineAxis {
+    #[default]
+    X,
+    Y,
+}
+
+/// What the robot made of a floor-line pulse (seed 003 §2.5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub enum LineVerdict {
+    /// The PPD was cut with a line and the pose corrected.
+    #[default]
+    Corrected,
+    /// No line lay near enough to the PPD, or none held enough of it (a crossing): ignored.
+    Rejected,
+    /// Too soon after the last correction: taken as a double detection and ignored.
+    Echo,
+}
+
+/// The last floor-line pulse and what it did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct LineEventInfo {
+    /// Robot clock at the pulse.
+    pub time_ms: u32,
+    pub verdict: LineVerdict,
+    /// The line the PPD was cut with (`Corrected` only; else X).
+    pub axis: LineAxis,
+    /// Its index k from the grid's origin (`Corrected` only; else 0).
+    pub index: i16,
+    /// `Corrected`: how far the corrected position moved; `Rejected`: distance of the PPD from
+    /// the best line; `Echo`: 0. Millimetres, saturating.
+    pub moved_mm: u16,
+    /// Heading correction applied (`Corrected` only), milliradians.
+    pub turned_mrad: i16,
+    /// Share of the PPD's weight on the winning line, percent (`Corrected` only).
+    pub support_pct: u8,
+}
+
+/// One PPD sample: where the hypothesis puts the robot and its wheel-bias pair.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct PpdSample {
+    /// Offset from `Localization::corrected`, millimetres (saturating).
+    pub dx_mm: i16,
+    pub dy_mm: i16,
+    /// Relative wheel speed error, left then right, in units of 0.01 % (saturating at ±1.27 %).
+    pub bias: [i8; 2],
+}
+
+/// PPD samples carried by one `Localization` (of the robot's 64).
+pub const PPD_SAMPLES_SENT: usize = 16;
+
+/// Robot -> station at 5 Hz while floor-grid line correction runs (seed 003 §2.5): the
+/// corrected, plain-odometry and nearest-line poses, the last line event and a summary of the
+/// position probability distribution (PPD).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Localization {
+    pub time_ms: u32,
+    /// Pose corrected by the PPD (the pose telemetry reports).
+    pub corrected: Pose,
+    /// Plain odometry from the same encoder counts.
+    pub uncorrected: Pose,
+    /// The nearest-line baseline the thesis rejects (seed 003 §2.2.4).
+    pub baseline: Pose,
+    /// Root-mean-square distance of the PPD's samples from their mean, millimetres.
+    pub ppd_size_mm: u16,
+    /// Mean wheel bias of the PPD, left then right, in units of 0.001 %.
+    pub bias_mean: [i16; 2],
+    /// Line pulses, accepted corrections and ignored pulses since line correction started,
+    /// wrapping.
+    pub lines: u16,
+    pub corrections: u16,
+    pub rejected: u16,
+    /// The last line pulse, if any.
+    pub last_event: Option<LineEventInfo>,
+    /// Every fourth PPD sample.
+    pub samples: [PpdSample; PPD_SAMPLES_SENT],
+}
+
 /// Every message, in kind order: variant index == the header's kind byte.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Schema)]
 pub enum Message<'a> {
@@ -475,6 +590,7 @@ pub enum Message<'a> {
     #[serde(borrow)]
     Log(Log<'a>),
     EmuTruth(EmuTruth),
+    Localization(Localization),
 }
 
 /// The header's kind byte for each message.
@@ -494,11 +610,12 @@ pub enum Kind {
     Event = 10,
     Log = 11,
     EmuTruth = 12,
+    Localization = 13,
 }
 
 impl Kind {
     /// Every kind, in numeric order.
-    pub const ALL: [Kind; 13] = [
+    pub const ALL: [Kind; 14] = [
         Kind::Hello,
         Kind::HelloReply,
         Kind::Heartbeat,
@@ -512,6 +629,7 @@ impl Kind {
         Kind::Event,
         Kind::Log,
         Kind::EmuTruth,
+        Kind::Localization,
     ];
 
     /// The kind for a header byte, or `None` for an unknown kind.
@@ -537,6 +655,7 @@ impl Message<'_> {
             Message::Event(_) => Kind::Event,
             Message::Log(_) => Kind::Log,
             Message::EmuTruth(_) => Kind::EmuTruth,
+            Message::Localization(_) => Kind::Localization,
         }
     }
 }

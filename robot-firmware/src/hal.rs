@@ -16,6 +16,35 @@ pub struct BeaconReading {
     pub strength: u8,
 }
 
+/// What the gripper turret is told (seed 000 §1.1: the arm moves to 256 positions, the grip
+/// is open or closed).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GripperCommand {
+    /// Arm position to move to: [`ARM_UP`] (carrying) .. [`ARM_DOWN`] (fingers on the floor).
+    pub arm: u8,
+    /// Close the grip (true) or open it.
+    pub closed: bool,
+}
+
+/// Arm position with the arm raised (the object, if any, clear of the floor).
+pub const ARM_UP: u8 = 0;
+/// Arm position with the fingers at floor level, where an object can be gripped.
+pub const ARM_DOWN: u8 = 255;
+
+/// Pixels in one K213 camera line.
+pub const CAMERA_PIXELS: usize = 64;
+
+/// What the gripper turret reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GripperState {
+    /// Where the arm is now (it moves towards the commanded position over some cycles).
+    pub arm: u8,
+    /// The grip is closed (and has finished closing).
+    pub closed: bool,
+    /// The object-present sensor: something is between the fingers.
+    pub object: bool,
+}
+
 /// Motor command in the profile's native units (`Profile::motor_unit_mm_s` mm/s each; on a
 /// Khepera the speed unit of 8 mm/s, on the micro-rato the nominal speed of seed 004 §4).
 pub use crate::behaviour::MotorCommand;
@@ -52,6 +81,20 @@ pub trait Hal {
 
     /// Battery voltage, millivolts; 0 when unknown.
     fn battery_mv(&mut self) -> u16;
+
+    /// The gripper turret's state; `None` on robots without one (the default).
+    fn gripper(&mut self) -> Option<GripperState> {
+        None
+    }
+
+    /// Commands the gripper turret; ignored on robots without one (the default).
+    fn set_gripper(&mut self, _cmd: GripperCommand) {}
+
+    /// Grabs one line of the K213 camera (seed 000 §1.1: 64 pixels, 8 bit, 36 deg, pixel 0 at
+    /// the left edge) into `image`; false on robots without one (the default).
+    fn camera(&mut self, _image: &mut [u8; CAMERA_PIXELS]) -> bool {
+        false
+    }
 
     /// Reads received serial bytes into `buf`; returns how many (0 when none are waiting).
     fn serial_read(&mut self, buf: &mut [u8]) -> usize;

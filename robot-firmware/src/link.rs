@@ -7,14 +7,20 @@
 //! - a command whose sequence number is among the last `REPLY_CACHE` answered is not executed
 //!   again: its remembered reply is re-sent;
 //! - a frame goes into the outgoing queue whole or not at all, so the wire never carries a
-//!   torn frame; telemetry is skipped (and counted) rather than crowding out replies.
+//!   torn frame; telemetry is skipped (and counted) rather than crowding out replies;
+//! - with a key (`set_key`, PROTOCOL.md §13) every frame sent is signed and only frames that
+//!   verify are acted on: a refused frame changes nothing, not even the link timeout or the
+//!   failsafe clock; a refused `Hello` is answered with `Event HandshakeRefused` and a
+//!   negative reason, so the station can say why instead of timing out.
 //!
-//! Memory: one 262-byte decoder, a `TX_QUEUE`-byte queue, a few dozen bytes of state.
+//! Memory: one 262-byte decoder, a `TX_QUEUE`-byte queue, the 104-byte signing state, a few
+//! dozen bytes of other state.
 
 use heapless::Deque;
+use protocol::sign::{AuthError, AuthStats, LinkAuth, LinkKey, KEY_LEN, ROBOT_LINK};
 use protocol::{
-    encode, Ack, AckInfo, Command, Event, EventCode, Feed, Frame, FrameDecoder, HelloReply,
-    Message, Nack, NackReason, SeqTracker, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION,
+    Ack, AckInfo, Command, Event, EventCode, Feed, Frame, FrameDecoder, HelloReply, Message, Nack,
+    NackReason, SeqTracker, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION,
 };
 
 /// Bytes of the outgoing queue: several frames, so a burst of replies never blocks.
@@ -96,6 +102,7 @@ struct LinkState {
     next_reply_slot: usize,
     peer_seq: SeqTracker,
     counters: LinkCounters,
+    auth: LinkAuth,
 }
 
 impl Default for Link {
@@ -105,7 +112,7 @@ impl Default for Link {
 }
 
 impl Link {
-    pub const fn new() -> Self {
+    pub fn new() -> Self {
         Link {
             rx: FrameDecoder::new(),
             st: LinkState {
@@ -127,8 +134,26 @@ impl Link {
                     handshakes: 0,
                     handshakes_refused: 0,
                 },
+                auth: LinkAuth::new(None, ROBOT_LINK),
             },
         }
+    }
+
+    /// Sets (or clears) the link key: from now on every frame is signed and only signed
+    /// frames that verify are accepted (PROTOCOL.md §13). Ends any session.
+    pub fn set_key(&mut self, key: Option<&[u8; KEY_LEN]>) {
+        self.st.auth = LinkAuth::new(key.map(LinkKey::new), ROBOT_LINK);
+        self.st.session = None;
+    }
+
+    /// Whether the link signs and requires signatures.
+    pub fn keyed(&self) -> bool {
+        self.st.auth.keyed()
+    }
+
+    /// Frames verified and refused by the authentication layer.
+    pub fn auth_stats(&self) -> &AuthStats {
+        self.st.auth.stats()
     }
 
     /// Whether a station has completed the handshake and not timed out.
@@ -182,8 +207,16 @@ impl Link {
                 Feed::Frame { frame, rest } => (frame, rest),
             };
             input = rest;
+            if let Err(e) = st.auth.verify(&frame) {
+                if frame.header.kind == protocol::Kind::Hello {
+                    st.refuse_unauthenticated(e, now_ms);
+                }
+                continue;
+            }
             // The frame borrows the decoder; everything below touches other fields only.
-            let Frame { header, message } = frame;
+            let Frame {
+                header, message, ..
+            } = frame;
             st.last_rx_ms = now_ms;
             st.peer_seq.observe(header.seq);
             match message {
@@ -288,6 +321,17 @@ impl Link {
 }
 
 impl LinkState {
+    /// Tells the station why its `Hello` was not even read. Only a `Hello` is answered, so a
+    /// flood of forged frames gets at most one small frame per frame back, and the answer
+    /// yields to replies like telemetry does.
+    fn refuse_unauthenticated(&mut self, e: AuthError, now_ms: u32) {
+        let ev = Event {
+            code: EventCode::HandshakeRefused,
+            value: auth_refusal_code(&e),
+        };
+        self.send_low_priority(&Message::Event(ev), now_ms);
+    }
+
     fn remembered(&self, seq: u16) -> Option<Reply> {
         self.replies
             .iter()
@@ -314,7 +358,8 @@ impl LinkState {
     /// Queues a frame if it fits whole; returns whether it was queued.
     fn send(&mut self, msg: &Message<'_>, now_ms: u32) -> bool {
         let mut buf = [0u8; MAX_FRAME];
-        let Ok(n) = encode(self.tx_seq, msg, &mut buf) else {
+        // The robot has no wall clock: its timestamps count on from the station's.
+        let Ok(n) = self.auth.encode(self.tx_seq, msg, 0, &mut buf) else {
             self.counters.frames_dropped = self.counters.frames_dropped.wrapping_add(1);
             return false;
         };
@@ -365,6 +410,19 @@ impl LinkState {
             }
             self.counters.bytes_out += n as u64;
         }
+    }
+}
+
+/// `Event HandshakeRefused`'s value for a `Hello` the authentication layer refused
+/// (PROTOCOL.md §13); a refused fingerprint or version reports the version, a positive number.
+pub fn auth_refusal_code(e: &AuthError) -> i32 {
+    match e {
+        AuthError::Unsigned => -1,
+        AuthError::BadSignature { .. } => -2,
+        AuthError::StaleTimestamp { .. } => -3,
+        AuthError::UnexpectedSignature { .. } => -4,
+        AuthError::WrongDirection { .. } => -5,
+        AuthError::TooManyLinks { .. } => -6,
     }
 }
 

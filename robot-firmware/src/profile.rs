@@ -52,8 +52,13 @@ pub const KHEPERA: Profile = Profile {
         | caps::AMBIENT_LIGHT
         | caps::LINE_SENSOR
         | caps::BATTERY
+        // seed 000 §1.1, §7: the gripper and K213 camera turrets.
+        | caps::GRIPPER
+        | caps::CAMERA
         | caps::ONBOARD_PLANNING
-        | caps::TRANSFERS,
+        | caps::TRANSFERS
+        // seed 003: encoders + floor line sensor: grid-line correction, Mode::Survey.
+        | caps::LINE_CORRECTION,
     // seed 000 §1.1: 55 mm diameter.
     body_diameter_m: 0.055,
     // seed 000 §3: d = 52 mm, dl = 0.08 mm per pulse.

@@ -20,7 +20,7 @@ use crate::deadreckon::{DeadReckonInput, DeadReckonParams, DeadReckoner, Degrade
 use crate::execute::{ExecuteParams, Executor};
 use crate::explore::{ExploreParams, Explorer};
 use crate::guided::{guided_step, GuidedParams, GuidedPhase};
-use crate::hal::{BeaconReading, Hal, MotorCommand};
+use crate::hal::{BeaconReading, GripperCommand, GripperState, Hal, MotorCommand};
 use crate::link::{Identity, Inbound, Link, LinkStatus, Reply, Response};
 use crate::odometry::{encoder_delta, wrap_angle, Odometry, OdometryParams, Point, Pose};
 use crate::params::{RobotConfig, Tunables};
@@ -28,10 +28,18 @@ use crate::profile::Profile;
 use crate::telemetry;
 use crate::transfer::{Installed, Objects};
 
+mod calibrate;
 mod explore;
 mod follow;
+mod forage;
+mod linecorr;
+mod scan;
 
+pub use calibrate::{CalPhase, LightCalibration};
 pub use follow::Execution;
+pub use forage::{Forage, ForageParams, ForagePhase, GripStep};
+pub use linecorr::{LineCorr, REPORT_PERIOD_MS as LOCALIZATION_PERIOD_MS};
+pub use scan::{LandmarkScan, ScanParams, Sighting};
 
 /// Events waiting to be sent; a burst larger than this loses its oldest.
 const EVENT_QUEUE: usize = 8;
@@ -73,6 +81,8 @@ pub struct Sensors {
     pub beacon: Option<BeaconReading>,
     pub battery_mv: u16,
     pub encoders: Option<[i32; 2]>,
+    /// The gripper turret; `None` without one.
+    pub gripper: Option<GripperState>,
 }
 
 /// Control-cycle timing.
@@ -129,6 +139,14 @@ pub struct Core {
     pub explorer: Explorer,
     /// Time of the current control cycle, ms.
     cycle_ms: u32,
+    /// Seed 000 §7 foraging state.
+    pub forage: Forage,
+    /// The gripper command in force (sent each cycle on a robot with a gripper).
+    pub gripper_cmd: GripperCommand,
+    /// Seed 003 floor-grid line correction and the survey pilot.
+    pub linecorr: LineCorr,
+    /// Seed 000 §5.3 light -> angle calibration (`Mode::CalibrateLight`).
+    pub light_cal: LightCalibration,
 }
 
 /// Waypoints the robot keeps for execution: start, 256 region centres, goal.
@@ -194,6 +212,10 @@ impl Robot {
                 plan_points_len: 0,
                 explorer: Explorer::new(ExploreParams::default(), opts.seed ^ 0x5EED_0004),
                 cycle_ms: 0,
+                forage: Forage::default(),
+                gripper_cmd: GripperCommand::default(),
+                linecorr: LineCorr::new(odometry_params, opts.start, opts.seed ^ 0x5EED_0003),
+                light_cal: LightCalibration::new(opts.seed ^ 0x5EED_0005),
             },
         }
     }
@@ -268,6 +290,10 @@ impl Robot {
                 next
             };
         }
+        if self.core.linecorr.report_due(now_ms) {
+            let m = self.core.linecorr.report(now_ms);
+            self.link.send_low_priority(&Message::Localization(m), now_ms);
+        }
         self.link
             .heartbeat(now_ms, protocol::timing::HEARTBEAT_PERIOD_MS);
     }
@@ -286,7 +312,9 @@ impl Robot {
 impl Core {
     /// The pose estimate: odometry on robots with encoders, compass dead reckoning otherwise.
     pub fn pose(&self) -> Pose {
-        if self.profile.has(protocol::caps::ENCODERS) {
+        if self.linecorr.active() {
+            self.linecorr.pose()
+        } else if self.profile.has(protocol::caps::ENCODERS) {
             self.odometry.pose()
         } else {
             let p = self.dead.position();
@@ -354,6 +382,7 @@ impl Core {
     fn try_apply(&mut self, command: Command, now_ms: u32) -> Result<AckInfo, NackReason> {
         match command {
             Command::SetMode(Mode::Explore) => self.start_exploration()?,
+            Command::SetMode(Mode::Forage) => self.start_forage()?,
             Command::SetMode(mode) => {
                 self.check_mode(mode)?;
                 if mode == Mode::GoTo && self.goal.is_none() {
@@ -408,6 +437,7 @@ impl Core {
                     return Err(NackReason::OutOfRange);
                 }
                 self.odometry.set_pose(Pose::new(p.x, p.y, heading));
+                self.linecorr.set_pose(Pose::new(p.x, p.y, heading));
                 // Without encoders the heading comes from the compass; only x, y are set.
                 self.dead.set_position(p);
             }
@@ -479,6 +509,25 @@ impl Core {
                     Err(NackReason::Unsupported)
                 }
             }
+            Mode::Forage => {
+                let caps = protocol::caps::AMBIENT_LIGHT
+                    | protocol::caps::ENCODERS
+                    | protocol::caps::GRIPPER;
+                if khepera_like && self.profile.has(caps) {
+                    Ok(())
+                } else {
+                    Err(NackReason::Unsupported)
+                }
+            }
+            Mode::Survey => linecorr::check(self.profile),
+            Mode::CalibrateLight => {
+                let caps = protocol::caps::AMBIENT_LIGHT | protocol::caps::ENCODERS;
+                if khepera_like && self.profile.has(caps) {
+                    Ok(())
+                } else {
+                    Err(NackReason::Unsupported)
+                }
+            }
             // Handled by `start_exploration`, which `SetMode(Explore)` is routed to.
             Mode::Explore => Err(NackReason::BadState),
             // `ExecutePlan { plan_id }` starts a plan: the id proves which one the station
@@ -505,11 +554,18 @@ impl Core {
                 behaviour::Mode::Idle
             }
             Mode::ExecutePlan => self.plan_arbiter_mode(),
+            Mode::Forage => self.forage_arbiter_mode(),
             _ => behaviour::Mode::Idle,
         };
         self.arbiter.set_mode(arbiter_mode);
         if mode == Mode::SeekLight {
             self.arbiter.release_light();
+        }
+        if mode == Mode::Survey {
+            self.linecorr.start(self.pose(), self.cycle_ms);
+        }
+        if mode == Mode::CalibrateLight {
+            self.start_light_calibration();
         }
         if mode != self.mode {
             self.mode = mode;
@@ -566,11 +622,15 @@ impl Core {
 
         self.read_sensors(hal);
         self.estimate(now_ms);
+        self.report_light_bearing(now_ms);
         let cmd = self.decide();
         let max = self.profile.motor_max;
         let cmd = cmd.clamped(max);
         self.motor = cmd;
         hal.set_motors(cmd);
+        if self.profile.has(protocol::caps::GRIPPER) {
+            hal.set_gripper(self.gripper_cmd);
+        }
         let end = hal.now_us();
         self.timing.busy_us = u32::try_from(end.saturating_sub(now_us)).unwrap_or(u32::MAX);
     }
@@ -585,7 +645,16 @@ impl Core {
             beacon: hal.beacon(),
             battery_mv: hal.battery_mv(),
             encoders: hal.encoders(),
+            gripper: hal.gripper(),
         };
+        if self.mode == Mode::Forage && self.forage.wants_frame() {
+            // Only when a landmark scan asks (the K213 gives 2 frames a second), straight
+            // into the scan, so the line is not kept.
+            let mut line = [0u8; crate::hal::CAMERA_PIXELS];
+            let ok = hal.camera(&mut line);
+            let heading = self.pose().heading;
+            self.forage.take_frame(heading, ok.then_some(&line));
+        }
         if s.line && !self.sensors.line {
             self.line_events = self.line_events.wrapping_add(1);
             self.push_event(EventCode::LineCrossed, i32::from(self.line_events));
@@ -600,6 +669,7 @@ impl Core {
                 let dl = encoder_delta(prev[0], enc[0]);
                 let dr = encoder_delta(prev[1], enc[1]);
                 self.odometry.step(dl, dr);
+                self.line_correct(dl, dr, now_ms);
                 if period_s > 0.0 {
                     let mm = self.odometry.params.mm_per_pulse;
                     self.wheel_speed_mm_s = [
@@ -683,6 +753,9 @@ impl Core {
             | Mode::SeekLight => self.behaviour_command(),
             Mode::ExecutePlan => self.plan_command(),
             Mode::Explore => self.explore_command(),
+            Mode::Forage => self.forage_command(),
+            Mode::Survey => self.survey_command(),
+            Mode::CalibrateLight => self.calibrate_command(),
         }
     }
 
@@ -754,6 +827,7 @@ impl Core {
             Mode::GoTo => !self.guided_active,
             Mode::Wander | Mode::EdgeFollowLeft | Mode::EdgeFollowRight | Mode::SeekLight => true,
             Mode::ExecutePlan => !self.plan_guided(),
+            Mode::Forage => true,
             _ => false,
         };
         if arbiter_driven {

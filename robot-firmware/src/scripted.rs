@@ -4,7 +4,7 @@
 
 use heapless::Deque;
 
-use crate::hal::{BeaconReading, Hal, MotorCommand};
+use crate::hal::{BeaconReading, GripperCommand, GripperState, Hal, MotorCommand, CAMERA_PIXELS};
 
 /// Bytes a scripted port holds in each direction.
 pub const SCRIPTED_PORT: usize = 4096;
@@ -23,6 +23,12 @@ pub struct ScriptedHal {
     pub line: bool,
     pub beacon: Option<BeaconReading>,
     pub battery_mv: u16,
+    /// The gripper's report; `None` = no gripper.
+    pub gripper: Option<GripperState>,
+    /// The last gripper command set.
+    pub gripper_cmd: GripperCommand,
+    /// The camera line; `None` = no camera.
+    pub camera: Option<[u8; CAMERA_PIXELS]>,
     /// Bytes waiting for the robot to read.
     pub rx: Deque<u8, SCRIPTED_PORT>,
     /// Bytes the robot sent.
@@ -45,6 +51,9 @@ impl Default for ScriptedHal {
             line: false,
             beacon: None,
             battery_mv: 0,
+            gripper: None,
+            gripper_cmd: GripperCommand::default(),
+            camera: None,
             rx: Deque::new(),
             tx: Deque::new(),
             tx_chunk: usize::MAX,
@@ -124,6 +133,21 @@ impl Hal for ScriptedHal {
 
     fn battery_mv(&mut self) -> u16 {
         self.battery_mv
+    }
+
+    fn gripper(&mut self) -> Option<GripperState> {
+        self.gripper
+    }
+
+    fn set_gripper(&mut self, cmd: GripperCommand) {
+        self.gripper_cmd = cmd;
+    }
+
+    fn camera(&mut self, image: &mut [u8; CAMERA_PIXELS]) -> bool {
+        if let Some(line) = self.camera {
+            *image = line;
+        }
+        self.camera.is_some()
     }
 
     fn serial_read(&mut self, buf: &mut [u8]) -> usize {

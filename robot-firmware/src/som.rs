@@ -10,7 +10,8 @@
 //! linearly over the training ([`Schedule`]). Recall finds the best match on the `M` sensor
 //! components only and returns its `phi` (Eqs 20-21).
 //!
-//! Invariants: fixed size `N * (M + 1)` f32, no heap, no clock; randomness (initial weights,
+//! Invariants: fixed size `N * (M + 1)` numbers (f32, or [`Centi`]: hundredths in a u16, half
+//! the memory, for the robot), no heap, no clock; randomness (initial weights,
 //! presentation order) from a caller-seeded [`XorShift32`]. What can fail: a network with no
 //! neurons has no best match (`None`); empty example sets train nothing. Non-finite inputs give
 //! an arbitrary (but in-range) best match, never a panic. Units are the caller's: the L1 norm
@@ -105,20 +106,57 @@ pub fn rescale<const M: usize>(values: [f32; M], lo: f32, hi: f32) -> [f32; M] {
     })
 }
 
-/// A 1-D chain of `N` neurons over `M` sensor inputs and one output.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Som<const N: usize, const M: usize> {
-    weights: [[f32; M]; N],
-    outputs: [f32; N],
+/// How a neuron's numbers are stored. Arithmetic is always f32; storage may be narrower.
+pub trait Store: Copy + Default + PartialEq + core::fmt::Debug {
+    /// The stored value.
+    fn get(self) -> f32;
+    /// Stores `v` (rounded and clamped to what the type holds; NaN stores as the smallest).
+    fn put(v: f32) -> Self;
 }
 
-/// The light-angle network of seed 000 §5.3: 60 neurons, 6 front sensors.
-pub type LightSom = Som<60, 6>;
+impl Store for f32 {
+    fn get(self) -> f32 {
+        self
+    }
+    fn put(v: f32) -> Self {
+        v
+    }
+}
 
-impl<const N: usize, const M: usize> Som<N, M> {
-    /// A network with the given neurons (e.g. restored from flash).
-    pub const fn from_neurons(weights: [[f32; M]; N], outputs: [f32; N]) -> Self {
-        Self { weights, outputs }
+/// Hundredths in a u16: 0.00 ..= 655.35. Holds §5.3's rescaled readings (50..500) and angles
+/// (0..180 deg) at half the memory of f32; a training step smaller than 0.005 is lost, which
+/// stops a neuron within 0.05 of its target at the final rate 0.1.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Centi(pub u16);
+
+impl Store for Centi {
+    fn get(self) -> f32 {
+        f32::from(self.0) / 100.0
+    }
+    fn put(v: f32) -> Self {
+        // `as` saturates and maps NaN to 0.
+        Centi(libm::roundf(v * 100.0) as u16)
+    }
+}
+
+/// A 1-D chain of `N` neurons over `M` sensor inputs and one output, stored as `W`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Som<const N: usize, const M: usize, W: Store = f32> {
+    weights: [[W; M]; N],
+    outputs: [W; N],
+}
+
+/// The light-angle network of seed 000 §5.3: 60 neurons, 6 front sensors, in hundredths
+/// (840 bytes: the robot's RAM is tight, §1.1 aside).
+pub type LightSom = Som<60, 6, Centi>;
+
+impl<const N: usize, const M: usize, W: Store> Som<N, M, W> {
+    /// A network with the given neurons (e.g. restored from flash or a file).
+    pub fn from_neurons(weights: [[f32; M]; N], outputs: [f32; N]) -> Self {
+        Self {
+            weights: weights.map(|w| w.map(W::put)),
+            outputs: outputs.map(W::put),
+        }
     }
 
     /// "k randomly initialised neurons" (§5.1): weights uniform in `inputs`, outputs uniform
@@ -128,25 +166,28 @@ impl<const N: usize, const M: usize> Som<N, M> {
             let f = (rng.next_u32() >> 8) as f32 / 16_777_216.0;
             lo + f * (hi - lo)
         };
-        let mut weights = [[0.0; M]; N];
-        let mut outputs = [0.0; N];
+        let mut weights = [[W::default(); M]; N];
+        let mut outputs = [W::default(); N];
         for (w, o) in weights.iter_mut().zip(outputs.iter_mut()) {
             for v in w.iter_mut() {
-                *v = u(inputs);
+                *v = W::put(u(inputs));
             }
-            *o = u(output);
+            *o = W::put(u(output));
         }
         Self { weights, outputs }
     }
 
     /// Neuron `i`'s sensor weights and output value.
-    pub fn neuron(&self, i: usize) -> Option<(&[f32; M], f32)> {
-        Some((self.weights.get(i)?, *self.outputs.get(i)?))
+    pub fn neuron(&self, i: usize) -> Option<([f32; M], f32)> {
+        let w = self.weights.get(i)?;
+        Some((w.map(W::get), self.outputs.get(i)?.get()))
     }
 
     /// Eq 18: the neuron nearest to the whole example (L1 over sensors and output).
     pub fn best_match_training(&self, ex: &Example<M>) -> Option<usize> {
-        self.argmin(|i| l1(&self.weights[i], &ex.inputs) + (self.outputs[i] - ex.output).abs())
+        self.argmin(|i| {
+            l1(&self.weights[i], &ex.inputs) + (self.outputs[i].get() - ex.output).abs()
+        })
     }
 
     /// Eq 21: the neuron nearest to the sensor values alone (L1).
@@ -157,7 +198,7 @@ impl<const N: usize, const M: usize> Som<N, M> {
     /// Eqs 20-21: the output of the best match on the sensor values.
     pub fn recall(&self, inputs: &[f32; M]) -> Option<f32> {
         self.best_match(inputs)
-            .and_then(|i| self.outputs.get(i).copied())
+            .and_then(|i| self.outputs.get(i).map(|o| o.get()))
     }
 
     /// One training step (Eqs 18-19 with the digest's fix): every neuron moves towards the
@@ -176,9 +217,11 @@ impl<const N: usize, const M: usize> Som<N, M> {
                 continue;
             }
             for (wj, sj) in w.iter_mut().zip(ex.inputs.iter()) {
-                *wj += l * (sj - *wj);
+                let v = wj.get();
+                *wj = W::put(v + l * (sj - v));
             }
-            *o += l * (ex.output - *o);
+            let v = o.get();
+            *o = W::put(v + l * (ex.output - v));
         }
         Some(bm)
     }
@@ -219,8 +262,120 @@ impl<const N: usize, const M: usize> Som<N, M> {
     }
 }
 
-fn l1<const M: usize>(a: &[f32; M], b: &[f32; M]) -> f32 {
-    a.iter().zip(b.iter()).map(|(x, y)| (x - y).abs()).sum()
+/// Online training (seed 000 §5.3 on the robot itself): examples arrive one at a time, in
+/// the order the robot meets them, and are not kept. Presented in that order, a rotation would
+/// drag the chain along with it while the neighbourhood is wide; a small reservoir of `B`
+/// recent examples, from which a random one is trained as each new one arrives, breaks the
+/// order at the cost of `B` examples of memory. The schedule advances by epoch (one turn of
+/// the robot), so the paper's width and rate decay is kept.
+/// Held examples are stored as `W`, like the network.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OnlineTrainer<const M: usize, const B: usize, W: Store = f32> {
+    /// Width and rate decay over the epochs.
+    pub schedule: &'static Schedule,
+    epoch: u16,
+    held_inputs: [[W; M]; B],
+    held_outputs: [W; B],
+    len: u8,
+    trained: u32,
+}
+
+impl<const M: usize, const B: usize, W: Store> OnlineTrainer<M, B, W> {
+    /// A trainer at epoch 0 with an empty reservoir. `B` is at most 255.
+    pub fn new(schedule: &'static Schedule) -> Self {
+        Self {
+            schedule,
+            epoch: 0,
+            held_inputs: [[W::default(); M]; B],
+            held_outputs: [W::default(); B],
+            len: 0,
+            trained: 0,
+        }
+    }
+
+    fn held(&self, k: usize) -> Option<Example<M>> {
+        Some(Example {
+            inputs: self.held_inputs.get(k)?.map(W::get),
+            output: self.held_outputs.get(k)?.get(),
+        })
+    }
+
+    fn hold(&mut self, k: usize, ex: &Example<M>) {
+        if let (Some(i), Some(o)) = (self.held_inputs.get_mut(k), self.held_outputs.get_mut(k)) {
+            *i = ex.inputs.map(W::put);
+            *o = W::put(ex.output);
+        }
+    }
+
+    /// The epoch examples are trained in now.
+    pub fn epoch(&self) -> u32 {
+        u32::from(self.epoch)
+    }
+
+    /// Training steps taken so far.
+    pub fn trained(&self) -> u32 {
+        self.trained
+    }
+
+    /// Whether every epoch of the schedule has passed.
+    pub fn finished(&self) -> bool {
+        self.epoch() >= self.schedule.epochs
+    }
+
+    /// Takes `ex`; trains `som` on a random held one (or on `ex` itself when `B` is 0).
+    /// Does nothing once the schedule is finished.
+    pub fn offer<const N: usize>(
+        &mut self,
+        som: &mut Som<N, M, W>,
+        ex: Example<M>,
+        rng: &mut XorShift32,
+    ) {
+        if self.finished() {
+            return;
+        }
+        let (width, rate) = self.schedule.at(self.epoch());
+        let len = usize::from(self.len);
+        let chosen = if len < B {
+            self.hold(len, &ex);
+            self.len = self.len.saturating_add(1);
+            return;
+        } else if B == 0 {
+            ex
+        } else {
+            let k = rng.next_u32() as usize % B;
+            let old = self.held(k).unwrap_or(ex);
+            self.hold(k, &ex);
+            old
+        };
+        if som.train_step(&chosen, rate, width).is_some() {
+            self.trained += 1;
+        }
+    }
+
+    /// Ends the epoch; after the last one the held examples are trained at the final rate
+    /// and width, so none is lost.
+    pub fn next_epoch<const N: usize>(&mut self, som: &mut Som<N, M, W>) {
+        if self.finished() {
+            return;
+        }
+        self.epoch = self.epoch.saturating_add(1);
+        if self.finished() {
+            let last = self.schedule.epochs.saturating_sub(1);
+            let (width, rate) = self.schedule.at(last);
+            for k in 0..usize::from(self.len) {
+                if let Some(ex) = self.held(k) {
+                    if som.train_step(&ex, rate, width).is_some() {
+                        self.trained += 1;
+                    }
+                }
+            }
+            self.len = 0;
+        }
+    }
+}
+
+fn l1<const M: usize, W: Store>(a: &[W; M], b: &[f32; M]) -> f32 {
+    a.iter().zip(b.iter()).map(|(x, y)| (x.get() - y).abs()).sum()
 }
 
 /// A random start and a stride coprime to `n` (so `start + k stride mod n` visits all).
@@ -363,6 +518,42 @@ mod tests {
             let y = som.recall(&[x]).unwrap();
             assert!((y - 2.0 * x).abs() < 12.0, "{x} -> {y}");
         }
+    }
+
+    #[test]
+    fn the_online_trainer_learns_an_ordered_stream_and_follows_the_schedule() {
+        // y = 2x presented in order, forwards then backwards, 20 epochs: the reservoir keeps
+        // the ordered stream from dragging the chain.
+        let mut rng = XorShift32::new(5);
+        let mut som = Som::<20, 1>::random(&mut rng, (0.0, 100.0), (0.0, 200.0));
+        let mut t = OnlineTrainer::<1, 8>::new(&Schedule::LIGHT);
+        for epoch in 0..20u32 {
+            assert_eq!(t.epoch(), epoch);
+            for k in 0..=100u32 {
+                let x = if epoch % 2 == 0 { k } else { 100 - k } as f32;
+                let ex = Example {
+                    inputs: [x],
+                    output: 2.0 * x,
+                };
+                t.offer(&mut som, ex, &mut rng);
+            }
+            t.next_epoch(&mut som);
+        }
+        assert!(t.finished());
+        // Every example trained once: the first 8 went into the reservoir and were flushed.
+        assert_eq!(t.trained(), 20 * 101);
+        for x in [3.0f32, 37.0, 50.0, 96.0] {
+            let y = som.recall(&[x]).unwrap();
+            assert!((y - 2.0 * x).abs() < 12.0, "{x} -> {y}");
+        }
+        // A finished trainer changes nothing.
+        let before = som.clone();
+        let ex = Example {
+            inputs: [0.0],
+            output: 500.0,
+        };
+        t.offer(&mut som, ex, &mut rng);
+        assert_eq!(som, before);
     }
 
     #[test]

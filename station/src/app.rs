@@ -9,7 +9,9 @@
 //! (with the robot's Nack reason) reaches the log and the parameter editor. Cannot fail.
 
 pub mod arena;
+pub mod forage;
 pub mod history;
+pub mod localization;
 pub mod log;
 pub mod params;
 pub mod transfers;
@@ -30,6 +32,9 @@ use params::ParamEditor;
 
 /// Teleop repeat period while driving (PROTOCOL.md §7: 10 Hz).
 pub const TELEOP_PERIOD_MS: u64 = 100;
+/// A tick this much before the period is up repeats teleop already: the TUI ticks every
+/// 32 ms (`pace::SLOT`), so the repeat comes after 96 ms rather than 128.
+pub const TELEOP_SLACK_MS: u64 = 20;
 /// One arrow press changes the forward speed by this much, mm/s.
 pub const V_STEP: i16 = 50;
 /// One arrow press changes the turn rate by this much, mrad/s.
@@ -150,6 +155,10 @@ pub struct App {
     pub recording: Option<(String, u64)>,
     /// Map and plan transfers, the robot's objects, the upload prompt (`app::transfers`).
     pub transfers: transfers::Transfers,
+    /// Floor-grid line correction (seed 003): tracks, line events, PPD, errors.
+    pub localization: localization::LocalizationState,
+    /// Foraging (seed 000 §7): objects gripped and delivered, which were taken.
+    pub forage: forage::ForageProgress,
     next_id: CommandId,
     pending: HashMap<CommandId, Pending>,
     outbox: Vec<(CommandId, Command)>,
@@ -194,6 +203,8 @@ impl App {
             chart: 0,
             recording: None,
             transfers: transfers::Transfers::default(),
+            localization: localization::LocalizationState::default(),
+            forage: forage::ForageProgress::default(),
             next_id: 1,
             pending: HashMap::new(),
             outbox: Vec::new(),
@@ -303,6 +314,7 @@ impl App {
             Action::ClearTracks => {
                 self.believed.clear();
                 self.true_track.clear();
+                self.localization.clear();
             }
             Action::PlanLocal => self.plan_locally(),
             // Done by the TUI loop, which owns the file; it reports with `Recording`.
@@ -317,7 +329,7 @@ impl App {
         let due = self
             .teleop
             .last_sent_ms
-            .is_none_or(|t| now_ms.saturating_sub(t) >= TELEOP_PERIOD_MS);
+            .is_none_or(|t| now_ms.saturating_sub(t) + TELEOP_SLACK_MS >= TELEOP_PERIOD_MS);
         if self.teleop.driving && due {
             self.send_teleop();
         }
@@ -453,8 +465,10 @@ impl App {
             LinkEvent::Truth(t) => {
                 let (x, y, _) = pose_m(&t.pose);
                 self.true_track.push(x, y);
+                self.localization.on_truth(&t);
                 self.truth = Some(t);
             }
+            LinkEvent::Localization(l) => self.localization.on_message(*l),
             LinkEvent::Robot(e) => self.on_robot_event(e),
             LinkEvent::Log { level, text } => self.note(level.into(), Source::Robot, text),
             LinkEvent::CommandDone {
@@ -506,11 +520,18 @@ impl App {
         let (x, y, _) = pose_m(&t.pose);
         self.believed.push(x, y);
         self.encoders.push(t.wheels.encoders);
+        self.forage.on_telemetry(&t);
         self.history.push(self.now_ms as f64 / 1000.0, t);
         self.telemetry = Some(t);
     }
 
     fn on_robot_event(&mut self, e: Event) {
+        let at = self
+            .true_pose()
+            .or_else(|| self.pose())
+            .map(|(x, y, _)| (x, y));
+        let site = self.map.arena.as_ref().and_then(|a| a.forage.as_ref());
+        self.forage.on_event(&e, at, site);
         let v = e.value;
         let (level, text) = match e.code {
             EventCode::ModeChanged => {
@@ -538,6 +559,28 @@ impl App {
             EventCode::HandshakeRefused => (
                 Level::Error,
                 format!("robot refused our handshake (it saw protocol {v})"),
+            ),
+            EventCode::ObjectGrasped => (Level::Info, format!("object gripped ({v} so far)")),
+            EventCode::ObjectDelivered => {
+                (Level::Info, format!("object delivered home ({v} so far)"))
+            }
+            EventCode::SourceEmpty => (Level::Info, format!("light source empty ({v} known)")),
+            EventCode::LightCalibrated if v > 0 => (
+                Level::Info,
+                format!("light calibration done ({v} examples)"),
+            ),
+            EventCode::LightCalibrated => (
+                Level::Warn,
+                match v {
+                    protocol::calibration::NO_LIGHT => {
+                        "light calibration failed: no light near the robot".into()
+                    }
+                    _ => format!("light calibration failed (code {v})"),
+                },
+            ),
+            EventCode::LightBearing => (
+                Level::Debug,
+                format!("light at {:+.1} deg", f64::from(v) / 10.0),
             ),
             EventCode::ParamChanged => (
                 Level::Info,
@@ -663,6 +706,9 @@ pub fn mode_name(m: Mode) -> &'static str {
         Mode::SeekLight => "SeekLight",
         Mode::Explore => "Explore",
         Mode::ExecutePlan => "ExecutePlan",
+        Mode::Forage => "Forage",
+        Mode::Survey => "Survey",
+        Mode::CalibrateLight => "CalibrateLight",
     }
 }
 
@@ -671,8 +717,8 @@ pub fn mode_from_index(i: i32) -> Option<Mode> {
     MODES.get(usize::try_from(i).ok()?).copied()
 }
 
-/// Every mode in wire order; the digit keys 0-8 select them.
-pub const MODES: [Mode; 9] = [
+/// Every mode in wire order; the digit keys 0-9 select the first ten.
+pub const MODES: [Mode; 11] = [
     Mode::Idle,
     Mode::Manual,
     Mode::GoTo,
@@ -682,6 +728,8 @@ pub const MODES: [Mode; 9] = [
     Mode::SeekLight,
     Mode::Explore,
     Mode::ExecutePlan,
+    Mode::Forage,
+    Mode::Survey,
 ];
 
 fn mode_name_i32(i: i32) -> String {

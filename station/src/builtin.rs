@@ -57,6 +57,16 @@ impl Drop for BuiltinEmulator {
 
 /// Starts the built-in emulator. See the module documentation.
 pub fn start_builtin_emulator() -> Result<BuiltinEmulator, BuiltinError> {
+    start_builtin_emulator_with(None, None)
+}
+
+/// Starts the built-in emulator in `arena` (a built-in name or a file; default Micro-Rato'99)
+/// with `profile` (default micro-rato, or khepera in `builtin:forage`, the robot with a
+/// gripper).
+pub fn start_builtin_emulator_with(
+    arena: Option<&str>,
+    profile: Option<&'static robot_firmware::Profile>,
+) -> Result<BuiltinEmulator, BuiltinError> {
     let base = std::env::var_os("XDG_RUNTIME_DIR")
         .map(PathBuf::from)
         .filter(|p| p.is_dir())
@@ -66,6 +76,16 @@ pub fn start_builtin_emulator() -> Result<BuiltinEmulator, BuiltinError> {
     let link = dir.join("robot");
     let mut opts = EmulatorOptions::builtin_default();
     opts.serve.link = Some(link.clone());
+    if let Some(a) = arena {
+        opts.arena = a.to_string();
+    }
+    let forage = opts.arena == emulator::forage::BUILTIN_FORAGE;
+    // `builtin:floor-grid` (seed 003): its floor lines, and the robot with a line sensor.
+    opts.sim.floor_grid_m = emulator::builtin::floor_grid_pitch(&opts.arena);
+    let grid = opts.sim.floor_grid_m.is_some();
+    if let Some(p) = profile.or_else(|| (forage || grid).then_some(&robot_firmware::KHEPERA)) {
+        opts.sim.profile = p;
+    }
     let arena = emulator::builtin::load(&opts.arena, &opts.load)
         .ok()
         .map(|a| ArenaOverlay::from_arena(&a));

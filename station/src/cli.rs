@@ -28,9 +28,14 @@ pub struct Cli {
     #[command(flatten)]
     pub port: PortArgs,
     /// An arena file to draw under the map and plan on with P (CiberRato XML, maze text, ROS
-    /// YAML, ASCII grid).
+    /// YAML, ASCII grid), or a built-in one (`builtin:micro-rato-99`, `builtin:forage`).
+    /// Without --port the built-in emulator simulates it.
     #[arg(long, value_name = "FILE", global = false)]
     pub arena: Option<PathBuf>,
+    /// The built-in emulator's robot (without --port): default micro-rato, or khepera in
+    /// `builtin:forage` (the foraging robot, with its gripper).
+    #[arg(long, value_enum, global = false)]
+    pub profile: Option<emulator::cli::ProfileArg>,
 }
 
 /// Which port to use.
@@ -42,6 +47,9 @@ pub struct PortArgs {
     /// Baud rate (ignored by ptys).
     #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
     pub baud: u32,
+    /// Link authentication key: a file of 64 hex digits, the robot's key (PROTOCOL.md §13).
+    #[arg(long, value_name = "PATH", requires = "port")]
+    pub key_file: Option<PathBuf>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -172,6 +180,18 @@ pub enum Sub {
     ///   station export run.rec --csv run.csv --mcap run.mcap
     #[command(verbatim_doc_comment)]
     Export(crate::export::ExportArgs),
+    /// Train the light -> angle map (seed 000 §5.3) from a recording of a calibrating robot
+    ///
+    /// Uses the telemetry recorded while a Khepera turned next to a light (mode
+    /// calibrate-light): labels from each full turn (or from --light X,Y), the firmware's own
+    /// network code, every fifth example held out. Prints the held-out mean/max angle error
+    /// and writes the map (FILE.json, or binary for any other name) atomically.
+    ///
+    /// Examples:
+    ///   station calibrate cal.rec --out som.json
+    ///   station calibrate cal.rec --out som.bin --light 0.40,0.30 --json
+    #[command(verbatim_doc_comment)]
+    Calibrate(crate::calibrate::CalibrateArgs),
 }
 
 /// A port that headless commands require.
@@ -183,6 +203,20 @@ pub struct RequiredPort {
     /// Baud rate (ignored by ptys).
     #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
     pub baud: u32,
+    /// Link authentication key: a file of 64 hex digits, the robot's key (PROTOCOL.md §13).
+    /// Every frame is then signed, and only frames signed with it are accepted.
+    #[arg(long, value_name = "PATH")]
+    pub key_file: Option<PathBuf>,
+}
+
+/// The key in a `--key-file`, if one was given; the error names the file and the fault.
+pub fn load_key(path: Option<&std::path::Path>) -> Result<Option<protocol::LinkKey>, String> {
+    path.map(|p| {
+        emulator::link::read_key_file(p)
+            .map(|k| protocol::LinkKey::new(&k))
+            .map_err(|e| format!("--key-file: {e}"))
+    })
+    .transpose()
 }
 
 /// The commands `send` knows.
@@ -278,6 +312,9 @@ pub enum ModeArg {
     SeekLight,
     Explore,
     ExecutePlan,
+    Forage,
+    /// Seed 000 §5.3: turn next to a light and train the light -> angle map.
+    CalibrateLight,
 }
 
 impl From<ModeArg> for Mode {
@@ -292,6 +329,8 @@ impl From<ModeArg> for Mode {
             ModeArg::SeekLight => Mode::SeekLight,
             ModeArg::Explore => Mode::Explore,
             ModeArg::ExecutePlan => Mode::ExecutePlan,
+            ModeArg::Forage => Mode::Forage,
+            ModeArg::CalibrateLight => Mode::CalibrateLight,
         }
     }
 }
@@ -404,6 +443,8 @@ fn parse_param(s: &str) -> Result<u16, String> {
 /// Parses the process arguments and runs; the exit code to return.
 pub fn run() -> ExitCode {
     let cli = Cli::parse();
+    // Just before the runtime's clock starts: the TUI's timers then share its wake-ups.
+    crate::pace::start();
     let rt = match tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()

@@ -19,7 +19,7 @@ use tokio::time::Instant;
 use crate::app::arena::ArenaOverlay;
 use crate::app::params::format_value;
 use crate::app::{App, AppOptions};
-use crate::builtin::start_builtin_emulator;
+use crate::builtin::start_builtin_emulator_with;
 use crate::cli::{Cli, RequiredPort, SendCmd, Sub};
 use crate::link::api::{command_text, nack_text, param_name};
 use crate::link::serial::{open_exclusive, SerialConnector};
@@ -37,6 +37,8 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 cli.port.port.as_deref(),
                 cli.port.baud,
                 cli.arena.as_deref(),
+                cli.profile.map(|p| p.profile()),
+                crate::cli::load_key(cli.port.key_file.as_deref()).map_err(anyhow::Error::msg)?,
             )
             .await
         }
@@ -61,6 +63,7 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Sub::Record(args)) => crate::record::command::run(&args).await,
         Some(Sub::Replay(args)) => crate::replay::command::run(&args).await,
         Some(Sub::Export(args)) => crate::export::run(&args),
+        Some(Sub::Calibrate(args)) => crate::calibrate::run(&args),
     }
 }
 
@@ -68,6 +71,8 @@ async fn interactive(
     port: Option<&Path>,
     baud: u32,
     arena: Option<&Path>,
+    profile: Option<&'static robot_firmware::Profile>,
+    key: Option<protocol::LinkKey>,
 ) -> anyhow::Result<ExitCode> {
     if !std::io::stdout().is_terminal() {
         bail!("the TUI needs a terminal; for scripts use `station send` or `station stats`");
@@ -77,7 +82,9 @@ async fn interactive(
     let mut plan = PlanState::default();
     let mut arena = match arena {
         Some(p) => {
-            let a = emulator::arena::load(p, &emulator::arena::LoadOptions::default())
+            // Built-in names (`builtin:forage`) as well as files.
+            let name = p.to_string_lossy();
+            let a = emulator::builtin::load(&name, &emulator::arena::LoadOptions::default())
                 .with_context(|| format!("cannot load arena {}", p.display()))?;
             plan = PlanState::for_arena(&a, &p.display().to_string());
             Some(ArenaOverlay::from_arena(&a))
@@ -93,7 +100,8 @@ async fn interactive(
             (p.to_path_buf(), p.display().to_string())
         }
         None => {
-            let mut emu = start_builtin_emulator()?;
+            let simulated = arena_path.map(|p| p.to_string_lossy().into_owned());
+            let mut emu = start_builtin_emulator_with(simulated.as_deref(), profile)?;
             let label = format!("built-in emulator on {}", emu.pty_path().display());
             if arena.is_none() {
                 arena = emu.arena.clone();
@@ -113,10 +121,15 @@ async fn interactive(
         (None, None) => String::new(),
     };
     let epoch = tokio::time::Instant::now();
+    // Paced: the TUI shows the link at most 10 times a second, so reading it every 25 ms on
+    // the TUI's own timer grid costs nobody anything and saves most wake-ups (README
+    // "Performance").
     let link = spawn_link(
-        SerialConnector::new(&path, baud),
+        SerialConnector::new(&path, baud).paced(true),
         LinkOptions {
             tap: Some(tap),
+            paced: true,
+            key,
             ..LinkOptions::default()
         },
     );
@@ -196,6 +209,7 @@ pub(crate) async fn connect(
         SerialConnector::new(&port.port, port.baud),
         LinkOptions {
             station: format!("station-cli {}", env!("CARGO_PKG_VERSION")),
+            key: crate::cli::load_key(port.key_file.as_deref()).map_err(anyhow::Error::msg)?,
             ..LinkOptions::default()
         },
     );
@@ -347,6 +361,19 @@ async fn stats(
             s.decoder.errors(),
             s.decoder.bytes_dropped
         );
+        if s.auth.keyed || s.auth.refused() > 0 {
+            let a = &s.auth;
+            println!(
+                "auth        {}; verified {}  bad signature {}  stale {}  unsigned {}  \
+                 unexpected signature {}",
+                if a.keyed { "signed" } else { "no key" },
+                a.verified,
+                a.bad_signature,
+                a.stale_timestamp,
+                a.unsigned,
+                a.unexpected_signature
+            );
+        }
         match (s.rtt_ms.p50, s.rtt_ms.p99) {
             (Some(a), Some(b)) => println!("rtt         p50 {a:.0} ms  p99 {b:.0} ms"),
             _ => println!("rtt         no samples (no commands sent)"),

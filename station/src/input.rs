@@ -15,7 +15,7 @@ use ratatui::layout::Rect;
 use crate::action::Action;
 use crate::app::transfers::TransferAction;
 use crate::app::{App, View, MODES, V_STEP, W_STEP};
-use crate::ui::{self, map_layers, Panel};
+use crate::ui::{self, localization, map_layers, Panel};
 
 /// Cursor step of one arrow press in go-to mode, metres (shift: 5x).
 pub const CURSOR_STEP_M: f64 = 0.1;
@@ -34,7 +34,7 @@ pub fn action_for(app: &App, ev: &Event) -> Option<Action> {
             match m.kind {
                 MouseEventKind::Down(MouseButton::Left) => {
                     let map = areas.find(Panel::Map)?;
-                    let inner = inner_of(ui::plan_panel::split(app, map).0);
+                    let inner = inner_of(ui::map::map_area(app, map));
                     let (x_m, y_m) = ui::map::to_world(app, inner, m.column, m.row)?;
                     Some(Action::GoToPoint { x_m, y_m })
                 }
@@ -133,7 +133,7 @@ fn global(k: &KeyEvent) -> Option<Action> {
         KeyCode::Left | KeyCode::Char('a') => drive(0, W_STEP),
         KeyCode::Right | KeyCode::Char('d') => drive(0, -W_STEP),
         KeyCode::Char(' ') => Some(Action::StopDriving),
-        KeyCode::Char(c @ '0'..='8') => {
+        KeyCode::Char(c @ '0'..='9') => {
             let i = c.to_digit(10)? as usize;
             MODES.get(i).map(|m: &Mode| Action::SetMode(*m))
         }
@@ -156,6 +156,11 @@ fn global(k: &KeyEvent) -> Option<Action> {
         KeyCode::Char('n') => Some(Action::ToggleLayer(map_layers::PLAN)),
         KeyCode::Char('m') => Some(Action::ToggleLayer(map_layers::SMOOTHED)),
         KeyCode::Char('e') => Some(Action::ToggleLayer(map_layers::ENDS)),
+        KeyCode::Char('y') => Some(Action::ToggleLayer(localization::ODOMETRY)),
+        KeyCode::Char('i') => Some(Action::ToggleLayer(localization::LINES)),
+        KeyCode::Char('v') => Some(Action::ToggleLayer(localization::PPD)),
+        KeyCode::Char('f') => Some(Action::ToggleLayer(localization::FLOOR)),
+        KeyCode::Char('S') => Some(Action::SetMode(Mode::Survey)),
         KeyCode::PageUp => Some(Action::LogScroll(5)),
         KeyCode::PageDown => Some(Action::LogScroll(-5)),
         _ => None,

@@ -16,11 +16,13 @@
 pub mod action;
 pub mod app;
 pub mod builtin;
+pub mod calibrate;
 pub mod cli;
 pub mod export;
 pub mod headless;
 pub mod input;
 pub mod link;
+pub mod pace;
 pub mod plan;
 pub mod record;
 pub mod replay;

@@ -53,6 +53,8 @@ impl ReplayFeed {
             station: "replay".into(),
             nonce_seed: 0,
         });
+        // A signed recording replays without its key: the frames were verified when live.
+        machine.trust_signatures();
         machine.port_opened(0, port);
         let _ = machine.take_output();
         let _ = machine.take_events();

@@ -1,23 +1,29 @@
 //! The interactive terminal: set up, run the event loop, and always restore the terminal.
 //!
-//! Layer: the TUI's I/O edge. Terminal events come from a reader thread (crossterm's blocking
-//! `read`, as gitui does), link events from the link task; both become `Action`s for
-//! `App::update`, the app's outbox goes to the link, and the screen is redrawn when something
-//! changed (no redraw at all while nothing happens): at once after a key, at most `LINK_FPS`
-//! times a second for the link's changes, however fast telemetry comes. The link's tap goes to
-//! the `TuiRecorder` (the `R` key), which writes it only while recording. The terminal is
-//! restored on quit, on
-//! error and on panic (a hook installed before raw mode is entered). What can fail: terminal
-//! I/O (`io::Error`).
+//! Layer: the TUI's I/O edge. Terminal events come from crossterm's event stream (its thread
+//! sleeps until an event: no polling), link events from the link task; both become `Action`s
+//! for `App::update`, the app's outbox goes to the link, and the screen is redrawn when
+//! something changed (no redraw at all while nothing happens): at once after a key, at most
+//! `LINK_FPS` times a second for the link's changes, however fast telemetry comes. Every timer
+//! is on the `pace` grid, so the tick, the redraw limit and the paced link share wake-ups. The
+//! viewport is fixed and resized on the terminal's resize events (a full-screen viewport asks
+//! the terminal for its size before every frame, opening `/dev/tty` each time). The link's tap
+//! goes to the `TuiRecorder` (the `R` key), which writes it only while recording. The terminal
+//! is restored on quit, on error, on panic (a hook installed before raw mode is entered) and on
+//! SIGTERM, SIGHUP and SIGINT, which end the TUI as `q` does. What can fail: terminal I/O
+//! (`io::Error`).
 
 use std::io::{self, stdout};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::pin::Pin;
 use std::time::Duration;
 
-use ratatui::crossterm::event::{self, DisableMouseCapture, EnableMouseCapture, Event};
+use futures_core::Stream;
+use ratatui::crossterm::event::{DisableMouseCapture, EnableMouseCapture, Event, EventStream};
 use ratatui::crossterm::execute;
-use ratatui::DefaultTerminal;
+use ratatui::crossterm::terminal::EnterAlternateScreen;
+use ratatui::layout::Rect;
+use ratatui::{DefaultTerminal, TerminalOptions, Viewport};
+use tokio::signal::unix::{signal, Signal, SignalKind};
 use tokio::sync::mpsc;
 use tokio::time::Instant;
 
@@ -25,26 +31,36 @@ use crate::action::Action;
 use crate::app::App;
 use crate::link::RunningLink;
 use crate::record::live::TuiRecorder;
-use crate::{input, ui};
+use crate::{input, pace, ui};
 
-/// Time between ticks (teleop repetition needs 100 ms; ticks at twice that rate).
-const TICK: Duration = Duration::from_millis(50);
-/// Most redraws a second for changes that come from the link or the clock; a key redraws at
-/// once. 50 Hz telemetry and truth are 100 events a second: drawing each took the whole TUI to
-/// ~5 % of a core; at this rate it is ~2 %, of which drawing ~0.6 % (README "Performance").
+/// Time between ticks while driving: one `pace` slot (32 ms), so that teleop repeats every
+/// three ticks, about every 100 ms (`app::TELEOP_PERIOD_MS`).
+const DRIVING_TICK: Duration = pace::SLOT;
+/// Time between ticks otherwise: nothing but transfers and recording notes needs them.
+const IDLE_TICK: Duration = Duration::from_millis(2 * pace::SLOT.as_millis() as u64);
+/// About the most redraws a second for changes that come from the link or the clock; a key
+/// redraws at once. 50 Hz telemetry and truth are 100 events a second: drawing each took the
+/// whole TUI to ~5 % of a core (README "Performance").
 pub const LINK_FPS: u32 = 10;
+/// The time between two redraws for the link's changes: `LINK_FPS` on whole slots (96 ms).
+pub const LINK_FRAME: Duration = Duration::from_millis(3 * pace::SLOT.as_millis() as u64);
 
 /// Runs the TUI until the operator quits. Restores the terminal whatever happens. `recorder`
 /// records the link while the operator asks (`R`); a recording running at quit is saved.
 pub async fn run(mut app: App, mut link: RunningLink, mut recorder: TuiRecorder) -> io::Result<()> {
+    // Before raw mode: from here on, these signals end the loop instead of the process.
+    let mut signals = StopSignals::new()?;
     install_panic_hook();
-    let mut terminal = ratatui::try_init()?;
+    let mut terminal = init_terminal()?;
     let result = async {
         execute!(stdout(), EnableMouseCapture)?;
-        event_loop(&mut terminal, &mut app, &mut link, &mut recorder).await
+        event_loop(&mut terminal, &mut app, &mut link, &mut recorder, &mut signals).await
     }
     .await;
     restore();
+    if let Some(name) = signals.received {
+        eprintln!("station: stopped by {name}");
+    }
     if let Some(note) = recorder.stop() {
         app.update(Action::Recording(note));
     }
@@ -58,6 +74,60 @@ pub async fn run(mut app: App, mut link: RunningLink, mut recorder: TuiRecorder)
 pub fn restore() {
     let _ = execute!(stdout(), DisableMouseCapture);
     ratatui::restore();
+}
+
+/// Enters raw mode and the alternate screen with a viewport of the terminal's size now; the
+/// loops resize it on `Event::Resize` (`resize`). Restores the terminal if that fails.
+pub(crate) fn init_terminal() -> io::Result<DefaultTerminal> {
+    let init = || {
+        let (w, h) = ratatui::crossterm::terminal::size()?;
+        let terminal = ratatui::try_init_with_options(TerminalOptions {
+            viewport: Viewport::Fixed(Rect::new(0, 0, w, h)),
+        })?;
+        execute!(stdout(), EnterAlternateScreen)?;
+        Ok(terminal)
+    };
+    init().inspect_err(|_| restore())
+}
+
+/// Follows a terminal resize (the viewport is fixed: nothing else notices).
+pub(crate) fn resize(terminal: &mut DefaultTerminal, ev: &Event) -> io::Result<()> {
+    if let Event::Resize(w, h) = *ev {
+        terminal.resize(Rect::new(0, 0, w, h))?;
+    }
+    Ok(())
+}
+
+/// The signals that end the TUI cleanly (terminal restored, recording saved) rather than
+/// killing it with the terminal left in raw mode on the alternate screen.
+pub(crate) struct StopSignals {
+    term: Signal,
+    hup: Signal,
+    int: Signal,
+    /// The signal that ended the loop, if one did.
+    pub received: Option<&'static str>,
+}
+
+impl StopSignals {
+    /// Takes the signals over from their default action. Needs a tokio runtime.
+    pub(crate) fn new() -> io::Result<StopSignals> {
+        Ok(StopSignals {
+            term: signal(SignalKind::terminate())?,
+            hup: signal(SignalKind::hangup())?,
+            int: signal(SignalKind::interrupt())?,
+            received: None,
+        })
+    }
+
+    /// Waits for one of them; remembers which.
+    pub(crate) async fn recv(&mut self) {
+        let name = tokio::select! {
+            _ = self.term.recv() => "SIGTERM",
+            _ = self.hup.recv() => "SIGHUP",
+            _ = self.int.recv() => "SIGINT",
+        };
+        self.received = Some(name);
+    }
 }
 
 /// Restores the terminal before a panic message is printed.
@@ -74,6 +144,7 @@ async fn event_loop(
     app: &mut App,
     link: &mut RunningLink,
     recorder: &mut TuiRecorder,
+    signals: &mut StopSignals,
 ) -> io::Result<()> {
     let size = terminal.size()?;
     app.update(Action::Resize {
@@ -81,25 +152,29 @@ async fn event_loop(
         height: size.height,
     });
     let (input_tx, mut input_rx) = mpsc::unbounded_channel();
-    let stop = Arc::new(AtomicBool::new(false));
-    let reader = spawn_reader(input_tx, Arc::clone(&stop));
+    let reader = spawn_reader(input_tx);
     let t0 = Instant::now();
-    let mut tick = tokio::time::interval(TICK);
-    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+    // Every periodic timer is on the `pace` grid: they share wake-ups with each other and
+    // with the paced link.
+    let tick = tokio::time::sleep_until(pace::next_slot());
+    tokio::pin!(tick);
     let mut dirty = true;
-    // A key's effect is drawn at once; the link's at most `LINK_FPS` times a second.
+    // A key's effect is drawn at once; the link's at most every `LINK_FRAME`.
     let mut urgent = true;
-    let frame = Duration::from_secs(1) / LINK_FPS;
-    let mut last_draw = Instant::now();
+    let frame = LINK_FRAME;
+    let mut last_draw = pace::slot_at_or_before(Instant::now());
     // One timer for the next allowed redraw, re-armed only when that time changes.
     let redraw = tokio::time::sleep_until(last_draw + frame);
     tokio::pin!(redraw);
+    // Made once: a signal future made afresh on every wake-up costs more than the wake-up.
+    let stop_signal = signals.recv();
+    tokio::pin!(stop_signal);
     let result = loop {
         if dirty && (urgent || last_draw.elapsed() >= frame) {
             if let Err(e) = terminal.draw(|f| ui::render(app, f)) {
                 break Err(e);
             }
-            last_draw = Instant::now();
+            last_draw = pace::slot_at_or_before(Instant::now());
             dirty = false;
             urgent = false;
         }
@@ -109,6 +184,9 @@ async fn event_loop(
         tokio::select! {
             ev = input_rx.recv() => match ev {
                 Some(Ok(ev)) => {
+                    if let Err(e) = resize(terminal, &ev) {
+                        break Err(e);
+                    }
                     match input::action_for(app, &ev) {
                         // The loop owns the recording's file: it starts or stops it.
                         Some(Action::ToggleRecording) => {
@@ -136,7 +214,7 @@ async fn event_loop(
                 }
                 dirty = true;
             }
-            _ = tick.tick() => {
+            () = &mut tick => {
                 let driving = app.teleop.driving;
                 app.update(Action::Tick { now_ms: t0.elapsed().as_millis() as u64 });
                 dirty |= driving;
@@ -145,8 +223,11 @@ async fn event_loop(
                     app.update(Action::Recording(note));
                     dirty = true;
                 }
+                let every = if app.teleop.driving { DRIVING_TICK } else { IDLE_TICK };
+                tick.as_mut().reset(pace::slot_at_or_before(Instant::now()) + every);
             }
             () = &mut redraw, if dirty => {}
+            () = &mut stop_signal => break Ok(()),
         }
         for (id, command) in app.take_outbox() {
             link.handle.submit_with_id(id, command);
@@ -158,8 +239,8 @@ async fn event_loop(
             break Ok(());
         }
     };
-    stop.store(true, Ordering::Relaxed);
-    let _ = reader.join();
+    // Dropping the stream wakes and ends crossterm's reader thread.
+    reader.abort();
     result
 }
 
@@ -171,24 +252,20 @@ fn on_link(app: &mut App, recorder: &mut TuiRecorder, ev: crate::link::LinkEvent
     app.update(Action::Link(ev));
 }
 
-/// Reads terminal events on a thread; polls so it notices `stop` within 100 ms.
+/// Forwards terminal events from crossterm's event stream until the receiver is gone or the
+/// task is aborted (which drops the stream and ends its thread). The stream's thread blocks
+/// until an event comes: an idle terminal costs no wake-ups.
 pub(crate) fn spawn_reader(
     tx: mpsc::UnboundedSender<io::Result<Event>>,
-    stop: Arc<AtomicBool>,
-) -> std::thread::JoinHandle<()> {
-    std::thread::spawn(move || {
-        while !stop.load(Ordering::Relaxed) {
-            match event::poll(Duration::from_millis(100)) {
-                Ok(true) => {
-                    if tx.send(event::read()).is_err() {
-                        return;
-                    }
-                }
-                Ok(false) => {}
-                Err(e) => {
-                    let _ = tx.send(Err(e));
-                    return;
-                }
+) -> tokio::task::JoinHandle<()> {
+    tokio::spawn(async move {
+        let mut events = EventStream::new();
+        while let Some(ev) =
+            std::future::poll_fn(|cx| Pin::new(&mut events).poll_next(cx)).await
+        {
+            let failed = ev.is_err();
+            if tx.send(ev).is_err() || failed {
+                return;
             }
         }
     })

@@ -145,3 +145,32 @@ fn owned(m: &Message<'_>) -> Received {
         other => Received::Other(other.kind()),
     }
 }
+
+/// The path of one of the workspace's binaries (`station`, `robot-emulator`), built by the
+/// same `cargo test` run: they sit in the target directory beside the `deps` folder this test
+/// runs from. A run that did not build it (`cargo test -p e2e-tests` alone) builds it here.
+pub fn workspace_bin(name: &str) -> std::path::PathBuf {
+    let exe = std::env::current_exe().unwrap_or_default();
+    let profile_dir = exe
+        .parent()
+        .and_then(|deps| deps.parent())
+        .map(std::path::Path::to_path_buf)
+        .unwrap_or_default();
+    let path = profile_dir.join(name);
+    if !path.is_file() {
+        let package = if name == "robot-emulator" {
+            "emulator"
+        } else {
+            name
+        };
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let mut build = std::process::Command::new(cargo);
+        build.args(["build", "-p", package, "--bin", name]);
+        if profile_dir.file_name().is_some_and(|p| p == "release") {
+            build.arg("--release");
+        }
+        // Best effort: a failure shows up as the binary missing when it is run.
+        let _ = build.status();
+    }
+    path
+}

@@ -12,6 +12,8 @@
 //! - [`ppd`]: samples, their motion under a wheel bias, prior and lattice seeding.
 //! - [`spps`]: the corrector, stepped per control cycle with the encoder counts.
 //! - [`baseline`]: nearest-line snapping.
+//! - [`fitter`]: the grid fitter (§2.6), steering so that lines are crossed at an angle.
+//! - [`survey`]: the pilot of the long survey runs (a random walk with the fitter's pull).
 //!
 //! Invariants: no heap, no clock, no I/O; fixed capacity by const generic; seeded randomness.
 //! Nothing here panics. What can fail is reported, not raised: a line event far from every
@@ -22,14 +24,18 @@
 //! of stack for N = 64 (two scratch arrays). Reproduction: tests/paper_003_line_correction.rs.
 
 pub mod baseline;
+pub mod fitter;
 pub mod grid;
 pub mod ppd;
 pub mod spps;
+pub mod survey;
 
 pub use baseline::NearestLine;
+pub use fitter::GridFitter;
 pub use grid::{Axis, GridGeometry, GridLine, Swept};
 pub use ppd::{Prior, Sample, SAMPLE_BYTES};
 pub use spps::{LineCorrection, LineOutcome, Spps, Spps64, SppsCounters, SppsParams};
+pub use survey::{Steer, Survey, SurveyParams};
 
 /// Turns a latched floor-sensor level (true while over a line or entered since the last read)
 /// into one event per line: true on a rising edge only. A double detection (an echo after a

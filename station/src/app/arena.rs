@@ -20,6 +20,31 @@ pub struct ArenaOverlay {
     /// Centre and radius.
     pub targets: Vec<((f64, f64), f64)>,
     pub beacons: Vec<(f64, f64)>,
+    /// Light sources (seed 000: lamps the Khepera's ambient sensors see).
+    pub lights: Vec<(f64, f64)>,
+    /// The foraging site (seed 000 §7), when the arena has one.
+    pub forage: Option<ForageOverlay>,
+}
+
+/// What the map draws of a foraging site: home base, objects where they start, landmarks.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ForageOverlay {
+    /// Home base centre and radius, metres.
+    pub home: ((f64, f64), f64),
+    /// Objects at their start, metres (one under each lamp).
+    pub objects: Vec<(f64, f64)>,
+    /// The three global landmarks, metres.
+    pub landmarks: Vec<(f64, f64)>,
+}
+
+impl ForageOverlay {
+    pub fn from_site(site: &emulator::forage::ForageSite) -> Self {
+        ForageOverlay {
+            home: ((site.home.centre.x, site.home.centre.y), site.home.radius_m),
+            objects: site.object_positions().iter().map(|p| (p.x, p.y)).collect(),
+            landmarks: site.landmarks.iter().map(|p| (p.x, p.y)).collect(),
+        }
+    }
 }
 
 impl ArenaOverlay {
@@ -48,6 +73,13 @@ impl ArenaOverlay {
                 .iter()
                 .map(|b| (b.position.x, b.position.y))
                 .collect(),
+            lights: a
+                .lights
+                .iter()
+                .map(|l| (l.position.x, l.position.y))
+                .collect(),
+            forage: emulator::forage::ForageSite::of_builtin(a)
+                .map(|s| ForageOverlay::from_site(&s)),
         }
     }
 

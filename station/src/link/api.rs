@@ -57,6 +57,8 @@ pub enum LinkEvent {
     Telemetry(Telemetry),
     /// Ground truth from the emulator (never from a real robot).
     Truth(EmuTruth),
+    /// Floor-grid line correction state (seed 003), boxed: it is the largest message.
+    Localization(Box<protocol::Localization>),
     /// An `Event` frame from the robot.
     Robot(Event),
     /// A `Log` line from the robot.

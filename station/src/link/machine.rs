@@ -9,19 +9,24 @@
 //!   with `NotConnected`, and the ones in flight when the session ends fail with `LinkLost`;
 //! - every submitted command produces exactly one `CommandDone`;
 //! - a fingerprint or protocol mismatch is reported once with both builds named, and retried
-//!   only slowly (the robot may be reflashed), never every 200 ms.
+//!   only slowly (the robot may be reflashed), never every 200 ms;
+//! - with a key (`set_key`, PROTOCOL.md §13) every frame sent is signed and a received frame
+//!   is acted on only once it verifies; a key on one side only, or two different keys, ends
+//!   the handshake in `Refused` with a message naming --key-file, never in a silent timeout.
 //!
 //! Cannot fail: encoding errors are impossible for the messages it builds (all fit a frame)
 //! and are counted, not raised, if they ever happen.
 
 use std::collections::VecDeque;
 
-use protocol::timing::{HEARTBEAT_PERIOD_MS, LINK_TIMEOUT_MS};
+use protocol::sign::{ticks_from_unix_us, AuthError, LinkAuth, LinkKey, STATION_LINK};
+use protocol::timing::LINK_TIMEOUT_MS;
 use protocol::{
-    encode, Command, Feed, FrameDecoder, FrameError, Heartbeat, Hello, HelloReply, Kind, Message,
-    NackReason, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION,
+    Command, EventCode, Feed, FrameDecoder, FrameError, Heartbeat, Hello, HelloReply, Kind,
+    Message, NackReason, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION,
 };
 
+use super::clock::RobotClock;
 use super::api::{
     CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, PeerInfo, TransferIn,
     TransferOut,
@@ -69,6 +74,13 @@ pub struct LinkMachine {
     last_rx_ms: u64,
     last_tx_ms: u64,
     next_stats_ms: u64,
+    /// The robot's clock rate: heartbeats go out every 250 ms of the robot's time.
+    robot_clock: RobotClock,
+    auth: LinkAuth,
+    /// Signed frames are decoded without a key and not verified (replaying a recording).
+    trust_signatures: bool,
+    /// The wall clock at `now_ms` = 0, in signing ticks (PROTOCOL.md §13).
+    epoch_ticks: u64,
 }
 
 impl LinkMachine {
@@ -92,7 +104,38 @@ impl LinkMachine {
             last_rx_ms: 0,
             last_tx_ms: 0,
             next_stats_ms: 0,
+            robot_clock: RobotClock::default(),
+            auth: LinkAuth::new(None, STATION_LINK),
+            trust_signatures: false,
+            epoch_ticks: 0,
         }
+    }
+
+    /// Signs every frame with `key` and accepts only frames that verify with it; `None` turns
+    /// authentication off. Timestamps start from the wall clock now.
+    pub fn set_key(&mut self, key: Option<LinkKey>) {
+        let unix_us = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| u64::try_from(d.as_micros()).unwrap_or(u64::MAX))
+            .unwrap_or(0);
+        self.set_key_at(key, ticks_from_unix_us(unix_us));
+    }
+
+    /// `set_key` with the wall clock given: `epoch_ticks` is the time at `now_ms` = 0.
+    pub fn set_key_at(&mut self, key: Option<LinkKey>, epoch_ticks: u64) {
+        self.auth = LinkAuth::new(key, STATION_LINK);
+        self.epoch_ticks = epoch_ticks;
+    }
+
+    /// Decodes signed frames without checking them: for replaying a recording, whose key the
+    /// replayer need not have and whose timestamps are old by nature.
+    pub fn trust_signatures(&mut self) {
+        self.trust_signatures = true;
+    }
+
+    /// Whether frames are signed and verified.
+    pub fn keyed(&self) -> bool {
+        self.auth.keyed()
     }
 
     /// The current connection state.
@@ -192,6 +235,12 @@ impl LinkMachine {
                 }
                 Feed::Frame { frame, rest } => {
                     input = rest;
+                    if !self.trust_signatures {
+                        if let Err(e) = self.auth.verify(&frame) {
+                            self.on_auth_error(e);
+                            continue;
+                        }
+                    }
                     let kind = frame.header.kind;
                     let seq = frame.header.seq;
                     (kind, seq, Owned::from(frame.message))
@@ -246,7 +295,7 @@ impl LinkMachine {
             State::Connected { .. } => {
                 t = t
                     .min(self.last_rx_ms + u64::from(LINK_TIMEOUT_MS))
-                    .min(self.last_tx_ms + u64::from(HEARTBEAT_PERIOD_MS));
+                    .min(self.last_tx_ms + self.robot_clock.heartbeat_period_ms());
                 if let Some(c) = self.commands.next_deadline() {
                     t = t.min(c);
                 }
@@ -263,12 +312,14 @@ impl LinkMachine {
             State::Connected { since_ms, .. } => now_ms.saturating_sub(since_ms),
             _ => 0,
         };
-        self.stats.snapshot(
+        let mut s = self.stats.snapshot(
             now_ms,
             self.connection.name(),
             session_ms,
             self.decoder.stats(),
-        )
+        );
+        s.auth = super::stats::AuthCounts::new(self.auth.keyed(), self.auth.stats());
+        s
     }
 
     /// Ends every command (the task is shutting down).
@@ -293,7 +344,7 @@ impl LinkMachine {
             self.finish(f.id, f.command, CommandOutcome::Failed(failure));
         }
         self.pump(now_ms);
-        if now_ms.saturating_sub(self.last_tx_ms) >= u64::from(HEARTBEAT_PERIOD_MS) {
+        if now_ms.saturating_sub(self.last_tx_ms) >= self.robot_clock.heartbeat_period_ms() {
             let time_ms = now_ms as u32; // the wire's clock wraps (PROTOCOL.md §6 kind 2)
             self.send(now_ms, &Message::Heartbeat(Heartbeat { time_ms }));
         }
@@ -301,8 +352,13 @@ impl LinkMachine {
 
     fn start_handshake(&mut self, now_ms: u64) {
         let session = self.next_nonce();
+        self.robot_clock.reset();
         self.stats.robot_seq.reset();
         self.stats.truth_seq.reset();
+        // The robot signs on from our Hello's timestamp (PROTOCOL.md §13), so nothing it
+        // signed before this Hello is current: a replay of an old session is stale.
+        let hello_ts = self.auth.next_timestamp(self.clock(now_ms));
+        self.auth.reset_replay(hello_ts);
         self.send_hello(now_ms, session);
         self.state = State::Handshaking {
             session,
@@ -337,6 +393,61 @@ impl LinkMachine {
         }
     }
 
+    /// A frame that passed the CRC but not authentication: counted (the stats show it) and
+    /// dropped. Before a session, a key on one side only or a different key is what it means,
+    /// and the user is told so instead of waiting for a timeout.
+    fn on_auth_error(&mut self, e: AuthError) {
+        if self.connected() {
+            return;
+        }
+        let why = match e {
+            AuthError::BadSignature { .. } => {
+                "the robot's frames do not verify with this station's key (the robot has \
+                 another key)"
+            }
+            AuthError::UnexpectedSignature { .. } => {
+                "the robot signs its frames (it has a key) but this station has no key"
+            }
+            AuthError::Unsigned => {
+                "the robot does not sign its frames (it has no key) but this station has one; \
+                 give both the same key or neither"
+            }
+            // Replays, reflections and stale frames are an attacker's or the past's, not a
+            // misconfiguration: counted only.
+            AuthError::StaleTimestamp { .. }
+            | AuthError::WrongDirection { .. }
+            | AuthError::TooManyLinks { .. } => return,
+        };
+        self.refuse_auth(why);
+    }
+
+    /// The robot's `Event HandshakeRefused` with a negative value: it could not authenticate
+    /// our `Hello` (PROTOCOL.md §13).
+    fn on_robot_auth_refusal(&mut self, code: i32) {
+        let why = match code {
+            -1 => "the robot has a key and refused our unsigned frames",
+            -2 => "the robot refused our signature (it has another key)",
+            -4 => "the robot has no key and refused our signed frames",
+            // -3 stale: our next Hello's timestamp follows the robot's, so it heals by itself.
+            _ => return,
+        };
+        self.refuse_auth(why);
+    }
+
+    fn refuse_auth(&mut self, why: &str) {
+        let session = match self.state {
+            State::Handshaking { session, .. } | State::Refused { session, .. } => session,
+            _ => self.next_nonce(),
+        };
+        let message = format!("link authentication failed: {why}; check --key-file");
+        // Retried at the Hello pace: a robot restarted with the right key connects at once.
+        self.state = State::Refused {
+            session,
+            next_hello_ms: self.last_tx_ms + HELLO_RETRY_MS,
+        };
+        self.set_connection(Connection::Refused { message });
+    }
+
     fn on_frame(&mut self, now_ms: u64, kind: Kind, seq: u16, msg: Owned) {
         self.stats.frames_in += 1;
         self.last_rx_ms = now_ms;
@@ -348,10 +459,16 @@ impl LinkMachine {
         match msg {
             Owned::HelloReply(r) => self.on_hello_reply(now_ms, r),
             Owned::Telemetry(t) => {
+                self.robot_clock.observe(t.time_ms, now_ms);
                 self.stats.telemetry(now_ms);
                 self.events.push_back(LinkEvent::Telemetry(t));
             }
-            Owned::Truth(t) => self.events.push_back(LinkEvent::Truth(t)),
+            Owned::Truth(t) => {
+                self.robot_clock.observe(t.time_ms, now_ms);
+                self.events.push_back(LinkEvent::Truth(t));
+            }
+            Owned::Heartbeat(time_ms) => self.robot_clock.observe(time_ms, now_ms),
+            Owned::Localization(l) => self.events.push_back(LinkEvent::Localization(l)),
             Owned::Ack(a) => match self.commands.answer(a.cmd_seq) {
                 Some(f) => {
                     let rtt_ms = now_ms.saturating_sub(f.last_sent_ms);
@@ -369,7 +486,12 @@ impl LinkMachine {
                 None => self.stats.commands.unmatched_replies += 1,
             },
             Owned::Nack(n) => self.on_nack(now_ms, n),
-            Owned::Event(e) => self.events.push_back(LinkEvent::Robot(e)),
+            Owned::Event(e) => {
+                if e.code == EventCode::HandshakeRefused && e.value < 0 && !self.connected() {
+                    self.on_robot_auth_refusal(e.value);
+                }
+                self.events.push_back(LinkEvent::Robot(e));
+            }
             Owned::Log { level, text } => self.events.push_back(LinkEvent::Log { level, text }),
             Owned::Transfer(t) => self.events.push_back(LinkEvent::Transfer(t)),
             Owned::Other => {}
@@ -498,13 +620,19 @@ impl LinkMachine {
 
     fn send_with_seq(&mut self, now_ms: u64, seq: u16, msg: &Message<'_>) {
         let mut buf = [0u8; MAX_FRAME];
+        let clock = self.clock(now_ms);
         // Every message built here fits a frame; a failure would be a bug, counted not raised.
-        if let Ok(n) = encode(seq, msg, &mut buf) {
+        if let Ok(n) = self.auth.encode(seq, msg, clock, &mut buf) {
             self.out.extend_from_slice(buf.get(..n).unwrap_or(&[]));
             self.stats.frames_out += 1;
             self.stats.bytes_out += n as u64;
             self.last_tx_ms = now_ms;
         }
+    }
+
+    /// The wall clock in signing ticks (10 µs since 2015; PROTOCOL.md §13).
+    fn clock(&self, now_ms: u64) -> u64 {
+        self.epoch_ticks.saturating_add(now_ms.saturating_mul(100))
     }
 
     fn next_nonce(&mut self) -> u32 {
@@ -523,6 +651,7 @@ enum Owned {
     HelloReply(OwnedHelloReply),
     Telemetry(protocol::Telemetry),
     Truth(protocol::EmuTruth),
+    Localization(Box<protocol::Localization>),
     Ack(protocol::Ack),
     Nack(protocol::Nack),
     Event(protocol::Event),
@@ -531,6 +660,8 @@ enum Owned {
         text: String,
     },
     Transfer(TransferIn),
+    /// A heartbeat's time: the robot's clock.
+    Heartbeat(u32),
     Other,
 }
 
@@ -554,6 +685,7 @@ impl From<Message<'_>> for Owned {
             Message::HelloReply(r) => Owned::HelloReply(owned_reply(&r)),
             Message::Telemetry(t) => Owned::Telemetry(t),
             Message::EmuTruth(t) => Owned::Truth(t),
+            Message::Localization(l) => Owned::Localization(Box::new(l)),
             Message::Ack(a) => Owned::Ack(a),
             Message::Nack(n) => Owned::Nack(n),
             Message::Event(e) => Owned::Event(e),
@@ -568,7 +700,8 @@ impl From<Message<'_>> for Owned {
                 data: c.data.to_vec(),
             }),
             Message::TransferAck(a) => Owned::Transfer(TransferIn::Ack(a)),
-            Message::Hello(_) | Message::Heartbeat(_) | Message::Command(_) => Owned::Other,
+            Message::Heartbeat(h) => Owned::Heartbeat(h.time_ms),
+            Message::Hello(_) | Message::Command(_) => Owned::Other,
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Unit tests of the link state machine against hand-made robot frames: no port, no clock.
 
 use super::*;
-use protocol::{Ack, AckInfo, EmuTruth, MapCapacity, Mode, Nack, ProfileId, Telemetry};
+use protocol::{encode, Ack, AckInfo, EmuTruth, MapCapacity, Mode, Nack, ProfileId, Telemetry};
 
 const SESSION_SEED: u64 = 7;
 
@@ -310,6 +310,28 @@ fn a_heartbeat_goes_out_after_250_ms_without_sending() {
 }
 
 #[test]
+fn a_robot_whose_clock_runs_ten_times_faster_gets_heartbeats_ten_times_as_often() {
+    // `robot-emulator --speed 10`: its 1.5 s link timeout is 150 ms of ours, so 250 ms
+    // heartbeats would lose the session; 250 ms of its time is 25 ms of ours.
+    let mut m = machine();
+    connect(&mut m);
+    for i in 0..=12u16 {
+        let t = 100 * u64::from(i);
+        let time_ms = (t * 10) as u32;
+        m.receive(t, &frame(i + 1, &Message::Heartbeat(Heartbeat { time_ms })));
+    }
+    m.poll(1_200);
+    assert_eq!(sent(&mut m).len(), 1, "a heartbeat after 1.2 s of not sending");
+    assert!(m.next_deadline() <= 1_225);
+    m.poll(1_224);
+    assert!(sent(&mut m).is_empty());
+    m.poll(1_225);
+    let s = sent(&mut m);
+    assert_eq!(s.len(), 1);
+    assert_eq!(s[0].1, Kind::Heartbeat);
+}
+
+#[test]
 fn silence_for_1500_ms_ends_the_session_fails_commands_and_handshakes_again() {
     let mut m = machine();
     let old = connect(&mut m);
@@ -410,4 +432,147 @@ fn closing_the_port_fails_what_is_in_flight_and_reports_why() {
             reason: "gone".into()
         })
     );
+}
+
+mod auth {
+    //! Link authentication (PROTOCOL.md §13) against a hand-made keyed robot.
+    use super::*;
+    use protocol::sign::{LinkAuth, LinkKey, ROBOT_LINK};
+    use protocol::{Event, EventCode};
+
+    const T0: u64 = 0x1f92_d63c_e000;
+
+    fn keyed_machine(key: u8) -> LinkMachine {
+        let mut m = machine();
+        m.set_key_at(Some(LinkKey::new(&[key; 32])), T0);
+        m
+    }
+
+    /// The robot's side: verifies what the station sent, returns the Hello's session.
+    fn robot_reads(robot: &mut LinkAuth, m: &mut LinkMachine) -> Option<u32> {
+        let bytes = m.take_output();
+        let mut dec = FrameDecoder::new();
+        let mut input = bytes.as_slice();
+        let mut session = None;
+        loop {
+            match dec.feed(input) {
+                Feed::NeedMore => return session,
+                Feed::Error { error, .. } => panic!("station sent a bad frame: {error}"),
+                Feed::Frame { frame, rest } => {
+                    robot.verify(&frame).expect("the station's frames verify");
+                    if let Message::Hello(h) = frame.message {
+                        session = Some(h.session);
+                    }
+                    input = rest;
+                }
+            }
+        }
+    }
+
+    fn signed(robot: &mut LinkAuth, seq: u16, msg: &Message<'_>) -> Vec<u8> {
+        let mut buf = [0u8; MAX_FRAME];
+        let n = robot.encode(seq, msg, 0, &mut buf).expect("encode");
+        buf[..n].to_vec()
+    }
+
+    fn telemetry() -> Message<'static> {
+        Message::Telemetry(Telemetry::default())
+    }
+
+    #[test]
+    fn forged_unsigned_and_replayed_frames_are_counted_and_never_end_the_session() {
+        let mut m = keyed_machine(1);
+        let mut robot = LinkAuth::new(Some(LinkKey::new(&[1; 32])), ROBOT_LINK);
+        m.port_opened(0, "p");
+        let session = robot_reads(&mut robot, &mut m).expect("hello");
+        let reply_bytes = reply(session, FINGERPRINT, true);
+        // The robot's real reply, signed: decode the unsigned helper's message and re-sign.
+        let mut dec = FrameDecoder::new();
+        let msg = match dec.feed(&reply_bytes) {
+            Feed::Frame { frame, .. } => frame.message,
+            other => panic!("{other:?}"),
+        };
+        let good_reply = signed(&mut robot, 0, &msg);
+        m.receive(5, &good_reply);
+        assert!(m.connected());
+        let t1 = signed(&mut robot, 1, &telemetry());
+        m.receive(10, &t1);
+        let mut forger = LinkAuth::new(Some(LinkKey::new(&[2; 32])), ROBOT_LINK);
+        m.receive(20, &signed(&mut forger, 2, &telemetry()));
+        m.receive(30, &frame(3, &telemetry()));
+        m.receive(40, &t1);
+        m.receive(50, &good_reply);
+        let s = m.stats(60);
+        assert!(m.connected(), "a refused frame ended the session");
+        assert!(s.auth.keyed);
+        assert_eq!(s.auth.verified, 2);
+        assert_eq!(
+            (
+                s.auth.bad_signature,
+                s.auth.unsigned,
+                s.auth.stale_timestamp
+            ),
+            (1, 1, 2)
+        );
+        assert_eq!(s.telemetry_frames, 1, "only the verified telemetry counts");
+    }
+
+    #[test]
+    fn a_robot_on_another_key_ends_the_handshake_with_a_message_naming_the_key_file() {
+        let mut m = keyed_machine(1);
+        m.port_opened(0, "p");
+        m.take_output();
+        m.take_events();
+        let mut robot = LinkAuth::new(Some(LinkKey::new(&[2; 32])), ROBOT_LINK);
+        let refusal = Message::Event(Event {
+            code: EventCode::HandshakeRefused,
+            value: -2,
+        });
+        m.receive(10, &signed(&mut robot, 0, &refusal));
+        let events = m.take_events();
+        match connections(&events).as_slice() {
+            [Connection::Refused { message }] => {
+                assert!(
+                    message.starts_with("link authentication failed"),
+                    "{message}"
+                );
+                assert!(message.contains("another key"), "{message}");
+                assert!(message.ends_with("check --key-file"), "{message}");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(!m.connected());
+    }
+
+    #[test]
+    fn an_unkeyed_station_says_the_robot_has_a_key() {
+        let mut m = machine();
+        m.port_opened(0, "p");
+        m.take_events();
+        let mut robot = LinkAuth::new(Some(LinkKey::new(&[2; 32])), ROBOT_LINK);
+        let refusal = Message::Event(Event {
+            code: EventCode::HandshakeRefused,
+            value: -1,
+        });
+        m.receive(10, &signed(&mut robot, 0, &refusal));
+        let events = m.take_events();
+        let msg = match connections(&events).as_slice() {
+            [Connection::Refused { message }] => message.clone(),
+            other => panic!("{other:?}"),
+        };
+        assert!(msg.contains("this station has no key"), "{msg}");
+        assert_eq!(m.stats(20).auth.unexpected_signature, 1);
+    }
+
+    #[test]
+    fn a_replaying_station_trusts_signatures_it_cannot_check() {
+        let mut m = machine();
+        m.trust_signatures();
+        m.port_opened(0, "p");
+        let mut robot = LinkAuth::new(Some(LinkKey::new(&[2; 32])), ROBOT_LINK);
+        m.receive(10, &signed(&mut robot, 0, &telemetry()));
+        let s = m.stats(20);
+        assert_eq!(s.telemetry_frames, 1);
+        assert_eq!(s.auth.refused(), 0);
+    }
 }

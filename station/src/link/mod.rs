@@ -7,9 +7,11 @@
 //! robot firmware on the far end of an in-memory port, for tests and demos.
 
 pub mod api;
+pub mod clock;
 pub mod commands;
 pub mod machine;
 pub mod memory;
+pub mod paced;
 pub mod serial;
 pub mod sim;
 pub mod stats;

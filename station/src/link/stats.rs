@@ -48,6 +48,54 @@ pub struct LinkStats {
     pub handshakes: u32,
     /// Sessions ended by 1.5 s of silence.
     pub link_timeouts: u32,
+    /// Link authentication (PROTOCOL.md §13).
+    pub auth: AuthCounts,
+}
+
+/// Frames the authentication layer verified and refused, by reason.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct AuthCounts {
+    /// This station signs and verifies (it has a key).
+    pub keyed: bool,
+    pub verified: u32,
+    /// Bad MAC: another key, or a forgery.
+    pub bad_signature: u32,
+    /// Timestamp not above the last accepted: a replay or a duplicate.
+    pub stale_timestamp: u32,
+    /// Unsigned frames while keyed.
+    pub unsigned: u32,
+    /// Signed frames while not keyed.
+    pub unexpected_signature: u32,
+    /// Our own frames reflected back, or more robot-side links than windows.
+    pub other: u32,
+}
+
+impl AuthCounts {
+    pub fn new(keyed: bool, a: &protocol::AuthStats) -> Self {
+        AuthCounts {
+            keyed,
+            verified: a.verified,
+            bad_signature: a.bad_signature,
+            stale_timestamp: a.stale_timestamp,
+            unsigned: a.unsigned,
+            unexpected_signature: a.unexpected_signature,
+            other: a.wrong_direction.saturating_add(a.too_many_links),
+        }
+    }
+
+    /// Every refused frame together.
+    pub fn refused(&self) -> u64 {
+        [
+            self.bad_signature,
+            self.stale_timestamp,
+            self.unsigned,
+            self.unexpected_signature,
+            self.other,
+        ]
+        .iter()
+        .map(|&n| u64::from(n))
+        .sum()
+    }
 }
 
 /// Sequence-number accounting of one stream.
@@ -245,6 +293,7 @@ impl StatsCollector {
             port_opens: self.port_opens,
             handshakes: self.handshakes,
             link_timeouts: self.link_timeouts,
+            auth: AuthCounts::default(),
         }
     }
 }

@@ -36,6 +36,11 @@ pub struct LinkOptions {
     pub write_timeout: Duration,
     /// Every byte read or written, timestamped, for recording (None: no tap).
     pub tap: Option<mpsc::UnboundedSender<TapRecord>>,
+    /// Link authentication key (PROTOCOL.md §13): sign and verify every frame.
+    pub key: Option<protocol::LinkKey>,
+    /// Put the task's timers (heartbeat, statistics, presence check) on the `pace` grid, so
+    /// that they share wake-ups with the TUI's; each fires up to one slot later.
+    pub paced: bool,
 }
 
 impl Default for LinkOptions {
@@ -46,6 +51,8 @@ impl Default for LinkOptions {
             reopen_every: Duration::from_millis(100),
             write_timeout: Duration::from_millis(500),
             tap: None,
+            key: None,
+            paced: false,
         }
     }
 }
@@ -128,10 +135,11 @@ pub fn spawn_link<C: Connector>(connector: C, opts: LinkOptions) -> RunningLink 
     let (req_tx, req_rx) = mpsc::unbounded_channel();
     let (ev_tx, ev_rx) = mpsc::unbounded_channel();
     let seed = opts.nonce_seed.unwrap_or_else(random_seed);
-    let machine = LinkMachine::new(MachineConfig {
+    let mut machine = LinkMachine::new(MachineConfig {
         station: opts.station.clone(),
         nonce_seed: seed,
     });
+    machine.set_key(opts.key.clone());
     let task = Task {
         machine,
         opts,
@@ -226,19 +234,34 @@ impl Task {
         mut port: Box<dyn Transport>,
     ) -> Ended {
         let mut buf = vec![0u8; 4096];
-        let mut presence = tokio::time::interval(self.opts.reopen_every);
-        presence.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        let mut presence = if self.opts.paced {
+            // On the grid, and kept there when late (`Delay` would leave it).
+            let period = crate::pace::slots(self.opts.reopen_every);
+            let mut i = tokio::time::interval_at(crate::pace::next_slot(), period);
+            i.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+            i
+        } else {
+            let mut i = tokio::time::interval(self.opts.reopen_every);
+            i.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+            i
+        };
+        // Paced: bytes since the last check prove the port is there (no `stat` at 50 Hz).
+        let mut heard = false;
         loop {
             if let Err(reason) = self.flush(&mut port).await {
                 return Ended::Closed(reason);
             }
             self.forward();
-            let deadline = self.t0 + Duration::from_millis(self.machine.next_deadline());
+            let mut deadline = self.t0 + Duration::from_millis(self.machine.next_deadline());
+            if self.opts.paced {
+                deadline = crate::pace::slot_at_or_after(deadline);
+            }
             tokio::select! {
                 r = port.read(&mut buf) => match r {
                     Ok(0) => return Ended::Closed(format!("{} closed", connector.name())),
                     Ok(n) => {
                         let bytes = buf.get(..n).unwrap_or(&[]);
+                        heard = true;
                         self.tap(TapDirection::FromRobot, bytes);
                         let now = self.now_ms();
                         self.machine.receive(now, bytes);
@@ -256,7 +279,8 @@ impl Task {
                     self.machine.poll(now);
                 }
                 _ = presence.tick() => {
-                    if !connector.present() {
+                    let heard = std::mem::take(&mut heard) && self.opts.paced;
+                    if !heard && !connector.present() {
                         return Ended::Closed(format!("{} disappeared", connector.name()));
                     }
                 }

@@ -51,11 +51,15 @@ pub struct RecordArgs {
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
+    /// Link authentication key file (64 hex digits, PROTOCOL.md §13); needs --port.
+    #[arg(long, value_name = "PATH", requires = "port")]
+    pub key_file: Option<PathBuf>,
 }
 
 /// Runs `station record`.
 pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
     check_out(&args.out, args.force)?;
+    let key = crate::cli::load_key(args.key_file.as_deref()).map_err(anyhow::Error::msg)?;
     let mut builtin = None;
     let (path, label) = match &args.port {
         Some(p) => {
@@ -90,6 +94,7 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
         LinkOptions {
             station: format!("station-record {}", env!("CARGO_PKG_VERSION")),
             tap: Some(tap_tx),
+            key,
             ..LinkOptions::default()
         },
     );

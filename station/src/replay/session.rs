@@ -76,8 +76,10 @@ impl ReplaySession {
             changed |= !matches!(a, Action::Tick { .. });
             self.app.update(a);
         }
-        // Nothing the app might want to send goes anywhere.
+        // Nothing the app might want to send goes anywhere: neither commands nor the transfer
+        // engine's answers to recorded chunks (kept, they would pile up while exploring).
         let _ = self.app.take_outbox();
+        let _ = self.app.transfers.take_frames();
         changed
     }
 

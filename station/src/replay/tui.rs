@@ -1,14 +1,13 @@
 //! The replay's terminal loop: the live TUI's terminal handling around a `ReplaySession`.
 //!
-//! Layer: I/O edge (the same terminal setup, reader thread and restore-on-panic as `crate::tui`).
+//! Layer: I/O edge (the same terminal setup, event stream, restore on panic and on SIGTERM,
+//! SIGHUP and SIGINT as `crate::tui`).
 //! The loop sleeps until the next record is due, a key arrives, or the progress bar needs
 //! updating (at most every `BAR_REFRESH_US` while playing, never while paused), and draws at
 //! most `MAX_FPS` times a second however fast records arrive, so a replay at 128× costs what a
 //! live link does. What can fail: terminal I/O (`io::Error`).
 
 use std::io;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Duration;
 
 use ratatui::DefaultTerminal;
@@ -23,28 +22,37 @@ pub const MAX_FPS: u64 = 30;
 
 /// Runs the replay until the operator quits. Restores the terminal whatever happens.
 pub async fn run(mut session: ReplaySession) -> io::Result<()> {
+    let mut signals = crate::tui::StopSignals::new()?;
     crate::tui::install_panic_hook();
-    let mut terminal = ratatui::try_init()?;
-    let result = event_loop(&mut terminal, &mut session).await;
+    let mut terminal = crate::tui::init_terminal()?;
+    let result = event_loop(&mut terminal, &mut session, &mut signals).await;
     crate::tui::restore();
+    if let Some(name) = signals.received {
+        eprintln!("station: stopped by {name}");
+    }
     result
 }
 
-async fn event_loop(terminal: &mut DefaultTerminal, s: &mut ReplaySession) -> io::Result<()> {
+async fn event_loop(
+    terminal: &mut DefaultTerminal,
+    s: &mut ReplaySession,
+    signals: &mut crate::tui::StopSignals,
+) -> io::Result<()> {
     let size = terminal.size()?;
     s.app.update(Action::Resize {
         width: size.width,
         height: size.height,
     });
     let (input_tx, mut input_rx) = mpsc::unbounded_channel();
-    let stop = Arc::new(AtomicBool::new(false));
-    let reader = crate::tui::spawn_reader(input_tx, Arc::clone(&stop));
+    let reader = crate::tui::spawn_reader(input_tx);
     let t0 = Instant::now();
     let wall = || t0.elapsed().as_micros() as u64;
     let frame_us = 1_000_000 / MAX_FPS;
     let mut dirty = true;
     let mut last_draw: Option<u64> = None;
     let mut shown_bar = String::new();
+    let stop_signal = signals.recv();
+    tokio::pin!(stop_signal);
     let result = loop {
         let now = wall();
         dirty |= s.sync(now);
@@ -75,17 +83,22 @@ async fn event_loop(terminal: &mut DefaultTerminal, s: &mut ReplaySession) -> io
         };
         tokio::select! {
             ev = input_rx.recv() => match ev {
-                Some(Ok(ev)) => dirty |= s.event(wall(), &ev),
+                Some(Ok(ev)) => {
+                    if let Err(e) = crate::tui::resize(terminal, &ev) {
+                        break Err(e);
+                    }
+                    dirty |= s.event(wall(), &ev);
+                }
                 Some(Err(e)) => break Err(e),
                 None => break Ok(()),
             },
             () = sleep => {}
+            () = &mut stop_signal => break Ok(()),
         }
         if s.quit {
             break Ok(());
         }
     };
-    stop.store(true, Ordering::Relaxed);
-    let _ = reader.join();
+    reader.abort();
     result
 }

@@ -20,8 +20,8 @@ pub const KEYS: &[(&str, &str)] = &[
     ("← →  a d", "teleop turn left / right"),
     ("space", "stop: zero speed and send Stop"),
     (
-        "0-8",
-        "mode: idle manual goto wander edgeL edgeR light explore plan",
+        "0-9",
+        "mode: idle manual goto wander edgeL edgeR light explore plan forage",
     ),
     (
         "g ←↑↓→ Enter",
@@ -39,6 +39,10 @@ pub const KEYS: &[(&str, &str)] = &[
     (
         "o r n m e",
         "map layers: grid regions plan smoothed start/goal",
+    ),
+    (
+        "S  y i v f",
+        "survey the floor grid / odometry tracks, line events, PPD, grid",
     ),
     (
         "u  M",

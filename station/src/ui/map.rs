@@ -25,6 +25,12 @@ pub trait MapLayer: Sync {
     fn name(&self) -> &'static str;
     /// Paints it; called only when visible.
     fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>);
+    /// Whether painting now puts dots on the canvas (not only labels). Only such a layer gets
+    /// a canvas layer of its own: each is a copy of the whole canvas, and most of the map's
+    /// layers are empty most of the time. Saying yes when painting nothing costs time only.
+    fn dots(&self, _app: &App) -> bool {
+        true
+    }
 }
 
 /// The world rectangle being drawn, metres, and the cells it covers.
@@ -47,15 +53,20 @@ pub struct BelievedLayer;
 pub struct GoalLayer;
 
 /// Layers in drawing order: the planner's grid and squares under the arena, plans above it.
-pub static LAYERS: [&dyn MapLayer; 10] = [
+pub static LAYERS: [&dyn MapLayer; 15] = [
     &map_layers::GridLayer,
     &map_layers::RegionsLayer,
+    &super::localization::FloorLayer,
     &ArenaLayer,
+    &super::forage::ForageLayer,
     &map_layers::PlanLayer,
     &map_layers::SmoothedLayer,
     &super::transfer::RobotPlanLayer,
+    &super::localization::OdometryLayer,
     &TruthLayer,
     &BelievedLayer,
+    &super::localization::LinesLayer,
+    &super::localization::PpdLayer,
     &GoalLayer,
     &map_layers::EndsLayer,
 ];
@@ -76,6 +87,13 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     if let Some(side) = side {
         super::plan_panel::render(app, frame, side);
     }
+    let (area, loc) = match side {
+        Some(_) => (area, None),
+        None => super::localization::split(app, area),
+    };
+    if let Some(loc) = loc {
+        super::localization::render_panel(app, frame, loc);
+    }
     let name = app
         .map
         .arena
@@ -89,10 +107,10 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             // The plan panel, when drawn, says it all; else a status that fits the title row.
             side.map_or_else(
                 || {
-                    map_layers::status(
-                        app,
-                        area.width.saturating_sub(name.chars().count() as u16 + 12),
-                    )
+                    let room = area.width.saturating_sub(name.chars().count() as u16 + 12);
+                    super::forage::status(app)
+                        .filter(|l| l.width() <= usize::from(room))
+                        .or_else(|| map_layers::status(app, room))
                 },
                 |_| None,
             )
@@ -126,11 +144,21 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             for layer in LAYERS.iter() {
                 if app.map.visible(layer.name()) {
                     layer.paint(app, &view, ctx);
-                    ctx.layer();
+                    if layer.dots(app) {
+                        ctx.layer();
+                    }
                 }
             }
         });
     frame.render_widget(canvas, area);
+}
+
+/// The map's own part of the map panel `area`: without the plan or line-correction panel.
+pub fn map_area(app: &App, area: Rect) -> Rect {
+    match super::plan_panel::split(app, area) {
+        (a, Some(_)) => a,
+        (a, None) => super::localization::split(app, a).0,
+    }
 }
 
 /// The world rectangle shown in `inner` (x bounds, y bounds), with square braille dots.
@@ -231,6 +259,10 @@ impl MapLayer for ArenaLayer {
         "arena"
     }
 
+    fn dots(&self, app: &App) -> bool {
+        app.map.arena.is_some()
+    }
+
     fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {
         let Some(a) = &app.map.arena else { return };
         let [x0, y0, x1, y1] = a.bounds;
@@ -273,6 +305,10 @@ impl MapLayer for TruthLayer {
         "truth"
     }
 
+    fn dots(&self, app: &App) -> bool {
+        app.true_track.points().next().is_some() || app.true_pose().is_some()
+    }
+
     fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>) {
         let pts: Vec<(f64, f64)> = app.true_track.points().copied().collect();
         ctx.draw(&Points {
@@ -290,6 +326,10 @@ impl MapLayer for BelievedLayer {
         "believed"
     }
 
+    fn dots(&self, app: &App) -> bool {
+        app.believed.points().next().is_some() || app.pose().is_some()
+    }
+
     fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>) {
         let pts: Vec<(f64, f64)> = app.believed.points().copied().collect();
         ctx.draw(&Points {
@@ -305,6 +345,10 @@ impl MapLayer for BelievedLayer {
 impl MapLayer for GoalLayer {
     fn name(&self) -> &'static str {
         "goal"
+    }
+
+    fn dots(&self, _app: &App) -> bool {
+        false
     }
 
     fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {

@@ -62,6 +62,10 @@ impl MapLayer for GridLayer {
         GRID
     }
 
+    fn dots(&self, app: &App) -> bool {
+        map(app).is_some()
+    }
+
     fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>) {
         let Some(m) = map(app) else { return };
         ctx.marker(Marker::HalfBlock);
@@ -102,6 +106,10 @@ impl MapLayer for GridLayer {
 impl MapLayer for RegionsLayer {
     fn name(&self) -> &'static str {
         REGIONS
+    }
+
+    fn dots(&self, app: &App) -> bool {
+        app.map.plan.planner().is_some()
     }
 
     fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>) {
@@ -146,6 +154,10 @@ impl MapLayer for PlanLayer {
         PLAN
     }
 
+    fn dots(&self, app: &App) -> bool {
+        app.map.plan.result.is_some()
+    }
+
     fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {
         let Some(r) = &app.map.plan.result else {
             return;
@@ -165,6 +177,14 @@ impl MapLayer for SmoothedLayer {
         SMOOTHED
     }
 
+    fn dots(&self, app: &App) -> bool {
+        app.map
+            .plan
+            .result
+            .as_ref()
+            .is_some_and(|r| r.smoothed.is_some())
+    }
+
     fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {
         if let Some(s) = app
             .map
@@ -181,6 +201,10 @@ impl MapLayer for SmoothedLayer {
 impl MapLayer for EndsLayer {
     fn name(&self) -> &'static str {
         ENDS
+    }
+
+    fn dots(&self, _app: &App) -> bool {
+        false
     }
 
     fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {

@@ -7,9 +7,11 @@
 //! room of a large terminal. Cannot fail: a panel too small for its content clips it.
 
 pub mod charts;
+pub mod forage;
 pub mod header;
 pub mod help;
 pub mod link;
+pub mod localization;
 pub mod log;
 pub mod map;
 pub mod map_layers;

@@ -94,6 +94,10 @@ impl MapLayer for RobotPlanLayer {
         ROBOT_PLAN_LAYER
     }
 
+    fn dots(&self, app: &App) -> bool {
+        app.transfers.robot_plan.is_some()
+    }
+
     fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {
         let Some((_, points)) = &app.transfers.robot_plan else {
             return;

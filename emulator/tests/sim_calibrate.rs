@@ -1,0 +1,201 @@
+//! Seed 000 §5.3 done by the robot itself: `Mode::CalibrateLight` in the emulator. The
+//! Khepera is set down 1 cm from a lamp (the paper's calibration distance) in an open box and
+//! told to calibrate; it turns on the spot, labels its readings with its own odometry heading
+//! and trains its network online (robot-firmware/src/robot/calibrate.rs). Then it is carried
+//! round the lamp, 1 deg at a time from the lamp on its right (-90 deg) to its left (+90), and
+//! its `light_bearing()` is compared with the TRUE bearing from the simulation.
+//!
+//! Paper (offline, errors against odometry labels on the training rotation): mean 1.52 deg,
+//! max 6.52 deg. Here the errors are against the truth, on fresh readings, so they include the
+//! robot's own heading reference (found from the first turn) and its odometry. Tolerances:
+//! the seed-averaged mean within 1.52 deg + 25 %, the seed-averaged max within 6.52 deg + 35 %
+//! (as robot-firmware/tests/paper_000_som.rs). Run with `--nocapture` for the table.
+#![allow(clippy::unwrap_used, clippy::panic)]
+
+use std::path::PathBuf;
+
+use emulator::arena::{Arena, ArenaFormat, Light, Pose};
+use emulator::geometry::{Aabb, Point};
+use emulator::sim::{Sim, SimConfig};
+use protocol::{Command, Mode};
+use robot_firmware::link::Reply;
+use robot_firmware::KHEPERA;
+
+const SEEDS: u64 = 6;
+const LAMP: (f64, f64) = (0.4, 0.3);
+
+fn lamp() -> Point {
+    Point::new(LAMP.0, LAMP.1)
+}
+
+fn open_box() -> Arena {
+    Arena {
+        name: "open box".into(),
+        source: PathBuf::from("test"),
+        format: ArenaFormat::AsciiGrid,
+        bounds: Aabb::from_corners(Point::new(0.0, 0.0), Point::new(0.75, 0.6)),
+        enclosed: true,
+        walls: Vec::new(),
+        raster: None,
+        beacons: Vec::new(),
+        targets: Vec::new(),
+        lights: Vec::new(),
+        starts: Vec::new(),
+        goal: None,
+        unit_m: 0.01,
+        warnings: Vec::new(),
+    }
+}
+
+/// The robot's centre with the lamp `gap` from its rim, due west of the lamp.
+fn spot(gap: f64) -> Point {
+    let r = f64::from(KHEPERA.body_diameter_m) / 2.0;
+    Point::new(LAMP.0 - r - gap, LAMP.1)
+}
+
+struct Outcome {
+    sim_s: f64,
+    drift_deg: f64,
+    mean: f64,
+    max: f64,
+    far_mean: f64,
+}
+
+fn calibrate(seed: u64, true_wheel_distance_m: Option<f64>, start_heading: f64) -> Outcome {
+    let at = spot(0.01);
+    let cfg = SimConfig {
+        seed,
+        start: Some(Pose {
+            x: at.x,
+            y: at.y,
+            heading: start_heading,
+        }),
+        lights: vec![Light {
+            position: lamp(),
+            height_m: 0.0,
+            intensity: 1.0,
+        }],
+        true_wheel_distance_m,
+        ..SimConfig::new(&KHEPERA)
+    };
+    let mut sim = Sim::new(open_box(), cfg).unwrap();
+    let reply = sim
+        .robot_mut()
+        .core
+        .apply(Command::SetMode(Mode::CalibrateLight), 0);
+    assert_eq!(reply, Reply::Ack(protocol::AckInfo::Done));
+    // 21 turns of about 20 s; give it 600 s.
+    for _ in 0..600_000 {
+        sim.step();
+        if sim.robot().core.mode != Mode::CalibrateLight {
+            break;
+        }
+    }
+    let core = &sim.robot().core;
+    assert_eq!(core.mode, Mode::Idle, "seed {seed}: still calibrating");
+    assert!(core.light_cal.trained, "seed {seed}: calibration failed");
+    let sim_s = sim.now_us() as f64 * 1e-6;
+    let drift = core.light_cal.drift_per_turn().to_degrees();
+    let (mean, max) = sweep(&mut sim, 0.01);
+    let (far_mean, _) = sweep(&mut sim, 0.04);
+    Outcome {
+        sim_s,
+        drift_deg: f64::from(drift),
+        mean,
+        max,
+        far_mean,
+    }
+}
+
+/// Carries the robot round the lamp at `gap`, -90..=90 deg in 1 deg steps; (mean, max)
+/// absolute error of the robot's bearing against the truth, degrees.
+fn sweep(sim: &mut Sim, gap: f64) -> (f64, f64) {
+    let at = spot(gap);
+    let mut errors = Vec::new();
+    for a in -90..=90 {
+        // The lamp is due east: bearing a means heading -a.
+        let heading = -f64::from(a).to_radians();
+        sim.place(Pose {
+            x: at.x,
+            y: at.y,
+            heading,
+        })
+        .unwrap();
+        // One control cycle reads the sensors.
+        sim.run_for(90);
+        let t = sim.truth();
+        let truth = ((LAMP.1 - t.y).atan2(LAMP.0 - t.x) - t.heading).to_degrees();
+        let got = sim
+            .robot()
+            .core
+            .light_bearing()
+            .unwrap_or_else(|| panic!("no bearing at {a} deg, {gap} m"));
+        errors.push((f64::from(got.to_degrees()) - truth).abs());
+    }
+    let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+    (mean, errors.iter().copied().fold(0.0, f64::max))
+}
+
+fn experiment(label: &str, wheel: Option<f64>) -> (f64, f64, f64) {
+    println!("\nonline calibration, {label}");
+    println!("seed | sim s | drift deg/turn | 1 cm mean   max | 4 cm mean");
+    let mut acc = (0.0, 0.0, 0.0);
+    for seed in 1..=SEEDS {
+        // Start facing anywhere: the first turn finds the lamp.
+        let o = calibrate(seed, wheel, seed as f64 * 1.1);
+        println!(
+            "{seed:>4} | {:>5.0} | {:>14.2} | {:>9.2} {:>5.2} | {:>9.2}",
+            o.sim_s, o.drift_deg, o.mean, o.max, o.far_mean
+        );
+        acc = (acc.0 + o.mean, acc.1 + o.max, acc.2 + o.far_mean);
+    }
+    let n = SEEDS as f64;
+    let out = (acc.0 / n, acc.1 / n, acc.2 / n);
+    println!(
+        "average: mean {:.2} deg (paper 1.52), max {:.2} deg (paper 6.52), 4 cm mean {:.2}",
+        out.0, out.1, out.2
+    );
+    out
+}
+
+#[test]
+fn the_robot_calibrates_itself_to_the_papers_accuracy() {
+    let (mean, max, far) = experiment("nominal wheels", None);
+    assert!(mean <= 1.52 * 1.25, "mean {mean}");
+    assert!(max <= 6.52 * 1.35, "max {max}");
+    assert!(far > mean, "4 cm {far} vs 1 cm {mean}");
+}
+
+#[test]
+fn a_robot_whose_wheels_are_53_mm_apart_calibrates_as_well() {
+    // seed 000 §3: the real Khepera behaves as if its wheels were 53.3 mm apart while the
+    // odometry uses 52 mm: odometry over-reports every turn by 2.5 % (the light drifts about
+    // -9 deg per turn through the odometry frame). The robot measures that drift and scales
+    // its labels, so the paper's tolerances hold here too.
+    let (mean, max, _) = experiment("true wheel distance 53.3 mm", Some(0.0533));
+    assert!(mean <= 1.52 * 1.25, "mean {mean}");
+    assert!(max <= 6.52 * 1.35, "max {max}");
+}
+
+#[test]
+fn calibration_far_from_any_light_fails_cleanly() {
+    let cfg = SimConfig {
+        seed: 3,
+        start: Some(Pose {
+            x: 0.2,
+            y: 0.3,
+            heading: 0.0,
+        }),
+        ..SimConfig::new(&KHEPERA)
+    };
+    let mut sim = Sim::new(open_box(), cfg).unwrap();
+    sim.robot_mut()
+        .core
+        .apply(Command::SetMode(Mode::CalibrateLight), 0);
+    // One turn is about 20 s.
+    sim.run_for(40_000);
+    let core = &sim.robot().core;
+    assert_eq!(core.mode, Mode::Idle);
+    assert!(!core.light_cal.trained);
+    assert_eq!(core.light_bearing(), None);
+}

@@ -1,0 +1,556 @@
+//! Foraging mode (seed 000 §7): find a lit source, grip the object at it, carry it home by
+//! odometry, put it down, and look for the next source.
+//!
+//! Layer: part of the control cycle (`Core::decide` in `Mode::Forage`), above the behaviour
+//! arbiter (seed 000 §4), which does all the driving: `DriveToLight` (avoidance + Braitenberg
+//! IIIa) while searching and approaching, `GoTo(home)` (avoidance + drift, edge following
+//! round obstacles) on the way home. This module is the paper's rule-based central unit for
+//! the task, reduced to the part the robot can sense here:
+//!
+//! - Search: wander with obstacle avoidance until a light is detected (T1), approach it to
+//!   the optimal distance (T2). A source the robot already emptied (its believed position
+//!   within `ForageParams::known_radius_m` of one in the list) is left at once (§6.1: leave
+//!   until the reading rises above T3). §7.4: gripping is triggered by the light threshold,
+//!   not by the IR sensors, which the lamp disturbs.
+//! - Grasp: stopped, arm down, close the grip, read the object-present sensor. Nothing there:
+//!   the source is recorded as empty (`SourceEmpty`), the robot leaves it. Something there:
+//!   raise the arm, `ObjectGrasped`, head home.
+//! - Return: drift to the home point by odometry.
+//! - Drop: arm down, open the grip, `ObjectDelivered`, arm up, search again.
+//!
+//! Departures from the paper, each because the emulated robot has no camera: the home base
+//! is where foraging starts (the paper finds it first by its dead-end IR pattern and a visual
+//! mark), and there is no global pose update from the three landmarks at home (§6.2 needs the
+//! K213 camera; `landmarks::Triple` implements the resection for a robot that has one). The
+//! pose error on return is therefore plain odometry's, and the emulator reports it.
+//!
+//! Invariants: fixed-size state (`MAX_SOURCES` remembered sources); each gripper step has a
+//! timeout, so a gripper that never reports (or is absent) cannot hang the robot; the motors
+//! are stopped whenever the gripper moves. Never a panic.
+
+use protocol::{EventCode, Mode, NackReason};
+
+use super::scan::{self, LandmarkScan, ScanParams, ScanStep};
+use super::Core;
+use crate::behaviour::{self, drift::DriftPhase, light::LightPhase};
+use crate::hal::{GripperCommand, GripperState, MotorCommand, ARM_DOWN, ARM_UP, CAMERA_PIXELS};
+use crate::landmarks::Triple;
+use crate::odometry::{wrap_angle, Point, Pose};
+
+/// Light sources the robot remembers as emptied (the paper keeps only such meaningful points).
+pub const MAX_SOURCES: usize = 6;
+
+/// Foraging parameters. The paper gives none of these numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ForageParams {
+    /// A source whose estimated position is within this of a remembered one is that source.
+    /// 0.12 m: a few centimetres of odometry error over a trip, plus the 4 cm between the
+    /// robot's centre and the lamp at the optimal distance.
+    pub known_radius_m: f32,
+    /// Distance from the robot's centre to the light at T2 (the optimal distance): body
+    /// radius + about 1.4 cm (seed 000 §6.1). Used to place the source ahead of the robot.
+    pub source_ahead_m: f32,
+    /// Cycles allowed for each gripper step before giving up on it: 40 (3.2 s on a Khepera,
+    /// three times the arm's full travel).
+    pub step_timeout_cycles: u16,
+    /// A resected position farther than this from the believed one is not believed, metres:
+    /// 0.5 (a long search drifts a few decimetres; a failed fix lands anywhere).
+    pub max_fix_m: f32,
+    /// Landmark scans at home per trip: 2 (arrive, fix, drive to the corrected home, fix).
+    pub max_locates: u8,
+    /// After a fix, home is reached only within this, metres: 0.04.
+    pub home_tolerance_m: f32,
+    /// The camera scan.
+    pub scan: ScanParams,
+    /// On the way home, moving less than `stall_m` in `stall_cycles` is a stall (avoidance
+    /// and drift can cancel against a wall across the way): 0.03 m in 100 cycles (8 s).
+    pub stall_m: f32,
+    pub stall_cycles: u16,
+    /// A stall is broken by wandering (avoidance alone) this long: 40 cycles (3.2 s).
+    pub unstick_cycles: u16,
+}
+
+impl Default for ForageParams {
+    fn default() -> Self {
+        ForageParams {
+            known_radius_m: 0.12,
+            source_ahead_m: 0.042,
+            step_timeout_cycles: 40,
+            max_fix_m: 0.5,
+            max_locates: 2,
+            home_tolerance_m: 0.04,
+            scan: ScanParams::default(),
+            stall_m: 0.03,
+            stall_cycles: 100,
+            unstick_cycles: 40,
+        }
+    }
+}
+
+/// Where a gripper sequence is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GripStep {
+    /// Lowering the arm to the floor.
+    Lower,
+    /// Closing (grasp) or opening (drop) the grip.
+    Grip,
+    /// Raising the arm.
+    Raise,
+}
+
+/// What the foraging robot is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ForagePhase {
+    /// Mapping the three landmarks from the start (the home base), turning on the spot.
+    Map,
+    /// Wandering and approaching lights.
+    #[default]
+    Search,
+    /// At a source, picking up its object.
+    Grasp(GripStep),
+    /// Object in the gripper, at the source: scanning the landmarks before the way home (an
+    /// event-driven update like the one at home; a long search leaves odometry's heading tens
+    /// of degrees off, too much to find home by).
+    Fix,
+    /// Carrying an object home.
+    Return,
+    /// At home (as believed), scanning the landmarks for a global fix (seed 000 §6.2, §7).
+    Locate,
+    /// At home, putting the object down.
+    Drop(GripStep),
+}
+
+/// The foraging state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Forage {
+    pub params: ForageParams,
+    pub phase: ForagePhase,
+    /// The home base: where foraging first started, metres.
+    pub home: Option<Point>,
+    /// Objects gripped so far.
+    pub grasped: u16,
+    /// Objects put down at home so far.
+    pub delivered: u16,
+    /// Sources found empty or already emptied, believed positions.
+    sources: [Point; MAX_SOURCES],
+    sources_len: usize,
+    /// Cycles spent in the current gripper step.
+    step_cycles: u16,
+    /// The grasp found nothing: after raising the arm, search again.
+    grasp_failed: bool,
+    /// The three landmarks, once mapped.
+    pub triple: Option<Triple>,
+    /// The scan in progress (Map, Locate).
+    pub scan: Option<LandmarkScan>,
+    /// Scans at home this trip.
+    locates: u8,
+    /// Global fixes applied so far.
+    pub fixes: u16,
+    /// Where the way home last made progress, and the cycles since.
+    anchor: Point,
+    stalled_cycles: u16,
+    /// Cycles left of a wander that breaks a stall.
+    unstick_cycles: u16,
+    /// Believed heading when the grip closed (the source is ahead of it).
+    grip_heading: f32,
+}
+
+impl Default for Forage {
+    fn default() -> Self {
+        Forage {
+            params: ForageParams::default(),
+            phase: ForagePhase::Search,
+            home: None,
+            grasped: 0,
+            delivered: 0,
+            sources: [Point::new(0.0, 0.0); MAX_SOURCES],
+            sources_len: 0,
+            step_cycles: 0,
+            grasp_failed: false,
+            triple: None,
+            scan: None,
+            locates: 0,
+            fixes: 0,
+            anchor: Point::new(0.0, 0.0),
+            stalled_cycles: 0,
+            unstick_cycles: 0,
+            grip_heading: 0.0,
+        }
+    }
+}
+
+impl Forage {
+    /// The remembered (emptied) sources.
+    pub fn sources(&self) -> &[Point] {
+        self.sources.get(..self.sources_len).unwrap_or(&[])
+    }
+
+    fn known(&self, p: Point) -> bool {
+        self.sources()
+            .iter()
+            .any(|s| s.distance_to(p) < self.params.known_radius_m)
+    }
+
+    /// Remembers a source; when full, the oldest is forgotten.
+    fn remember(&mut self, p: Point) {
+        if self.known(p) {
+            return;
+        }
+        if self.sources_len == MAX_SOURCES {
+            self.sources.copy_within(1.., 0);
+            self.sources_len -= 1;
+        }
+        if let Some(slot) = self.sources.get_mut(self.sources_len) {
+            *slot = p;
+            self.sources_len += 1;
+        }
+    }
+
+    fn set_phase(&mut self, phase: ForagePhase, heading: f32) {
+        self.phase = phase;
+        self.step_cycles = 0;
+        self.scan = matches!(
+            phase,
+            ForagePhase::Map | ForagePhase::Fix | ForagePhase::Locate
+        )
+        .then(|| LandmarkScan::new(heading));
+    }
+
+    /// Whether the scan wants a camera line next cycle.
+    pub fn wants_frame(&self) -> bool {
+        self.scan.is_some_and(|s| s.wants_frame())
+    }
+
+    /// The camera line the scan asked for (`None`: no camera), taken at `heading`.
+    pub fn take_frame(&mut self, heading: f32, frame: Option<&[u8; CAMERA_PIXELS]>) {
+        let p = self.params.scan;
+        if let Some(scan) = self.scan.as_mut() {
+            scan.take_frame(heading, frame, &p);
+        }
+    }
+}
+
+impl Core {
+    /// `SetMode(Forage)`: the first start makes the current position the home base.
+    pub(super) fn start_forage(&mut self) -> Result<(), NackReason> {
+        self.check_mode(Mode::Forage)?;
+        if self.forage.home.is_none() {
+            self.forage.home = Some(self.pose().point());
+        }
+        if self.mode != Mode::Forage {
+            // Resume where it makes sense: carrying -> home, else search; first of all map
+            // the landmarks, from the start, where the pose is known (seed 000 §7).
+            let carrying = self.sensors.gripper.is_some_and(|g| g.object);
+            let camera = self.profile.has(protocol::caps::CAMERA);
+            let phase = if camera && self.forage.triple.is_none() {
+                ForagePhase::Map
+            } else if carrying {
+                ForagePhase::Return
+            } else {
+                ForagePhase::Search
+            };
+            self.forage.set_phase(phase, self.pose().heading);
+        }
+        self.enter(Mode::Forage);
+        Ok(())
+    }
+
+    /// The arbiter's mode for the current phase.
+    pub(super) fn forage_arbiter_mode(&self) -> behaviour::Mode {
+        match (self.forage.phase, self.forage.home) {
+            (ForagePhase::Search, _) => behaviour::Mode::DriveToLight,
+            (ForagePhase::Return, Some(home)) => behaviour::Mode::GoTo(home),
+            _ => behaviour::Mode::Idle,
+        }
+    }
+
+    fn forage_phase(&mut self, phase: ForagePhase) {
+        self.forage.set_phase(phase, self.pose().heading);
+        let mode = self.forage_arbiter_mode();
+        self.arbiter.set_mode(mode);
+    }
+
+    /// This cycle's motor command in `Mode::Forage`.
+    pub(super) fn forage_command(&mut self) -> MotorCommand {
+        let g = self.sensors.gripper.unwrap_or_default();
+        self.forage.step_cycles = self.forage.step_cycles.saturating_add(1);
+        let timed_out = self.forage.step_cycles > self.forage.params.step_timeout_cycles;
+        match self.forage.phase {
+            ForagePhase::Search => self.forage_search(g),
+            ForagePhase::Return => {
+                if !g.object {
+                    // Lost on the way (or taken): look for another.
+                    self.forage_phase(ForagePhase::Search);
+                    return MotorCommand::STOP;
+                }
+                if let Some(cmd) = self.forage_unstick() {
+                    return cmd;
+                }
+                let cmd = self.behaviour_command();
+                if self.arbiter.state().drift_phase == DriftPhase::Reached {
+                    let locate = self.forage.triple.is_some()
+                        && self.forage.locates < self.forage.params.max_locates;
+                    let next = if locate {
+                        ForagePhase::Locate
+                    } else {
+                        ForagePhase::Drop(GripStep::Lower)
+                    };
+                    self.forage_phase(next);
+                    return MotorCommand::STOP;
+                }
+                cmd
+            }
+            ForagePhase::Map | ForagePhase::Fix | ForagePhase::Locate => self.forage_scan(),
+            ForagePhase::Grasp(step) => {
+                self.forage_grasp(step, g, timed_out);
+                MotorCommand::STOP
+            }
+            ForagePhase::Drop(step) => {
+                self.forage_drop(step, g, timed_out);
+                MotorCommand::STOP
+            }
+        }
+    }
+
+    /// Breaks a stall on the way home: after `stall_cycles` without `stall_m` of progress,
+    /// wander for `unstick_cycles`, then drive home again (a fresh drift).
+    fn forage_unstick(&mut self) -> Option<MotorCommand> {
+        let p = self.forage.params;
+        let here = self.pose().point();
+        if self.forage.unstick_cycles > 0 {
+            self.forage.unstick_cycles -= 1;
+            if self.forage.unstick_cycles == 0 {
+                let mode = self.forage_arbiter_mode();
+                self.arbiter.set_mode(mode);
+                self.forage.anchor = here;
+                self.forage.stalled_cycles = 0;
+                return None;
+            }
+            return Some(self.behaviour_command());
+        }
+        if here.distance_to(self.forage.anchor) > p.stall_m {
+            self.forage.anchor = here;
+            self.forage.stalled_cycles = 0;
+            return None;
+        }
+        self.forage.stalled_cycles = self.forage.stalled_cycles.saturating_add(1);
+        if self.forage.stalled_cycles < p.stall_cycles {
+            return None;
+        }
+        self.forage.unstick_cycles = p.unstick_cycles;
+        self.arbiter.set_mode(behaviour::Mode::Wander);
+        Some(self.behaviour_command())
+    }
+
+    /// A landmark scan: on the spot, then map (at the start) or fix the pose (at home).
+    fn forage_scan(&mut self) -> MotorCommand {
+        let heading = self.pose().heading;
+        let params = self.forage.params.scan;
+        let Some(scan) = self.forage.scan.as_mut() else {
+            self.forage_phase(ForagePhase::Search);
+            return MotorCommand::STOP;
+        };
+        match scan.step(heading, &params) {
+            ScanStep::Drive(cmd) => return cmd,
+            ScanStep::WantFrame => return MotorCommand::STOP,
+            ScanStep::Done => {}
+        }
+        let seen = *scan;
+        let here = self.pose();
+        if self.forage.phase == ForagePhase::Map {
+            self.forage.triple = scan::map_triple(here.point(), seen.sightings());
+            self.forage_phase(ForagePhase::Search);
+            return MotorCommand::STOP;
+        }
+        if self.forage.phase == ForagePhase::Fix {
+            let fix = self
+                .forage
+                .triple
+                .and_then(|t| scan::resect(&t, here, seen.sightings()))
+                .filter(|f| f.point().distance_to(here.point()) <= self.forage.params.max_fix_m);
+            // The source, ahead of where the robot gripped (it has turned round since).
+            let (at, h) = match fix {
+                Some(f) => (
+                    f.point(),
+                    self.forage.grip_heading + wrap_angle(f.heading - here.heading),
+                ),
+                None => (here.point(), self.forage.grip_heading),
+            };
+            let d = self.forage.params.source_ahead_m;
+            let source = Point::new(at.x + d * libm::cosf(h), at.y + d * libm::sinf(h));
+            if let Some(fix) = fix {
+                self.apply_fix(here, fix);
+            }
+            self.forage.remember(source);
+            self.forage_phase(ForagePhase::Return);
+            return MotorCommand::STOP;
+        }
+        self.forage.locates = self.forage.locates.saturating_add(1);
+        let fix = self
+            .forage
+            .triple
+            .and_then(|t| scan::resect(&t, here, seen.sightings()));
+        let home = self.forage.home.unwrap_or(here.point());
+        let mut at_home = true;
+        if let Some(fix) =
+            fix.filter(|f| f.point().distance_to(here.point()) <= self.forage.params.max_fix_m)
+        {
+            self.apply_fix(here, fix);
+            at_home = fix.point().distance_to(home) <= self.forage.params.home_tolerance_m;
+        }
+        let next = if at_home || self.forage.locates >= self.forage.params.max_locates {
+            ForagePhase::Drop(GripStep::Lower)
+        } else {
+            ForagePhase::Return
+        };
+        self.forage_phase(next);
+        MotorCommand::STOP
+    }
+
+    /// Seed 000 §7: "the position of the robot is updated ... each time the home-base is
+    /// reached, using the global landmarks as a reference".
+    fn apply_fix(&mut self, was: Pose, fix: Pose) {
+        self.odometry.set_pose(fix);
+        self.forage.fixes = self.forage.fixes.saturating_add(1);
+        let moved_mm = libm::roundf(was.point().distance_to(fix.point()) * 1000.0) as i32;
+        self.push_event(EventCode::PoseCorrected, moved_mm);
+    }
+
+    fn forage_search(&mut self, g: GripperState) -> MotorCommand {
+        if g.object && g.closed {
+            self.forage_phase(ForagePhase::Return);
+            return MotorCommand::STOP;
+        }
+        self.gripper_cmd = GripperCommand {
+            arm: ARM_UP,
+            closed: false,
+        };
+        let cmd = self.behaviour_command();
+        if self.arbiter.state().light_phase != LightPhase::Arrived {
+            return cmd;
+        }
+        if self.forage.known(self.source_ahead()) {
+            // An emptied source: leave it until its light fades (seed 000 §6.1, T3).
+            self.arbiter.release_light();
+            return MotorCommand::STOP;
+        }
+        self.forage.grasp_failed = false;
+        self.forage_phase(ForagePhase::Grasp(GripStep::Lower));
+        MotorCommand::STOP
+    }
+
+    /// Where the source is when the robot stops at the optimal distance facing it.
+    fn source_ahead(&self) -> Point {
+        let p = self.pose();
+        let d = self.forage.params.source_ahead_m;
+        Point::new(
+            p.x + d * libm::cosf(p.heading),
+            p.y + d * libm::sinf(p.heading),
+        )
+    }
+
+    fn forage_grasp(&mut self, step: GripStep, g: GripperState, timed_out: bool) {
+        match step {
+            GripStep::Lower => {
+                self.gripper_cmd = GripperCommand {
+                    arm: ARM_DOWN,
+                    closed: false,
+                };
+                if g.arm == ARM_DOWN || timed_out {
+                    self.forage_phase(ForagePhase::Grasp(GripStep::Grip));
+                }
+            }
+            GripStep::Grip => {
+                self.gripper_cmd.closed = true;
+                if g.closed || timed_out {
+                    // One object per source (seed 000 §7): either way it is now empty. A full
+                    // one is remembered after the landmark fix, where the pose is better.
+                    self.forage.grip_heading = self.pose().heading;
+                    if !g.object || self.forage.triple.is_none() {
+                        self.forage.remember(self.source_ahead());
+                    }
+                    if !g.object {
+                        self.forage.grasp_failed = true;
+                        self.gripper_cmd.closed = false;
+                        let n = self.forage.sources_len as i32;
+                        self.push_event(EventCode::SourceEmpty, n);
+                    }
+                    self.forage_phase(ForagePhase::Grasp(GripStep::Raise));
+                }
+            }
+            GripStep::Raise => {
+                self.gripper_cmd.arm = ARM_UP;
+                if g.arm != ARM_UP && !timed_out {
+                    return;
+                }
+                if g.object && !self.forage.grasp_failed {
+                    self.forage.grasped = self.forage.grasped.saturating_add(1);
+                    let n = i32::from(self.forage.grasped);
+                    self.push_event(EventCode::ObjectGrasped, n);
+                    self.forage.locates = 0;
+                    let next = if self.forage.triple.is_some() {
+                        ForagePhase::Fix
+                    } else {
+                        ForagePhase::Return
+                    };
+                    self.forage_phase(next);
+                } else {
+                    self.gripper_cmd.closed = false;
+                    self.forage_phase(ForagePhase::Search);
+                    self.arbiter.release_light();
+                }
+            }
+        }
+    }
+
+    fn forage_drop(&mut self, step: GripStep, g: GripperState, timed_out: bool) {
+        match step {
+            GripStep::Lower => {
+                self.gripper_cmd.arm = ARM_DOWN;
+                if g.arm == ARM_DOWN || timed_out {
+                    self.forage_phase(ForagePhase::Drop(GripStep::Grip));
+                }
+            }
+            GripStep::Grip => {
+                self.gripper_cmd.closed = false;
+                if !g.closed || timed_out {
+                    self.forage_phase(ForagePhase::Drop(GripStep::Raise));
+                }
+            }
+            GripStep::Raise => {
+                self.gripper_cmd.arm = ARM_UP;
+                if g.arm != ARM_UP && !timed_out {
+                    return;
+                }
+                // With the arm up the fingers are empty unless the object stuck: then the
+                // search phase sees it still held and comes back to try again.
+                if !g.object {
+                    self.forage.delivered = self.forage.delivered.saturating_add(1);
+                    let n = i32::from(self.forage.delivered);
+                    self.push_event(EventCode::ObjectDelivered, n);
+                }
+                self.forage_phase(ForagePhase::Search);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn remembered_sources_are_recognised_nearby_and_the_oldest_goes_when_full() {
+        let mut f = Forage::default();
+        f.remember(Point::new(0.5, 0.5));
+        assert!(f.known(Point::new(0.55, 0.52)));
+        assert!(!f.known(Point::new(0.7, 0.5)));
+        f.remember(Point::new(0.52, 0.5));
+        assert_eq!(f.sources().len(), 1, "the same source is not stored twice");
+        for i in 0..MAX_SOURCES {
+            f.remember(Point::new(1.0 + i as f32, 0.0));
+        }
+        assert_eq!(f.sources().len(), MAX_SOURCES);
+        assert!(!f.known(Point::new(0.5, 0.5)), "the oldest was forgotten");
+    }
+}

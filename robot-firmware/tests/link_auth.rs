@@ -1,0 +1,312 @@
+//! Link authentication on the robot (PROTOCOL.md §13): with a key it acts only on frames that
+//! verify; unsigned, forged, replayed and reflected frames change nothing (no motor moves, no
+//! failsafe held off), and a refused Hello is answered with its reason.
+#![allow(clippy::unwrap_used, clippy::panic)]
+
+use protocol::sign::{LinkAuth, LinkKey, ROBOT_LINK, STATION_LINK};
+use protocol::*;
+use robot_firmware::scripted::ScriptedHal;
+use robot_firmware::{MotorCommand, Robot, RobotOptions, MICRO_RATO};
+
+const KEY: [u8; 32] = [0x42; 32];
+const OTHER: [u8; 32] = [0x24; 32];
+/// The station's clock at the start of a test, in signing ticks (2026-01-01).
+const T0: u64 = 0x1f92_d63c_e000;
+
+/// What the station saw: each frame's message (owned enough) and its verdict.
+#[derive(Clone, Debug, PartialEq)]
+enum Seen {
+    HelloReply { accepted: bool },
+    Ack(u16),
+    Nack(u16, NackReason),
+    Event(Event),
+    Other,
+}
+
+struct Station {
+    robot: Robot,
+    hal: ScriptedHal,
+    seq: u16,
+    dec: FrameDecoder,
+    /// The station's own signing and verifying state (the key it believes in).
+    auth: LinkAuth,
+    clock: u64,
+}
+
+impl Station {
+    fn new(robot_key: Option<&[u8; 32]>, station_key: Option<&[u8; 32]>) -> Self {
+        let mut robot = Robot::new(RobotOptions {
+            profile: &MICRO_RATO,
+            seed: 1,
+            start: robot_firmware::odometry::Pose::new(0.5, 0.5, 0.0),
+            emulated: false,
+            firmware_version: "test",
+        });
+        robot.link.set_key(robot_key);
+        Station {
+            robot,
+            hal: ScriptedHal {
+                compass: Some(0.0),
+                ..ScriptedHal::default()
+            },
+            seq: 0,
+            dec: FrameDecoder::new(),
+            auth: LinkAuth::new(station_key.map(LinkKey::new), STATION_LINK),
+            clock: T0,
+        }
+    }
+
+    /// Encodes as the station would (signed when it has a key), returns the wire bytes.
+    fn frame(&mut self, msg: &Message<'_>) -> Vec<u8> {
+        let mut buf = [0u8; MAX_FRAME];
+        self.clock += 100;
+        let n = self
+            .auth
+            .encode(self.seq, msg, self.clock, &mut buf)
+            .unwrap();
+        self.seq = self.seq.wrapping_add(1);
+        buf[..n].to_vec()
+    }
+
+    fn push(&mut self, wire: &[u8]) {
+        assert_eq!(self.hal.push_rx(wire), wire.len());
+    }
+
+    fn send(&mut self, msg: &Message<'_>) -> Vec<u8> {
+        let wire = self.frame(msg);
+        self.push(&wire);
+        wire
+    }
+
+    /// An unsigned frame, whatever the station's key.
+    fn send_unsigned(&mut self, msg: &Message<'_>) {
+        let mut buf = [0u8; MAX_FRAME];
+        let n = encode(self.seq, msg, &mut buf).unwrap();
+        self.seq = self.seq.wrapping_add(1);
+        self.push(&buf[..n]);
+    }
+
+    /// A frame signed with another key.
+    fn send_forged(&mut self, msg: &Message<'_>) {
+        let mut buf = [0u8; MAX_FRAME];
+        self.clock += 100;
+        let n = encode_signed(
+            self.seq,
+            msg,
+            &LinkKey::new(&OTHER),
+            STATION_LINK,
+            self.clock,
+            &mut buf,
+        )
+        .unwrap();
+        self.push(&buf[..n]);
+    }
+
+    fn hello(&mut self) -> Vec<Seen> {
+        let hello = Message::Hello(Hello {
+            fingerprint: FINGERPRINT,
+            protocol: PROTOCOL_VERSION,
+            session: 7,
+            station: "test",
+        });
+        self.send(&hello);
+        self.run(20)
+    }
+
+    /// Steps the robot `ms` milliseconds; returns what it sent, each frame checked by the
+    /// station's authentication (a frame that does not verify is a test failure).
+    fn run(&mut self, ms: u64) -> Vec<Seen> {
+        let mut seen = Vec::new();
+        for _ in 0..ms {
+            self.robot.step(&mut self.hal);
+            self.hal.now_us += 1000;
+            let mut buf = [0u8; 4096];
+            let n = self.hal.take_tx(&mut buf);
+            let mut input = &buf[..n];
+            loop {
+                match self.dec.feed(input) {
+                    Feed::NeedMore => break,
+                    Feed::Error { error, .. } => panic!("robot sent a bad frame: {error}"),
+                    Feed::Frame { frame, rest } => {
+                        input = rest;
+                        if let Err(e) = self.auth.verify(&frame) {
+                            panic!("robot frame {:?} refused: {e}", frame.header.kind);
+                        }
+                        seen.push(match frame.message {
+                            Message::HelloReply(r) => Seen::HelloReply {
+                                accepted: r.accepted,
+                            },
+                            Message::Ack(a) => Seen::Ack(a.cmd_seq),
+                            Message::Nack(n) => Seen::Nack(n.cmd_seq, n.reason),
+                            Message::Event(e) => Seen::Event(e),
+                            _ => Seen::Other,
+                        });
+                    }
+                }
+            }
+        }
+        seen
+    }
+
+    fn replies(seen: &[Seen]) -> Vec<&Seen> {
+        seen.iter()
+            .filter(|s| matches!(s, Seen::Ack(_) | Seen::Nack(..)))
+            .collect()
+    }
+}
+
+fn teleop() -> Message<'static> {
+    Message::Command(Command::Teleop {
+        v_mm_s: 200,
+        w_mrad_s: 0,
+    })
+}
+
+/// A keyed robot and station in a session, the robot in manual mode.
+fn manual_session() -> Station {
+    let mut s = Station::new(Some(&KEY), Some(&KEY));
+    assert!(s.hello().contains(&Seen::HelloReply { accepted: true }));
+    s.send(&Message::Command(Command::SetMode(Mode::Manual)));
+    let seen = s.run(20);
+    assert_eq!(Station::replies(&seen), [&Seen::Ack(1)]);
+    s
+}
+
+#[test]
+fn unsigned_and_forged_commands_are_refused_and_no_motor_moves() {
+    let mut s = manual_session();
+    let moves = s.hal.motor_moves;
+    s.send_unsigned(&teleop());
+    s.send_forged(&teleop());
+    let seen = s.run(100);
+    assert!(Station::replies(&seen).is_empty(), "{seen:?}");
+    assert_eq!(s.hal.motors, MotorCommand::STOP);
+    assert_eq!(s.hal.motor_moves, moves, "a refused frame moved a motor");
+    let a = s.robot.link.auth_stats();
+    assert_eq!((a.unsigned, a.bad_signature), (1, 1));
+    // The same command signed with the key is obeyed: the refusals above were the key's doing.
+    let seq = s.seq;
+    s.send(&teleop());
+    let seen = s.run(100);
+    assert_eq!(Station::replies(&seen), [&Seen::Ack(seq)]);
+    assert_ne!(s.hal.motors, MotorCommand::STOP);
+}
+
+#[test]
+fn a_replayed_command_is_refused() {
+    let mut s = manual_session();
+    let go = s.send(&teleop());
+    s.run(50);
+    assert_ne!(s.hal.motors, MotorCommand::STOP);
+    s.send(&Message::Command(Command::Teleop {
+        v_mm_s: 0,
+        w_mrad_s: 0,
+    }));
+    s.run(100);
+    let stopped = s.hal.motors;
+    // The recorded "go" frame again: same seq, same timestamp.
+    s.push(&go);
+    let seen = s.run(100);
+    assert!(
+        Station::replies(&seen).is_empty(),
+        "replay answered: {seen:?}"
+    );
+    assert_eq!(s.hal.motors, stopped);
+    assert_eq!(s.robot.link.auth_stats().stale_timestamp, 1);
+}
+
+#[test]
+fn unsigned_heartbeats_do_not_hold_off_the_failsafe() {
+    let mut s = manual_session();
+    s.send(&teleop());
+    s.run(50);
+    assert_ne!(s.hal.motors, MotorCommand::STOP);
+    // Only forged and unsigned heartbeats from now on: the 300 ms failsafe must trip.
+    for _ in 0..10 {
+        s.send_unsigned(&Message::Heartbeat(Heartbeat { time_ms: 0 }));
+        s.run(50);
+        s.send_forged(&Message::Heartbeat(Heartbeat { time_ms: 0 }));
+        s.run(50);
+    }
+    assert_eq!(s.hal.motors, MotorCommand::STOP);
+}
+
+#[test]
+fn a_refused_hello_is_answered_with_its_reason() {
+    let refusal = |value| {
+        Seen::Event(Event {
+            code: EventCode::HandshakeRefused,
+            value,
+        })
+    };
+    // Keyed robot, forged Hello: bad signature.
+    let mut s = Station::new(Some(&KEY), Some(&KEY));
+    s.send_forged(&Message::Hello(Hello {
+        fingerprint: FINGERPRINT,
+        protocol: PROTOCOL_VERSION,
+        session: 1,
+        station: "forger",
+    }));
+    assert_eq!(s.run(20), [refusal(-2)]);
+    assert!(!s.robot.link.connected());
+    // Unkeyed robot, signed Hello: it has no key; its answer is unsigned.
+    let mut s = Station::new(None, Some(&KEY));
+    let hello = Message::Hello(Hello {
+        fingerprint: FINGERPRINT,
+        protocol: PROTOCOL_VERSION,
+        session: 1,
+        station: "keyed",
+    });
+    s.send(&hello);
+    s.auth = LinkAuth::new(None, STATION_LINK);
+    assert_eq!(s.run(20), [refusal(-4)]);
+    assert!(!s.robot.link.connected());
+}
+
+#[test]
+fn a_keyed_robot_refuses_an_unsigned_hello_with_a_signed_event() {
+    let mut s = Station::new(Some(&KEY), None);
+    s.send(&Message::Hello(Hello {
+        fingerprint: FINGERPRINT,
+        protocol: PROTOCOL_VERSION,
+        session: 1,
+        station: "no key",
+    }));
+    // Read the answer with the key: it is signed by the robot's link.
+    s.auth = LinkAuth::new(Some(LinkKey::new(&KEY)), STATION_LINK);
+    let seen = s.run(20);
+    assert_eq!(
+        seen,
+        [Seen::Event(Event {
+            code: EventCode::HandshakeRefused,
+            value: -1,
+        })]
+    );
+    assert!(!s.robot.link.connected());
+    assert_eq!(s.robot.link.auth_stats().unsigned, 1);
+}
+
+#[test]
+fn the_robot_signs_on_from_the_stations_timestamps_and_stays_small() {
+    let mut s = Station::new(Some(&KEY), Some(&KEY));
+    s.hello();
+    // The station's window for the robot's link holds the robot's last timestamp, which
+    // counts on from the station's clock (the robot has none).
+    let last = s
+        .auth
+        .replay()
+        .last(ROBOT_LINK)
+        .expect("robot frames verified");
+    assert!(
+        last > T0,
+        "robot timestamp {last} not above the station's {T0}"
+    );
+    eprintln!(
+        "size_of: Robot {} Link {} LinkAuth {} LinkKey {}",
+        std::mem::size_of::<Robot>(),
+        std::mem::size_of::<robot_firmware::link::Link>(),
+        std::mem::size_of::<LinkAuth>(),
+        std::mem::size_of::<LinkKey>()
+    );
+    assert!(std::mem::size_of::<Robot>() <= 32 * 1024);
+}

@@ -1,0 +1,124 @@
+#!/usr/bin/env python3
+"""Regenerates the synthetic files of the bad-input corpus (maps/, plans/, recordings/).
+
+Run from this directory with a good recording and a good Plan object at hand:
+    station record --out /tmp/good.rec --seconds 2
+    station plan --map builtin:micro-rato-99 --out-object /tmp/good.plan
+    python3 generate.py /tmp/good.rec /tmp/good.plan
+Arena files (arenas/) are copies of emulator/tests/data/bad. MANIFEST.tsv says how each file
+is used and what the error must say; keep the two in step.
+"""
+import os
+import struct
+import sys
+
+
+def crc32c(data):
+    crc = 0xFFFFFFFF
+    for b in data:
+        crc ^= b
+        for _ in range(8):
+            crc = (crc >> 1) ^ (0x82F63B78 if crc & 1 else 0)
+    return crc ^ 0xFFFFFFFF
+
+
+def varint(n):
+    out = bytearray()
+    while True:
+        b = n & 0x7F
+        n >>= 7
+        if n:
+            out.append(b | 0x80)
+        else:
+            out.append(b)
+            return bytes(out)
+
+
+def write(path, data):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "wb") as f:
+        f.write(data)
+
+
+def map_object(w=4, h=4, cell=300, flags=0, reserved=0, version=1, kind=0, cells=None,
+               start=(0, 0), goal=(0, 0)):
+    head = bytes([version, kind, flags, reserved]) + struct.pack("<HHIii", w, h, cell, 0, 0)
+    head += struct.pack("<ii", *start) + struct.pack("<ii", *goal)
+    if cells is None:
+        cells = bytes([0x55]) * ((w * h + 3) // 4)
+    return head + cells
+
+
+def maps():
+    write("maps/01-empty.obj", b"")
+    write("maps/02-truncated-header.obj", map_object()[:20])
+    write("maps/03-truncated-cells.obj", map_object(w=8, h=8)[:-3])
+    write("maps/04-trailing-bytes.obj", map_object() + b"\0\0")
+    write("maps/05-version-9.obj", map_object(version=9))
+    write("maps/06-unknown-kind.obj", map_object(kind=7))
+    write("maps/07-reserved-flag.obj", map_object(flags=0x80))
+    write("maps/08-reserved-byte.obj", map_object(reserved=1))
+    write("maps/09-zero-width.obj", map_object(w=0))
+    write("maps/10-too-tall.obj", map_object(h=5000, cells=b""))
+    write("maps/11-zero-cell.obj", map_object(cell=0))
+    write("maps/12-absent-start-not-zero.obj", map_object(start=(5, 0)))
+    write("maps/13-reserved-cell-code.obj", map_object(cells=bytes([0x55, 0x55, 0xFF, 0x55])))
+    write("maps/14-padding-not-zero.obj", map_object(w=3, h=1, cells=bytes([0xD5])))
+
+
+def plans(good):
+    write("plans/01-truncated.obj", good[: len(good) // 2])
+    write("plans/02-trailing-bytes.obj", good + b"\0")
+    write("plans/03-version-2.obj", b"\x02" + good[1:])
+    write("plans/04-a-map-object.obj", map_object())
+    write("plans/05-reserved-flags.obj", good[:2] + b"\x80" + good[3:])
+    write("plans/06-empty.obj", b"")
+    write("plans/07-reserved-byte.obj", good[:3] + b"\x01" + good[4:])
+
+
+def split_recording(rec):
+    meta_len = struct.unpack_from("<I", rec, 12)[0]
+    header_end = 16 + meta_len + 4
+    return rec[:header_end], rec[header_end:], meta_len
+
+
+def record(t_us, kind, data):
+    body = varint(t_us) + bytes([kind]) + varint(len(data)) + data
+    return body + struct.pack("<I", crc32c(body))
+
+
+def header(meta, version=1):
+    fixed = b"\x89STREC\r\n" + struct.pack("<HHI", version, 0, len(meta)) + meta
+    return fixed + struct.pack("<I", crc32c(fixed))
+
+
+def recordings(good):
+    head, body, meta_len = split_recording(good)
+    meta = head[16:16 + meta_len]
+    first = record(0, 2, b"\x01sim")
+    write("recordings/01-empty.rec", b"")
+    write("recordings/02-text-file.rec", b"time,x,y\n0,1,2\n")
+    write("recordings/03-bad-magic.rec", b"\x89STREX\r\n" + good[8:])
+    write("recordings/04-version-2.rec", header(meta, version=2) + body)
+    write("recordings/05-header-crc.rec", head[:-1] + bytes([head[-1] ^ 1]) + body)
+    write("recordings/06-meta-too-long.rec",
+          b"\x89STREC\r\n" + struct.pack("<HHI", 1, 0, 1 << 20) + b"{}")
+    write("recordings/07-meta-not-json.rec", header(b"not json at all") + first)
+    write("recordings/08-torn-tail.rec", good[:-5])
+    flipped = bytearray(good)
+    flipped[len(head) + 40] ^= 0x10
+    write("recordings/09-flipped-bit.rec", bytes(flipped))
+    write("recordings/10-time-goes-back.rec",
+          header(meta) + record(5000, 0, b"\x00") + record(4000, 0, b"\x00"))
+    write("recordings/11-after-end.rec",
+          header(meta) + record(0, 3, b"stopped") + record(10, 0, b"\x00"))
+    write("recordings/12-huge-record.rec", header(meta) + varint(0) + b"\x00" + varint(1 << 30))
+    write("recordings/13-header-only-truncated.rec", good[:10])
+
+
+if __name__ == "__main__":
+    good_rec = open(sys.argv[1], "rb").read()
+    good_plan = open(sys.argv[2], "rb").read()
+    maps()
+    plans(good_plan)
+    recordings(good_rec)
