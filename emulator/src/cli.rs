@@ -192,6 +192,11 @@ pub enum TaskArg {
     /// (the profile with a gripper) in `builtin:forage` unless --arena names another arena
     /// (which then gets three lamps with objects drawn from --seed, home at the start).
     Forage,
+    /// Seed 000 §6.1: calibrate the light sensors, then map one lamp in the paper's 75 x 60
+    /// cm box, once without and once with local correction; reports the recognitions of
+    /// each (paper: 5 without, 24+ with). Its own arena and the khepera: --arena and
+    /// --profile are ignored.
+    LightMap,
 }
 
 impl WorldArgs {
@@ -223,7 +228,10 @@ impl WorldArgs {
             (self.line_double, "line-double", &mut n.line_double),
         ] {
             if v.is_some_and(|p| !(0.0..=1.0).contains(&p)) {
-                return Err(format!("--{name} {}: must be a probability in [0, 1]", v.unwrap_or_default()));
+                return Err(format!(
+                    "--{name} {}: must be a probability in [0, 1]",
+                    v.unwrap_or_default()
+                ));
             }
             set(v, name, slot)?;
         }
@@ -363,6 +371,9 @@ impl RunArgs {
                 return Err("--goal is for --task go-to; foraging heads for the lamps".to_string())
             }
             TaskArg::Forage => Task::Forage,
+            TaskArg::LightMap => {
+                return Err("--task light-map is run by `scenario::lightmap`".to_string())
+            }
             TaskArg::LineCorrect => {
                 return Err("--task line-correct is run by `line_correct_options`".to_string())
             }
@@ -391,10 +402,16 @@ impl RunArgs {
             return Err("--goal is for --task go-to; line-correct surveys the grid".to_string());
         }
         if !(self.distance.is_finite() && self.distance > 0.0) {
-            return Err(format!("--distance {}: must be positive metres", self.distance));
+            return Err(format!(
+                "--distance {}: must be positive metres",
+                self.distance
+            ));
         }
         if !(self.timeout.is_finite() && self.timeout > 0.0) {
-            return Err(format!("--timeout {}: must be positive seconds", self.timeout));
+            return Err(format!(
+                "--timeout {}: must be positive seconds",
+                self.timeout
+            ));
         }
         let mut o = crate::line_correct::LineCorrectOptions::new(self.world.profile.profile());
         o.seed = self.world.seed;
@@ -487,6 +504,40 @@ mod tests {
             parse(&["--reconnect-after", "1"]).is_err(),
             "needs --disconnect-after"
         );
+    }
+
+    #[test]
+    fn line_correct_takes_distance_and_line_faults() {
+        let cli = parse(&[
+            "run",
+            "--task",
+            "line-correct",
+            "--profile",
+            "khepera",
+            "--arena",
+            "builtin:floor-grid",
+            "--line-miss",
+            "0.3",
+            "--distance",
+            "12",
+        ])
+        .expect("valid");
+        let Some(Command::Run(r)) = cli.command else {
+            panic!("run subcommand")
+        };
+        let o = r.line_correct_options().expect("valid");
+        assert_eq!((o.distance_m, o.noise.line_miss), (12.0, 0.3));
+        assert!(r.options().is_err(), "not a go-to scenario");
+        let cli = parse(&["run", "--task", "line-correct", "--line-miss", "2"]).expect("parses");
+        let Some(Command::Run(r)) = cli.command else {
+            panic!("run subcommand")
+        };
+        let e = r.line_correct_options().unwrap_err();
+        assert!(e.contains("--line-miss"), "{e}");
+        // Serving the floor-grid arena lays its grid.
+        let cli = parse(&["--arena", "builtin:floor-grid", "--profile", "khepera"]).expect("ok");
+        let o = cli.serve.options().expect("valid");
+        assert_eq!(o.sim.floor_grid_m, Some(0.1));
     }
 
     #[test]

@@ -68,6 +68,9 @@ fn run(args: &RunArgs) -> Result<(), String> {
     if args.task == emulator::cli::TaskArg::Forage {
         return forage(args);
     }
+    if args.task == emulator::cli::TaskArg::LightMap {
+        return light_map(args);
+    }
     let opts = args.options()?;
     let arena = emulator::builtin::load(&args.world.arena, &load_options(args))
         .map_err(|e| e.to_string())?;
@@ -176,4 +179,30 @@ fn load_options(args: &RunArgs) -> emulator::arena::LoadOptions {
         load.ciberrato_grid = emulator::arena::GridFile::Path(g.clone());
     }
     load
+}
+
+/// `--task light-map`: seed 000 §6.1 without and with local correction, same seed.
+fn light_map(args: &RunArgs) -> Result<(), String> {
+    use emulator::scenario::lightmap::{run_light_map, LightMapOptions};
+    let seed = args.world.seed;
+    let without = run_light_map(&LightMapOptions::new(seed, false)).map_err(|e| e.to_string())?;
+    let with = run_light_map(&LightMapOptions::new(seed, true)).map_err(|e| e.to_string())?;
+    if args.json {
+        let both = serde_json::json!({ "without_correction": without, "with_correction": with });
+        println!("{both}");
+    } else {
+        for r in [&without, &with] {
+            println!(
+                "{} correction: recognised {} times, then {} ({} visits, {:.0} s simulated, {:.1} m)",
+                if r.correct { "with" } else { "without" },
+                r.recognitions,
+                r.ended,
+                r.visits.len(),
+                r.sim_s,
+                r.distance_m
+            );
+        }
+        println!("paper (seed 000 §6.1): 5 without correction; stopped after 24 with it");
+    }
+    Ok(())
 }

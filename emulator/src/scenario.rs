@@ -43,6 +43,7 @@ use crate::sensors::Noise;
 use crate::sim::{Sim, SimConfig, SimError};
 
 pub mod forage;
+pub mod lightmap;
 
 /// Settle time after the firmware reports arrival, ms (a few motor time constants).
 pub const SETTLE_MS: u64 = 500;

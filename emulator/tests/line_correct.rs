@@ -55,7 +55,10 @@ fn corrected_error_stays_within_half_a_square_over_40_m_while_odometry_drifts() 
         assert!(r.corrected.mean_mm < 5.0, "{r:?}");
         // Plain odometry from the same counts leaves the grid square within the run.
         assert!(r.uncorrected.max_mm > 4.0 * HALF_SQUARE_MM, "{r:?}");
-        assert!(r.ppd_size_max_mm < HALF_SQUARE_MM, "the PPD stays bounded: {r:?}");
+        assert!(
+            r.ppd_size_max_mm < HALF_SQUARE_MM,
+            "the PPD stays bounded: {r:?}"
+        );
         // The wheel bias is the thesis's: within ±1 %.
         assert!(r.wheel_bias.iter().all(|b| b.abs() <= 0.01), "{r:?}");
     }
@@ -79,10 +82,18 @@ fn runs_of_three_and_more_missed_lines_are_tolerated() {
         .iter()
         .filter(|r| r.corrected.max_mm < HALF_SQUARE_MM)
         .collect();
-    assert!(ok.len() >= 5, "{} of {} within half a square", ok.len(), reps.len());
+    assert!(
+        ok.len() >= 5,
+        "{} of {} within half a square",
+        ok.len(),
+        reps.len()
+    );
     for r in &ok {
         assert!(r.max_missed_run >= 3, "{r:?}");
-        assert!(r.pulses * 10 < r.true_crossings * 8, "misses happened: {r:?}");
+        assert!(
+            r.pulses * 10 < r.true_crossings * 8,
+            "misses happened: {r:?}"
+        );
     }
 }
 

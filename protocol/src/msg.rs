@@ -447,6 +447,7 @@ pub enum EventCode {
     /// A plan step failed; value = waypoint index.
     PlanAborted,
     /// The station's fingerprint or version did not match; value = protocol version seen.
+    /// Negative: the `Hello` failed link authentication, value = reason (PROTOCOL.md §13).
     HandshakeRefused,
     /// A parameter changed; value = parameter id.
     ParamChanged,

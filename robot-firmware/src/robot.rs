@@ -292,7 +292,8 @@ impl Robot {
         }
         if self.core.linecorr.report_due(now_ms) {
             let m = self.core.linecorr.report(now_ms);
-            self.link.send_low_priority(&Message::Localization(m), now_ms);
+            self.link
+                .send_low_priority(&Message::Localization(m), now_ms);
         }
         self.link
             .heartbeat(now_ms, protocol::timing::HEARTBEAT_PERIOD_MS);

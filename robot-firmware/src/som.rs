@@ -375,7 +375,10 @@ impl<const M: usize, const B: usize, W: Store> OnlineTrainer<M, B, W> {
 }
 
 fn l1<const M: usize, W: Store>(a: &[W; M], b: &[f32; M]) -> f32 {
-    a.iter().zip(b.iter()).map(|(x, y)| (x.get() - y).abs()).sum()
+    a.iter()
+        .zip(b.iter())
+        .map(|(x, y)| (x.get() - y).abs())
+        .sum()
 }
 
 /// A random start and a stride coprime to `n` (so `start + k stride mod n` visits all).

@@ -310,3 +310,56 @@ fn the_robot_signs_on_from_the_stations_timestamps_and_stays_small() {
     );
     assert!(std::mem::size_of::<Robot>() <= 32 * 1024);
 }
+
+mod hostile {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn command() -> impl Strategy<Value = Command> {
+        prop_oneof![
+            (any::<i16>(), any::<i16>()).prop_map(|(v, w)| Command::Teleop {
+                v_mm_s: v,
+                w_mrad_s: w
+            }),
+            Just(Command::SetMode(Mode::Wander)),
+            Just(Command::SetMode(Mode::Explore)),
+            (any::<i32>(), any::<i32>())
+                .prop_map(|(x, y)| Command::GoTo(PointMm { x_mm: x, y_mm: y })),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// Whatever arrives without the key (garbage, unsigned commands, commands signed
+        /// with another key, a reflected robot frame) moves no motor and gets no reply.
+        #[test]
+        fn nothing_without_the_key_moves_a_motor(
+            noise in prop::collection::vec(any::<u8>(), 0..300),
+            commands in prop::collection::vec((command(), 0..3u8), 1..8),
+        ) {
+            let mut s = manual_session();
+            let moves = s.hal.motor_moves;
+            s.push(&noise);
+            s.push(&[0]);
+            for (c, how) in commands {
+                let msg = Message::Command(c);
+                match how {
+                    0 => s.send_unsigned(&msg),
+                    1 => s.send_forged(&msg),
+                    _ => {
+                        let mut robot = LinkAuth::new(Some(LinkKey::new(&KEY)), ROBOT_LINK);
+                        let mut buf = [0u8; MAX_FRAME];
+                        let n = robot.encode(0, &msg, T0 * 2, &mut buf).unwrap();
+                        s.push(&buf[..n]);
+                    }
+                }
+                let seen = s.run(30);
+                prop_assert!(Station::replies(&seen).is_empty(), "{:?}", seen);
+            }
+            prop_assert_eq!(s.hal.motor_moves, moves);
+            prop_assert_eq!(s.hal.motors, MotorCommand::STOP);
+            prop_assert!(s.robot.link.auth_stats().refused() > 0);
+        }
+    }
+}

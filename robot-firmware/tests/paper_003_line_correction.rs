@@ -10,15 +10,16 @@
 //! (§2.3.3, §2.7), turning smoothly at random, steered back near the arena's edge by a pilot
 //! that sees the true pose (the estimators under test never do). The thesis pairs the PPD with
 //! a grid fitter (§2.6) that makes the robot cross lines at an angle, V and H alternately, and
-//! avoid crossings (C zones); the runs that must stay within half a square use a minimal one
-//! that steers the robot's ESTIMATED heading towards 30 or 60 degrees off the grid axes.
+//! avoid crossings (C zones); the runs that must stay within half a square use the firmware's
+//! minimal `localize::GridFitter`, which steers the ESTIMATED heading towards 30 or 60 degrees
+//! off the grid axes.
 //!
 //! Run with `--nocapture` to see the tables quoted in the report.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use robot_firmware::behaviour::XorShift32;
 use robot_firmware::localize::{
-    ppd, GridGeometry, LineOutcome, NearestLine, Prior, Sample, Spps, SppsParams,
+    ppd, GridFitter, GridGeometry, LineOutcome, NearestLine, Prior, Sample, Spps, SppsParams,
 };
 use robot_firmware::odometry::{wrap_angle, OdometryParams, Point, Pose};
 
@@ -28,7 +29,6 @@ const D_MM: f64 = 52.0; // seed 003 §2.3.3: wheelbase L = 52 mm
 const DL_MM: f64 = 0.08; // seed 000 §3.1: 0.08 mm per pulse
 const PITCH_M: f64 = 0.10; // seed 003 §2.6.4: 10 cm squares
 const LINE_W_M: f64 = 0.01; // the emulator's tape width; the thesis gives none
-const FITTER_GAIN: f64 = 1.0; // 1/s: rad/s of turn per rad off the preferred heading
 const SUBSTEPS: usize = 20; // line detection resolution inside a cycle: 0.5 mm
 const HALF_SQUARE_MM: f64 = 50.0; // Fig 2-25 / the brief's bound
 const RUN_M: f64 = 40.0; // metres per run
@@ -88,17 +88,8 @@ impl World {
         let (cx, cy) = (self.x - 1.0, self.y - 1.0);
         let mut omega = self.turn;
         if let Some(h) = fitter {
-            // seed 003 §2.6.2-2.6.3: cross lines at an angle so V and H zones alternate, but
-            // not at 45 deg, which runs through every crossing (C zones): pull the heading
-            // towards the nearest of 30 and 60 deg off the grid axes.
-            let q = std::f64::consts::FRAC_PI_2;
-            let phi = h.rem_euclid(q);
-            let target = if phi < q / 2.0 {
-                q / 3.0
-            } else {
-                2.0 * q / 3.0
-            };
-            omega += FITTER_GAIN * (target - phi);
+            // seed 003 §2.6.2-2.6.3: the firmware's grid fitter (30 or 60 deg off the axes).
+            omega += f64::from(GridFitter::default().turn(h as f32));
         }
         if (cx * cx + cy * cy).sqrt() > 0.8 {
             let back = wrap(cy.atan2(cx) + std::f64::consts::PI - self.heading);

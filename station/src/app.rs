@@ -556,6 +556,11 @@ impl App {
             EventCode::PlanInstalled => (Level::Info, "plan installed".into()),
             EventCode::PlanFinished => (Level::Info, "plan finished".into()),
             EventCode::PlanAborted => (Level::Warn, format!("plan aborted at waypoint {v}")),
+            // Negative: the robot could not authenticate our Hello (PROTOCOL.md §13).
+            EventCode::HandshakeRefused if v < 0 => (
+                Level::Warn,
+                format!("robot refused our handshake: link authentication, reason {v}"),
+            ),
             EventCode::HandshakeRefused => (
                 Level::Error,
                 format!("robot refused our handshake (it saw protocol {v})"),
@@ -718,7 +723,7 @@ pub fn mode_from_index(i: i32) -> Option<Mode> {
 }
 
 /// Every mode in wire order; the digit keys 0-9 select the first ten.
-pub const MODES: [Mode; 11] = [
+pub const MODES: [Mode; 12] = [
     Mode::Idle,
     Mode::Manual,
     Mode::GoTo,
@@ -730,6 +735,7 @@ pub const MODES: [Mode; 11] = [
     Mode::ExecutePlan,
     Mode::Forage,
     Mode::Survey,
+    Mode::CalibrateLight,
 ];
 
 fn mode_name_i32(i: i32) -> String {

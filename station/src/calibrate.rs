@@ -280,7 +280,10 @@ pub fn examples(
 pub fn errors(som: &LightSom, set: &[Example<FRONT>]) -> (f64, f64) {
     let e: Vec<f64> = set
         .iter()
-        .filter_map(|ex| som.recall(&ex.inputs).map(|y| f64::from((y - ex.output).abs())))
+        .filter_map(|ex| {
+            som.recall(&ex.inputs)
+                .map(|y| f64::from((y - ex.output).abs()))
+        })
         .collect();
     if e.is_empty() {
         return (0.0, 0.0);
@@ -372,7 +375,9 @@ fn decode_bin(bytes: &[u8]) -> anyhow::Result<LightSom> {
     let u16_at = |i: usize| u16::from_le_bytes([body[i], body[i + 1]]);
     let (version, n, m) = (u16_at(4), u16_at(6), u16_at(8));
     if version != FILE_VERSION || usize::from(n) != NEURONS || usize::from(m) != FRONT {
-        bail!("binary light map: version {version}, {n} x {m}; this station reads version 1, 60 x 6");
+        bail!(
+            "binary light map: version {version}, {n} x {m}; this station reads version 1, 60 x 6"
+        );
     }
     let mut weights = [[0.0f32; FRONT]; NEURONS];
     let mut outputs = [0.0f32; NEURONS];
@@ -431,7 +436,10 @@ fn is_json(path: &Path) -> bool {
 /// Runs `station calibrate`.
 pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
     if args.out.is_dir() {
-        bail!("--out {} is a directory; give a file name", args.out.display());
+        bail!(
+            "--out {} is a directory; give a file name",
+            args.out.display()
+        );
     }
     let rec = Recording::open(&args.recording)?;
     if let Some(d) = &rec.damage {
@@ -454,11 +462,15 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
             "{}: no telemetry{}; record while the robot calibrates (station send --port P mode \
              calibrate-light), or pass --any-mode",
             args.recording.display(),
-            if args.any_mode { "" } else { " in mode calibrate-light" }
+            if args.any_mode {
+                ""
+            } else {
+                " in mode calibrate-light"
+            }
         );
     }
-    let (all, reference, turns) = examples(&frames, args.light)
-        .with_context(|| args.recording.display().to_string())?;
+    let (all, reference, turns) =
+        examples(&frames, args.light).with_context(|| args.recording.display().to_string())?;
     if all.len() < 2 * HOLD_OUT {
         bail!(
             "{}: only {} examples with a light within 90 deg of ahead (below T1 = {T1}); need \

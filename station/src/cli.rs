@@ -313,6 +313,8 @@ pub enum ModeArg {
     Explore,
     ExecutePlan,
     Forage,
+    /// Seed 003: wander over the floor grid correcting odometry at every line.
+    Survey,
     /// Seed 000 §5.3: turn next to a light and train the light -> angle map.
     CalibrateLight,
 }
@@ -330,6 +332,7 @@ impl From<ModeArg> for Mode {
             ModeArg::Explore => Mode::Explore,
             ModeArg::ExecutePlan => Mode::ExecutePlan,
             ModeArg::Forage => Mode::Forage,
+            ModeArg::Survey => Mode::Survey,
             ModeArg::CalibrateLight => Mode::CalibrateLight,
         }
     }

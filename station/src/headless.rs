@@ -86,8 +86,12 @@ async fn interactive(
             let name = p.to_string_lossy();
             let a = emulator::builtin::load(&name, &emulator::arena::LoadOptions::default())
                 .with_context(|| format!("cannot load arena {}", p.display()))?;
-            plan = PlanState::for_arena(&a, &p.display().to_string());
-            Some(ArenaOverlay::from_arena(&a))
+            let overlay = ArenaOverlay::from_arena(&a);
+            // Foraging does not plan, and a 0.3 m planning grid over a 1 m box is all walls.
+            if overlay.forage.is_none() {
+                plan = PlanState::for_arena(&a, &p.display().to_string());
+            }
+            Some(overlay)
         }
         None => None,
     };

@@ -10,7 +10,8 @@
 //! - `record`, `replay`, `export`: recordings of both directions of a link, the TUI driven by
 //!   one, and their export to MCAP and CSV.
 //! - `transfer`: map and plan uploads and downloads (the engine, `station upload-map` ...).
-//! - `tui`: the terminal loop; `cli`, `headless`, `builtin`: the binary's edge.
+//! - `tui`: the terminal loop; `pace`: the timer grid its periodic work shares; `cli`,
+//!   `headless`, `builtin`: the binary's edge.
 #![deny(unsafe_code)]
 
 pub mod action;

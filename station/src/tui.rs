@@ -4,7 +4,8 @@
 //! sleeps until an event: no polling), link events from the link task; both become `Action`s
 //! for `App::update`, the app's outbox goes to the link, and the screen is redrawn when
 //! something changed (no redraw at all while nothing happens): at once after a key, at most
-//! `LINK_FPS` times a second for the link's changes, however fast telemetry comes. Every timer
+//! once per `LINK_FRAME` (about `LINK_FPS` a second) for the link's changes, however fast
+//! telemetry comes. Every timer
 //! is on the `pace` grid, so the tick, the redraw limit and the paced link share wake-ups. The
 //! viewport is fixed and resized on the terminal's resize events (a full-screen viewport asks
 //! the terminal for its size before every frame, opening `/dev/tty` each time). The link's tap
@@ -37,13 +38,13 @@ use crate::{input, pace, ui};
 /// three ticks, about every 100 ms (`app::TELEOP_PERIOD_MS`).
 const DRIVING_TICK: Duration = pace::SLOT;
 /// Time between ticks otherwise: nothing but transfers and recording notes needs them.
-const IDLE_TICK: Duration = Duration::from_millis(2 * pace::SLOT.as_millis() as u64);
+const IDLE_TICK: Duration = pace::SLOT.saturating_mul(2);
 /// About the most redraws a second for changes that come from the link or the clock; a key
 /// redraws at once. 50 Hz telemetry and truth are 100 events a second: drawing each took the
 /// whole TUI to ~5 % of a core (README "Performance").
 pub const LINK_FPS: u32 = 10;
 /// The time between two redraws for the link's changes: `LINK_FPS` on whole slots (96 ms).
-pub const LINK_FRAME: Duration = Duration::from_millis(3 * pace::SLOT.as_millis() as u64);
+pub const LINK_FRAME: Duration = pace::SLOT.saturating_mul(3);
 
 /// Runs the TUI until the operator quits. Restores the terminal whatever happens. `recorder`
 /// records the link while the operator asks (`R`); a recording running at quit is saved.
@@ -54,7 +55,14 @@ pub async fn run(mut app: App, mut link: RunningLink, mut recorder: TuiRecorder)
     let mut terminal = init_terminal()?;
     let result = async {
         execute!(stdout(), EnableMouseCapture)?;
-        event_loop(&mut terminal, &mut app, &mut link, &mut recorder, &mut signals).await
+        event_loop(
+            &mut terminal,
+            &mut app,
+            &mut link,
+            &mut recorder,
+            &mut signals,
+        )
+        .await
     }
     .await;
     restore();
@@ -260,9 +268,7 @@ pub(crate) fn spawn_reader(
 ) -> tokio::task::JoinHandle<()> {
     tokio::spawn(async move {
         let mut events = EventStream::new();
-        while let Some(ev) =
-            std::future::poll_fn(|cx| Pin::new(&mut events).poll_next(cx)).await
-        {
+        while let Some(ev) = std::future::poll_fn(|cx| Pin::new(&mut events).poll_next(cx)).await {
             let failed = ev.is_err();
             if tx.send(ev).is_err() || failed {
                 return;

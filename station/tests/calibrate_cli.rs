@@ -141,22 +141,12 @@ fn a_recorded_calibration_trains_a_map_to_the_papers_accuracy() {
             let rec = record(&mut s, 600);
             let path = d.join(format!("cal-{seed}-{out}.rec"));
             std::fs::write(&path, rec).unwrap();
-            let mut args = vec![
-                "calibrate",
-                path.to_str().unwrap(),
-                "--out",
-                out,
-                "--json",
-            ];
+            let mut args = vec!["calibrate", path.to_str().unwrap(), "--out", out, "--json"];
             if let Some(l) = extra {
                 args.extend(["--light", l]);
             }
             let o = station(&args, &d);
-            assert!(
-                o.status.success(),
-                "{}",
-                String::from_utf8_lossy(&o.stderr)
-            );
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
             let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
             println!("seed {seed} {out}: {report}");
             let mean = report["mean_deg"].as_f64().unwrap();

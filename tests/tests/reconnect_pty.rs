@@ -34,9 +34,11 @@ fn dir() -> PathBuf {
 /// Starts an emulator on `link`; returns it once the symlink points at its new pty. A killed
 /// emulator leaves its symlink dangling; it is removed first, so the new one is seen even when
 /// the kernel hands out the same pty number again.
+// The child is handed to the caller, which kills and waits for it.
+#[allow(clippy::zombie_processes)]
 fn emulator(link: &Path, seed: usize) -> Child {
     let _ = std::fs::remove_file(link);
-    let child = Command::new(workspace_bin("robot-emulator"))
+    let mut child = Command::new(workspace_bin("robot-emulator"))
         .args(["serve", "--seed", &seed.to_string(), "--link"])
         .arg(link)
         .stdin(Stdio::null())
@@ -49,7 +51,11 @@ fn emulator(link: &Path, seed: usize) -> Child {
         if std::fs::metadata(link).is_ok() {
             return child;
         }
-        assert!(Instant::now() < deadline, "the emulator made no pty");
+        if Instant::now() >= deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("the emulator made no pty");
+        }
         std::thread::sleep(Duration::from_millis(2));
     }
 }

@@ -215,6 +215,11 @@ impl LightCalibration {
         self.drift
     }
 
+    /// Training steps of the last calibration.
+    pub fn trained_examples(&self) -> u32 {
+        self.trainer.trained()
+    }
+
     /// Installs a network trained elsewhere (e.g. by the station from a recording).
     pub fn install(&mut self, som: LightSom) {
         self.som = som;
@@ -321,8 +326,7 @@ impl Core {
             }
         }
         let behind = libm::fabsf(wrap_angle(cal.light_dir - heading)) >= BEHIND;
-        if cal.phase == CalPhase::Align && cal.drift_turns == 1 && !cal.sweep.started() && !behind
-        {
+        if cal.phase == CalPhase::Align && cal.drift_turns == 1 && !cal.sweep.started() && !behind {
             // Every later sweep starts with the light behind, so no sweep splits the bright
             // side (its centroid) or the labelled half-turn between two turns.
             return MotorCommand::new(TURN_UNITS, -TURN_UNITS);
@@ -415,7 +419,10 @@ mod tests {
         // The light is ahead at true heading 40 - 360 deg: that, in odometry terms.
         let want = wrap_angle((light - TURN) / scale);
         let d = s.direction(&angles, scale).unwrap();
-        assert!(wrap_angle(d - want).abs().to_degrees() < 1.0, "{d} vs {want}");
+        assert!(
+            wrap_angle(d - want).abs().to_degrees() < 1.0,
+            "{d} vs {want}"
+        );
         assert!(s.brightest < T1);
         // A flat turn has no direction.
         let mut flat = Sweep::new();

@@ -422,10 +422,10 @@ mod tests {
             support_pct: u8::MAX,
         });
         let mut buf = [0u8; protocol::MAX_FRAME];
-        let typical = protocol::encode(0, &protocol::Message::Localization(m), &mut buf)
-            .expect("fits");
-        let n = protocol::encode(0, &protocol::Message::Localization(wide), &mut buf)
-            .expect("fits");
+        let typical =
+            protocol::encode(0, &protocol::Message::Localization(m), &mut buf).expect("fits");
+        let n =
+            protocol::encode(0, &protocol::Message::Localization(wide), &mut buf).expect("fits");
         // Frame sizes on the wire, delimiter included, quoted in PROTOCOL.md.
         assert_eq!((typical, n), (103, 218));
     }

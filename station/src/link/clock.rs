@@ -5,15 +5,19 @@
 //! (`robot-emulator --speed 10`) runs that clock ten times faster, and a station that sends a
 //! heartbeat every 250 ms of its own time would be silent for 2.5 s of the robot's and lose the
 //! session. So the station reads the robot's clock from every frame that carries it
-//! (telemetry, truth, heartbeats), measures its rate over at least `SPAN_MS`, and sends its
-//! heartbeats every 250 ms of the *robot's* time (at most every `MIN_HEARTBEAT_MS`). A robot
-//! whose clock is within `TOLERANCE` of ours (a real one) keeps the protocol's 250 ms. Cannot
-//! fail.
+//! (telemetry, truth, heartbeats), measures its rate, and sends its heartbeats every 250 ms of
+//! the *robot's* time (at most every `MIN_HEARTBEAT_MS`). The first estimate comes
+//! `FIRST_SPAN_MS` into a session, well before a fast robot's timeout (150 ms of ours at ten
+//! times real time), and is refined as the span grows; later measurements span `SPAN_MS` at
+//! least. A robot whose clock is within `TOLERANCE` of ours (a real one) keeps the protocol's
+//! 250 ms. Cannot fail.
 
 use protocol::timing::HEARTBEAT_PERIOD_MS;
 
-/// Shortest span of our clock a rate is measured over, ms (the arrival jitter of a paced port,
-/// up to 32 ms, is then a few per cent).
+/// Shortest span of our clock the first rate of a session is measured over, ms: rough (a paced
+/// port delivers frames up to 32 ms late), but an overestimate only sends more heartbeats.
+pub const FIRST_SPAN_MS: u64 = 30;
+/// Shortest span of a later measurement, ms (the arrival jitter is then a few per cent).
 pub const SPAN_MS: u64 = 1_000;
 /// Longest span before the measurement starts afresh, so a changed speed is followed.
 pub const RESTART_MS: u64 = 5_000;
@@ -30,6 +34,8 @@ pub struct RobotClock {
     anchor: Option<(u32, u64)>,
     /// Robot ms per our ms, once measured.
     rate: Option<f64>,
+    /// A measurement has ended: the next one spans `SPAN_MS`.
+    settled: bool,
 }
 
 impl RobotClock {
@@ -45,7 +51,7 @@ impl RobotClock {
             return;
         };
         let span = now_ms.saturating_sub(t0);
-        if span < SPAN_MS {
+        if span < if self.settled { SPAN_MS } else { FIRST_SPAN_MS } {
             return;
         }
         // A robot that restarted has a clock behind the anchor: start over.
@@ -58,6 +64,7 @@ impl RobotClock {
         self.rate = Some(f64::from(advanced) / span as f64);
         if span >= RESTART_MS {
             self.anchor = Some((robot_ms, now_ms));
+            self.settled = true;
         }
     }
 
@@ -94,10 +101,12 @@ mod tests {
     #[test]
     fn a_robot_ten_times_faster_gets_heartbeats_ten_times_as_often() {
         let mut c = RobotClock::default();
-        for t in (0..1_000u64).step_by(100) {
-            c.observe((t * 10) as u32, t);
-            assert_eq!(c.heartbeat_period_ms(), 250, "not measured before a second");
-        }
+        c.observe(0, 0);
+        assert_eq!(c.heartbeat_period_ms(), 250, "not measured from one frame");
+        // Two batches of a paced port, 32 ms apart, one of them late: a rough first estimate.
+        c.observe(600, 32);
+        let early = c.heartbeat_period_ms();
+        assert!((10..=40).contains(&early), "{early} ms");
         c.observe(10_000, 1_000);
         assert_eq!(c.heartbeat_period_ms(), 25);
         // As fast as the machine allows: capped.
@@ -113,7 +122,10 @@ mod tests {
         c.observe(0, 0);
         c.observe(50_000, 5_000);
         assert_eq!(c.heartbeat_period_ms(), 25);
-        // Back to real time: the next measurement starts where the last one ended.
+        // Back to real time: the next measurement starts where the last one ended and spans a
+        // second (a short one would be as rough as a session's first).
+        c.observe(50_100, 5_100);
+        assert_eq!(c.heartbeat_period_ms(), 25);
         c.observe(51_000, 6_000);
         assert_eq!(c.heartbeat_period_ms(), 250);
         // The robot restarted: its clock went back; no rate until measured again.

@@ -321,7 +321,11 @@ fn a_robot_whose_clock_runs_ten_times_faster_gets_heartbeats_ten_times_as_often(
         m.receive(t, &frame(i + 1, &Message::Heartbeat(Heartbeat { time_ms })));
     }
     m.poll(1_200);
-    assert_eq!(sent(&mut m).len(), 1, "a heartbeat after 1.2 s of not sending");
+    assert_eq!(
+        sent(&mut m).len(),
+        1,
+        "a heartbeat after 1.2 s of not sending"
+    );
     assert!(m.next_deadline() <= 1_225);
     m.poll(1_224);
     assert!(sent(&mut m).is_empty());
@@ -437,7 +441,7 @@ fn closing_the_port_fails_what_is_in_flight_and_reports_why() {
 mod auth {
     //! Link authentication (PROTOCOL.md §13) against a hand-made keyed robot.
     use super::*;
-    use protocol::sign::{LinkAuth, LinkKey, ROBOT_LINK};
+    use protocol::sign::{LinkAuth, LinkKey, ROBOT_LINK, STATION_LINK};
     use protocol::{Event, EventCode};
 
     const T0: u64 = 0x1f92_d63c_e000;
@@ -562,6 +566,46 @@ mod auth {
         };
         assert!(msg.contains("this station has no key"), "{msg}");
         assert_eq!(m.stats(20).auth.unexpected_signature, 1);
+    }
+
+    #[test]
+    fn a_robot_ahead_of_our_clock_refuses_once_then_our_timestamps_follow_its() {
+        let mut m = keyed_machine(1);
+        let mut robot = LinkAuth::new(Some(LinkKey::new(&[1; 32])), ROBOT_LINK);
+        // The robot last heard a station whose clock was an hour ahead of ours.
+        let ahead = Message::Heartbeat(Heartbeat { time_ms: 0 });
+        let mut fast = LinkAuth::new(Some(LinkKey::new(&[1; 32])), STATION_LINK);
+        let mut buf = [0u8; MAX_FRAME];
+        let n = fast.encode(0, &ahead, T0 + 360_000_000, &mut buf).unwrap();
+        let mut dec = FrameDecoder::new();
+        match dec.feed(&buf[..n]) {
+            Feed::Frame { frame, .. } => robot.verify(&frame).unwrap(),
+            other => panic!("{other:?}"),
+        }
+        m.port_opened(0, "p");
+        let out = m.take_output();
+        let mut dec = FrameDecoder::new();
+        let mut input = out.as_slice();
+        let mut refused = None;
+        while let Feed::Frame { frame, rest } = dec.feed(input) {
+            input = rest;
+            refused = robot.verify(&frame).err();
+        }
+        assert!(matches!(refused, Some(AuthError::StaleTimestamp { .. })));
+        let refusal = Message::Event(Event {
+            code: EventCode::HandshakeRefused,
+            value: -3,
+        });
+        m.receive(10, &signed(&mut robot, 0, &refusal));
+        assert!(
+            !matches!(m.connection(), Connection::Refused { .. }),
+            "a stale refusal heals by itself"
+        );
+        m.poll(HELLO_RETRY_MS);
+        assert!(
+            robot_reads(&mut robot, &mut m).is_some(),
+            "the next Hello verifies"
+        );
     }
 
     #[test]

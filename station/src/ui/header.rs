@@ -114,7 +114,7 @@ pub fn render_footer(app: &App, frame: &mut Frame, area: Rect) {
             ("Tab", "view"),
             ("↑↓←→/wasd", "drive"),
             ("space", "stop"),
-            ("0-7", "mode"),
+            ("0-9", "mode"),
             ("g", "go-to"),
             ("p", "params"),
             ("+/-", "rate"),

@@ -134,14 +134,27 @@ fn lines(app: &App) -> Vec<Line<'static>> {
             l(" late "),
             Span::raw(s.robot_seq.late.to_string()),
         ]),
-        Line::from(vec![
-            l("CRC errors "),
-            bad(u64::from(s.decoder.crc_errors)),
-            l("  bad frames "),
-            bad(s.decoder.errors()),
-            l("  dropped bytes "),
-            bad(s.decoder.bytes_dropped),
-        ]),
+        Line::from({
+            let mut spans = vec![
+                l("CRC errors "),
+                bad(u64::from(s.decoder.crc_errors)),
+                l("  bad frames "),
+                bad(s.decoder.errors()),
+                l("  dropped bytes "),
+                bad(s.decoder.bytes_dropped),
+            ];
+            // Link authentication (PROTOCOL.md §13): frames refused for a bad signature, a
+            // stale timestamp or a missing or unexpected signature.
+            if s.auth.keyed || s.auth.refused() > 0 {
+                spans.push(l(if s.auth.keyed {
+                    "  signed, refused "
+                } else {
+                    "  refused "
+                }));
+                spans.push(bad(s.auth.refused()));
+            }
+            spans
+        }),
         Line::from(vec![
             l("commands "),
             Span::raw(format!(
