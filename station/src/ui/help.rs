@@ -20,8 +20,8 @@ pub const KEYS: &[(&str, &str)] = &[
     ("← →  a d", "teleop turn left / right"),
     ("space", "stop: zero speed and send Stop"),
     (
-        "0-9",
-        "mode: idle manual goto wander edgeL edgeR light explore plan forage",
+        "0-9 modes",
+        "idle manual goto wander edgeL edgeR light explore plan forage",
     ),
     (
         "g ←↑↓→ Enter",

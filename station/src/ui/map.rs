@@ -82,15 +82,17 @@ const ROBOT_R: f64 = 0.04;
 const ROBOT_FRACTION: f64 = 1.0 / 50.0;
 
 pub fn render(app: &App, frame: &mut Frame, area: Rect) {
-    // A wide panel gives its spare columns to the plan panel (the same split maps clicks).
-    let (area, side) = super::plan_panel::split(app, area);
+    // A wide panel gives its spare columns to a side panel (the same split maps clicks): the
+    // line-correction panel while the robot reports it, since planning means nothing on a
+    // floor grid, else the plan panel.
+    let (area, loc) = super::localization::split(app, area);
+    let (area, side) = match loc {
+        Some(_) => (area, None),
+        None => super::plan_panel::split(app, area),
+    };
     if let Some(side) = side {
         super::plan_panel::render(app, frame, side);
     }
-    let (area, loc) = match side {
-        Some(_) => (area, None),
-        None => super::localization::split(app, area),
-    };
     if let Some(loc) = loc {
         super::localization::render_panel(app, frame, loc);
     }
@@ -155,9 +157,9 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
 
 /// The map's own part of the map panel `area`: without the plan or line-correction panel.
 pub fn map_area(app: &App, area: Rect) -> Rect {
-    match super::plan_panel::split(app, area) {
+    match super::localization::split(app, area) {
         (a, Some(_)) => a,
-        (a, None) => super::localization::split(app, a).0,
+        (a, None) => super::plan_panel::split(app, a).0,
     }
 }
 
