@@ -45,21 +45,30 @@ pub fn micro_rato_99(opts: &LoadOptions) -> Result<Arena, ArenaError> {
 pub fn floor_grid() -> Arena {
     let side = FLOOR_GRID_SIDE_M;
     Arena {
-        name: "Floor grid (seed 003)".to_string(),
-        source: Path::new(FLOOR_GRID).to_path_buf(),
+        starts: vec![crate::arena::Pose {
+            x: side / 2.0 + 0.03,
+            y: side / 2.0 + 0.04,
+            heading: 0.4,
+        }],
+        ..walled_box("Floor grid (seed 003)", FLOOR_GRID, side, side)
+    }
+}
+
+/// An empty walled box `width_m` x `height_m` with its lower-left corner at the origin: no
+/// obstacles, lights, targets or starts.
+pub fn walled_box(name: &str, source: &str, width_m: f64, height_m: f64) -> Arena {
+    Arena {
+        name: name.to_string(),
+        source: Path::new(source).to_path_buf(),
         format: crate::arena::ArenaFormat::AsciiGrid,
-        bounds: Aabb::from_corners(Point::new(0.0, 0.0), Point::new(side, side)),
+        bounds: Aabb::from_corners(Point::new(0.0, 0.0), Point::new(width_m, height_m)),
         enclosed: true,
         walls: Vec::new(),
         raster: None,
         beacons: Vec::new(),
         targets: Vec::new(),
         lights: Vec::new(),
-        starts: vec![crate::arena::Pose {
-            x: side / 2.0 + 0.03,
-            y: side / 2.0 + 0.04,
-            heading: 0.4,
-        }],
+        starts: Vec::new(),
         goal: None,
         unit_m: 0.01,
         warnings: Vec::new(),

@@ -126,10 +126,20 @@ pub struct ServeArgs {
     #[arg(long, default_value = "1", value_parser = parse_speed)]
     pub speed: Speed,
     /// Probability of losing a byte, both directions.
-    #[arg(long, default_value_t = 0.0, value_name = "P")]
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "P",
+        allow_negative_numbers = true
+    )]
     pub drop_rate: f64,
     /// Probability of flipping a bit, both directions.
-    #[arg(long, default_value_t = 0.0, value_name = "P")]
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "P",
+        allow_negative_numbers = true
+    )]
     pub flip_rate: f64,
     /// Only fault the station-to-robot direction.
     #[arg(long, conflicts_with = "only_from_robot")]

@@ -455,7 +455,41 @@ pub fn spawn(opts: EmulatorOptions) -> Result<RunningEmulator, SpawnError> {
 /// Reads a link key file: 64 hex digits (surrounding white space ignored). The error names
 /// the file and what is wrong with it.
 pub fn read_key_file(path: &Path) -> Result<[u8; protocol::sign::KEY_LEN], String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read key file {}: {e}", path.display()))?;
+    use std::io::Read;
+    let cannot = |e: std::io::Error| format!("cannot read key file {}: {e}", path.display());
+    // Read a bounded prefix: a key is 64 digits, and `--key-file /dev/zero` must not hang.
+    let mut text = String::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(KEY_FILE_MAX + 1).read_to_string(&mut text))
+        .map_err(cannot)?;
+    if text.len() as u64 > KEY_FILE_MAX {
+        return Err(format!(
+            "key file {}: longer than {KEY_FILE_MAX} bytes; a key is 64 hex digits",
+            path.display()
+        ));
+    }
     protocol::sign::parse_key_hex(&text).map_err(|e| format!("key file {}: {e}", path.display()))
+}
+
+/// Longest key file read, bytes (64 digits with room for white space and line endings).
+const KEY_FILE_MAX: u64 = 4096;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn key_files_are_read_whole_only_when_short() {
+        let dir = std::env::temp_dir();
+        let key = "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff";
+        let ok = dir.join(format!("emu-key-ok-{}", std::process::id()));
+        std::fs::write(&ok, format!("  {key}\n")).unwrap();
+        assert!(read_key_file(&ok).is_ok());
+        let long = dir.join(format!("emu-key-long-{}", std::process::id()));
+        std::fs::write(&long, format!("{key}{}", " ".repeat(5000))).unwrap();
+        let e = read_key_file(&long).unwrap_err();
+        assert!(e.contains("longer than 4096 bytes") && e.contains("emu-key-long"), "{e}");
+        let _ = std::fs::remove_file(ok);
+        let _ = std::fs::remove_file(long);
+    }
 }

@@ -146,6 +146,19 @@ impl ScenarioOptions {
             slip: 0.0,
         }
     }
+
+    /// The simulator's configuration for these options (robot, seed, noise, start, wheels).
+    pub fn sim_config(&self) -> SimConfig {
+        SimConfig {
+            seed: self.seed,
+            noise: self.noise,
+            start: self.start,
+            true_wheel_distance_m: self.true_wheel_distance_m,
+            wheel_bias: self.wheel_bias,
+            slip: self.slip,
+            ..SimConfig::new(self.profile)
+        }
+    }
 }
 
 /// A pose in the report.
@@ -274,16 +287,7 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
         }
     });
     let name = arena.name.clone();
-    let cfg = SimConfig {
-        seed: opts.seed,
-        noise: opts.noise,
-        start: opts.start,
-        true_wheel_distance_m: opts.true_wheel_distance_m,
-        wheel_bias: opts.wheel_bias,
-        slip: opts.slip,
-        ..SimConfig::new(opts.profile)
-    };
-    let mut sim = Sim::new(arena, cfg)?;
+    let mut sim = Sim::new(arena, opts.sim_config())?;
     brief_firmware(&mut sim)?;
     set_arrival(&mut sim, opts.arrival_m, tolerance_m)?;
     let started = Instant::now();

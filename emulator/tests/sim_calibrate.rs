@@ -12,10 +12,8 @@
 //! (as robot-firmware/tests/paper_000_som.rs). Run with `--nocapture` for the table.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use std::path::PathBuf;
-
-use emulator::arena::{Arena, ArenaFormat, Light, Pose};
-use emulator::geometry::{Aabb, Point};
+use emulator::arena::{Arena, Light, Pose};
+use emulator::geometry::Point;
 use emulator::sim::{Sim, SimConfig};
 use protocol::{Command, Mode};
 use robot_firmware::link::Reply;
@@ -29,22 +27,7 @@ fn lamp() -> Point {
 }
 
 fn open_box() -> Arena {
-    Arena {
-        name: "open box".into(),
-        source: PathBuf::from("test"),
-        format: ArenaFormat::AsciiGrid,
-        bounds: Aabb::from_corners(Point::new(0.0, 0.0), Point::new(0.75, 0.6)),
-        enclosed: true,
-        walls: Vec::new(),
-        raster: None,
-        beacons: Vec::new(),
-        targets: Vec::new(),
-        lights: Vec::new(),
-        starts: Vec::new(),
-        goal: None,
-        unit_m: 0.01,
-        warnings: Vec::new(),
-    }
+    emulator::builtin::walled_box("open box", "test", 0.75, 0.6)
 }
 
 /// The robot's centre with the lamp `gap` from its rim, due west of the lamp.

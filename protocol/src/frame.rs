@@ -19,7 +19,9 @@ use crate::msg::{
     Ack, Command, EmuTruth, Event, Heartbeat, Hello, HelloReply, Kind, Log, Message, Nack,
     Telemetry, TransferAck, TransferBegin, TransferChunk,
 };
-use crate::sign::{LinkKey, Signature, MAC_LEN, SIGNATURE_LEN, SIGNED_FLAG, TIMESTAMP_MAX};
+use crate::sign::{
+    LinkKey, Signature, MAC_LEN, SIGNATURE_LEN, SIGNED_FLAG, TIMESTAMP_LEN, TIMESTAMP_MAX,
+};
 
 /// The protocol version carried in every header.
 pub const PROTOCOL_VERSION: u8 = 1;
@@ -197,8 +199,10 @@ pub fn encode_signed(
         .ok_or(EncodeError::PayloadTooLarge)?;
     let n = serialize_payload(msg, body)?;
     let version = PROTOCOL_VERSION | SIGNED_FLAG;
+    let kind = msg.kind() as u8;
     let [s0, s1] = seq.to_le_bytes();
-    raw[..HEADER_LEN].copy_from_slice(&[version, msg.kind() as u8, s0, s1]);
+    // The MAC covers the header, so it goes in before the MAC is taken.
+    raw[..HEADER_LEN].copy_from_slice(&[version, kind, s0, s1]);
     let trailer_at = HEADER_LEN + n;
     let mac_at = trailer_at + SIGNATURE_LEN - MAC_LEN;
     let ts = timestamp.min(TIMESTAMP_MAX).to_le_bytes();
@@ -206,20 +210,12 @@ pub fn encode_signed(
         .get_mut(trailer_at..mac_at)
         .ok_or(EncodeError::PayloadTooLarge)?;
     trailer[0] = link_id;
-    trailer[1..].copy_from_slice(&ts[..6]);
+    trailer[1..].copy_from_slice(&ts[..TIMESTAMP_LEN]);
     let mac = key.mac(raw.get(..mac_at).ok_or(EncodeError::PayloadTooLarge)?);
     raw.get_mut(mac_at..mac_at + MAC_LEN)
         .ok_or(EncodeError::PayloadTooLarge)?
         .copy_from_slice(&mac);
-    let crc_at = mac_at + MAC_LEN;
-    let crc = crc32c(raw.get(..crc_at).ok_or(EncodeError::PayloadTooLarge)?);
-    let end = crc_at + CRC_LEN;
-    raw.get_mut(crc_at..end)
-        .ok_or(EncodeError::PayloadTooLarge)?
-        .copy_from_slice(&crc.to_le_bytes());
-    let n = cobs::try_encode(&raw[..end], out).map_err(|_| EncodeError::OutputTooSmall)?;
-    *out.get_mut(n).ok_or(EncodeError::OutputTooSmall)? = 0;
-    Ok(n + 1)
+    finish_raw(&mut raw, version, kind, seq, n + SIGNATURE_LEN, out)
 }
 
 /// Encodes a frame from raw parts: any version, any kind byte, any payload bytes. For tests,
@@ -352,13 +348,13 @@ pub fn parse_raw(raw: &[u8]) -> Result<Frame<'_>, FrameError> {
         let mut mac = [0u8; MAC_LEN];
         let (link_id, ts_bytes, mac_bytes) = (
             trailer.first().copied().unwrap_or(0),
-            trailer.get(1..1 + 6).unwrap_or(&[]),
-            trailer.get(1 + 6..).unwrap_or(&[]),
+            trailer.get(1..1 + TIMESTAMP_LEN).unwrap_or(&[]),
+            trailer.get(1 + TIMESTAMP_LEN..).unwrap_or(&[]),
         );
-        if ts_bytes.len() != 6 || mac_bytes.len() != MAC_LEN {
+        if ts_bytes.len() != TIMESTAMP_LEN || mac_bytes.len() != MAC_LEN {
             return Err(FrameError::TooShort { len });
         }
-        ts[..6].copy_from_slice(ts_bytes);
+        ts[..TIMESTAMP_LEN].copy_from_slice(ts_bytes);
         mac.copy_from_slice(mac_bytes);
         let sig = Signature {
             link_id,

@@ -586,7 +586,8 @@ impl Core {
             return;
         }
         let silence = now_ms.wrapping_sub(last_rx_ms);
-        if silence > u32::from(self.config.failsafe_ms) {
+        // ">=": the motors must be stopped within failsafe_ms of the last byte, not after it.
+        if silence >= u32::from(self.config.failsafe_ms) {
             self.failsafe = true;
             self.teleop = (0, 0);
             self.push_event(

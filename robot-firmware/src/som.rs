@@ -348,7 +348,7 @@ impl<const M: usize, const B: usize, W: Store> OnlineTrainer<M, B, W> {
             old
         };
         if som.train_step(&chosen, rate, width).is_some() {
-            self.trained += 1;
+            self.trained = self.trained.saturating_add(1);
         }
     }
 
@@ -365,7 +365,7 @@ impl<const M: usize, const B: usize, W: Store> OnlineTrainer<M, B, W> {
             for k in 0..usize::from(self.len) {
                 if let Some(ex) = self.held(k) {
                     if som.train_step(&ex, rate, width).is_some() {
-                        self.trained += 1;
+                        self.trained = self.trained.saturating_add(1);
                     }
                 }
             }

@@ -580,6 +580,9 @@ impl App {
                     protocol::calibration::NO_LIGHT => {
                         "light calibration failed: no light near the robot".into()
                     }
+                    protocol::calibration::NO_DIRECTION => {
+                        "light calibration failed: the first turn gave no light direction".into()
+                    }
                     _ => format!("light calibration failed (code {v})"),
                 },
             ),

@@ -28,7 +28,7 @@
 //!   "weights": [[w0..w5] x 60], "outputs": [60 angles in degrees], ...}` (figures kept too).
 //! - binary, little-endian: magic `"LSOM"`, u16 version 1, u16 neurons, u16 inputs, then per
 //!   neuron `inputs` weights and one output as u16 hundredths (the robot's own storage), then
-//!   a u32 CRC-32C of every byte before it. 60 x 6: 850 bytes.
+//!   a u32 CRC-32C of every byte before it. 60 x 6: 854 bytes.
 //!
 //! What can fail: an unreadable or damaged recording (refused unless `--salvage`), one without
 //! usable frames (says why), bad arguments, an output that cannot be written. The output is
@@ -49,7 +49,7 @@ use crate::record::Recording;
 
 /// seed 000 §6.1 T1: a reading below this means a light is near.
 pub const T1: u16 = 470;
-/// The Khepera's front sensors S0..S5, degrees (seed 000 §4.1), as the firmware's profile.
+/// How many front sensors (S0..S5, seed 000 §4.1) the network reads.
 const FRONT: usize = 6;
 /// Every `HOLD_OUT`-th example is held out for testing.
 pub const HOLD_OUT: usize = 5;
@@ -435,12 +435,8 @@ fn is_json(path: &Path) -> bool {
 
 /// Runs `station calibrate`.
 pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
-    if args.out.is_dir() {
-        bail!(
-            "--out {} is a directory; give a file name",
-            args.out.display()
-        );
-    }
+    // Before the work, and so that the map never replaces the recording it came from.
+    crate::export::check_out(&args.out, &args.recording).context("--out")?;
     let rec = Recording::open(&args.recording)?;
     if let Some(d) = &rec.damage {
         if !args.salvage {

@@ -461,15 +461,42 @@ pub fn run() -> ExitCode {
     match rt.block_on(crate::headless::dispatch(cli)) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("station: {e:#}");
+            eprintln!("station: {}", error_text(&e));
             ExitCode::FAILURE
         }
     }
 }
 
+/// The error and its causes, `: `-separated, leaving out a cause the message before it
+/// already ends with (our file errors say "{path}: {source}" and keep the source as a cause).
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.ends_with(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_error_that_already_quotes_its_cause_prints_it_once() {
+        let read = crate::record::RecordError::Read {
+            path: "x.rec".into(),
+            source: crate::record::ReadError::Truncated { offset: 12 },
+        };
+        let e = anyhow::Error::new(read).context("cannot replay");
+        assert_eq!(
+            error_text(&e),
+            "cannot replay: x.rec: truncated at byte 12: the file ends inside a record (a torn tail)"
+        );
+    }
 
     fn parse(args: &[&str]) -> Result<Cli, clap::Error> {
         Cli::try_parse_from(std::iter::once("station").chain(args.iter().copied()))

@@ -188,7 +188,8 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn check_out(out: &Path, input: &Path) -> anyhow::Result<()> {
+/// Refuses an output that is a directory, lies in a missing directory, or is the input.
+pub(crate) fn check_out(out: &Path, input: &Path) -> anyhow::Result<()> {
     if out.is_dir() {
         bail!("{} is a directory; give a file name", out.display());
     }

@@ -10,8 +10,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
-use emulator::arena::{Arena, ArenaFormat, Light, Pose};
-use emulator::geometry::{Aabb, Point};
+use emulator::arena::{Arena, Light, Pose};
+use emulator::geometry::Point;
 use emulator::sim::{Sim, SimConfig};
 use protocol::{Message, Mode};
 use robot_firmware::KHEPERA;
@@ -38,22 +38,7 @@ fn station(args: &[&str], cwd: &Path) -> Output {
 }
 
 fn open_box() -> Arena {
-    Arena {
-        name: "open box".into(),
-        source: PathBuf::from("test"),
-        format: ArenaFormat::AsciiGrid,
-        bounds: Aabb::from_corners(Point::new(0.0, 0.0), Point::new(0.75, 0.6)),
-        enclosed: true,
-        walls: Vec::new(),
-        raster: None,
-        beacons: Vec::new(),
-        targets: Vec::new(),
-        lights: Vec::new(),
-        starts: Vec::new(),
-        goal: None,
-        unit_m: 0.01,
-        warnings: Vec::new(),
-    }
+    emulator::builtin::walled_box("open box", "test", 0.75, 0.6)
 }
 
 fn spot(gap: f64) -> Point {
@@ -218,6 +203,16 @@ fn bad_recordings_and_arguments_are_refused_with_a_reason_and_no_output() {
     );
     assert!(!o.status.success());
     assert!(!d.join("som.json").exists() && !d.join("som.bin").exists());
+    // The map would replace the recording it is trained from.
+    let before = std::fs::read(d.join("idle.rec")).unwrap();
+    let o = station(&["calibrate", "idle.rec", "--out", "idle.rec"], &d);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--out") && err.contains("is the input"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(d.join("idle.rec")).unwrap(), before);
 }
 
 #[test]

@@ -154,6 +154,13 @@ fn every_malformed_input_is_refused_clearly_without_panic_or_leftovers() {
         if !text.contains(&c.fragment) {
             problems.push(format!("no {:?} in the message", c.fragment));
         }
+        // An error chain that repeats its cause ("x: bad header: x: bad header") reads badly.
+        if text
+            .lines()
+            .any(|l| l.matches(c.fragment.as_str()).count() > 1)
+        {
+            problems.push(format!("{:?} said twice on one line", c.fragment));
+        }
         if !has_location(&c.fragment, &c.location) {
             problems.push(format!("the fragment has no {} position", c.location));
         }

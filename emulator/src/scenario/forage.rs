@@ -102,14 +102,8 @@ pub fn run_forage(arena: Arena, opts: ScenarioOptions) -> Result<ForageReport, S
     }
     let home = site.home;
     let cfg = SimConfig {
-        seed: opts.seed,
-        noise: opts.noise,
-        start: opts.start,
-        true_wheel_distance_m: opts.true_wheel_distance_m,
-        wheel_bias: opts.wheel_bias,
-        slip: opts.slip,
         forage: Some(site.clone()),
-        ..SimConfig::new(opts.profile)
+        ..opts.sim_config()
     };
     let mut sim = Sim::new(arena, cfg)?;
     apply(&mut sim, Command::SetMode(Mode::Forage), "SetMode(Forage)")?;

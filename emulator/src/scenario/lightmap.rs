@@ -38,8 +38,8 @@ use robot_firmware::KHEPERA;
 use serde::Serialize;
 
 use super::ScenarioError;
-use crate::arena::{Arena, ArenaFormat, Light, Pose};
-use crate::geometry::{Aabb, Point};
+use crate::arena::{Arena, Light, Pose};
+use crate::geometry::Point;
 use crate::rng::SimRng;
 use crate::sim::{Sim, SimConfig};
 
@@ -129,22 +129,7 @@ pub struct LightMapReport {
 }
 
 fn open_box() -> Arena {
-    Arena {
-        name: "seed 000 box 75 x 60 cm".into(),
-        source: "builtin".into(),
-        format: ArenaFormat::AsciiGrid,
-        bounds: Aabb::from_corners(Point::new(0.0, 0.0), Point::new(BOX_M.0, BOX_M.1)),
-        enclosed: true,
-        walls: Vec::new(),
-        raster: None,
-        beacons: Vec::new(),
-        targets: Vec::new(),
-        lights: Vec::new(),
-        starts: Vec::new(),
-        goal: None,
-        unit_m: 0.01,
-        warnings: Vec::new(),
-    }
+    crate::builtin::walled_box("seed 000 box 75 x 60 cm", "builtin", BOX_M.0, BOX_M.1)
 }
 
 fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), ScenarioError> {

@@ -62,6 +62,9 @@ const FRONT: usize = 6;
 const RESCALE: (f32, f32) = (50.0, 500.0);
 const TURN: f32 = 2.0 * core::f32::consts::PI;
 const HALF_PI: f32 = core::f32::consts::FRAC_PI_2;
+/// Largest drift per turn believed, radians: a quarter turn, ten times the 2.5 % wheel-distance
+/// error of seed 000 §3.
+const MAX_DRIFT: f32 = HALF_PI;
 
 /// Where a calibration is.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -255,7 +258,9 @@ impl LightCalibration {
             let alpha = 2.0 * (2.0 * k - 1.0) / (k * (k + 1.0));
             let beta = 6.0 / (k * (k + 1.0));
             self.light_dir = wrap_angle(self.light_dir + alpha * r);
-            self.drift += beta * r;
+            // Bounded so that `scale` stays finite and positive: a drift of a whole turn per
+            // turn (wild readings) would stop the sweeps from ever completing a circle.
+            self.drift = (self.drift + beta * r).clamp(-MAX_DRIFT, MAX_DRIFT);
         }
         self.light_dir = wrap_angle(self.light_dir + self.drift);
     }
@@ -430,6 +435,17 @@ mod tests {
             flat.add(-(k as f32) * dh, dh, 1.0, &[500; FRONT], &angles);
         }
         assert_eq!(flat.direction(&angles, 1.0), None);
+    }
+
+    #[test]
+    fn wild_turn_measurements_keep_the_turn_ratio_finite_and_positive() {
+        let mut cal = LightCalibration::new(1);
+        for k in 0..30 {
+            // Each turn's light half a turn from the prediction, always the same way.
+            cal.measured(cal.light_dir + if k % 2 == 0 { 3.1 } else { 3.0 });
+            let s = cal.scale();
+            assert!(s.is_finite() && s > 0.0, "turn {k}: scale {s}");
+        }
     }
 
     #[test]

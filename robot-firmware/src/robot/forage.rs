@@ -18,11 +18,11 @@
 //! - Return: drift to the home point by odometry.
 //! - Drop: arm down, open the grip, `ObjectDelivered`, arm up, search again.
 //!
-//! Departures from the paper, each because the emulated robot has no camera: the home base
-//! is where foraging starts (the paper finds it first by its dead-end IR pattern and a visual
-//! mark), and there is no global pose update from the three landmarks at home (§6.2 needs the
-//! K213 camera; `landmarks::Triple` implements the resection for a robot that has one). The
-//! pose error on return is therefore plain odometry's, and the emulator reports it.
+//! Departure from the paper: the home base is where foraging starts (the paper finds it first
+//! by its dead-end IR pattern and a visual mark). The global pose updates from the three
+//! landmarks (§6.2) need the K213 camera (`caps::CAMERA`): with one, the robot maps the
+//! landmarks from home with a turn on the spot (`Map`) and resects its pose from them after
+//! each grasp (`Fix`) and at home (`Locate`); without one, the way home is plain odometry.
 //!
 //! Invariants: fixed-size state (`MAX_SOURCES` remembered sources); each gripper step has a
 //! timeout, so a gripper that never reports (or is absent) cannot hang the robot; the motors
@@ -140,7 +140,7 @@ pub struct Forage {
     grasp_failed: bool,
     /// The three landmarks, once mapped.
     pub triple: Option<Triple>,
-    /// The scan in progress (Map, Locate).
+    /// The scan in progress (Map, Fix, Locate).
     pub scan: Option<LandmarkScan>,
     /// Scans at home this trip.
     locates: u8,

@@ -6,8 +6,8 @@
 //! each cycle and the camera line when asked (`take_frame`), and drives the motor command
 //! returned. Two uses: at the start
 //! of foraging the three tower landmarks are mapped from the (known) start pose (§7's
-//! initialisation phase, Eqs 30-31); at the home base their bearings give the global position
-//! and heading by resection (`landmarks::Triple`, Eqs 33-44).
+//! initialisation phase, Eqs 30-31); at a source after a grasp and at the home base their
+//! bearings give the global position and heading by resection (`landmarks::Triple`, Eqs 33-44).
 //!
 //! Choices the paper leaves open, as documented parameters: 15° steps, a line read after
 //! 6 cycles at rest (the K213 gives at most 2 frames per second), landmarks taken within 12°

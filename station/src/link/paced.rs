@@ -5,7 +5,7 @@
 //! millisecond; an event-driven reader wakes for each handful (about 340 reads and 560 wake-ups
 //! a second at 50 Hz telemetry), and those wake-ups were most of an idle TUI's CPU. Here, while
 //! bytes keep arriving, the port is not watched at all: it is read on the `pace` grid (every
-//! 25 ms, with the TUI's other timers, in the same wake-up). When a look finds nothing, the
+//! 32 ms, with the TUI's other timers, in the same wake-up). When a look finds nothing, the
 //! port is watched again (epoll) so that the first byte after a quiet spell is read at once:
 //! a quiet link costs no wake-ups, a busy one one per slot. Writes are non-blocking; a full
 //! output buffer is retried every `WRITE_RETRY` (the link task's write timeout notices a

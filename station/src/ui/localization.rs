@@ -184,27 +184,12 @@ pub fn split(app: &App, area: Rect) -> (Rect, Option<Rect>) {
     if !app.localization.active() {
         return (area, None);
     }
-    let [x0, y0, x1, y1] = app
+    let bounds = app
         .map
         .arena
         .as_ref()
         .map_or([0.0, 0.0, 2.0, 2.0], |a| a.bounds);
-    let (xs, ys) = (x1 - x0 + 0.2, y1 - y0 + 0.2);
-    let inner_h = f64::from(area.height.saturating_sub(2));
-    let need = (2.0 * inner_h * xs / ys.max(1e-9))
-        .ceil()
-        .min(f64::from(u16::MAX)) as u16
-        + 2;
-    let spare = area.width.saturating_sub(need);
-    if spare < MIN_WIDTH {
-        return (area, None);
-    }
-    let [map, side] = Layout::horizontal([
-        Constraint::Fill(1),
-        Constraint::Length(spare.min(MAX_WIDTH)),
-    ])
-    .areas(area);
-    (map, Some(side))
+    super::map::split_beside(area, bounds, MIN_WIDTH, MAX_WIDTH)
 }
 
 /// The panel: errors over time (with the emulator's truth) and the last line event.

@@ -7,7 +7,7 @@
 //! by name (`MapState::hidden`). `view_bounds` fits the arena (or the tracks) into the panel
 //! with square cells, and `to_world` inverts it for mouse clicks.
 
-use ratatui::layout::Rect;
+use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Stylize};
 use ratatui::symbols::Marker;
 use ratatui::text::Line as TLine;
@@ -161,6 +161,36 @@ pub fn map_area(app: &App, area: Rect) -> Rect {
         (a, Some(_)) => a,
         (a, None) => super::plan_panel::split(app, a).0,
     }
+}
+
+/// Splits a map panel `area` into the map, as wide as `bounds` ([x0, y0, x1, y1], metres,
+/// with the view's margin) needs at square braille dots, and a side panel of the columns left
+/// over (at most `max_width`); no side panel when fewer than `min_width` are left.
+pub fn split_beside(
+    area: Rect,
+    bounds: [f64; 4],
+    min_width: u16,
+    max_width: u16,
+) -> (Rect, Option<Rect>) {
+    let [x0, y0, x1, y1] = bounds;
+    let (xs, ys) = (x1 - x0 + 2.0 * MARGIN_M, y1 - y0 + 2.0 * MARGIN_M);
+    // Braille dots are square when a cell is twice as tall as wide: 2 columns per row of span.
+    let inner_h = f64::from(area.height.saturating_sub(2));
+    // A long thin arena (from a file) asks for more columns than a u16 holds: saturate.
+    let need = ((2.0 * inner_h * xs / ys.max(1e-9))
+        .ceil()
+        .min(f64::from(u16::MAX)) as u16)
+        .saturating_add(2);
+    let spare = area.width.saturating_sub(need);
+    if spare < min_width {
+        return (area, None);
+    }
+    let [map, side] = Layout::horizontal([
+        Constraint::Fill(1),
+        Constraint::Length(spare.min(max_width)),
+    ])
+    .areas(area);
+    (map, Some(side))
 }
 
 /// The world rectangle shown in `inner` (x bounds, y bounds), with square braille dots.

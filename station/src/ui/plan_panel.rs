@@ -7,7 +7,7 @@
 //! lands where the map is drawn. Timings are left to the log and `station plan` (they would
 //! make every frame different). Cannot fail: a short panel clips its list.
 
-use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::layout::Rect;
 use ratatui::style::{Color, Style, Stylize};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Paragraph};
@@ -20,32 +20,14 @@ use crate::app::App;
 const MIN_WIDTH: u16 = 30;
 /// Widest plan panel.
 const MAX_WIDTH: u16 = 46;
-/// Margin the map view adds around the arena, metres (as `map::view_bounds`).
-const MARGIN_M: f64 = 0.1;
 
 /// The map's part of `area` and the plan panel's, if there is room for one.
 pub fn split(app: &App, area: Rect) -> (Rect, Option<Rect>) {
     let Some(m) = app.map.plan.map() else {
         return (area, None);
     };
-    let [x0, y0, x1, y1] = app.map.arena.as_ref().map_or(m.bounds(), |a| a.bounds);
-    let (xs, ys) = (x1 - x0 + 2.0 * MARGIN_M, y1 - y0 + 2.0 * MARGIN_M);
-    // Braille dots are square when a cell is twice as tall as wide: 2 columns per row of span.
-    let inner_h = f64::from(area.height.saturating_sub(2));
-    let need = (2.0 * inner_h * xs / ys.max(1e-9))
-        .ceil()
-        .min(f64::from(u16::MAX)) as u16
-        + 2;
-    let spare = area.width.saturating_sub(need);
-    if spare < MIN_WIDTH {
-        return (area, None);
-    }
-    let [map, side] = Layout::horizontal([
-        Constraint::Fill(1),
-        Constraint::Length(spare.min(MAX_WIDTH)),
-    ])
-    .areas(area);
-    (map, Some(side))
+    let bounds = app.map.arena.as_ref().map_or(m.bounds(), |a| a.bounds);
+    super::map::split_beside(area, bounds, MIN_WIDTH, MAX_WIDTH)
 }
 
 fn row(label: &str, value: String) -> Line<'static> {
