@@ -488,7 +488,10 @@ mod tests {
         let long = dir.join(format!("emu-key-long-{}", std::process::id()));
         std::fs::write(&long, format!("{key}{}", " ".repeat(5000))).unwrap();
         let e = read_key_file(&long).unwrap_err();
-        assert!(e.contains("longer than 4096 bytes") && e.contains("emu-key-long"), "{e}");
+        assert!(
+            e.contains("longer than 4096 bytes") && e.contains("emu-key-long"),
+            "{e}"
+        );
         let _ = std::fs::remove_file(ok);
         let _ = std::fs::remove_file(long);
     }

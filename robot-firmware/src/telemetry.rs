@@ -26,7 +26,10 @@ pub fn build(core: &Core, now_ms: u32) -> Telemetry {
         (core.arrived, flags::ARRIVED),
         (core.objects.has_map(), flags::HAS_MAP),
         (core.objects.has_plan(), flags::HAS_PLAN),
-        (core.sensors.gripper.is_some_and(|g| g.object), flags::CARRYING),
+        (
+            core.sensors.gripper.is_some_and(|g| g.object),
+            flags::CARRYING,
+        ),
     ] {
         if on {
             f |= bit;

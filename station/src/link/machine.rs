@@ -26,11 +26,11 @@ use protocol::{
     Message, NackReason, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION,
 };
 
-use super::clock::RobotClock;
 use super::api::{
     CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, PeerInfo, TransferIn,
     TransferOut,
 };
+use super::clock::RobotClock;
 use super::commands::{CommandTable, InFlight};
 use super::stats::{LinkStats, StatsCollector};
 
