@@ -192,6 +192,9 @@ pub mod calibration {
     pub const NO_LIGHT: i32 = -1;
     /// The first turn did not give the light's direction (readings without a bright side).
     pub const NO_DIRECTION: i32 = -2;
+    /// A turn took more than 4 times its nominal time (wheels blocked, robot wedged): the
+    /// calibration gave up.
+    pub const STALLED: i32 = -3;
 }
 
 /// Bits of `BehaviourOut::active` (seed 000 §4).

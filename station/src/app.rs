@@ -583,6 +583,10 @@ impl App {
                     protocol::calibration::NO_DIRECTION => {
                         "light calibration failed: the first turn gave no light direction".into()
                     }
+                    protocol::calibration::STALLED => {
+                        "light calibration aborted: the robot stalled mid-turn (wheels blocked?)"
+                            .into()
+                    }
                     _ => format!("light calibration failed (code {v})"),
                 },
             ),

@@ -185,3 +185,17 @@ fn a_click_on_the_map_sends_go_to_in_millimetres() {
     );
     assert_eq!(app.map.goal, Some((1.25, -0.5)));
 }
+
+#[test]
+fn a_stalled_light_calibration_is_logged_as_a_stall_not_an_unknown_code() {
+    let mut app = connected_app();
+    app.update(Action::Link(LinkEvent::Robot(protocol::Event {
+        code: protocol::EventCode::LightCalibrated,
+        value: protocol::calibration::STALLED,
+    })));
+    let line = app.log.window(1).next().map(|l| l.text.clone());
+    assert!(
+        line.as_deref().is_some_and(|t| t.contains("stalled")),
+        "{line:?}"
+    );
+}

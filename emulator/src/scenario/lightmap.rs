@@ -31,7 +31,9 @@
 //! ([`ScenarioError`]). The run itself cannot fail.
 
 use protocol::{Command, Mode, PointMm};
-use robot_firmware::landmarks::{triangulate, BearingFix, LightMap, LightMapParams, Sighting};
+use robot_firmware::landmarks::{
+    triangulate, BearingFix, LandmarkError, LightMap, LightMapParams, Sighting,
+};
 use robot_firmware::link::Reply;
 use robot_firmware::odometry::{wrap_angle, Point as FwPoint};
 use robot_firmware::KHEPERA;
@@ -67,6 +69,10 @@ const CALIBRATE_MS: u64 = 600_000;
 const DETOUR_M: f32 = 0.08;
 /// Trips go at least this far from the stored source, metres.
 const TRIP_MIN_M: f64 = 0.30;
+/// Visits in a row whose two fixes do not triangulate (parallel bearings) before the run
+/// gives up: each retry starts from where the last ended, so a geometry that keeps failing
+/// (a robot that cannot get off the bearing line) would otherwise retry forever.
+const MAX_TRIANGULATION_FAILURES: u32 = 5;
 
 /// How the light-map run is set up.
 #[derive(Clone, Debug, PartialEq)]
@@ -119,7 +125,8 @@ pub struct LightMapReport {
     /// Recognitions before the source was lost (or the limit).
     pub recognitions: u32,
     /// Why the run ended: `lost` (a visit registered a second source), `not_found` (a trip
-    /// back found no light), `limit`, or `timeout`.
+    /// back found no light), `limit`, `timeout`, or `triangulation_failed`
+    /// (`MAX_TRIANGULATION_FAILURES` visits in a row whose fixes did not triangulate).
     pub ended: &'static str,
     /// The calibration's training examples.
     pub calibration_examples: u32,
@@ -219,8 +226,18 @@ fn seek_fix(sim: &mut Sim) -> Result<Option<BearingFix>, ScenarioError> {
     }))
 }
 
+/// Two bearing fixes to the source's position (the firmware's `triangulate`; a test swaps it).
+type Triangulate = fn(BearingFix, BearingFix) -> Result<FwPoint, LandmarkError>;
+
 /// Runs the §6.1 light-map experiment once.
 pub fn run_light_map(opts: &LightMapOptions) -> Result<LightMapReport, ScenarioError> {
+    run_with(opts, triangulate)
+}
+
+fn run_with(
+    opts: &LightMapOptions,
+    triangulate: Triangulate,
+) -> Result<LightMapReport, ScenarioError> {
     let r = f64::from(KHEPERA.body_diameter_m) / 2.0;
     let lamp = Point::new(LAMP_M.0, LAMP_M.1);
     let cfg = SimConfig {
@@ -262,6 +279,7 @@ pub fn run_light_map(opts: &LightMapOptions) -> Result<LightMapReport, ScenarioE
     let mut map = LightMap::<4>::new(LightMapParams::default());
     let mut visits = Vec::new();
     let mut recognitions = 0;
+    let mut failed_triangulations = 0;
     let ended = loop {
         // 2. A visit.
         let Some(fix1) = seek_fix(&mut sim)? else {
@@ -280,9 +298,14 @@ pub fn run_light_map(opts: &LightMapOptions) -> Result<LightMapReport, ScenarioE
         };
         let pose_error_m = sim.pose_error_m();
         let Ok(measured) = triangulate(fix1, fix2) else {
-            // Parallel bearings: try the visit again from here.
+            // Parallel bearings: try the visit again from here, a bounded number of times.
+            failed_triangulations += 1;
+            if failed_triangulations >= MAX_TRIANGULATION_FAILURES {
+                break "triangulation_failed";
+            }
             continue;
         };
+        failed_triangulations = 0;
         let stored = map.iter().next().map(|(_, p)| p);
         let manhattan_m = stored.map_or(0.0, |p| {
             f64::from(robot_firmware::landmarks::manhattan(p, measured))
@@ -352,4 +375,18 @@ pub fn run_light_map(opts: &LightMapOptions) -> Result<LightMapReport, ScenarioE
         distance_m: sim.distance_m() - d0,
         visits,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_run_whose_fixes_never_triangulate_ends_with_a_failure_instead_of_retrying_forever() {
+        let opts = LightMapOptions::new(1, true);
+        let r = run_with(&opts, |_, _| Err(LandmarkError::Parallel)).unwrap();
+        assert_eq!(r.ended, "triangulation_failed");
+        assert!(r.visits.is_empty());
+        assert_eq!(r.recognitions, 0);
+    }
 }

@@ -32,8 +32,10 @@
 //! Memory: about 1 KB: the 60 x 7 network in hundredths (840 bytes), 6 held examples, one
 //! turn's sums; no heap.
 //! What can fail: no light below T1 in the first turn (`calibration::NO_LIGHT`), or a first
-//! turn whose sums point nowhere (`calibration::NO_DIRECTION`): the robot stops, reports the
-//! code and keeps no map. Starting a calibration discards the previous map.
+//! turn whose sums point nowhere (`calibration::NO_DIRECTION`), or a turn that takes more
+//! than `STALL_FACTOR` times its nominal time (`calibration::STALLED`: wheels blocked, a
+//! robot wedged against something, so the sweep would never end): the robot stops, reports
+//! the code and keeps no map. Starting a calibration discards the previous map.
 
 use protocol::{calibration, EventCode, Mode};
 
@@ -62,6 +64,12 @@ const FRONT: usize = 6;
 const RESCALE: (f32, f32) = (50.0, 500.0);
 const TURN: f32 = 2.0 * core::f32::consts::PI;
 const HALF_PI: f32 = core::f32::consts::FRAC_PI_2;
+/// A turn (a sweep, or the wait for the light behind) taking longer than this many times its
+/// nominal time at `TURN_UNITS` is a stall: 4, well above the few per cent a wheel bias or a
+/// wheel-distance error slows a turn by.
+const STALL_FACTOR: f32 = 4.0;
+/// Stall limit when the profile's motor or wheel figures give no turn time, ms.
+const STALL_FALLBACK_MS: u32 = 120_000;
 /// Largest drift per turn believed, radians: a quarter turn, ten times the 2.5 % wheel-distance
 /// error of seed 000 §3.
 const MAX_DRIFT: f32 = HALF_PI;
@@ -181,6 +189,8 @@ pub struct LightCalibration {
     rng: XorShift32,
     /// When the last `LightBearing` went out (0: never; at most one report is lost).
     last_report_ms: u32,
+    /// When the turn under way (a sweep, or the wait for the light behind) began, ms.
+    turn_start_ms: u32,
 }
 
 impl LightCalibration {
@@ -199,6 +209,7 @@ impl LightCalibration {
             drift_turns: 0,
             rng,
             last_report_ms: 0,
+            turn_start_ms: 0,
         }
     }
 
@@ -230,8 +241,8 @@ impl LightCalibration {
         self.phase = CalPhase::Off;
     }
 
-    /// Starts over: a fresh random network, the align turn next.
-    fn start(&mut self) {
+    /// Starts over at `now_ms`: a fresh random network, the align turn next.
+    fn start(&mut self, now_ms: u32) {
         self.som = LightSom::random(&mut self.rng, RESCALE, (0.0, 180.0));
         self.trained = false;
         self.phase = CalPhase::Align;
@@ -240,6 +251,7 @@ impl LightCalibration {
         self.prev_heading = f32::NAN;
         self.drift = 0.0;
         self.drift_turns = 0;
+        self.turn_start_ms = now_ms;
     }
 
     /// A turn measured the light at `d` (odometry frame): a straight-line fit of direction
@@ -298,7 +310,21 @@ pub fn inputs(front: &[u16; FRONT]) -> [f32; FRONT] {
 impl Core {
     /// `SetMode(CalibrateLight)`, after `check_mode`: begins the align turn.
     pub(super) fn start_light_calibration(&mut self) {
-        self.light_cal.start();
+        self.light_cal.start(self.cycle_ms);
+    }
+
+    /// The longest a turn may take before it counts as stalled, ms: `STALL_FACTOR` times a
+    /// full turn on the spot at `TURN_UNITS` per wheel.
+    fn calibration_stall_ms(&self) -> u32 {
+        let p = &self.profile;
+        let speed_m_s = f32::from(TURN_UNITS) * p.motor_unit_mm_s / 1000.0;
+        let turn_ms = TURN * (p.wheel_distance_m / 2.0) / speed_m_s * 1000.0;
+        let limit = STALL_FACTOR * turn_ms;
+        if limit.is_finite() && limit > 0.0 && limit < u32::MAX as f32 {
+            limit as u32
+        } else {
+            STALL_FALLBACK_MS
+        }
     }
 
     /// The angle of a light from the heading, radians counter-clockwise, when the light
@@ -313,6 +339,10 @@ impl Core {
         let front = front(&self.sensors.ambient);
         let angles = self.profile.ir.angle_rad;
         let angles = angles.get(..FRONT).unwrap_or(&[]);
+        let now = self.cycle_ms;
+        if now.wrapping_sub(self.light_cal.turn_start_ms) > self.calibration_stall_ms() {
+            return self.end_calibration(calibration::STALLED);
+        }
         let cal = &mut self.light_cal;
         let dh = if cal.prev_heading.is_nan() {
             0.0
@@ -336,12 +366,16 @@ impl Core {
             // side (its centroid) or the labelled half-turn between two turns.
             return MotorCommand::new(TURN_UNITS, -TURN_UNITS);
         }
+        if !cal.sweep.started() {
+            cal.turn_start_ms = now;
+        }
         let scale = cal.scale();
         cal.sweep.add(heading, dh * scale, scale, &front, angles);
         if cal.sweep.turned < TURN {
             return MotorCommand::new(TURN_UNITS, -TURN_UNITS);
         }
         let sweep = core::mem::replace(&mut cal.sweep, Sweep::new());
+        cal.turn_start_ms = now;
         let direction = sweep.direction(angles, scale);
         match cal.phase {
             CalPhase::Align if sweep.brightest >= T1 => {
@@ -446,6 +480,52 @@ mod tests {
             let s = cal.scale();
             assert!(s.is_finite() && s > 0.0, "turn {k}: scale {s}");
         }
+    }
+
+    #[test]
+    fn a_robot_that_cannot_turn_gives_up_the_calibration_as_stalled() {
+        use crate::scripted::ScriptedHal;
+        use crate::{odometry::Pose, Robot, RobotOptions, KHEPERA};
+        use protocol::{Command, Event};
+
+        let mut robot = Robot::new(RobotOptions {
+            profile: &KHEPERA,
+            seed: 1,
+            start: Pose::new(0.5, 0.5, 0.0),
+            emulated: false,
+            firmware_version: "test",
+        });
+        // Wheels blocked: the encoders never move whatever the motors are told.
+        let mut hal = ScriptedHal {
+            encoders: Some([0, 0]),
+            ambient: [300, 250, 200, 210, 260, 320, 500, 500],
+            ..ScriptedHal::default()
+        };
+        let core = &mut robot.core;
+        let _ = core.apply(Command::SetMode(Mode::CalibrateLight), 0);
+        assert_eq!(core.mode, Mode::CalibrateLight);
+        let stall_ms = u64::from(core.calibration_stall_ms());
+        let mut ended = None;
+        // Two nominal turn limits of 80 ms cycles: without a bound the robot turns forever.
+        for k in 1..=(2 * stall_ms / 80) {
+            hal.now_us = k * 80_000;
+            let now_us = hal.now_us;
+            core.control_cycle(&mut hal, now_us);
+            while let Some(Event { code, value }) = core.events.pop_front() {
+                if code == EventCode::LightCalibrated {
+                    ended = Some((value, k * 80));
+                }
+            }
+            if ended.is_some() {
+                break;
+            }
+        }
+        let (value, at_ms) = ended.expect("the calibration never ended");
+        assert_eq!(value, calibration::STALLED);
+        assert!(at_ms > stall_ms, "gave up at {at_ms} ms, before the limit");
+        assert_eq!(core.mode, Mode::Idle);
+        assert_eq!(core.motor, MotorCommand::STOP);
+        assert!(!core.light_cal.trained);
     }
 
     #[test]

@@ -25,7 +25,9 @@
 //! each grasp (`Fix`) and at home (`Locate`); without one, the way home is plain odometry.
 //!
 //! Invariants: fixed-size state (`MAX_SOURCES` remembered sources); each gripper step has a
-//! timeout, so a gripper that never reports (or is absent) cannot hang the robot; the motors
+//! timeout, so a gripper that never reports (or is absent) cannot hang the robot; a landmark
+//! scan whose turn stalls (`ScanStep::Stalled`) ends as one that saw nothing, so a robot that
+//! cannot turn goes on as after a failed fix instead of scanning forever; the motors
 //! are stopped whenever the gripper moves. Never a panic.
 
 use protocol::{EventCode, Mode, NackReason};
@@ -350,12 +352,19 @@ impl Core {
             self.forage_phase(ForagePhase::Search);
             return MotorCommand::STOP;
         };
-        match scan.step(heading, &params) {
+        let stalled = match scan.step(heading, &params) {
             ScanStep::Drive(cmd) => return cmd,
             ScanStep::WantFrame => return MotorCommand::STOP,
-            ScanStep::Done => {}
-        }
-        let seen = *scan;
+            ScanStep::Done => false,
+            ScanStep::Stalled => true,
+        };
+        // A stalled scan saw part of a turn at best: treated as one that saw no landmarks, so
+        // the phase goes on as after a failed fix (no map, no pose update).
+        let seen = if stalled {
+            LandmarkScan::new(heading)
+        } else {
+            *scan
+        };
         let here = self.pose();
         if self.forage.phase == ForagePhase::Map {
             self.forage.triple = scan::map_triple(here.point(), seen.sightings());
@@ -538,6 +547,44 @@ impl Core {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_map_scan_on_a_robot_that_cannot_turn_gives_up_and_searches() {
+        use crate::scripted::ScriptedHal;
+        use crate::{Robot, RobotOptions, KHEPERA};
+        use protocol::Command;
+
+        let mut robot = Robot::new(RobotOptions {
+            profile: &KHEPERA,
+            seed: 1,
+            start: Pose::new(0.5, 0.5, 0.0),
+            emulated: false,
+            firmware_version: "test",
+        });
+        // Wheels blocked; a camera that sees a plain wall.
+        let mut hal = ScriptedHal {
+            encoders: Some([0, 0]),
+            ambient: [500; 8],
+            gripper: Some(GripperState::default()),
+            camera: Some([180; CAMERA_PIXELS]),
+            ..ScriptedHal::default()
+        };
+        let core = &mut robot.core;
+        let _ = core.apply(Command::SetMode(Mode::Forage), 0);
+        assert_eq!(core.forage.phase, ForagePhase::Map);
+        // A full scan takes about 300 cycles; without a bound this one never ends.
+        for k in 1..=2_000u64 {
+            hal.now_us = k * 80_000;
+            let now_us = hal.now_us;
+            core.control_cycle(&mut hal, now_us);
+            if core.forage.phase != ForagePhase::Map {
+                break;
+            }
+        }
+        assert_eq!(core.forage.phase, ForagePhase::Search);
+        assert_eq!(core.forage.triple, None);
+        assert_eq!(core.mode, Mode::Forage);
+    }
 
     #[test]
     fn remembered_sources_are_recognised_nearby_and_the_oldest_goes_when_full() {

@@ -17,7 +17,9 @@
 //! width and minimum pixel; geometry is enough for the emulated camera).
 //!
 //! Invariants: fixed size (at most `MAX_SIGHTINGS` sightings); a scan ends after one full
-//! turn whatever it sees. Never a panic.
+//! turn whatever it sees, or as `Stalled` when one step's turn takes more than
+//! `ScanParams::stall_cycles` (a robot wedged so it cannot turn would otherwise scan
+//! forever). Never a panic.
 
 use crate::hal::{MotorCommand, CAMERA_PIXELS};
 use crate::landmarks::{Camera, Triple};
@@ -44,6 +46,9 @@ pub struct ScanParams {
     pub tower_m: f32,
     /// Two sightings closer than this in bearing are the same landmark, radians: 5°.
     pub same_rad: f32,
+    /// A step still turning after this many cycles is a stall and ends the scan: 25 (2 s,
+    /// more than 4 times the 0.43 s a 15° step takes at 35°/s).
+    pub stall_cycles: u16,
 }
 
 impl Default for ScanParams {
@@ -57,6 +62,7 @@ impl Default for ScanParams {
             edge_threshold: 20,
             tower_m: 0.048,
             same_rad: 5.0 * deg,
+            stall_cycles: 25,
         }
     }
 }
@@ -74,7 +80,8 @@ pub struct Sighting {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Phase {
-    Turning,
+    /// Turning to the next look; cycles spent so far.
+    Turning(u16),
     Settling(u8),
     /// Waiting for the camera line (`take_frame`).
     Looking,
@@ -91,6 +98,9 @@ pub enum ScanStep {
     WantFrame,
     /// One full turn done.
     Done,
+    /// A step did not finish turning in `ScanParams::stall_cycles`: the scan is given up
+    /// (the robot cannot turn); its sightings are not a full turn's and should not be used.
+    Stalled,
 }
 
 /// One scan in progress.
@@ -134,11 +144,15 @@ impl LandmarkScan {
         self.turned += libm::fabsf(d);
         self.step_turned += libm::fabsf(d);
         match self.phase {
-            Phase::Turning => {
+            Phase::Turning(n) => {
                 if self.step_turned >= p.step_rad {
                     self.phase = Phase::Settling(0);
                     return ScanStep::Drive(MotorCommand::STOP);
                 }
+                if n >= p.stall_cycles {
+                    return ScanStep::Stalled;
+                }
+                self.phase = Phase::Turning(n.saturating_add(1));
                 let u = p.turn_units;
                 ScanStep::Drive(MotorCommand::new(-u, u))
             }
@@ -180,7 +194,7 @@ impl LandmarkScan {
         if self.turned >= 2.0 * core::f32::consts::PI {
             return ScanStep::Done;
         }
-        self.phase = Phase::Turning;
+        self.phase = Phase::Turning(0);
         self.step_turned = 0.0;
         ScanStep::Drive(MotorCommand::STOP)
     }
@@ -326,6 +340,29 @@ mod tests {
                 width: 2.0
             }
         );
+    }
+
+    #[test]
+    fn a_scan_whose_turn_makes_no_progress_gives_up_and_a_turning_one_finishes() {
+        let p = ScanParams::default();
+        let run = |turn_rate: f32| {
+            let mut heading = 0.0f32;
+            let mut s = LandmarkScan::new(heading);
+            for cycle in 0..10_000u32 {
+                match s.step(heading, &p) {
+                    ScanStep::Drive(cmd) if cmd != MotorCommand::STOP => heading += turn_rate,
+                    ScanStep::Drive(_) => {}
+                    ScanStep::WantFrame => s.take_frame(heading, None, &p),
+                    end => return (end, cycle),
+                }
+            }
+            (ScanStep::Drive(MotorCommand::STOP), u32::MAX)
+        };
+        // About 2.8° a cycle: a Khepera at 2 units, 80 ms cycles.
+        assert_eq!(run(0.049).0, ScanStep::Done);
+        let (end, cycles) = run(0.0);
+        assert_eq!(end, ScanStep::Stalled);
+        assert!(cycles < 100, "gave up after {cycles} cycles");
     }
 
     #[test]
