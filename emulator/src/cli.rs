@@ -176,9 +176,10 @@ pub struct RunArgs {
     /// Goal `X,Y` in metres for go-to (default: the arena's goal or target).
     #[arg(long, value_name = "X,Y", value_parser = parse_point)]
     pub goal: Option<[f64; 2]>,
-    /// Simulated seconds before giving up.
-    #[arg(long, default_value_t = 300.0)]
-    pub timeout: f64,
+    /// Simulated seconds before giving up [default: 300; line-correct: 1.5 x the survey's
+    /// time at 0.1 m/s, e.g. 600 s for 40 m].
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub timeout: Option<f64>,
     /// Print the report as one JSON object (otherwise a readable summary).
     #[arg(long)]
     pub json: bool,
@@ -359,15 +360,19 @@ impl RunArgs {
         }
     }
 
+    /// `--timeout`, or the task's `default`; refused unless finite and positive.
+    fn timeout_s(&self, default: f64) -> Result<f64, String> {
+        match self.timeout {
+            None => Ok(default),
+            Some(t) if t.is_finite() && t > 0.0 => Ok(t),
+            Some(t) => Err(format!("--timeout {t}: must be positive seconds")),
+        }
+    }
+
     /// The scenario these arguments describe.
     pub fn options(&self) -> Result<ScenarioOptions, String> {
         self.world.check()?;
-        if !(self.timeout.is_finite() && self.timeout > 0.0) {
-            return Err(format!(
-                "--timeout {}: must be positive seconds",
-                self.timeout
-            ));
-        }
+        let timeout_s = self.timeout_s(DEFAULT_TIMEOUT_S)?;
         let task = match self.task {
             TaskArg::GoTo => Task::GoTo(self.goal.map(|[x, y]| GoalPoint { x_m: x, y_m: y })),
             TaskArg::ReachBeacon | TaskArg::ExploreThenPlan if self.goal.is_some() => {
@@ -395,7 +400,7 @@ impl RunArgs {
         };
         let mut o = ScenarioOptions::new(profile, task);
         o.seed = self.world.seed;
-        o.timeout_s = self.timeout;
+        o.timeout_s = timeout_s;
         o.noise = self.world.noise()?;
         o.start = self.world.start_pose();
         o.true_wheel_distance_m = self.world.true_wheel_distance;
@@ -417,17 +422,12 @@ impl RunArgs {
                 self.distance
             ));
         }
-        if !(self.timeout.is_finite() && self.timeout > 0.0) {
-            return Err(format!(
-                "--timeout {}: must be positive seconds",
-                self.timeout
-            ));
-        }
+        // A 40 m survey at 0.1 m/s takes 400 s: the go-to default (300 s) would cut it.
+        let timeout_s = self.timeout_s(self.distance / 0.1 * 1.5)?;
         let mut o = crate::line_correct::LineCorrectOptions::new(self.world.profile.profile());
         o.seed = self.world.seed;
         o.distance_m = self.distance;
-        // A 40 m survey at 0.1 m/s takes 400 s: the go-to default (300 s) would cut it.
-        o.timeout_s = self.timeout.max(self.distance / 0.1 * 1.5);
+        o.timeout_s = timeout_s;
         o.noise = self.world.noise()?;
         o.start = self.world.start_pose();
         if let Some(g) = self.world.floor_grid {
@@ -436,6 +436,9 @@ impl RunArgs {
         Ok(o)
     }
 }
+
+/// Simulated seconds a scenario runs before giving up, unless `--timeout` says.
+const DEFAULT_TIMEOUT_S: f64 = 300.0;
 
 fn numbers(s: &str, what: &str, min: usize, max: usize) -> Result<Vec<f64>, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();

@@ -35,7 +35,7 @@ mod forage;
 mod linecorr;
 mod scan;
 
-pub use calibrate::{CalPhase, LightCalibration};
+pub use calibrate::{CalPhase, LightCalibration, T1 as LIGHT_NEAR_T1};
 pub use follow::Execution;
 pub use forage::{Forage, ForageParams, ForagePhase, GripStep};
 pub use linecorr::{LineCorr, REPORT_PERIOD_MS as LOCALIZATION_PERIOD_MS};

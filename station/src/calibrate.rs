@@ -47,8 +47,8 @@ use serde::Serialize;
 use crate::export::{walk, Direction, Item};
 use crate::record::Recording;
 
-/// seed 000 §6.1 T1: a reading below this means a light is near.
-pub const T1: u16 = 470;
+/// seed 000 §6.1 T1: a reading below this means a light is near (the robot's own threshold).
+pub const T1: u16 = robot_firmware::robot::LIGHT_NEAR_T1;
 /// How many front sensors (S0..S5, seed 000 §4.1) the network reads.
 const FRONT: usize = 6;
 /// Every `HOLD_OUT`-th example is held out for testing.
@@ -437,21 +437,7 @@ fn is_json(path: &Path) -> bool {
 pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
     // Before the work, and so that the map never replaces the recording it came from.
     crate::export::check_out(&args.out, &args.recording).context("--out")?;
-    let rec = Recording::open(&args.recording)?;
-    if let Some(d) = &rec.damage {
-        if !args.salvage {
-            bail!(
-                "{}: {d}; nothing was written (--salvage uses the {} records before it)",
-                args.recording.display(),
-                rec.records.len()
-            );
-        }
-        eprintln!(
-            "station: {}: {d}; using the {} records before it",
-            args.recording.display(),
-            rec.records.len()
-        );
-    }
+    let rec = crate::export::open_whole(&args.recording, args.salvage)?;
     let frames = samples(&rec, args.any_mode);
     if frames.is_empty() {
         bail!(

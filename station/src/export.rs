@@ -145,21 +145,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
     if outs.len() == 2 && args.mcap == args.csv {
         bail!("--mcap and --csv name the same file");
     }
-    let rec = Recording::open(&args.file)?;
-    if let Some(d) = &rec.damage {
-        if !args.salvage {
-            bail!(
-                "{}: {d}; nothing was written (--salvage exports the {} records before it)",
-                args.file.display(),
-                rec.records.len()
-            );
-        }
-        eprintln!(
-            "station: {}: {d}; exporting the {} records before it",
-            args.file.display(),
-            rec.records.len()
-        );
-    }
+    let rec = open_whole(&args.file, args.salvage)?;
     // Both outputs are complete before either takes its final name.
     let mut done = Vec::new();
     let mut notes = Vec::new();
@@ -186,6 +172,26 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         eprintln!("{n}");
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Opens a recording for a command that writes something from it: a damaged one (corrupted
+/// or torn) is refused unless `salvage`, which keeps the records before the damage.
+pub(crate) fn open_whole(path: &Path, salvage: bool) -> anyhow::Result<Recording> {
+    let rec = Recording::open(path)?;
+    if let Some(d) = &rec.damage {
+        let n = rec.records.len();
+        if !salvage {
+            bail!(
+                "{}: {d}; nothing was written (--salvage uses the {n} records before it)",
+                path.display()
+            );
+        }
+        eprintln!(
+            "station: {}: {d}; using the {n} records before it",
+            path.display()
+        );
+    }
+    Ok(rec)
 }
 
 /// Refuses an output that is a directory, lies in a missing directory, or is the input.

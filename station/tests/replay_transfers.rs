@@ -2,9 +2,8 @@
 //! to a recorded download (one `TransferAck` per chunk) are dropped, like its commands.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use protocol::{HelloReply, Message, TransferChunk, FINGERPRINT, PROTOCOL_VERSION};
+use protocol::{Message, TransferChunk, PROTOCOL_VERSION};
 use station::app::AppOptions;
-use station::link::Connection;
 use station::record::synth::{demo_peer, Synth};
 use station::record::{Meta, Recording};
 use station::replay::session::ReplaySession;
@@ -18,39 +17,7 @@ fn downloading(chunks: u32) -> Recording {
         ..Meta::default()
     };
     let mut s = Synth::new(&meta);
-    let peer = demo_peer();
-    s.link(
-        0,
-        &Connection::Handshaking {
-            port: "memory".into(),
-        },
-    );
-    s.to_robot(
-        100,
-        &Message::Hello(protocol::Hello {
-            fingerprint: FINGERPRINT,
-            protocol: PROTOCOL_VERSION,
-            session: peer.session,
-            station: "synth",
-        }),
-    );
-    s.from_robot(
-        5_000,
-        &Message::HelloReply(HelloReply {
-            fingerprint: FINGERPRINT,
-            protocol: PROTOCOL_VERSION,
-            session: peer.session,
-            accepted: true,
-            firmware: "robot-firmware",
-            firmware_version: "0.1.0",
-            profile: peer.profile,
-            capabilities: peer.capabilities,
-            map_capacity: peer.map_capacity,
-            telemetry_hz: 10,
-            failsafe_ms: 300,
-        }),
-    );
-    s.link(5_100, &Connection::Connected(peer));
+    s.handshake(demo_peer());
     let data = [7u8; 64];
     for i in 0..chunks {
         s.from_robot(

@@ -75,6 +75,44 @@ impl Synth {
         self.raw(t_us, RecordKind::Link, &data);
     }
 
+    /// The opening of a session with `peer`: handshaking, the station's wake-up byte and
+    /// `Hello`, the robot's accepting `HelloReply` at 5 ms, connected at 5.1 ms.
+    pub fn handshake(&mut self, peer: PeerInfo) {
+        self.link(
+            0,
+            &Connection::Handshaking {
+                port: "memory".into(),
+            },
+        );
+        self.raw(100, RecordKind::ToRobot, &[0]);
+        self.to_robot(
+            100,
+            &Message::Hello(protocol::Hello {
+                fingerprint: FINGERPRINT,
+                protocol: PROTOCOL_VERSION,
+                session: peer.session,
+                station: "synth",
+            }),
+        );
+        self.from_robot(
+            5_000,
+            &Message::HelloReply(HelloReply {
+                fingerprint: FINGERPRINT,
+                protocol: PROTOCOL_VERSION,
+                session: peer.session,
+                accepted: true,
+                firmware: "robot-firmware",
+                firmware_version: "0.1.0",
+                profile: peer.profile,
+                capabilities: peer.capabilities,
+                map_capacity: peer.map_capacity,
+                telemetry_hz: 10,
+                failsafe_ms: 300,
+            }),
+        );
+        self.link(5_100, &Connection::Connected(peer));
+    }
+
     /// The file's bytes, finished with an end record.
     pub fn finish(mut self, t_us: u64, reason: &str) -> Vec<u8> {
         encode_record(&mut self.bytes, t_us, RecordKind::End, reason.as_bytes());
@@ -139,40 +177,7 @@ pub fn demo(seconds: u32, hz: u32) -> Vec<u8> {
         ..Meta::default()
     };
     let mut s = Synth::new(&meta);
-    let peer = demo_peer();
-    s.link(
-        0,
-        &Connection::Handshaking {
-            port: "memory".into(),
-        },
-    );
-    s.raw(100, RecordKind::ToRobot, &[0]);
-    s.to_robot(
-        100,
-        &Message::Hello(protocol::Hello {
-            fingerprint: FINGERPRINT,
-            protocol: PROTOCOL_VERSION,
-            session: peer.session,
-            station: "synth",
-        }),
-    );
-    s.from_robot(
-        5_000,
-        &Message::HelloReply(HelloReply {
-            fingerprint: FINGERPRINT,
-            protocol: PROTOCOL_VERSION,
-            session: peer.session,
-            accepted: true,
-            firmware: "robot-firmware",
-            firmware_version: "0.1.0",
-            profile: peer.profile,
-            capabilities: peer.capabilities,
-            map_capacity: peer.map_capacity,
-            telemetry_hz: 10,
-            failsafe_ms: 300,
-        }),
-    );
-    s.link(5_100, &Connection::Connected(peer));
+    s.handshake(demo_peer());
     let period_us = 1_000_000 / u64::from(hz.max(1));
     let mut cmd_seq = None;
     for i in 0..seconds * hz {
