@@ -56,16 +56,20 @@ impl Drop for BuiltinEmulator {
 }
 
 /// Starts the built-in emulator. See the module documentation.
-pub fn start_builtin_emulator() -> Result<BuiltinEmulator, BuiltinError> {
-    start_builtin_emulator_with(None, None)
+pub fn start_builtin_emulator(
+    key: Option<&[u8; protocol::sign::KEY_LEN]>,
+) -> Result<BuiltinEmulator, BuiltinError> {
+    start_builtin_emulator_with(None, None, key)
 }
 
 /// Starts the built-in emulator in `arena` (a built-in name or a file; default Micro-Rato'99)
 /// with `profile` (default micro-rato, or khepera in `builtin:forage`, the robot with a
-/// gripper).
+/// gripper). With `key` the robot signs its frames and accepts only frames signed with it
+/// (PROTOCOL.md §13), as a robot given `--key-file` does.
 pub fn start_builtin_emulator_with(
     arena: Option<&str>,
     profile: Option<&'static robot_firmware::Profile>,
+    key: Option<&[u8; protocol::sign::KEY_LEN]>,
 ) -> Result<BuiltinEmulator, BuiltinError> {
     let base = std::env::var_os("XDG_RUNTIME_DIR")
         .map(PathBuf::from)
@@ -76,6 +80,7 @@ pub fn start_builtin_emulator_with(
     let link = dir.join("robot");
     let mut opts = EmulatorOptions::builtin_default();
     opts.serve.link = Some(link.clone());
+    opts.serve.key = key.copied();
     if let Some(a) = arena {
         opts.arena = a.to_string();
     }

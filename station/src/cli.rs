@@ -48,7 +48,8 @@ pub struct PortArgs {
     #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
     pub baud: u32,
     /// Link authentication key: a file of 64 hex digits, the robot's key (PROTOCOL.md §13).
-    #[arg(long, value_name = "PATH", requires = "port")]
+    /// Without --port the built-in emulator is given the same key.
+    #[arg(long, value_name = "PATH")]
     pub key_file: Option<PathBuf>,
 }
 
@@ -211,12 +212,15 @@ pub struct RequiredPort {
 
 /// The key in a `--key-file`, if one was given; the error names the file and the fault.
 pub fn load_key(path: Option<&std::path::Path>) -> Result<Option<protocol::LinkKey>, String> {
-    path.map(|p| {
-        emulator::link::read_key_file(p)
-            .map(|k| protocol::LinkKey::new(&k))
-            .map_err(|e| format!("--key-file: {e}"))
-    })
-    .transpose()
+    Ok(load_key_bytes(path)?.map(|k| protocol::LinkKey::new(&k)))
+}
+
+/// The raw key in a `--key-file`, for a built-in emulator that must share it.
+pub fn load_key_bytes(
+    path: Option<&std::path::Path>,
+) -> Result<Option<[u8; protocol::sign::KEY_LEN]>, String> {
+    path.map(|p| emulator::link::read_key_file(p).map_err(|e| format!("--key-file: {e}")))
+        .transpose()
 }
 
 /// The commands `send` knows.

@@ -33,12 +33,14 @@ use crate::plan::PlanState;
 pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         None => {
+            let key = crate::cli::load_key_bytes(cli.port.key_file.as_deref())
+                .map_err(anyhow::Error::msg)?;
             interactive(
                 cli.port.port.as_deref(),
                 cli.port.baud,
                 cli.arena.as_deref(),
                 cli.profile.map(|p| p.profile()),
-                crate::cli::load_key(cli.port.key_file.as_deref()).map_err(anyhow::Error::msg)?,
+                key,
             )
             .await
         }
@@ -72,7 +74,7 @@ async fn interactive(
     baud: u32,
     arena: Option<&Path>,
     profile: Option<&'static robot_firmware::Profile>,
-    key: Option<protocol::LinkKey>,
+    key: Option<[u8; protocol::sign::KEY_LEN]>,
 ) -> anyhow::Result<ExitCode> {
     if !std::io::stdout().is_terminal() {
         bail!("the TUI needs a terminal; for scripts use `station send` or `station stats`");
@@ -105,7 +107,7 @@ async fn interactive(
         }
         None => {
             let simulated = arena_path.map(|p| p.to_string_lossy().into_owned());
-            let mut emu = start_builtin_emulator_with(simulated.as_deref(), profile)?;
+            let mut emu = start_builtin_emulator_with(simulated.as_deref(), profile, key.as_ref())?;
             let label = format!("built-in emulator on {}", emu.pty_path().display());
             if arena.is_none() {
                 arena = emu.arena.clone();
@@ -133,7 +135,7 @@ async fn interactive(
         LinkOptions {
             tap: Some(tap),
             paced: true,
-            key,
+            key: key.map(|k| protocol::LinkKey::new(&k)),
             ..LinkOptions::default()
         },
     );

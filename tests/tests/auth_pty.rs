@@ -246,3 +246,30 @@ fn the_station_binary_exits_1_with_the_message_on_a_wrong_key() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `station record --key-file K` without --port gives the built-in emulator the same key: the
+/// keyed station would get no session from an unkeyed robot ("a key against a robot without
+/// one"), so a connected recording shows both ends signed with K.
+#[test]
+fn the_built_in_emulator_shares_the_stations_key() {
+    let d = dir("builtin");
+    let out_file = d.join("keyed.rec");
+    let out = std::process::Command::new(e2e_tests::workspace_bin("station"))
+        .arg("record")
+        .arg("--key-file")
+        .arg(key_file(&d, "robot.key", KEY))
+        .arg("--out")
+        .arg(&out_file)
+        .args(["--seconds", "2", "--json"])
+        .output()
+        .expect("the station binary runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("\"connected\": true"), "{stdout}");
+    assert!(!stdout.contains("\"bytes_from_robot\": 0,"), "{stdout}");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -51,15 +51,18 @@ pub struct RecordArgs {
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
-    /// Link authentication key file (64 hex digits, PROTOCOL.md §13); needs --port.
-    #[arg(long, value_name = "PATH", requires = "port")]
+    /// Link authentication key file (64 hex digits, PROTOCOL.md §13). Without --port the
+    /// built-in emulator is given the same key.
+    #[arg(long, value_name = "PATH")]
     pub key_file: Option<PathBuf>,
 }
 
 /// Runs `station record`.
 pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
     check_out(&args.out, args.force)?;
-    let key = crate::cli::load_key(args.key_file.as_deref()).map_err(anyhow::Error::msg)?;
+    let raw_key =
+        crate::cli::load_key_bytes(args.key_file.as_deref()).map_err(anyhow::Error::msg)?;
+    let key = raw_key.map(|k| protocol::LinkKey::new(&k));
     let mut builtin = None;
     let (path, label) = match &args.port {
         Some(p) => {
@@ -67,7 +70,7 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
             (p.clone(), p.display().to_string())
         }
         None => {
-            let mut emu = start_builtin_emulator()?;
+            let mut emu = start_builtin_emulator(raw_key.as_ref())?;
             let label = format!("built-in emulator on {}", emu.pty_path().display());
             let path = emu.path().to_path_buf();
             builtin = Some(emu);
