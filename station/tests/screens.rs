@@ -339,3 +339,27 @@ fn a_click_on_the_map_becomes_a_go_to_at_that_point() {
     assert!((x_m - (x0 + x1) / 2.0).abs() < 0.2, "{x_m}");
     assert!((y_m - (y0 + y1) / 2.0).abs() < 0.3, "{y_m}");
 }
+
+#[test]
+fn a_signed_session_says_so_beside_the_capabilities_and_counts_refused_frames() {
+    let mut app = story();
+    let unsigned = screen(&app, 120, 40);
+    assert!(!unsigned.contains("auth "), "{unsigned}");
+    let mut s = stats();
+    s.auth.keyed = true;
+    app.update(Action::Link(LinkEvent::Stats(Box::new(s.clone()))));
+    let signed = screen(&app, 120, 40);
+    assert!(signed.contains("│auth signed  refused 0 "), "{signed}");
+    s.auth.stale_timestamp = 3;
+    app.update(Action::Link(LinkEvent::Stats(Box::new(s))));
+    let refused = screen(&app, 120, 40);
+    assert!(refused.contains("│auth signed  refused 3 "), "{refused}");
+    // Still readable at the smallest size: the line is there, unwrapped.
+    assert!(
+        screen(&app, 80, 24).contains("auth signed  refused 3") || {
+            // At 80x24 the link panel is a view of its own (Tab), not on the dashboard.
+            app.update(Action::ShowView(View::Link));
+            screen(&app, 80, 24).contains("auth signed  refused 3")
+        }
+    );
+}

@@ -143,18 +143,24 @@ fn lines(app: &App) -> Vec<Line<'static>> {
                 l("  dropped bytes "),
                 bad(s.decoder.bytes_dropped),
             ];
-            // Link authentication (PROTOCOL.md §13): frames refused for a bad signature, a
-            // stale timestamp or a missing or unexpected signature.
-            if s.auth.keyed || s.auth.refused() > 0 {
-                spans.push(l(if s.auth.keyed {
-                    "  signed, refused "
-                } else {
-                    "  refused "
-                }));
-                spans.push(bad(s.auth.refused()));
-            }
             spans
         }),
+    ]);
+    // Link authentication (PROTOCOL.md §13): whether frames are signed, and frames refused
+    // for a bad signature, a stale timestamp or a missing or unexpected signature.
+    if s.auth.keyed || s.auth.refused() > 0 {
+        out.push(Line::from(vec![
+            l("auth "),
+            if s.auth.keyed {
+                Span::styled("signed", Style::new().fg(Color::Green))
+            } else {
+                Span::raw("unsigned")
+            },
+            l("  refused "),
+            bad(s.auth.refused()),
+        ]));
+    }
+    out.extend([
         Line::from(vec![
             l("commands "),
             Span::raw(format!(
