@@ -134,17 +134,14 @@ fn lines(app: &App) -> Vec<Line<'static>> {
             l(" late "),
             Span::raw(s.robot_seq.late.to_string()),
         ]),
-        Line::from({
-            let mut spans = vec![
-                l("CRC errors "),
-                bad(u64::from(s.decoder.crc_errors)),
-                l("  bad frames "),
-                bad(s.decoder.errors()),
-                l("  dropped bytes "),
-                bad(s.decoder.bytes_dropped),
-            ];
-            spans
-        }),
+        Line::from(vec![
+            l("CRC errors "),
+            bad(u64::from(s.decoder.crc_errors)),
+            l("  bad frames "),
+            bad(s.decoder.errors()),
+            l("  dropped bytes "),
+            bad(s.decoder.bytes_dropped),
+        ]),
     ]);
     // Link authentication (PROTOCOL.md §13): whether frames are signed, and frames refused
     // for a bad signature, a stale timestamp or a missing or unexpected signature.
