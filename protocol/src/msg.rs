@@ -377,6 +377,9 @@ pub enum ObjectKind {
     Map,
     Plan,
     Regions,
+    /// Seed 000 §5.3's light -> angle network (60 neurons x 6 inputs, in hundredths): trained
+    /// on the robot (`Mode::CalibrateLight`) or by `station calibrate`, and moved either way.
+    LightCalibration,
 }
 
 /// Sender -> receiver: an object of `len` bytes with CRC-32C `crc` follows in chunks.
@@ -421,6 +424,9 @@ pub enum TransferStatus {
     Rejected,
     /// A chunk or ack named an id that is not the transfer in progress.
     UnknownId,
+    /// The receiver cannot take this object now (the robot is calibrating the network the
+    /// object would replace); nothing was changed. Try again later.
+    Busy,
 }
 
 /// Robot -> station: something happened.
@@ -467,6 +473,8 @@ pub enum EventCode {
     /// The calibrated light -> angle map sees a light; value = its bearing from the heading,
     /// decidegrees, counter-clockwise (-900 right .. 900 left). At most 2 per second.
     LightBearing,
+    /// A light calibration arrived by upload and replaced the robot's; value = its id.
+    CalibrationInstalled,
 }
 
 /// Log severity.

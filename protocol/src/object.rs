@@ -1,4 +1,5 @@
-//! Object layouts: the Map, Plan and Regions byte strings that move by chunked transfer (§8).
+//! Object layouts: the Map, Plan, Regions and LightCalibration byte strings that move by
+//! chunked transfer (§8).
 //!
 //! Layer: pure functions over byte slices, like the frame codec. `encode_*` writes into a
 //! caller's slice; `*View::parse` checks untrusted bytes and returns a zero-copy view that the
@@ -8,7 +9,7 @@
 //! Every field is fixed-width little-endian, not postcard: fixed offsets let a reader index
 //! straight into the object (waypoint `i` is at a computable offset) and keep chunk boundaries
 //! independent of the content. Every object opens with `version` ([`OBJECT_VERSION`]) and
-//! `kind` (the [`ObjectKind`] index: 0 Map, 1 Plan, 2 Regions).
+//! `kind` (the [`ObjectKind`] index: 0 Map, 1 Plan, 2 Regions, 3 LightCalibration).
 //!
 //! Invariant: encodings are canonical. Reserved bytes and bits are zero, absent points are
 //! zero, padding bits after the last map cell are zero, and the decoder refuses anything else.
@@ -23,10 +24,15 @@ use core::fmt;
 
 use crate::msg::{ObjectKind, PointMm};
 
+mod light;
 mod map;
 mod plan;
 mod regions;
 
+pub use light::{
+    encode_light, LightNeuron, LightView, LIGHT_HEADER_LEN, LIGHT_INPUTS, LIGHT_MAX_OUTPUT,
+    LIGHT_NEURONS, LIGHT_NEURON_LEN, LIGHT_OBJECT_LEN,
+};
 pub use map::{encode_map, map_crc, MapHeader, MapView};
 pub use plan::{encode_plan, finish_plan, plan_object_len, NavPlan, PlanMeta, PlanView};
 pub use regions::{encode_regions, RegionsHeader, RegionsView, SquareRec};
@@ -57,7 +63,7 @@ pub enum Problem {
     TrailingBytes { extra: usize },
     /// Byte 0 is not [`OBJECT_VERSION`].
     UnsupportedVersion { version: u8 },
-    /// Byte 1 is not an object kind (0..=2).
+    /// Byte 1 is not an object kind (0..=3).
     UnknownKind { kind: u8 },
     /// Byte 1 names another kind than the caller expected.
     WrongKind { found: ObjectKind },
@@ -81,6 +87,10 @@ pub enum Problem {
     CountMismatch,
     /// The output buffer is too small for the encoding.
     OutputTooSmall { needed: usize },
+    /// A light network of another shape than 60 neurons x 6 inputs.
+    BadShape { neurons: u8, inputs: u8 },
+    /// A light neuron's output (angle + 90 deg, hundredths) above 180 deg.
+    BadOutput { index: u16, output: u16 },
 }
 
 /// A problem and the byte offset (from the object's first byte) where it was found.
@@ -121,6 +131,17 @@ impl fmt::Display for Problem {
             Problem::BadSquare { index } => write!(f, "square {index} is empty or off the map"),
             Problem::CountMismatch => write!(f, "a count disagrees with the items"),
             Problem::OutputTooSmall { needed } => write!(f, "output needs {needed} bytes"),
+            Problem::BadShape { neurons, inputs } => write!(
+                f,
+                "light network of {neurons} neurons x {inputs} inputs, expected \
+                 {LIGHT_NEURONS} x {LIGHT_INPUTS}"
+            ),
+            Problem::BadOutput { index, output } => write!(
+                f,
+                "neuron {index}'s output {}.{:02} deg is above 180 deg",
+                output / 100,
+                output % 100
+            ),
         }
     }
 }
@@ -225,6 +246,7 @@ pub fn kind_of(bytes: &[u8]) -> Result<ObjectKind, ObjectError> {
         0 => Ok(ObjectKind::Map),
         1 => Ok(ObjectKind::Plan),
         2 => Ok(ObjectKind::Regions),
+        3 => Ok(ObjectKind::LightCalibration),
         kind => Err(ObjectError::at(1, Problem::UnknownKind { kind })),
     }
 }
@@ -235,6 +257,7 @@ pub enum ObjectView<'a> {
     Map(MapView<'a>),
     Plan(PlanView<'a>),
     Regions(RegionsView<'a>),
+    LightCalibration(LightView<'a>),
 }
 
 /// Parses an object of any kind.
@@ -243,5 +266,6 @@ pub fn parse(bytes: &[u8]) -> Result<ObjectView<'_>, ObjectError> {
         ObjectKind::Map => ObjectView::Map(MapView::parse(bytes)?),
         ObjectKind::Plan => ObjectView::Plan(PlanView::parse(bytes)?),
         ObjectKind::Regions => ObjectView::Regions(RegionsView::parse(bytes)?),
+        ObjectKind::LightCalibration => ObjectView::LightCalibration(LightView::parse(bytes)?),
     })
 }

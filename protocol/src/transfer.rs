@@ -226,6 +226,8 @@ pub enum Outcome {
     UnknownId,
     /// `MAX_TIMEOUTS` retry periods in a row passed without progress.
     TimedOut,
+    /// The receiver cannot take the object now (the robot is calibrating); nothing changed.
+    Busy,
     /// The bytes handed to `poll` are not as long as the object announced.
     ObjectChanged,
 }
@@ -246,6 +248,9 @@ impl fmt::Display for Outcome {
             Outcome::CrcMismatch => "object CRC mismatch at the receiver",
             Outcome::UnknownId => "receiver does not know the transfer",
             Outcome::TimedOut => "transfer timed out",
+            Outcome::Busy => {
+                "receiver is busy with the object (the robot is calibrating); try later"
+            }
             Outcome::ObjectChanged => "object changed during the transfer",
         })
     }
@@ -430,6 +435,7 @@ impl Sender {
             TransferStatus::AlreadyHave => Outcome::AlreadyHave,
             TransferStatus::CrcMismatch => Outcome::CrcMismatch,
             TransferStatus::Rejected => Outcome::Rejected,
+            TransferStatus::Busy => Outcome::Busy,
             TransferStatus::UnknownId => {
                 // The receiver lost the transfer (restarted, or took another): begin again.
                 self.restarts = self.restarts.saturating_add(1);

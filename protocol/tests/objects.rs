@@ -80,6 +80,18 @@ fn plan_example(map_id: u32) -> Vec<u8> {
     out
 }
 
+/// The example light network: neuron `i`'s weight `k` is 50.00 + 7.00 k + 0.50 i (a rescaled
+/// reading), its output 3.00 i deg (the angle + 90 deg).
+fn light_example() -> Vec<u8> {
+    let neurons = (0..LIGHT_NEURONS as u16).map(|i| {
+        let w = core::array::from_fn(|k| 5000 + 700 * k as u16 + 50 * i);
+        (w, 300 * i)
+    });
+    let mut out = vec![0; LIGHT_OBJECT_LEN];
+    assert_eq!(encode_light(neurons, &mut out), Ok(LIGHT_OBJECT_LEN));
+    out
+}
+
 fn documented(doc: &str, name: &str) -> Vec<u8> {
     let start = doc
         .find(&format!("\nobject `{name}`\n"))
@@ -145,6 +157,24 @@ fn protocol_md_object_examples_match_the_encoders_and_decode_back() {
     assert_eq!(v.waypoint(3), Some(p(600, 900)));
     assert_eq!(v.nav_block().len(), 24 + 16);
     assert_eq!(crc32c(&plan), 0x7692_f253);
+
+    // The light network is shown only as far as its second neuron; its id pins the rest.
+    let light = light_example();
+    let shown = documented(&doc, "light");
+    assert_eq!(shown.len(), 32);
+    assert_eq!(shown, light[..32]);
+    let id = crc32c(&light);
+    assert!(
+        doc.contains(&format!("id `{id:#010x}`")),
+        "PROTOCOL.md must state the light example's id {id:#010x}"
+    );
+    let ObjectView::LightCalibration(l) = parse(&light).unwrap() else {
+        panic!("not a light calibration")
+    };
+    assert_eq!(
+        l.neuron(59),
+        Some(([7950, 8650, 9350, 10050, 10750, 11450], 17700))
+    );
 }
 
 fn err(bytes: &[u8]) -> ObjectError {
@@ -257,7 +287,7 @@ proptest! {
     /// Any bytes: a decoder answers, never panics; what it accepts re-encodes to itself.
     #[test]
     fn untrusted_bytes_never_panic_and_accepted_ones_are_canonical(
-        kind in 0u8..4,
+        kind in 0u8..5,
         body in proptest::collection::vec(any::<u8>(), 0..200),
     ) {
         let mut bytes = vec![1, kind];
@@ -274,6 +304,9 @@ proptest! {
                     let regions: Vec<u32> = (0..v.nav.regions).map(|i| v.region(i).unwrap()).collect();
                     encode_plan(v.meta, &v.nav, regions, v.waypoints().collect::<Vec<_>>(), &mut out)
                 }
+                ObjectView::LightCalibration(l) => {
+                    encode_light(l.neurons().collect::<Vec<_>>(), &mut out)
+                }
             };
             prop_assert_eq!(&out[..n.unwrap()], &bytes[..]);
         }
@@ -281,9 +314,9 @@ proptest! {
 
     /// Valid objects with one byte changed or cut short: an error or another valid object.
     #[test]
-    fn damaged_objects_never_panic(which in 0usize..3, pos in any::<usize>(), val in any::<u8>(), cut in any::<bool>()) {
+    fn damaged_objects_never_panic(which in 0usize..4, pos in any::<usize>(), val in any::<u8>(), cut in any::<bool>()) {
         let map = map_example();
-        let mut b = [map.clone(), regions_example(5), plan_example(5)][which].clone();
+        let mut b = [map.clone(), regions_example(5), plan_example(5), light_example()][which].clone();
         let i = pos % b.len();
         if cut {
             b.truncate(i);

@@ -13,7 +13,10 @@
 //! Maps, plans and regions live in `transfer::Objects`; plan following is in `robot::follow`.
 
 use heapless::Deque;
-use protocol::{AckInfo, Command, Event, EventCode, Message, Mode, NackReason, PointMm};
+use protocol::{
+    AckInfo, Command, Event, EventCode, Message, Mode, NackReason, ObjectKind, PointMm,
+    TransferAck, TransferStatus,
+};
 
 use crate::behaviour::{self, Arbiter, ArbiterParams, BehaviourSet, Inputs, Side};
 use crate::deadreckon::{DeadReckonInput, DeadReckonParams, DeadReckoner, DegradeEvent};
@@ -342,11 +345,43 @@ impl Core {
     /// A transfer frame: uploads to the robot (begin, chunk) and acks of its downloads.
     fn transfer(&mut self, m: &Message<'_>, now_ms: u32) -> Response {
         match m {
+            // A robot without light sensors has no use for a light calibration.
+            Message::TransferBegin(b)
+                if b.object == ObjectKind::LightCalibration
+                    && !self.profile.has(protocol::caps::AMBIENT_LIGHT) =>
+            {
+                Response::Send(Message::TransferAck(TransferAck {
+                    id: b.id,
+                    next: 0,
+                    status: TransferStatus::Rejected,
+                }))
+            }
+            Message::TransferBegin(b) if self.calibration_busy(b.object) => {
+                Response::Send(Message::TransferAck(TransferAck {
+                    id: b.id,
+                    next: 0,
+                    status: TransferStatus::Busy,
+                }))
+            }
             Message::TransferBegin(b) => {
                 Response::Send(Message::TransferAck(self.objects.on_begin(b)))
             }
+            // A calibration begun before `Mode::CalibrateLight` must not land in the middle of
+            // one: the chunk is answered Busy and the partial upload kept for later.
+            Message::TransferChunk(c)
+                if self
+                    .objects
+                    .upload_progress()
+                    .is_some_and(|(o, id, ..)| id == c.id && self.calibration_busy(o)) =>
+            {
+                Response::Send(Message::TransferAck(TransferAck {
+                    id: c.id,
+                    next: 0,
+                    status: TransferStatus::Busy,
+                }))
+            }
             Message::TransferChunk(c) => {
-                let (ack, installed) = self.objects.on_chunk(c);
+                let (ack, installed) = self.objects.on_chunk(c, &mut self.light_cal);
                 if let Some(i) = installed {
                     self.installed(i);
                 }
@@ -360,10 +395,18 @@ impl Core {
         }
     }
 
-    /// Reports a new map or plan; a plan being executed is abandoned when replaced.
+    /// Whether an upload of `object` must wait: a light calibration while one is being trained.
+    fn calibration_busy(&self, object: ObjectKind) -> bool {
+        object == ObjectKind::LightCalibration && self.mode == Mode::CalibrateLight
+    }
+
+    /// Reports a new map, plan or calibration; a plan being executed is abandoned when replaced.
     fn installed(&mut self, what: Installed) {
         // Event values carry the object id's 32 bits (PROTOCOL.md §8).
         match what {
+            Installed::LightCalibration { id } => {
+                self.push_event(EventCode::CalibrationInstalled, id as i32)
+            }
             Installed::Map { id } => self.push_event(EventCode::MapUpdated, id as i32),
             Installed::Plan { id } => {
                 self.abort_plan();
@@ -460,7 +503,7 @@ impl Core {
                 self.installed(Installed::Plan { id });
             }
             Command::Download { object, offset } => {
-                return self.objects.start_download(object, offset);
+                return self.objects.start_download(object, offset, &self.light_cal);
             }
         }
         Ok(AckInfo::Done)

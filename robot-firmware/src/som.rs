@@ -177,6 +177,22 @@ impl<const N: usize, const M: usize, W: Store> Som<N, M, W> {
         Self { weights, outputs }
     }
 
+    /// Neuron `i` as stored (for a network's object, PROTOCOL.md §12).
+    pub fn stored(&self, i: usize) -> Option<([W; M], W)> {
+        Some((*self.weights.get(i)?, *self.outputs.get(i)?))
+    }
+
+    /// Replaces neuron `i` as stored; false if there is no neuron `i`.
+    pub fn set_stored(&mut self, i: usize, weights: [W; M], output: W) -> bool {
+        match (self.weights.get_mut(i), self.outputs.get_mut(i)) {
+            (Some(w), Some(o)) => {
+                (*w, *o) = (weights, output);
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// Neuron `i`'s sensor weights and output value.
     pub fn neuron(&self, i: usize) -> Option<([f32; M], f32)> {
         let w = self.weights.get(i)?;

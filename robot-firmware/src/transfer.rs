@@ -1,5 +1,6 @@
 //! The robot's objects: its map, plan and regions, moved by chunked transfer (PROTOCOL.md §8,
-//! §12) and made on board by segmentation and planning (seed 004 §6).
+//! §12) and made on board by segmentation and planning (seed 004 §6); and its light
+//! calibration (seed 000 §5.3), which the robot owns elsewhere but uploads and downloads here.
 //!
 //! Layer: between the link and `nav`. [`Objects`] owns the fixed navigation instance
 //! ([`Nav64`]), the installed plan (its object bytes, which are also the waypoints the executor
@@ -19,8 +20,9 @@
 //! capacity exceeded); transfers answer `TransferStatus`es. Nothing here panics.
 
 use protocol::object::{
-    encode_map, encode_regions, finish_plan, map_crc, plan_object_len, MapHeader, MapView,
-    ObjectError, PlanMeta, PlanView, Problem, SquareRec, MAP_HEADER_LEN, PLAN_HEADER_LEN,
+    encode_map, encode_regions, finish_plan, map_crc, plan_object_len, LightView, MapHeader,
+    MapView, ObjectError, PlanMeta, PlanView, Problem, SquareRec, LIGHT_OBJECT_LEN, MAP_HEADER_LEN,
+    PLAN_HEADER_LEN,
 };
 use protocol::transfer::{Outcome, Receiver, Sender, Verified};
 use protocol::{
@@ -33,6 +35,7 @@ use crate::nav::{
     SegmentError, Smoothed,
 };
 use crate::odometry::Point;
+use crate::robot::LightCalibration;
 use crate::MAP_CAPACITY;
 
 /// Bytes of the robot's grid storage (64 x 64 cells, 2 bits each).
@@ -60,6 +63,7 @@ pub struct MapInfo {
 pub enum Installed {
     Map { id: u32 },
     Plan { id: u32 },
+    LightCalibration { id: u32 },
 }
 
 /// The robot's navigation objects and its transfers.
@@ -256,14 +260,16 @@ impl Objects {
     }
 
     /// `Command::Download`: snapshots the object, starts sending it, and returns the Ack's
-    /// info. Replaces a download in progress; a refusal leaves it running.
+    /// info. Replaces a download in progress; a refusal leaves it running. `light` is the
+    /// robot's calibration, sent when asked for and trained.
     pub fn start_download(
         &mut self,
         object: ObjectKind,
         offset: u32,
+        light: &LightCalibration,
     ) -> Result<AckInfo, NackReason> {
         self.map();
-        let len = self.object_len(object)?;
+        let len = self.object_len(object, light)?;
         if usize::try_from(offset).map_or(true, |o| o > len) {
             return Err(NackReason::OutOfRange);
         }
@@ -291,6 +297,12 @@ impl Objects {
                 dst.copy_from_slice(src);
                 (self.plan_id, len)
             }
+            ObjectKind::LightCalibration => {
+                let n = light
+                    .encode(&mut self.out)
+                    .map_err(|_| NackReason::CapacityExceeded)?;
+                (crc32c(self.out.get(..n).unwrap_or(&[])), n)
+            }
         };
         let crc = crc32c(self.out.get(..n).unwrap_or(&[]));
         let len = u32::try_from(n).map_err(|_| NackReason::CapacityExceeded)?;
@@ -305,7 +317,11 @@ impl Objects {
     }
 
     /// Length of the object a download would send, or why there is none.
-    fn object_len(&self, object: ObjectKind) -> Result<usize, NackReason> {
+    fn object_len(
+        &self,
+        object: ObjectKind,
+        light: &LightCalibration,
+    ) -> Result<usize, NackReason> {
         match object {
             ObjectKind::Map => {
                 let m = self.map.ok_or(NackReason::NoMap)?;
@@ -318,6 +334,9 @@ impl Objects {
             }
             ObjectKind::Plan if self.plan_len > 0 => Ok(self.plan_len),
             ObjectKind::Plan => Err(NackReason::NoPlan),
+            // An untrained network is random numbers, not a calibration.
+            ObjectKind::LightCalibration if light.trained => Ok(LIGHT_OBJECT_LEN),
+            ObjectKind::LightCalibration => Err(NackReason::BadState),
         }
     }
 
@@ -326,8 +345,8 @@ impl Objects {
         self.tx = None;
     }
 
-    /// Answers an upload's `TransferBegin`. The robot takes maps up to 64 x 64 and plans; it
-    /// computes regions itself and refuses them.
+    /// Answers an upload's `TransferBegin`. The robot takes maps up to 64 x 64, plans and
+    /// light calibrations; it computes regions itself and refuses them.
     pub fn on_begin(&mut self, b: &TransferBegin) -> TransferAck {
         self.map();
         let (limit, have) = match b.object {
@@ -340,12 +359,19 @@ impl Objects {
                 self.has_plan() && (self.plan_id, self.plan_crc) == (b.id, b.crc),
             ),
             ObjectKind::Regions => (0, false),
+            // Nothing remembers which calibration was uploaded; 844 bytes are cheap to resend.
+            ObjectKind::LightCalibration => (LIGHT_OBJECT_LEN, false),
         };
         self.rx.on_begin(b, limit, have)
     }
 
-    /// Answers an upload's `TransferChunk`; installs the object when it is whole and verified.
-    pub fn on_chunk(&mut self, c: &TransferChunk<'_>) -> (TransferAck, Option<Installed>) {
+    /// Answers an upload's `TransferChunk`; installs the object when it is whole and verified
+    /// (a light calibration into `light`).
+    pub fn on_chunk(
+        &mut self,
+        c: &TransferChunk<'_>,
+        light: &mut LightCalibration,
+    ) -> (TransferAck, Option<Installed>) {
         let mut installed = None;
         let Objects {
             nav,
@@ -376,6 +402,10 @@ impl Objects {
                     })
                 }
                 ObjectKind::Regions => None,
+                ObjectKind::LightCalibration => LightView::parse(v.bytes).ok().map(|view| {
+                    light.install_object(&view);
+                    Installed::LightCalibration { id: v.id }
+                }),
             };
             installed.is_some()
         });

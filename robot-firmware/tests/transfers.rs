@@ -496,3 +496,91 @@ fn protocol_md_object_examples_are_what_the_nav_code_produces() {
         assert_eq!(documented, bytes, "PROTOCOL.md object `{name}` differs");
     }
 }
+
+/// A light network in the object's storage: neuron `i` points at `3 i` deg (angle + 90).
+fn light_object() -> Vec<u8> {
+    use protocol::object::{encode_light, LIGHT_NEURONS, LIGHT_OBJECT_LEN};
+    let neurons = (0..LIGHT_NEURONS as u16).map(|i| {
+        // A bright spot sweeping across the six front sensors as the neuron's angle grows.
+        let w = core::array::from_fn(|k| {
+            let d = (i as i32 / 10 - k as i32).unsigned_abs() as u16;
+            5000 + 9000 * d.min(5)
+        });
+        (w, 300 * i)
+    });
+    let mut out = vec![0; LIGHT_OBJECT_LEN];
+    encode_light(neurons, &mut out).unwrap();
+    out
+}
+
+#[test]
+fn a_light_calibration_uploads_is_used_at_once_and_downloads_byte_identical() {
+    let mut st = Station::new(&KHEPERA);
+    // Untrained: nothing to download, and no bearings however bright the light.
+    assert_eq!(
+        st.download(ObjectKind::LightCalibration).unwrap_err(),
+        NackReason::BadState
+    );
+    st.hal.ambient = [300, 120, 90, 200, 420, 480, 500, 500];
+    st.run(1200);
+    assert!(!st.events.iter().any(|e| e.code == EventCode::LightBearing));
+
+    let object = light_object();
+    assert_eq!(
+        st.upload_object(ObjectKind::LightCalibration, &object),
+        Outcome::Complete
+    );
+    st.run(10);
+    let installed = st
+        .events
+        .iter()
+        .find(|e| e.code == EventCode::CalibrationInstalled)
+        .expect("CalibrationInstalled event");
+    assert_eq!(installed.value as u32, crc32c(&object));
+    assert!(st.robot.core.light_cal.trained);
+
+    st.run(1200);
+    let expected = st.robot.core.light_cal.bearing(&st.hal.ambient).unwrap();
+    let bearing = st
+        .events
+        .iter()
+        .rev()
+        .find(|e| e.code == EventCode::LightBearing)
+        .expect("the uploaded network gives bearings");
+    assert_eq!(bearing.value, (expected.to_degrees() * 10.0).round() as i32);
+
+    let (info, bytes) = st.download(ObjectKind::LightCalibration).unwrap();
+    assert!(matches!(info, AckInfo::Object { len: 844, .. }));
+    assert_eq!(
+        bytes, object,
+        "the robot sends back exactly what it was given"
+    );
+}
+
+#[test]
+fn a_light_calibration_upload_is_busy_while_calibrating_and_changes_nothing() {
+    let mut st = Station::new(&KHEPERA);
+    st.command(Command::SetMode(Mode::CalibrateLight)).unwrap();
+    // Starting draws a fresh network to train: that one must survive the upload.
+    let before = st.robot.core.light_cal.som.clone();
+    let object = light_object();
+    assert_eq!(
+        st.upload_object(ObjectKind::LightCalibration, &object),
+        Outcome::Busy
+    );
+    assert!(!st.robot.core.light_cal.trained);
+    assert_eq!(st.robot.core.light_cal.som, before);
+    assert!(!st
+        .events
+        .iter()
+        .any(|e| e.code == EventCode::CalibrationInstalled));
+    // A malformed network (an output past 180 deg) is refused after it arrives.
+    st.command(Command::SetMode(Mode::Idle)).unwrap();
+    let mut bad = object.clone();
+    bad[16..18].copy_from_slice(&18_001u16.to_le_bytes());
+    assert_eq!(
+        st.upload_object(ObjectKind::LightCalibration, &bad),
+        Outcome::Rejected
+    );
+    assert!(!st.robot.core.light_cal.trained);
+}

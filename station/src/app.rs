@@ -590,6 +590,10 @@ impl App {
                     _ => format!("light calibration failed (code {v})"),
                 },
             ),
+            EventCode::CalibrationInstalled => (
+                Level::Info,
+                format!("light calibration {:08x} installed", v as u32),
+            ),
             EventCode::LightBearing => (
                 Level::Debug,
                 format!("light at {:+.1} deg", f64::from(v) / 10.0),

@@ -41,7 +41,7 @@ use anyhow::{bail, Context};
 use clap::Args;
 use protocol::{Message, Mode, Telemetry};
 use robot_firmware::behaviour::XorShift32;
-use robot_firmware::som::{rescale, Example, LightSom, Schedule};
+use robot_firmware::som::{rescale, Centi, Example, LightSom, Schedule};
 use serde::Serialize;
 
 use crate::export::{walk, Direction, Item};
@@ -315,7 +315,7 @@ pub fn train(
 }
 
 /// The JSON form of a trained map, with the figures that describe it.
-pub fn encode_json(som: &LightSom, report: &Report) -> anyhow::Result<Vec<u8>> {
+pub fn encode_json(som: &LightSom, report: Option<&Report>) -> anyhow::Result<Vec<u8>> {
     let (weights, outputs): (Vec<[f32; FRONT]>, Vec<f32>) =
         (0..NEURONS).filter_map(|i| som.neuron(i)).unzip();
     let doc = serde_json::json!({
@@ -325,9 +325,10 @@ pub fn encode_json(som: &LightSom, report: &Report) -> anyhow::Result<Vec<u8>> {
         "inputs": FRONT,
         "weights": weights,
         "outputs": outputs,
-        "examples": report.examples,
-        "held_out_mean_deg": report.mean_deg,
-        "held_out_max_deg": report.max_deg,
+        // A network downloaded from the robot comes without the station's figures.
+        "examples": report.map(|r| r.examples),
+        "held_out_mean_deg": report.map(|r| r.mean_deg),
+        "held_out_max_deg": report.map(|r| r.max_deg),
     });
     let mut bytes = serde_json::to_vec_pretty(&doc)?;
     bytes.push(b'\n');
@@ -351,6 +352,30 @@ pub fn encode_bin(som: &LightSom) -> Vec<u8> {
     let crc = protocol::crc32c(&out);
     out.extend_from_slice(&crc.to_le_bytes());
     out
+}
+
+/// The network as a LightCalibration object (PROTOCOL.md §12), what the robot stores.
+pub fn light_object(som: &LightSom) -> anyhow::Result<Vec<u8>> {
+    let neurons = (0..NEURONS).map(|i| {
+        som.stored(i)
+            .map_or(([0; FRONT], 0), |(w, o)| (w.map(|c| c.0), o.0))
+    });
+    let mut out = vec![0; protocol::object::LIGHT_OBJECT_LEN];
+    let n = protocol::object::encode_light(neurons, &mut out)
+        .map_err(|e| anyhow::anyhow!("light network: {e}"))?;
+    out.truncate(n);
+    Ok(out)
+}
+
+/// A LightCalibration object's network (e.g. downloaded from the robot).
+pub fn from_light_object(bytes: &[u8]) -> anyhow::Result<LightSom> {
+    let view = protocol::object::LightView::parse(bytes)
+        .map_err(|e| anyhow::anyhow!("light calibration object: {e}"))?;
+    let mut som = LightSom::from_neurons([[0.0; FRONT]; NEURONS], [0.0; NEURONS]);
+    for (i, (w, o)) in view.neurons().enumerate() {
+        som.set_stored(i, w.map(Centi), Centi(o));
+    }
+    Ok(som)
 }
 
 /// Reads a map written by [`encode_json`] or [`encode_bin`]; errors say what and where.
@@ -428,7 +453,7 @@ fn decode_json(bytes: &[u8]) -> anyhow::Result<LightSom> {
     Ok(LightSom::from_neurons(weights, outputs))
 }
 
-fn is_json(path: &Path) -> bool {
+pub(crate) fn is_json(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("json"))
 }
@@ -481,7 +506,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
         train_max_deg,
     };
     let bytes = if is_json(&args.out) {
-        encode_json(&som, &report)?
+        encode_json(&som, Some(&report))?
     } else {
         encode_bin(&som)
     };

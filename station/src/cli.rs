@@ -193,6 +193,30 @@ pub enum Sub {
     ///   station calibrate cal.rec --out som.bin --light 0.40,0.30 --json
     #[command(verbatim_doc_comment)]
     Calibrate(crate::calibrate::CalibrateArgs),
+    /// Upload a light -> angle calibration to the robot (seed 000 §5.3)
+    ///
+    /// The file is what `station calibrate --out` or `station download-calibration --out`
+    /// wrote (JSON or binary). The robot installs it and uses it at once (LightBearing
+    /// events, the light-map and foraging tasks); it answers "busy" while it is calibrating
+    /// itself (mode calibrate-light). Exit status 1 when the file is not a calibration, the
+    /// robot has no light sensors, or the transfer fails.
+    ///
+    /// Examples:
+    ///   station calibrate cal.rec --out som.json
+    ///   station upload-calibration --port /dev/ttyUSB0 --calibration som.json
+    #[command(verbatim_doc_comment)]
+    UploadCalibration(crate::transfer::calibration::UploadCalibrationArgs),
+    /// Download the robot's light -> angle calibration to a file (seed 000 §5.3)
+    ///
+    /// The network the robot trained in mode calibrate-light (or was given), as JSON
+    /// (FILE.json) or binary (any other name): keep it, study it, or upload it again after
+    /// the robot restarts instead of calibrating for 7.5 minutes. Exit status 1 when the
+    /// robot holds no trained calibration or the transfer fails.
+    ///
+    /// Examples:
+    ///   station download-calibration --port /dev/ttyUSB0 --out som.bin
+    #[command(verbatim_doc_comment)]
+    DownloadCalibration(crate::transfer::calibration::DownloadCalibrationArgs),
 }
 
 /// A port that headless commands require.

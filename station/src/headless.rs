@@ -66,6 +66,8 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Sub::Replay(args)) => crate::replay::command::run(&args).await,
         Some(Sub::Export(args)) => crate::export::run(&args),
         Some(Sub::Calibrate(args)) => crate::calibrate::run(&args),
+        Some(Sub::UploadCalibration(args)) => crate::transfer::calibration::upload(&args).await,
+        Some(Sub::DownloadCalibration(args)) => crate::transfer::calibration::download(&args).await,
     }
 }
 

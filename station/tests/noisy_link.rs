@@ -249,7 +249,7 @@ impl Bench {
                 Some(out)
             }
             ObjectKind::Plan => Some(objects.plan_bytes().to_vec()),
-            ObjectKind::Regions => None,
+            ObjectKind::Regions | ObjectKind::LightCalibration => None,
         }
     }
 

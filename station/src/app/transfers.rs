@@ -360,6 +360,9 @@ impl App {
                     self.after_upload(object, r.id, bytes);
                 }
             }
+            (crate::transfer::Direction::Download, ObjectKind::LightCalibration) => {
+                self.note(Level::Info, Source::Command, r.text());
+            }
             (_, ObjectKind::Regions) => {}
         }
     }
@@ -373,7 +376,7 @@ impl App {
                 self.transfers.plan_id = id;
                 self.set_robot_plan(id, bytes);
             }
-            ObjectKind::Regions => {}
+            ObjectKind::Regions | ObjectKind::LightCalibration => {}
         }
     }
 

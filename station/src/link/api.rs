@@ -7,7 +7,7 @@
 //! oneshot channel too), whatever happens to the link in between.
 
 use protocol::{AckInfo, Command, EmuTruth, Event, LogLevel, MapCapacity, NackReason, ProfileId};
-use protocol::{ObjectKind, Telemetry, TransferAck, TransferBegin};
+use protocol::{Telemetry, TransferAck, TransferBegin};
 use serde::Serialize;
 use tokio::sync::oneshot;
 
@@ -216,11 +216,7 @@ pub fn command_text(c: &Command) -> String {
         Command::Plan { .. } => "plan".into(),
         Command::SetTelemetryRate { hz } => format!("rate {hz} Hz"),
         Command::Download { object, offset } => {
-            let o: &str = match object {
-                ObjectKind::Map => "map",
-                ObjectKind::Plan => "plan",
-                ObjectKind::Regions => "regions",
-            };
+            let o = crate::transfer::object_name(*object);
             format!("download {o} from {offset}")
         }
         Command::SetPose { pose } => format!(

@@ -83,7 +83,13 @@ pub struct UploadPlanArgs {
 }
 
 /// Prints a failure (JSON on stdout with `--json`, else a line on stderr); exit status 1.
-fn fail(json: bool, command: &str, outcome: &str, error: &str, extra: Value) -> ExitCode {
+pub(super) fn fail(
+    json: bool,
+    command: &str,
+    outcome: &str,
+    error: &str,
+    extra: Value,
+) -> ExitCode {
     if json {
         let mut v = json!({"command": command, "outcome": outcome, "ok": false, "error": error});
         merge(&mut v, extra);
@@ -114,7 +120,7 @@ fn map_json(m: &MapObject) -> Value {
 }
 
 /// Prints a transfer's report; exit status 0 when the receiver holds the object.
-fn finish(json: bool, command: &str, r: &JobReport, extra: Value) -> ExitCode {
+pub(super) fn finish(json: bool, command: &str, r: &JobReport, extra: Value) -> ExitCode {
     if json {
         let mut v = json!({"command": command});
         merge(&mut v, r.json());
@@ -133,7 +139,10 @@ fn finish(json: bool, command: &str, r: &JobReport, extra: Value) -> ExitCode {
 }
 
 /// Connects, and checks the robot takes transfers.
-async fn connect(port: &RequiredPort, timeout: f64) -> Result<(TransferClient, PeerInfo), String> {
+pub(super) async fn connect(
+    port: &RequiredPort,
+    timeout: f64,
+) -> Result<(TransferClient, PeerInfo), String> {
     let (link, peer) = crate::headless::connect(port, timeout)
         .await
         .map_err(|e| format!("{e:#}"))?;
@@ -141,7 +150,7 @@ async fn connect(port: &RequiredPort, timeout: f64) -> Result<(TransferClient, P
     if !peer.has(caps::TRANSFERS) {
         client.shutdown().await;
         return Err(format!(
-            "the robot ({} {}) does not take map or plan transfers",
+            "the robot ({} {}) does not take object transfers",
             peer.firmware, peer.firmware_version
         ));
     }
@@ -149,7 +158,7 @@ async fn connect(port: &RequiredPort, timeout: f64) -> Result<(TransferClient, P
 }
 
 /// A progress line on stderr while a terminal watches (nothing in scripts).
-fn progress_printer(json: bool, what: &'static str) -> impl FnMut(u32, u32) {
+pub(super) fn progress_printer(json: bool, what: &'static str) -> impl FnMut(u32, u32) {
     let show = !json && std::io::stderr().is_terminal();
     move |done, total| {
         if show && total > 0 {

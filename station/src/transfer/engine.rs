@@ -443,6 +443,7 @@ impl TransferEngine {
                     Outcome::UnknownId => JobOutcome::Failed(TransferError::UnknownId),
                     Outcome::TimedOut => JobOutcome::Failed(TransferError::TimedOut { attempts }),
                     Outcome::ObjectChanged => JobOutcome::Failed(TransferError::ObjectChanged),
+                    Outcome::Busy => JobOutcome::Failed(TransferError::Busy),
                 };
                 if outcome == JobOutcome::Complete {
                     self.report_progress(progress);
@@ -692,7 +693,8 @@ impl TransferEngine {
             TransferStatus::Rejected => {
                 self.finish(now_ms, JobOutcome::Failed(TransferError::Malformed), None);
             }
-            TransferStatus::AlreadyHave | TransferStatus::UnknownId => {}
+            // Answers a receiver gives, never a sender: ignored, as a robot's would be.
+            TransferStatus::AlreadyHave | TransferStatus::UnknownId | TransferStatus::Busy => {}
         }
     }
 

@@ -17,6 +17,7 @@
 //! [`JobReport`] whose [`JobOutcome`] is `Complete`, `AlreadyHave` or a [`TransferError`]
 //! that says what happened: nothing fails silently.
 
+pub mod calibration;
 pub mod client;
 pub mod command;
 pub mod engine;
@@ -58,6 +59,7 @@ pub fn object_name(o: ObjectKind) -> &'static str {
         ObjectKind::Map => "map",
         ObjectKind::Plan => "plan",
         ObjectKind::Regions => "regions",
+        ObjectKind::LightCalibration => "light calibration",
     }
 }
 
@@ -81,6 +83,8 @@ pub enum TransferError {
     TimedOut { attempts: u8 },
     #[error("the object changed during the transfer")]
     ObjectChanged,
+    #[error("the robot is calibrating its light sensors; upload when it is done (or stop it)")]
+    Busy,
     #[error("the robot refused the download: {}", nack_text(*.0))]
     Refused(NackReason),
     #[error("the download request failed: {0}")]
@@ -107,6 +111,7 @@ impl TransferError {
             TransferError::UnknownId => "unknown_id",
             TransferError::TimedOut { .. } => "timed_out",
             TransferError::ObjectChanged => "object_changed",
+            TransferError::Busy => "busy",
             TransferError::Refused(_) => "refused",
             TransferError::Request(_) => "request_failed",
             TransferError::Unexpected(_) => "unexpected_answer",
