@@ -183,7 +183,15 @@ pub async fn upload_map(args: &UploadMapArgs) -> anyhow::Result<ExitCode> {
         Err(e) => return Ok(fail(json, CMD, "bad_map", &e.to_string(), Value::Null)),
     };
     let Some(m) = loaded.map.filter(|_| loaded.object == ObjectKind::Map) else {
-        let e = format!("{} is not a map (use upload-plan for plans)", args.map.map);
+        let instead = match loaded.object {
+            ObjectKind::LightCalibration => "upload-calibration",
+            _ => "upload-plan",
+        };
+        let e = format!(
+            "{} is a {}, not a map (use {instead})",
+            args.map.map,
+            super::object_name(loaded.object)
+        );
         return Ok(fail(json, CMD, "bad_map", &e, Value::Null));
     };
     let extra = json!({"file": args.map.map, "map": map_json(&m)});

@@ -82,6 +82,8 @@ pub enum ObjectFileError {
         "regions cannot be uploaded: the robot segments its own map (send `segment` or `plan`)"
     )]
     Regions,
+    #[error("{path}: {message}")]
+    Calibration { path: PathBuf, message: String },
 }
 
 fn mm((x_mm, y_mm): (i32, i32)) -> PointMm {
@@ -198,6 +200,9 @@ pub fn load_for_upload(path: &str, opts: &MapOptions) -> Result<Loaded, ObjectFi
             summary,
         });
     }
+    if let Some(loaded) = load_calibration_file(Path::new(path))? {
+        return Ok(loaded);
+    }
     let map = NavMap::load(path, opts)?;
     let m = map_object(&map)?;
     let summary = format!(
@@ -227,7 +232,7 @@ pub fn read_object_file(path: &Path) -> Result<Option<Vec<u8>>, ObjectFileError>
         path: path.into(),
         source,
     })?;
-    let looks = bytes.first() == Some(&OBJECT_VERSION) && bytes.get(1).is_some_and(|k| *k <= 2);
+    let looks = bytes.first() == Some(&OBJECT_VERSION) && bytes.get(1).is_some_and(|k| *k <= 3);
     if !looks {
         return Ok(None);
     }
@@ -236,6 +241,37 @@ pub fn read_object_file(path: &Path) -> Result<Option<Vec<u8>>, ObjectFileError>
         source,
     })?;
     Ok(Some(bytes))
+}
+
+/// A light calibration in `station calibrate`'s file formats (binary "LSOM", or JSON naming
+/// its format), as the LightCalibration object the robot takes; `None` for any other file.
+fn load_calibration_file(path: &Path) -> Result<Option<Loaded>, ObjectFileError> {
+    let Ok(bytes) = std::fs::read(path) else {
+        return Ok(None);
+    };
+    let json_form = bytes.first() == Some(&b'{')
+        && std::str::from_utf8(&bytes).is_ok_and(|t| t.contains("\"robot-station light-som\""));
+    if !bytes.starts_with(b"LSOM") && !json_form {
+        return Ok(None);
+    }
+    let object = crate::calibrate::decode(&bytes)
+        .and_then(|som| crate::calibrate::light_object(&som))
+        .map_err(|e| ObjectFileError::Calibration {
+            path: path.into(),
+            message: format!("{e:#}"),
+        })?;
+    let summary = format!(
+        "light calibration {}, {} bytes, id {:#010x}",
+        path.display(),
+        object.len(),
+        crc32c(&object)
+    );
+    Ok(Some(Loaded {
+        object: ObjectKind::LightCalibration,
+        bytes: object,
+        map: None,
+        summary,
+    }))
 }
 
 /// Reads a Plan object file, refusing anything else with the byte offset of the problem.
@@ -358,6 +394,40 @@ mod tests {
         assert!(e.to_string().contains("at most 64 x 64"), "{e}");
         // 100 cells of 0.1 m = 10 m; 64 cells need 0.157 m: 0.16 m plus a centimetre.
         assert_eq!(e.suggest_m, 0.17);
+    }
+
+    #[test]
+    fn calibration_files_in_either_form_upload_as_one_light_calibration_object() {
+        let dir = std::env::temp_dir().join(format!("station-cal-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let som = robot_firmware::som::LightSom::random(
+            &mut robot_firmware::behaviour::XorShift32::new(3),
+            (50.0, 500.0),
+            (0.0, 180.0),
+        );
+        let bin = dir.join("som.bin");
+        std::fs::write(&bin, crate::calibrate::encode_bin(&som)).expect("writes");
+        let json = dir.join("som.json");
+        let text = crate::calibrate::encode_json(&som, None).expect("encodes");
+        std::fs::write(&json, text).expect("writes");
+        let load = |p: &Path| load_for_upload(&p.display().to_string(), &MapOptions::default());
+        let (a, b) = (load(&bin).expect("binary"), load(&json).expect("JSON"));
+        assert_eq!(a.object, ObjectKind::LightCalibration);
+        assert_eq!((b.object, &b.bytes), (a.object, &a.bytes));
+        assert_eq!(
+            crate::calibrate::from_light_object(&a.bytes).expect("parses"),
+            som
+        );
+        // A damaged one is refused naming the file, not taken for a map.
+        let mut bytes = std::fs::read(&bin).expect("reads");
+        bytes[12] ^= 1;
+        std::fs::write(&bin, bytes).expect("writes");
+        let Err(e) = load(&bin) else {
+            panic!("a damaged calibration was taken");
+        };
+        let e = e.to_string();
+        assert!(e.contains("som.bin") && e.contains("CRC mismatch"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -46,7 +46,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ),
     (
         "u  M",
-        "upload a map/plan file (progress bar) / show the robot's map",
+        "upload a map/plan/calibration file / show the robot's map",
     ),
     (
         "E  O  X",

@@ -67,7 +67,7 @@ pub fn render(app: &App, frame: &mut Frame, main: Rect) {
             ]))
             .block(
                 Block::bordered()
-                    .title(" Upload: a map file (any arena format) or a map/plan object ")
+                    .title(" Upload: an arena or map file, a map/plan object, a calibration ")
                     .title_bottom(" Enter uploads · Esc cancels "),
             ),
             area,
