@@ -378,6 +378,26 @@ pub fn from_light_object(bytes: &[u8]) -> anyhow::Result<LightSom> {
     Ok(som)
 }
 
+/// Reads the map in the file at `path`; errors name the file, and the line and column of a
+/// JSON syntax error (`som.json:3:14: JSON light map: expected value`).
+pub fn decode_file(path: &Path) -> anyhow::Result<LightSom> {
+    let shown = path.display();
+    let bytes = std::fs::read(path).map_err(|e| anyhow::anyhow!("cannot read {shown}: {e}"))?;
+    if !bytes.starts_with(MAGIC) {
+        if let Err(e) = serde_json::from_slice::<serde::de::IgnoredAny>(&bytes) {
+            // serde_json puts the position last ("... at line 3 column 14"): put it first.
+            let text = e.to_string();
+            let what = text.split(" at line ").next().unwrap_or(&text);
+            bail!(
+                "{shown}:{}:{}: JSON light map: {what}",
+                e.line(),
+                e.column()
+            );
+        }
+    }
+    decode(&bytes).map_err(|e| anyhow::anyhow!("{shown}: {e:#}"))
+}
+
 /// Reads a map written by [`encode_json`] or [`encode_bin`]; errors say what and where.
 pub fn decode(bytes: &[u8]) -> anyhow::Result<LightSom> {
     if bytes.starts_with(MAGIC) {
@@ -389,13 +409,27 @@ pub fn decode(bytes: &[u8]) -> anyhow::Result<LightSom> {
 
 fn decode_bin(bytes: &[u8]) -> anyhow::Result<LightSom> {
     let want = 10 + NEURONS * (FRONT + 1) * 2 + 4;
-    if bytes.len() != want {
-        bail!("binary light map: {} bytes, expected {want}", bytes.len());
+    if bytes.len() < want {
+        bail!(
+            "binary light map: byte {}: the file ends early; a map is {want} bytes",
+            bytes.len()
+        );
+    }
+    if bytes.len() > want {
+        bail!(
+            "binary light map: byte {want}: {} bytes after the map's end",
+            bytes.len() - want
+        );
     }
     let (body, crc) = bytes.split_at(want - 4);
     let stored = u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]);
     if protocol::crc32c(body) != stored {
-        bail!("binary light map: CRC mismatch at byte {}", want - 4);
+        let computed = protocol::crc32c(body);
+        bail!(
+            "binary light map: byte {}: CRC mismatch (stored {stored:#010x}, computed \
+             {computed:#010x})",
+            want - 4
+        );
     }
     let u16_at = |i: usize| u16::from_le_bytes([body[i], body[i + 1]]);
     let (version, n, m) = (u16_at(4), u16_at(6), u16_at(8));
@@ -411,7 +445,16 @@ fn decode_bin(bytes: &[u8]) -> anyhow::Result<LightSom> {
         for (k, v) in w.iter_mut().enumerate() {
             *v = f32::from(u16_at(base + 2 * k)) / 100.0;
         }
-        *o = f32::from(u16_at(base + 2 * FRONT)) / 100.0;
+        let out = u16_at(base + 2 * FRONT);
+        if out > protocol::object::LIGHT_MAX_OUTPUT {
+            bail!(
+                "binary light map: byte {}: neuron {i}'s output {}.{:02} deg is above 180 deg",
+                base + 2 * FRONT,
+                out / 100,
+                out % 100
+            );
+        }
+        *o = f32::from(out) / 100.0;
     }
     Ok(LightSom::from_neurons(weights, outputs))
 }
@@ -446,8 +489,9 @@ fn decode_json(bytes: &[u8]) -> anyhow::Result<LightSom> {
         }
         w.copy_from_slice(row);
     }
-    if let Some(i) = doc.outputs.iter().position(|v| !(0.0..=655.35).contains(v)) {
-        bail!("JSON light map: outputs[{i}] must be in 0..=655.35");
+    // Outputs are the light's angle + 90 deg; the robot takes nothing else (PROTOCOL.md §12).
+    if let Some(i) = doc.outputs.iter().position(|v| !(0.0..=180.0).contains(v)) {
+        bail!("JSON light map: outputs[{i}] must be an angle + 90 deg in 0..=180");
     }
     let outputs: [f32; NEURONS] = std::array::from_fn(|i| doc.outputs[i]);
     Ok(LightSom::from_neurons(weights, outputs))

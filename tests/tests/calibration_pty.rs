@@ -159,7 +159,7 @@ fn bad_files_and_robots_without_light_sensors_are_refused() {
     assert_eq!(out.status.code(), Some(1), "{}", text(&out));
     let t = text(&out);
     assert!(
-        t.contains("som.bin") && t.contains("CRC mismatch at byte 850"),
+        t.contains("som.bin") && t.contains("byte 850: CRC mismatch"),
         "{t}"
     );
     let _ = std::fs::remove_dir_all(&d);

@@ -64,14 +64,12 @@ pub async fn upload(args: &UploadCalibrationArgs) -> anyhow::Result<ExitCode> {
     const CMD: &str = "upload-calibration";
     let json = args.json;
     let file = args.calibration.display().to_string();
-    let object = std::fs::read(&args.calibration)
-        .map_err(|e| anyhow::anyhow!("cannot read {file}: {e}"))
-        .and_then(|b| calibrate::decode(&b))
-        .and_then(|som| calibrate::light_object(&som));
+    let object =
+        calibrate::decode_file(&args.calibration).and_then(|som| calibrate::light_object(&som));
     let bytes = match object {
         Ok(b) => b,
         Err(e) => {
-            let e = format!("{file}: {e:#}");
+            let e = format!("{e:#}");
             return Ok(fail(json, CMD, "bad_calibration", &e, Value::Null));
         }
     };

@@ -82,8 +82,9 @@ pub enum ObjectFileError {
         "regions cannot be uploaded: the robot segments its own map (send `segment` or `plan`)"
     )]
     Regions,
-    #[error("{path}: {message}")]
-    Calibration { path: PathBuf, message: String },
+    /// A light calibration file that cannot be read (the message names the file).
+    #[error("{0}")]
+    Calibration(String),
 }
 
 fn mm((x_mm, y_mm): (i32, i32)) -> PointMm {
@@ -254,12 +255,9 @@ fn load_calibration_file(path: &Path) -> Result<Option<Loaded>, ObjectFileError>
     if !bytes.starts_with(b"LSOM") && !json_form {
         return Ok(None);
     }
-    let object = crate::calibrate::decode(&bytes)
+    let object = crate::calibrate::decode_file(path)
         .and_then(|som| crate::calibrate::light_object(&som))
-        .map_err(|e| ObjectFileError::Calibration {
-            path: path.into(),
-            message: format!("{e:#}"),
-        })?;
+        .map_err(|e| ObjectFileError::Calibration(format!("{e:#}")))?;
     let summary = format!(
         "light calibration {}, {} bytes, id {:#010x}",
         path.display(),

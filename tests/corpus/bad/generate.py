@@ -9,6 +9,7 @@ Arena files (arenas/) are copies of emulator/tests/data/bad. MANIFEST.tsv says h
 is used and what the error must say; keep the two in step.
 """
 import os
+import json
 import struct
 import sys
 
@@ -116,9 +117,38 @@ def recordings(good):
     write("recordings/13-header-only-truncated.rec", good[:10])
 
 
+def light_bin(outputs=None, neurons=60, inputs=6):
+    """A `station calibrate` binary light map: "LSOM", version, shape, hundredths, CRC-32C."""
+    body = b"LSOM" + struct.pack("<HHH", 1, neurons, inputs)
+    for i in range(neurons):
+        body += struct.pack("<6H", *[5000 + 700 * k + 50 * i for k in range(inputs)])
+        body += struct.pack("<H", outputs[i] if outputs else 300 * i)
+    return body + struct.pack("<I", crc32c(body))
+
+
+def light_json(outputs=None, rows=60):
+    weights = [[50 + 7 * k + 0.5 * i for k in range(6)] for i in range(rows)]
+    outs = outputs if outputs else [3.0 * i for i in range(rows)]
+    return json.dumps({"format": "robot-station light-som", "version": 1, "neurons": 60,
+                       "inputs": 6, "weights": weights, "outputs": outs}).encode()
+
+
+def calibrations():
+    good = light_bin()
+    flipped = bytearray(good)
+    flipped[100] ^= 0x04
+    write("calibrations/01-flipped-bit.bin", bytes(flipped))
+    write("calibrations/02-truncated.bin", good[:400])
+    write("calibrations/03-output-past-180.bin", light_bin(outputs=[300 * i for i in range(59)] + [18100]))
+    write("calibrations/04-59-rows.json", light_json(rows=59))
+    write("calibrations/05-output-past-180.json", light_json(outputs=[3.0 * i for i in range(59)] + [181.0]))
+    write("calibrations/06-syntax.json", light_json()[:-7] + b",,]}")
+
+
 if __name__ == "__main__":
     good_rec = open(sys.argv[1], "rb").read()
     good_plan = open(sys.argv[2], "rb").read()
     maps()
     plans(good_plan)
     recordings(good_rec)
+    calibrations()
