@@ -161,6 +161,9 @@ pub struct App {
     pub forage: forage::ForageProgress,
     next_id: CommandId,
     pending: HashMap<CommandId, Pending>,
+    /// The last telemetry rate asked for and not yet answered: quick `+`/`-` presses step on
+    /// from it, not from the rate the robot last acknowledged.
+    rate_asked: Option<(CommandId, u8)>,
     outbox: Vec<(CommandId, Command)>,
 }
 
@@ -207,6 +210,7 @@ impl App {
             forage: forage::ForageProgress::default(),
             next_id: 1,
             pending: HashMap::new(),
+            rate_asked: None,
             outbox: Vec::new(),
         }
     }
@@ -431,9 +435,16 @@ impl App {
         }
     }
 
+    #[cfg(test)]
+    pub(crate) fn rate_asked_for_test(&self) -> Option<(CommandId, u8)> {
+        self.rate_asked
+    }
+
     fn step_rate(&mut self, d: i32) {
         let current = self
-            .rate_hz
+            .rate_asked
+            .map(|(_, hz)| hz)
+            .or(self.rate_hz)
             .or(self.peer.as_ref().map(|p| p.telemetry_hz))
             .unwrap_or(protocol::timing::TELEMETRY_DEFAULT_HZ);
         // The nearest step at or above the current rate, then one step along.
@@ -443,7 +454,8 @@ impl App {
             .unwrap_or(RATES.len() - 1) as i32;
         let j = (i + d).clamp(0, RATES.len() as i32 - 1) as usize;
         let hz = RATES.get(j).copied().unwrap_or(current);
-        self.send(Command::SetTelemetryRate { hz });
+        let id = self.send(Command::SetTelemetryRate { hz });
+        self.rate_asked = Some((id, hz));
     }
 
     /// Queues a command; returns its id.
@@ -611,6 +623,9 @@ impl App {
 
     fn on_done(&mut self, id: CommandId, command: Command, outcome: CommandOutcome) {
         let before = self.pending.remove(&id).and_then(|p| p.before);
+        if self.rate_asked.is_some_and(|(asked, _)| asked == id) {
+            self.rate_asked = None;
+        }
         let what = command_text(&command);
         match outcome {
             CommandOutcome::Acked { info, rtt_ms, .. } => {

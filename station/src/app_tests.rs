@@ -165,8 +165,25 @@ fn the_rate_keys_step_through_the_standard_rates() {
     let mut app = connected_app();
     app.update(Action::RateStep(1));
     assert_eq!(app.take_outbox()[0].1, Command::SetTelemetryRate { hz: 20 });
+    // Quick presses step on from what was asked, not from the last acknowledged rate.
+    app.update(Action::RateStep(1));
     app.update(Action::RateStep(-1));
-    assert_eq!(app.take_outbox()[0].1, Command::SetTelemetryRate { hz: 5 });
+    app.update(Action::RateStep(-1));
+    let asked: Vec<_> = app.take_outbox().into_iter().map(|(_, c)| c).collect();
+    let hz = |hz| Command::SetTelemetryRate { hz };
+    assert_eq!(asked, [hz(50), hz(20), hz(10)]);
+    // Once the last one is refused, the next press steps from the rate the robot has.
+    let (last, _) = app.rate_asked_for_test().unwrap();
+    app.update(Action::Link(LinkEvent::CommandDone {
+        id: last,
+        command: hz(10),
+        outcome: CommandOutcome::Nacked {
+            reason: protocol::NackReason::OutOfRange,
+            sends: 1,
+        },
+    }));
+    app.update(Action::RateStep(-1));
+    assert_eq!(app.take_outbox()[0].1, hz(5));
 }
 
 #[test]

@@ -65,6 +65,11 @@ fn key(app: &App, k: &KeyEvent) -> Option<Action> {
     }
     if app.transfers.prompt.is_some() {
         return match k.code {
+            KeyCode::Char('u') if ctrl => Some(Action::Transfer(TransferAction::PromptClear)),
+            KeyCode::Char(_) if ctrl => None,
+            KeyCode::End | KeyCode::Left | KeyCode::Right => {
+                Some(Action::Transfer(TransferAction::PromptKeep))
+            }
             KeyCode::Char(c) => Some(Action::Transfer(TransferAction::PromptInput(c))),
             KeyCode::Backspace => Some(Action::Transfer(TransferAction::PromptBackspace)),
             KeyCode::Enter => Some(Action::Transfer(TransferAction::PromptCommit)),

@@ -273,3 +273,37 @@ fn keys_upload_plan_on_the_robot_and_execute_its_plan() {
         vec![Command::ExecutePlan { plan_id }, Command::StartExploration]
     );
 }
+
+#[test]
+fn the_upload_prompt_suggestion_is_replaced_by_typing_kept_by_end_and_cleared_by_ctrl_u() {
+    let mut app = app();
+    let press = |app: &mut station::app::App, code: KeyCode, m: KeyModifiers| {
+        let ev = TermEvent::Key(KeyEvent::new(code, m));
+        if let Some(a) = station::input::action_for(app, &ev) {
+            app.update(a);
+        }
+    };
+    let type_text = |app: &mut station::app::App, s: &str| {
+        for c in s.chars() {
+            press(app, KeyCode::Char(c), KeyModifiers::NONE);
+        }
+    };
+    app.update(key(&app, 'u'));
+    assert!(app.transfers.prompt_suggested);
+    type_text(&mut app, "plan.obj");
+    assert_eq!(app.transfers.prompt.as_deref(), Some("plan.obj"));
+    // Typing on an edited path appends; Ctrl-U clears it all.
+    type_text(&mut app, "2");
+    assert_eq!(app.transfers.prompt.as_deref(), Some("plan.obj2"));
+    press(&mut app, KeyCode::Char('u'), KeyModifiers::CONTROL);
+    assert_eq!(app.transfers.prompt.as_deref(), Some(""));
+    press(&mut app, KeyCode::Esc, KeyModifiers::NONE);
+    // End keeps the suggestion for editing.
+    app.update(key(&app, 'u'));
+    press(&mut app, KeyCode::End, KeyModifiers::NONE);
+    type_text(&mut app, "x");
+    assert_eq!(
+        app.transfers.prompt.as_deref(),
+        Some(format!("{}x", emulator::builtin::MICRO_RATO_99).as_str())
+    );
+}

@@ -49,6 +49,10 @@ pub enum TransferAction {
     OpenPrompt,
     PromptInput(char),
     PromptBackspace,
+    /// Ctrl-U: clear the prompt (as in a shell).
+    PromptClear,
+    /// End or an arrow: keep the suggestion and edit it.
+    PromptKeep,
     /// Enter: upload the file named in the prompt.
     PromptCommit,
     /// Esc: close the prompt.
@@ -89,6 +93,9 @@ pub struct Transfers {
     pub engine: TransferEngine,
     /// The upload prompt's text while it is open.
     pub prompt: Option<String>,
+    /// The prompt still holds its suggestion untouched: typing replaces it, as a selected
+    /// default does in a dialog; Backspace, End or an arrow keep it for editing.
+    pub prompt_suggested: bool,
     /// The file uploaded last (the prompt's next default).
     pub last_path: Option<String>,
     /// The robot's map as last shown: (id, CRC).
@@ -145,20 +152,33 @@ impl App {
                     let m = self.map.plan.map()?;
                     (m.source != ROBOT_MAP_NAME).then(|| m.source.clone())
                 });
+                self.transfers.prompt_suggested = default.is_some();
                 self.transfers.prompt = Some(default.unwrap_or_default());
             }
             TransferAction::PromptInput(c) => {
+                let fresh = std::mem::take(&mut self.transfers.prompt_suggested);
                 if let Some(p) = self.transfers.prompt.as_mut() {
+                    if fresh {
+                        p.clear();
+                    }
                     if p.len() < PROMPT_MAX && !c.is_control() {
                         p.push(c);
                     }
                 }
             }
             TransferAction::PromptBackspace => {
+                self.transfers.prompt_suggested = false;
                 if let Some(p) = self.transfers.prompt.as_mut() {
                     p.pop();
                 }
             }
+            TransferAction::PromptClear => {
+                self.transfers.prompt_suggested = false;
+                if let Some(p) = self.transfers.prompt.as_mut() {
+                    p.clear();
+                }
+            }
+            TransferAction::PromptKeep => self.transfers.prompt_suggested = false,
             TransferAction::PromptCancel => self.transfers.prompt = None,
             TransferAction::PromptCommit => {
                 if let Some(path) = self.transfers.prompt.take() {

@@ -7,7 +7,7 @@
 //! robot holds, as downloaded, beside the station's own plan layers. Cannot fail.
 
 use ratatui::layout::Rect;
-use ratatui::style::{Color, Style, Stylize};
+use ratatui::style::{Color, Modifier, Style, Stylize};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::canvas::{Context, Line as CLine};
 use ratatui::widgets::{Block, Clear, Gauge, Paragraph};
@@ -62,13 +62,20 @@ pub fn render(app: &App, frame: &mut Frame, main: Rect) {
         frame.render_widget(Clear, area);
         frame.render_widget(
             Paragraph::new(Line::from(vec![
-                Span::raw(shown),
+                // A suggestion shows selected: the first key typed replaces it.
+                if app.transfers.prompt_suggested {
+                    Span::styled(shown, Style::new().add_modifier(Modifier::REVERSED))
+                } else {
+                    Span::raw(shown)
+                },
                 Span::styled("█", Style::new().fg(Color::Yellow)),
             ]))
             .block(
                 Block::bordered()
                     .title(" Upload: an arena or map file, a map/plan object, a calibration ")
-                    .title_bottom(" Enter uploads · Esc cancels "),
+                    .title_bottom(
+                        " Enter uploads · typing replaces, End edits · Ctrl-U clears · Esc ",
+                    ),
             ),
             area,
         );
