@@ -176,8 +176,9 @@ pub struct RunArgs {
     /// Goal `X,Y` in metres for go-to (default: the arena's goal or target).
     #[arg(long, value_name = "X,Y", value_parser = parse_point)]
     pub goal: Option<[f64; 2]>,
-    /// Simulated seconds before giving up [default: 300; line-correct: 1.5 x the survey's
-    /// time at 0.1 m/s, e.g. 600 s for 40 m].
+    /// Simulated seconds before giving up [default: 300; forage: 1200, since the first
+    /// object comes home after about 6 minutes; line-correct: 1.5 x the survey's time at
+    /// 0.1 m/s, e.g. 600 s for 40 m].
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub timeout: Option<f64>,
     /// Print the report as one JSON object (otherwise a readable summary).
@@ -372,7 +373,11 @@ impl RunArgs {
     /// The scenario these arguments describe.
     pub fn options(&self) -> Result<ScenarioOptions, String> {
         self.world.check()?;
-        let timeout_s = self.timeout_s(DEFAULT_TIMEOUT_S)?;
+        let timeout_s = self.timeout_s(if self.task == TaskArg::Forage {
+            FORAGE_TIMEOUT_S
+        } else {
+            DEFAULT_TIMEOUT_S
+        })?;
         let task = match self.task {
             TaskArg::GoTo => Task::GoTo(self.goal.map(|[x, y]| GoalPoint { x_m: x, y_m: y })),
             TaskArg::ReachBeacon | TaskArg::ExploreThenPlan if self.goal.is_some() => {
@@ -439,6 +444,9 @@ impl RunArgs {
 
 /// Simulated seconds a scenario runs before giving up, unless `--timeout` says.
 const DEFAULT_TIMEOUT_S: f64 = 300.0;
+/// Foraging's: 20 simulated minutes, in which seeds 1-6 bring 1-3 of the 3 objects home (the
+/// first after 4-13 minutes of searching); 300 s would end most runs with none.
+const FORAGE_TIMEOUT_S: f64 = 1200.0;
 
 fn numbers(s: &str, what: &str, min: usize, max: usize) -> Result<Vec<f64>, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
@@ -461,7 +469,8 @@ fn parse_point(s: &str) -> Result<[f64; 2], String> {
     Ok([v[0], v[1]])
 }
 
-fn parse_pose(s: &str) -> Result<[f64; 3], String> {
+/// `X,Y[,HEADING_DEG]` in metres and degrees (`--start`).
+pub fn parse_pose(s: &str) -> Result<[f64; 3], String> {
     let v = numbers(s, "X,Y or X,Y,HEADING_DEG", 2, 3)?;
     Ok([v[0], v[1], v.get(2).copied().unwrap_or(0.0)])
 }

@@ -59,17 +59,19 @@ impl Drop for BuiltinEmulator {
 pub fn start_builtin_emulator(
     key: Option<&[u8; protocol::sign::KEY_LEN]>,
 ) -> Result<BuiltinEmulator, BuiltinError> {
-    start_builtin_emulator_with(None, None, key)
+    start_builtin_emulator_with(None, None, key, None)
 }
 
 /// Starts the built-in emulator in `arena` (a built-in name or a file; default Micro-Rato'99)
 /// with `profile` (default micro-rato, or khepera in `builtin:forage`, the robot with a
 /// gripper). With `key` the robot signs its frames and accepts only frames signed with it
-/// (PROTOCOL.md §13), as a robot given `--key-file` does.
+/// (PROTOCOL.md §13), as a robot given `--key-file` does. `start` (`X,Y,HEADING_DEG`) replaces
+/// the arena's start pose.
 pub fn start_builtin_emulator_with(
     arena: Option<&str>,
     profile: Option<&'static robot_firmware::Profile>,
     key: Option<&[u8; protocol::sign::KEY_LEN]>,
+    start: Option<[f64; 3]>,
 ) -> Result<BuiltinEmulator, BuiltinError> {
     let base = std::env::var_os("XDG_RUNTIME_DIR")
         .map(PathBuf::from)
@@ -81,6 +83,13 @@ pub fn start_builtin_emulator_with(
     let mut opts = EmulatorOptions::builtin_default();
     opts.serve.link = Some(link.clone());
     opts.serve.key = key.copied();
+    if let Some([x, y, deg]) = start {
+        opts.sim.start = Some(emulator::arena::Pose {
+            x,
+            y,
+            heading: deg.to_radians(),
+        });
+    }
     if let Some(a) = arena {
         opts.arena = a.to_string();
     }

@@ -28,7 +28,8 @@ pub struct Cli {
     #[command(flatten)]
     pub port: PortArgs,
     /// An arena file to draw under the map and plan on with P (CiberRato XML, maze text, ROS
-    /// YAML, ASCII grid), or a built-in one (`builtin:micro-rato-99`, `builtin:forage`).
+    /// YAML, ASCII grid), or a built-in one (`builtin:micro-rato-99`, `builtin:forage`,
+    /// `builtin:floor-grid`).
     /// Without --port the built-in emulator simulates it.
     #[arg(long, value_name = "FILE", global = false)]
     pub arena: Option<PathBuf>,
@@ -36,6 +37,11 @@ pub struct Cli {
     /// `builtin:forage` (the foraging robot, with its gripper).
     #[arg(long, value_enum, global = false)]
     pub profile: Option<emulator::cli::ProfileArg>,
+    /// The built-in emulator's start pose `X,Y[,HEADING_DEG]` in metres (without --port;
+    /// default: the arena's start), e.g. next to a lamp of `builtin:forage` to calibrate.
+    #[arg(long, value_name = "X,Y[,DEG]", value_parser = emulator::cli::parse_pose,
+          allow_negative_numbers = true, conflicts_with = "port")]
+    pub start: Option<[f64; 3]>,
 }
 
 /// Which port to use.
@@ -65,11 +71,11 @@ pub enum Sub {
     Send {
         #[command(flatten)]
         port: RequiredPort,
-        /// Print JSON.
-        #[arg(long)]
+        /// Print JSON (before or after the command: `send --port P plan --json`).
+        #[arg(long, global = true)]
         json: bool,
         /// Seconds to wait for the handshake.
-        #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
+        #[arg(long, default_value_t = 5.0, value_parser = parse_seconds, global = true)]
         timeout: f64,
         #[command(subcommand)]
         command: SendCmd,
@@ -587,6 +593,24 @@ mod tests {
             };
             assert_eq!(command.to_command(), *want, "{args:?}");
         }
+    }
+
+    #[test]
+    fn the_built_in_emulator_takes_a_start_pose_but_a_port_does_not() {
+        let cli = parse(&["--arena", "builtin:forage", "--start", "0.1825,0.62,-90"]).unwrap();
+        assert_eq!(cli.start, Some([0.1825, 0.62, -90.0]));
+        let e = parse(&["--port", "/dev/ttyUSB0", "--start", "1,1"]).unwrap_err();
+        assert!(e.to_string().contains("cannot be used with"), "{e}");
+    }
+
+    #[test]
+    fn send_options_may_follow_the_command() {
+        let cli = parse(&["send", "--port", "p", "plan", "--json", "--timeout", "2"]).unwrap();
+        let Some(Sub::Send { json, timeout, .. }) = cli.command else {
+            panic!("not a send");
+        };
+        assert!(json);
+        assert_eq!(timeout, 2.0);
     }
 
     #[test]

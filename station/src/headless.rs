@@ -41,6 +41,7 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 cli.arena.as_deref(),
                 cli.profile.map(|p| p.profile()),
                 key,
+                cli.start,
             )
             .await
         }
@@ -77,6 +78,7 @@ async fn interactive(
     arena: Option<&Path>,
     profile: Option<&'static robot_firmware::Profile>,
     key: Option<[u8; protocol::sign::KEY_LEN]>,
+    start: Option<[f64; 3]>,
 ) -> anyhow::Result<ExitCode> {
     if !std::io::stdout().is_terminal() {
         bail!("the TUI needs a terminal; for scripts use `station send` or `station stats`");
@@ -109,7 +111,8 @@ async fn interactive(
         }
         None => {
             let simulated = arena_path.map(|p| p.to_string_lossy().into_owned());
-            let mut emu = start_builtin_emulator_with(simulated.as_deref(), profile, key.as_ref())?;
+            let mut emu =
+                start_builtin_emulator_with(simulated.as_deref(), profile, key.as_ref(), start)?;
             let label = format!("built-in emulator on {}", emu.pty_path().display());
             if arena.is_none() {
                 arena = emu.arena.clone();
