@@ -86,6 +86,17 @@ impl Endpoint {
     }
 }
 
+/// The bytes of `spec` if it is a file that opens as a Map object (version 1, kind 0).
+fn map_object_file(spec: &str) -> Option<Vec<u8>> {
+    let path = std::path::Path::new(spec);
+    if !path.is_file() {
+        return None;
+    }
+    let bytes = std::fs::read(path).ok()?;
+    (bytes.first() == Some(&protocol::object::OBJECT_VERSION) && bytes.get(1) == Some(&0))
+        .then_some(bytes)
+}
+
 /// The planner's map: a nav grid in `Vec` storage, its markers and where it came from.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NavMap {
@@ -108,8 +119,23 @@ pub struct NavMap {
 }
 
 impl NavMap {
-    /// Loads `spec` (a file, or `builtin:micro-rato-99`) and builds its grid.
+    /// Loads `spec` (an arena file, a Map object file such as `station download-map --out`
+    /// writes, or `builtin:micro-rato-99`) and builds its grid.
     pub fn load(spec: &str, opts: &MapOptions) -> Result<NavMap, NavError> {
+        if let Some(bytes) = map_object_file(spec) {
+            let name = std::path::Path::new(spec)
+                .file_stem()
+                .map_or_else(|| spec.to_string(), |s| s.to_string_lossy().into_owned());
+            let mut map = NavMap::from_map_object(&name, &bytes)
+                .map_err(|e| NavError::BadOption(format!("{spec}: {e}")))?;
+            map.source = spec.to_string();
+            map.notes.push(
+                "a Map object: its cells are used as they are (--cell and --radius apply to \
+                 arena files)"
+                    .into(),
+            );
+            return Ok(map);
+        }
         let arena = emulator::builtin::load(spec, &LoadOptions::default())?;
         NavMap::from_arena(&arena, spec, opts)
     }
@@ -490,6 +516,26 @@ mod tests {
 
     fn micro_rato() -> NavMap {
         NavMap::load(emulator::builtin::MICRO_RATO_99, &MapOptions::default()).expect("built in")
+    }
+
+    #[test]
+    fn a_map_object_file_loads_as_the_map_it_encodes() {
+        let arena = micro_rato();
+        let object = crate::transfer::objects::map_object(&arena).expect("encodes");
+        let path = std::env::temp_dir().join(format!("robot-map-{}.obj", std::process::id()));
+        std::fs::write(&path, &object.bytes).expect("writes");
+        let spec = path.display().to_string();
+        let loaded = NavMap::load(&spec, &MapOptions::default()).expect("a Map object loads");
+        assert_eq!(loaded.grid, arena.grid);
+        assert_eq!(loaded.start, arena.start);
+        assert_eq!(loaded.source, spec);
+        // A damaged one says what and where, naming the file.
+        std::fs::write(&path, &object.bytes[..20]).expect("writes");
+        let e = NavMap::load(&path.display().to_string(), &MapOptions::default())
+            .expect_err("truncated")
+            .to_string();
+        assert!(e.contains("robot-map-") && e.contains("byte "), "{e}");
+        let _ = std::fs::remove_file(&path);
     }
 
     #[test]
