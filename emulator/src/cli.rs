@@ -49,7 +49,7 @@ pub enum Command {
 #[derive(Debug, Clone, Args)]
 pub struct WorldArgs {
     /// Arena file: CiberRato lab .xml, micromouse maze .txt, ROS map .yaml, or an ASCII grid;
-    /// or `builtin:micro-rato-99`.
+    /// or a built-in one: `builtin:micro-rato-99`, `builtin:forage`, `builtin:floor-grid`.
     #[arg(long, default_value = crate::builtin::MICRO_RATO_99, value_name = "FILE")]
     pub arena: String,
     /// CiberRato grid file with start poses (default: found beside a `...Lab.xml`).

@@ -75,7 +75,8 @@ pub enum Sub {
         #[arg(long, global = true)]
         json: bool,
         /// Seconds to wait for the handshake.
-        #[arg(long, default_value_t = 5.0, value_parser = parse_seconds, global = true)]
+        #[arg(long, default_value_t = 5.0, value_parser = parse_seconds, global = true,
+          allow_negative_numbers = true)]
         timeout: f64,
         #[command(subcommand)]
         command: SendCmd,
@@ -85,13 +86,15 @@ pub enum Sub {
         #[command(flatten)]
         port: RequiredPort,
         /// Seconds to watch.
-        #[arg(long, short = 's', default_value_t = 5.0, value_parser = parse_seconds)]
+        #[arg(long, short = 's', default_value_t = 5.0, value_parser = parse_seconds,
+          allow_negative_numbers = true)]
         seconds: f64,
         /// Print JSON.
         #[arg(long)]
         json: bool,
         /// Seconds to wait for the handshake.
-        #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
+        #[arg(long, default_value_t = 5.0, value_parser = parse_seconds,
+          allow_negative_numbers = true)]
         timeout: f64,
     },
     /// Upload a map to the robot: any map file `station plan` reads, or a Map object file
@@ -261,16 +264,20 @@ pub enum SendCmd {
     /// Manual velocity: forward mm/s, turn mrad/s (counter-clockwise positive).
     #[command(allow_negative_numbers = true)]
     Teleop {
+        /// Forward speed, mm/s, -2000 to 2000 (the robot clamps it to its teleop_max_mm_s).
         #[arg(value_parser = clap::value_parser!(i16).range(-2000..=2000))]
         v_mm_s: i16,
+        /// Turn rate, mrad/s, -20000 to 20000, positive turning left (counter-clockwise).
         #[arg(value_parser = clap::value_parser!(i16).range(-20000..=20000))]
         w_mrad_s: i16,
     },
     /// Drive to a point, metres in the map frame.
     #[command(allow_negative_numbers = true)]
     Goto {
+        /// X, metres in the map frame (x right).
         #[arg(value_parser = parse_metres)]
         x: f64,
+        /// Y, metres in the map frame (y up).
         #[arg(value_parser = parse_metres)]
         y: f64,
     },
@@ -283,6 +290,7 @@ pub enum SendCmd {
     Stop,
     /// Telemetry rate in Hz (0 = off, at most 50).
     Rate {
+        /// Telemetry frames a second, 0 to 50.
         #[arg(value_parser = clap::value_parser!(u8).range(0..=50))]
         hz: u8,
     },

@@ -18,7 +18,8 @@ use super::NavError;
 #[derive(Debug, Args, Clone, PartialEq)]
 pub struct MapArgs {
     /// The map: a CiberRato lab (.xml), a micromouse maze (.txt), a ROS map (.yaml with its
-    /// .pgm), an ASCII grid, or builtin:micro-rato-99.
+    /// .pgm), an ASCII grid, a Map object (from download-map), or a built-in arena
+    /// (builtin:micro-rato-99, builtin:forage, builtin:floor-grid).
     #[arg(long, short = 'm', value_name = "FILE")]
     pub map: String,
     /// Grid cell side, metres (rounded to whole mm).

@@ -40,7 +40,8 @@ pub struct RecordArgs {
     #[arg(long, short = 'o', value_name = "FILE")]
     pub out: PathBuf,
     /// Seconds to record; without it, until Ctrl-C.
-    #[arg(long, short = 's', value_parser = parse_seconds)]
+    #[arg(long, short = 's', value_parser = parse_seconds,
+          allow_negative_numbers = true)]
     pub seconds: Option<f64>,
     /// Ask the robot for this telemetry rate (Hz, 1..=50) at every handshake.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=50))]

@@ -35,7 +35,8 @@ pub struct UploadCalibrationArgs {
     #[arg(long)]
     pub json: bool,
     /// Seconds to wait for the handshake.
-    #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
+    #[arg(long, default_value_t = 5.0, value_parser = parse_seconds,
+          allow_negative_numbers = true)]
     pub timeout: f64,
 }
 
@@ -55,7 +56,8 @@ pub struct DownloadCalibrationArgs {
     #[arg(long)]
     pub json: bool,
     /// Seconds to wait for the handshake.
-    #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
+    #[arg(long, default_value_t = 5.0, value_parser = parse_seconds,
+          allow_negative_numbers = true)]
     pub timeout: f64,
 }
 

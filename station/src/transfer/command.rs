@@ -41,7 +41,8 @@ pub struct UploadMapArgs {
     #[arg(long)]
     pub json: bool,
     /// Seconds to wait for the handshake.
-    #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
+    #[arg(long, default_value_t = 5.0, value_parser = parse_seconds,
+          allow_negative_numbers = true)]
     pub timeout: f64,
 }
 
@@ -62,7 +63,8 @@ pub struct DownloadMapArgs {
     #[arg(long)]
     pub json: bool,
     /// Seconds to wait for the handshake.
-    #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
+    #[arg(long, default_value_t = 5.0, value_parser = parse_seconds,
+          allow_negative_numbers = true)]
     pub timeout: f64,
 }
 
@@ -78,7 +80,8 @@ pub struct UploadPlanArgs {
     #[arg(long)]
     pub json: bool,
     /// Seconds to wait for the handshake.
-    #[arg(long, default_value_t = 5.0, value_parser = parse_seconds)]
+    #[arg(long, default_value_t = 5.0, value_parser = parse_seconds,
+          allow_negative_numbers = true)]
     pub timeout: f64,
 }
 
