@@ -105,8 +105,14 @@ async fn interactive(
     let mut builtin = None;
     let (path, label) = match port {
         Some(p) => {
-            // Fail now, with the reason, rather than open a TUI on a port that cannot work.
-            drop(open_exclusive(p, baud)?);
+            // Fail now, with the reason, rather than open a TUI on a port that cannot work
+            // (busy, not a tty, no permission). A port that is not there yet is waited for, as
+            // after an unplug: people start the station before plugging the robot in.
+            match open_exclusive(p, baud) {
+                Ok(port) => drop(port),
+                Err(crate::link::transport::OpenError::NotFound { .. }) => {}
+                Err(e) => return Err(e.into()),
+            }
             (p.to_path_buf(), p.display().to_string())
         }
         None => {

@@ -26,7 +26,11 @@ const LIGHT_LEN: f64 = 0.5;
 
 pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     let profile = profile_of(app);
-    let title = format!(" Sensors — {} ", profile.name);
+    // The glyph needs some layout before a robot says which it is; the title does not guess.
+    let title = match app.peer {
+        Some(_) => format!(" Sensors — {} ", profile.name),
+        None => " Sensors ".to_string(),
+    };
     let block = Block::bordered().title(title);
     let inner = block.inner(area);
     frame.render_widget(block, area);
