@@ -127,6 +127,9 @@ pub struct AppOptions {
 #[derive(Debug)]
 pub struct App {
     pub now_ms: u64,
+    /// Driven by `station replay`: what happened is shown, nothing is sent, and no hint
+    /// offers to send anything.
+    pub replaying: bool,
     pub size: (u16, u16),
     pub view: View,
     pub help: bool,
@@ -178,6 +181,7 @@ impl App {
     pub fn new(opts: AppOptions) -> Self {
         App {
             now_ms: 0,
+            replaying: false,
             size: (80, 24),
             view: View::Dashboard,
             help: false,

@@ -110,3 +110,16 @@ fn keys_pause_seek_both_ways_and_change_speed() {
     key(&mut s, 10_000_000, KeyCode::Char('q'));
     assert!(s.quit);
 }
+
+#[test]
+fn a_replay_at_its_start_offers_no_live_hints() {
+    let mut s = session();
+    s.player.toggle_pause(0);
+    s.sync(0);
+    let start = screen(&s, 0);
+    // Before the recording's first session: no "keeps trying" notice, no go-to hint, and the
+    // sensors panel does not guess a robot.
+    assert!(!start.contains("keeps trying"), "{start}");
+    assert!(!start.contains("go-to"), "{start}");
+    assert!(!start.contains("Sensors — "), "{start}");
+}

@@ -42,6 +42,7 @@ impl ReplaySession {
         let player = Player::new(rec.duration_us(), speed);
         let feed = ReplayFeed::new(&rec.meta.port);
         let mut app = App::new(opts.clone());
+        app.replaying = true;
         notes(&mut app, &rec, file);
         ReplaySession {
             rec,
@@ -86,6 +87,7 @@ impl ReplaySession {
     /// A fresh app and feed at time 0, keeping what the operator chose to look at.
     fn restart(&mut self) {
         let mut app = App::new(self.opts.clone());
+        app.replaying = true;
         app.size = self.app.size;
         app.view = self.app.view;
         app.chart = self.app.chart;

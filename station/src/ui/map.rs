@@ -125,6 +125,8 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             "× goal ".yellow(),
             if app.map.cursor_mode {
                 "+ cursor ".green()
+            } else if app.replaying {
+                "".into()
             } else {
                 "g/click: go-to ".dark_gray()
             },

@@ -155,12 +155,18 @@ fn notice(app: &App, frame: &mut Frame, main: Rect) {
     use ratatui::style::{Color, Style};
     use ratatui::widgets::{Block, Clear, Paragraph, Wrap};
     let (title, text) = match &app.connection {
+        // A replay between sessions: the header says so; nobody is trying anything.
+        crate::link::Connection::Closed { .. } if app.replaying => return,
         crate::link::Connection::Closed { reason } => (" Not connected ", reason.clone()),
         crate::link::Connection::Refused { message } => (" Robot refused ", message.clone()),
         _ => return,
     };
     let width = main.width.saturating_sub(4).max(10);
-    let text = format!("{text}. The station keeps trying.");
+    let text = if app.replaying {
+        format!("{text} (recorded).")
+    } else {
+        format!("{text}. The station keeps trying.")
+    };
     let lines = (text.chars().count() as u16).div_ceil(width.saturating_sub(2).max(1));
     let height = (lines + 2).min(main.height);
     let area = Rect {
