@@ -21,7 +21,7 @@ use crate::app::params::format_value;
 use crate::app::{App, AppOptions};
 use crate::builtin::start_builtin_emulator_with;
 use crate::cli::{Cli, RequiredPort, SendCmd, Sub};
-use crate::link::api::{command_text, nack_text, param_name};
+use crate::link::api::{command_text, param_name, refusal_text};
 use crate::link::serial::{open_exclusive, SerialConnector};
 use crate::link::{
     spawn_link, CommandOutcome, Connection, LinkEvent, LinkOptions, LinkStats, PeerInfo,
@@ -303,9 +303,9 @@ async fn send(
         }
         CommandOutcome::Nacked { reason, sends } => (
             false,
-            format!("nack: {what}: {}", nack_text(reason)),
+            format!("nack: {what}: {}", refusal_text(&command, reason)),
             json!({"outcome": "nack", "command": what, "sends": sends,
-                   "reason": format!("{reason:?}"), "reason_text": nack_text(reason)}),
+                   "reason": format!("{reason:?}"), "reason_text": refusal_text(&command, reason)}),
         ),
         CommandOutcome::Failed(why) => (
             false,

@@ -183,6 +183,27 @@ impl std::fmt::Display for CommandFailure {
     }
 }
 
+/// A refusal of `command` in words: [`nack_text`], and for a parameter out of range the range
+/// the firmware's table gives (`value out of range: 0 to 2000 mm/s`).
+pub fn refusal_text(command: &protocol::Command, reason: NackReason) -> String {
+    let base = nack_text(reason);
+    match (command, reason) {
+        (protocol::Command::SetParam { id, .. }, NackReason::OutOfRange) => {
+            match robot_firmware::params::info(id.0) {
+                Some(p) => format!(
+                    "{base}: {} to {}{}{}",
+                    p.min,
+                    p.max,
+                    if p.unit.is_empty() { "" } else { " " },
+                    p.unit
+                ),
+                None => base.to_string(),
+            }
+        }
+        _ => base.to_string(),
+    }
+}
+
 /// A human description of a Nack reason (PROTOCOL.md §6 kind 6).
 pub fn nack_text(reason: NackReason) -> &'static str {
     match reason {
@@ -235,4 +256,31 @@ pub fn param_name(id: u16) -> String {
 
 fn mm_to_m(mm: i32) -> f64 {
     f64::from(mm) / 1000.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use protocol::{Command, ParamId};
+
+    #[test]
+    fn a_parameter_out_of_range_is_refused_with_the_range_it_takes() {
+        let set = |id, value| Command::SetParam {
+            id: ParamId(id),
+            value,
+        };
+        assert_eq!(
+            refusal_text(&set(2, 5000.0), NackReason::OutOfRange),
+            "value out of range: 0 to 2000 mm/s"
+        );
+        // Other refusals, and parameters the table does not know, keep the plain words.
+        assert_eq!(
+            refusal_text(&set(999, 1.0), NackReason::OutOfRange),
+            "value out of range"
+        );
+        assert_eq!(
+            refusal_text(&Command::Stop, NackReason::Busy),
+            nack_text(NackReason::Busy)
+        );
+    }
 }
