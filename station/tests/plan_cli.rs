@@ -317,3 +317,14 @@ fn ascii_grids_plan_from_their_s_to_their_g() {
     assert_eq!(w.last(), Some(&(1.95, 0.75)));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_small_arena_at_coarse_cells_suggests_a_finer_cell_which_then_plans() {
+    let e = fails(&["plan", "--map", "builtin:forage"]);
+    assert!(e.contains("try a smaller --cell, e.g. 0.1"), "{e}");
+    let v = ok_json(&["plan", "--map", "builtin:forage", "--cell", "0.1", "--json"]);
+    assert!(
+        v["waypoints"].as_array().is_some_and(|w| !w.is_empty()),
+        "{v}"
+    );
+}

@@ -425,6 +425,17 @@ impl NavMap {
                 self.radius_m
             );
         }
+        // A cell that touches any wall is an obstacle: in a small arena coarse cells leave few
+        // free ones (`builtin:forage` at 0.3 m: none).
+        let (free, obstacle, _) = self.counts();
+        if free * 4 < free + obstacle && cell > 0.1 + 1e-9 {
+            return format!(
+                " (at {cell} m cells only {free} of {} cells are free; try a smaller --cell, e.g. \
+                 {})",
+                free + obstacle,
+                (cell / 3.0 * 100.0).round().max(1.0) / 100.0
+            );
+        }
         String::new()
     }
 
