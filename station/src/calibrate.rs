@@ -80,6 +80,9 @@ pub struct CalibrateArgs {
     /// Use a damaged or torn recording up to its last good record.
     #[arg(long)]
     pub salvage: bool,
+    /// Overwrite --out if it exists.
+    #[arg(long)]
+    pub force: bool,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -505,7 +508,7 @@ pub(crate) fn is_json(path: &Path) -> bool {
 /// Runs `station calibrate`.
 pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
     // Before the work, and so that the map never replaces the recording it came from.
-    crate::export::check_out(&args.out, &args.recording).context("--out")?;
+    crate::export::check_out(&args.out, &args.recording, args.force).context("--out")?;
     let rec = crate::export::open_whole(&args.recording, args.salvage)?;
     let frames = samples(&rec, args.any_mode);
     if frames.is_empty() {

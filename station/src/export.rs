@@ -42,6 +42,9 @@ pub struct ExportArgs {
     /// Export a damaged or torn recording up to its last good record instead of refusing it.
     #[arg(long)]
     pub salvage: bool,
+    /// Overwrite output files that exist.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Why an export failed.
@@ -140,7 +143,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         .flatten()
         .collect();
     for out in &outs {
-        check_out(out, &args.file)?;
+        check_out(out, &args.file, args.force)?;
     }
     if outs.len() == 2 && args.mcap == args.csv {
         bail!("--mcap and --csv name the same file");
@@ -194,8 +197,9 @@ pub(crate) fn open_whole(path: &Path, salvage: bool) -> anyhow::Result<Recording
     Ok(rec)
 }
 
-/// Refuses an output that is a directory, lies in a missing directory, or is the input.
-pub(crate) fn check_out(out: &Path, input: &Path) -> anyhow::Result<()> {
+/// Refuses an output that is a directory, lies in a missing directory, is the input, or
+/// exists (unless `force`): like `station record`, nothing is overwritten by surprise.
+pub(crate) fn check_out(out: &Path, input: &Path, force: bool) -> anyhow::Result<()> {
     if out.is_dir() {
         bail!("{} is a directory; give a file name", out.display());
     }
@@ -212,6 +216,9 @@ pub(crate) fn check_out(out: &Path, input: &Path) -> anyhow::Result<()> {
     };
     if same {
         bail!("the output {} is the input", out.display());
+    }
+    if out.exists() && !force {
+        bail!("{} exists; pass --force to overwrite it", out.display());
     }
     Ok(())
 }
