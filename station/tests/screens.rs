@@ -363,3 +363,24 @@ fn a_signed_session_says_so_beside_the_capabilities_and_counts_refused_frames() 
         }
     );
 }
+
+#[test]
+fn the_header_keeps_the_recording_clock_readable_at_80_columns() {
+    let mut app = story();
+    app.recording = Some(("/home/me/station-20261122-161849.rec".into(), app.now_ms));
+    let wide = screen(&app, 180, 50);
+    let top = wide.lines().next().unwrap();
+    assert!(
+        top.contains("● REC station-20261122-161849.rec 0:00"),
+        "{top}"
+    );
+    assert!(top.contains("robot-firmware"), "{top}");
+    let narrow = screen(&app, 80, 24);
+    let top = narrow.lines().next().unwrap();
+    // The file name and firmware version give way; the clock, mode and rate stay.
+    assert!(top.contains("● REC 0:00"), "{top}");
+    assert!(
+        top.contains("mode Manual") && top.contains("10 Hz"),
+        "{top}"
+    );
+}

@@ -13,7 +13,43 @@ use crate::app::{mode_name, App, View};
 use crate::link::Connection;
 
 pub fn render_header(app: &App, frame: &mut Frame, area: Rect) {
+    // Full first; on a narrow terminal the least needed detail goes first, so the REC clock,
+    // the mode and the link state stay readable at 80 columns.
+    let width = usize::from(area.width);
+    let line = [
+        Detail::Full,
+        Detail::ShortRec,
+        Detail::ShortState,
+        Detail::NoPort,
+    ]
+    .into_iter()
+    .map(|d| header_line(app, d))
+    .find(|l| l.width() <= width)
+    .unwrap_or_else(|| header_line(app, Detail::NoPort));
+    frame.render_widget(
+        Paragraph::new(line).style(Style::new().bg(Color::Black)),
+        area,
+    );
+}
+
+/// How much the header says, from all to the least.
+#[derive(Clone, Copy, PartialEq, PartialOrd)]
+enum Detail {
+    Full,
+    /// The recording's clock without its file name.
+    ShortRec,
+    /// The robot's profile without firmware name and version.
+    ShortState,
+    /// No port label.
+    NoPort,
+}
+
+fn header_line(app: &App, d: Detail) -> Line<'static> {
     let mut spans = match &app.connection {
+        Connection::Connected(p) if d >= Detail::ShortState => vec![Span::styled(
+            format!("● {:?}", p.profile),
+            Style::new().fg(Color::Green).bold(),
+        )],
         Connection::Connected(p) => vec![
             Span::styled("● connected ", Style::new().fg(Color::Green).bold()),
             Span::raw(format!(
@@ -59,25 +95,26 @@ pub fn render_header(app: &App, frame: &mut Frame, area: Rect) {
         let name = std::path::Path::new(file)
             .file_name()
             .map_or_else(|| file.clone(), |n| n.to_string_lossy().into_owned());
+        let text = if d >= Detail::ShortRec {
+            format!("● REC {}:{:02}", s / 60, s % 60)
+        } else {
+            format!("● REC {name} {}:{:02}", s / 60, s % 60)
+        };
         spans.push(sep());
-        spans.push(Span::styled(
-            format!("● REC {name} {}:{:02}", s / 60, s % 60),
-            Style::new().fg(Color::Red).bold(),
-        ));
+        spans.push(Span::styled(text, Style::new().fg(Color::Red).bold()));
     }
     if let Some(hz) = app.rate_hz {
         spans.push(sep());
         spans.push(Span::raw(format!("{hz} Hz")));
     }
-    spans.push(sep());
-    spans.push(Span::styled(
-        app.port_label.clone(),
-        Style::new().fg(Color::DarkGray),
-    ));
-    frame.render_widget(
-        Paragraph::new(Line::from(spans)).style(Style::new().bg(Color::Black)),
-        area,
-    );
+    if d < Detail::NoPort {
+        spans.push(sep());
+        spans.push(Span::styled(
+            app.port_label.clone(),
+            Style::new().fg(Color::DarkGray),
+        ));
+    }
+    Line::from(spans)
 }
 
 pub fn render_footer(app: &App, frame: &mut Frame, area: Rect) {
