@@ -96,7 +96,8 @@ pub enum SimError {
     /// The start pose puts the body inside or across a wall.
     #[error(
         "start pose ({x:.3} m, {y:.3} m) is inside a wall or closer to one than the robot's \
-         radius ({radius_m:.3} m); pick a free spot"
+         radius ({radius_m:.3} m); start at a free spot (--start X,Y[,DEG]) or with a smaller \
+         robot (--profile khepera)"
     )]
     StartInWall {
         /// Start x.
@@ -239,6 +240,26 @@ impl SimHal {
     }
 }
 
+/// What a robot with a beacon sensor is told about the arena it is put in, as it is told its
+/// start: the goal light's position (seed 004 §5: known from the start) and the arena's
+/// bounds (§4: the dead reckoning's validation rectangle). Without this the firmware keeps
+/// its defaults, the seed 004 arena (a 5 x 5 m square, the beacon at its centre): in
+/// Micro-Rato'99 the beacon is at (3.0, 2.571), so exploration headed for (2.5, 2.5) and every
+/// beacon calibration pulled the believed position towards the wrong point.
+fn tell_the_arena(robot: &mut Robot, world: &World) {
+    if !robot.core.profile.has(protocol::caps::BEACON) {
+        return;
+    }
+    let fw = |p: Point| robot_firmware::odometry::Point::new(p.x as f32, p.y as f32);
+    let params = &mut robot.core.dead.params;
+    if let Some(b) = world.beacon() {
+        params.beacon = fw(b.position);
+    }
+    let b = world.arena().bounds;
+    params.bounds.min = fw(b.min);
+    params.bounds.max = fw(b.max);
+}
+
 /// A running simulation.
 pub struct Sim {
     robot: Robot,
@@ -339,7 +360,7 @@ impl Sim {
             world,
         };
         let firmware_seed = SimRng::new(seed, stream::FIRMWARE).next_u64() as u32;
-        let robot = Robot::new(RobotOptions {
+        let mut robot = Robot::new(RobotOptions {
             profile,
             seed: firmware_seed,
             // The robot is told where it starts (seed 004 §5: the start pose is known).
@@ -347,6 +368,7 @@ impl Sim {
             emulated: true,
             firmware_version: env!("CARGO_PKG_VERSION"),
         });
+        tell_the_arena(&mut robot, &hal.world);
         let mut sim = Sim {
             robot,
             hal,

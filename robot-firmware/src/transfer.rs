@@ -228,6 +228,15 @@ impl Objects {
         Ok(crc)
     }
 
+    /// Replaces the map's goal point (exploration: where the goal area was found); the cells
+    /// stay, the map's id becomes the CRC-32C of its new encoding. No map, nothing to change.
+    pub fn set_goal(&mut self, goal: PointMm) {
+        if let Some(m) = self.map.as_mut() {
+            m.goal = Some(goal);
+            self.map_dirty = true;
+        }
+    }
+
     /// `Command::Segment`: segments the map (seed 004 §6); returns the number of regions.
     pub fn segment(&mut self) -> Result<usize, NackReason> {
         if self.map.is_none() {
@@ -674,6 +683,25 @@ mod tests {
         let id = o.map().map(|m| m.id);
         assert_eq!(id, map_object_crc(&g, None, None).ok());
         assert_ne!(id, Some(first));
+    }
+
+    #[test]
+    fn a_new_goal_is_where_a_plan_with_no_goal_ends_and_changes_the_maps_id() {
+        let mut o = Objects::new();
+        let mut g = Grid::new(5, 1, Geometry::SEED_004, [0u8; 2]).expect("fits");
+        g.fill(Cell::Free);
+        g.set(4, 0, Cell::Unknown).expect("inside");
+        let pt = |x_mm| PointMm { x_mm, y_mm: 150 };
+        let first = o.set_map(&g, None, Some(pt(1350))).expect("fits");
+        // The goal given with the map lies in a cell nobody has seen.
+        assert_eq!(o.plan_route(pt(150), None), Err(NackReason::BadPoint));
+        o.set_goal(pt(1050));
+        let id = o.map().map(|m| m.id);
+        assert_eq!(id, map_object_crc(&g, None, Some(pt(1050))).ok());
+        assert_ne!(id, Some(first));
+        o.plan_route(pt(150), None).expect("plans");
+        let (_, view) = o.plan().expect("installed");
+        assert_eq!(view.waypoint(view.waypoint_count() - 1), Some(pt(1050)));
     }
 
     #[test]

@@ -660,10 +660,16 @@ impl App {
                 if matches!(command, Command::Teleop { .. }) {
                     self.teleop = Teleop::default();
                 }
+                let detail = match command {
+                    Command::Plan { from, to } if reason == protocol::NackReason::BadPoint => {
+                        self.plan_refusal_detail(from, to)
+                    }
+                    _ => String::new(),
+                };
                 self.note(
                     Level::Error,
                     Source::Command,
-                    format!("refused: {what}: {}", nack_text(reason)),
+                    format!("refused: {what}: {}{detail}", nack_text(reason)),
                 );
             }
             CommandOutcome::Failed(CommandFailure::Superseded) => {}

@@ -6,8 +6,9 @@
 //! the robot creates an all-unknown one over its arena bounds at the paper's 0.3 m cells,
 //! with its start and the goal light as markers; with a map installed (a second run) it keeps
 //! it, so each run adds to what the robot knows ("avoid history" prefers unknown cells). The
-//! goal area is seen by the ground sensor; reaching it stops the robot and sends
-//! `GoalReached`. The map can be downloaded at any time, segmented and planned on.
+//! goal area is seen by the ground sensor; reaching it stops the robot, sends `GoalReached`
+//! and makes the point where it stopped the map's goal (the goal light's cell is not a place
+//! a plan can end). The map can be downloaded at any time, segmented and planned on.
 //!
 //! What can fail: `Unsupported` on a robot without compass and beacon; `CapacityExceeded` if
 //! the arena needs more than the firmware's 64 x 64 cells. Never a panic.
@@ -83,9 +84,25 @@ impl Core {
         };
         let cmd = self.explorer.step(&input, grid);
         if self.explorer.phase() == ExplorePhase::Arrived {
+            if !self.arrived {
+                self.record_goal_found(input.pose.point());
+            }
             self.mark_arrived();
             return MotorCommand::STOP;
         }
         cmd
+    }
+
+    /// Makes where the robot found the goal area the map's goal, so that a `Plan` with no
+    /// `to` (and the station's planner, which reads the map's goal) aims at a cell the robot
+    /// has stood in. The goal light's own cell is no target: seed 004 §6 marks the beacon as
+    /// an obstacle, and the ground sensor stops the robot at the area's edge, so the light's
+    /// cell is usually still unknown, which planning treats as an obstacle.
+    fn record_goal_found(&mut self, here: crate::odometry::Point) {
+        let mm = |v: f32| libm::roundf(v * 1000.0) as i32;
+        self.objects.set_goal(PointMm {
+            x_mm: mm(here.x),
+            y_mm: mm(here.y),
+        });
     }
 }

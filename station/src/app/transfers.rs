@@ -28,7 +28,7 @@ use protocol::{Command, EventCode, Mode, ObjectKind, PointMm};
 use super::log::{Level, Source};
 use super::App;
 use crate::link::{CommandOutcome, LinkEvent, TransferOut};
-use crate::plan::MapOptions;
+use crate::plan::{End, MapOptions};
 use crate::transfer::objects::{check_capacity, load_for_upload, plan_waypoints};
 use crate::transfer::{
     object_name, EngineOut, JobId, JobOutcome, JobReport, JobSpec, Progress, TransferEngine,
@@ -265,6 +265,47 @@ impl App {
             from: None,
             to: to.map(mm),
         });
+    }
+
+    /// What the station can say about a `Plan` the robot refused with `BadPoint`: the points
+    /// it sent (the robot's position and the map's goal as last seen when not given) and,
+    /// with the robot's map shown, which of them lies outside it or in a cell that is not
+    /// free. Starts with " (" so it follows the Nack's own words.
+    pub(super) fn plan_refusal_detail(&self, from: Option<PointMm>, to: Option<PointMm>) -> String {
+        let m = |p: PointMm| (f64::from(p.x_mm) / 1000.0, f64::from(p.y_mm) / 1000.0);
+        let robot_map = self
+            .map
+            .plan
+            .map()
+            .filter(|map| map.source == ROBOT_MAP_NAME);
+        let from_m = from.map(m).or_else(|| self.pose().map(|(x, y, _)| (x, y)));
+        let to_m = to
+            .map(m)
+            .or_else(|| robot_map.and_then(|map| map.goal).map(|g| g.centre));
+        // "(x, y)" when given, else what the robot takes, with where the station believes it is.
+        let say = |given: bool, what: &str, p: Option<(f64, f64)>| {
+            let at = p.map(|(x, y)| format!("({x:.3}, {y:.3})"));
+            match (given, at) {
+                (true, Some(at)) => at,
+                (false, Some(at)) => format!("{what} {at}"),
+                (_, None) => what.to_string(),
+            }
+        };
+        let mut text = format!(
+            " (from {} to {}",
+            say(from.is_some(), "the robot's position", from_m),
+            say(to.is_some(), "the map's goal", to_m),
+        );
+        if let Some(map) = robot_map {
+            let ends = [(End::Start, from_m), (End::Goal, to_m)];
+            for (end, p) in ends.into_iter().filter_map(|(e, p)| Some((e, p?))) {
+                if let Err(e) = map.check_point(end, p) {
+                    text.push_str(&format!("; {e}"));
+                }
+            }
+        }
+        text.push(')');
+        text
     }
 
     /// Called with every link event before the app looks at it; true when the event was the
