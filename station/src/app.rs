@@ -21,7 +21,7 @@ use std::collections::HashMap;
 use protocol::{AckInfo, Command, EmuTruth, Event, EventCode, Mode, PointMm, Telemetry};
 
 use crate::action::Action;
-use crate::link::api::{command_text, nack_text, param_name};
+use crate::link::api::{command_text, param_name, refusal_text};
 use crate::link::{
     CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats, PeerInfo,
 };
@@ -561,8 +561,9 @@ impl App {
             EventCode::Collision => (Level::Warn, "collision".into()),
             EventCode::LineCrossed => (Level::Debug, format!("line crossed ({v} so far)")),
             EventCode::PoseCorrected => (Level::Info, format!("pose corrected by {v} mm")),
+            // Once a second while the robot sees the beacon standing still: detail, not news.
             EventCode::BeaconCalibration => (
-                Level::Info,
+                Level::Debug,
                 format!(
                     "beacon calibration, confidence {:.3}",
                     f64::from(v) / 1000.0
@@ -669,7 +670,7 @@ impl App {
                 self.note(
                     Level::Error,
                     Source::Command,
-                    format!("refused: {what}: {}{detail}", nack_text(reason)),
+                    format!("refused: {what}: {}{detail}", refusal_text(&command, reason)),
                 );
             }
             CommandOutcome::Failed(CommandFailure::Superseded) => {}

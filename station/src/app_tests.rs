@@ -133,7 +133,7 @@ fn a_refused_parameter_write_shows_the_robots_reason_in_the_editor_and_the_log()
     assert!(app
         .log
         .window(1)
-        .any(|l| l.text == "refused: param set failsafe_ms 5: value out of range"));
+        .any(|l| l.text == "refused: param set failsafe_ms 5: value out of range: 50 to 10000 ms"));
 }
 
 #[test]
