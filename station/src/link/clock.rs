@@ -4,13 +4,14 @@
 //! manual failsafe on its own clock; an emulator serving faster than real time
 //! (`robot-emulator --speed 10`) runs that clock ten times faster, and a station that sends a
 //! heartbeat every 250 ms of its own time would be silent for 2.5 s of the robot's and lose the
-//! session. So the station reads the robot's clock from every frame that carries it
-//! (telemetry, truth, heartbeats), measures its rate, and sends its heartbeats every 250 ms of
-//! the *robot's* time (at most every `MIN_HEARTBEAT_MS`). The first estimate comes
-//! `FIRST_SPAN_MS` into a session, well before a fast robot's timeout (150 ms of ours at ten
-//! times real time), and is refined as the span grows; later measurements span `SPAN_MS` at
-//! least. A robot whose clock is within `TOLERANCE` of ours (a real one) keeps the protocol's
-//! 250 ms. Cannot fail.
+//! session. So the station reads the robot's clock from every frame of its session that
+//! carries it (telemetry, truth, heartbeats; never from what it read before the robot's
+//! `HelloReply`, which may be a backlog seconds old: `LinkMachine`), measures its rate, and
+//! sends its heartbeats every 250 ms of the *robot's* time (at most every
+//! `MIN_HEARTBEAT_MS`). The first estimate comes `FIRST_SPAN_MS` into a session, well before
+//! a fast robot's timeout (150 ms of ours at ten times real time), and is refined as the span
+//! grows; later measurements span `SPAN_MS` at least. A robot whose clock is within
+//! `TOLERANCE` of ours (a real one) keeps the protocol's 250 ms. Cannot fail.
 
 use protocol::timing::HEARTBEAT_PERIOD_MS;
 

@@ -423,11 +423,19 @@ impl LinkMachine {
 
     /// The robot's `Event HandshakeRefused` with a negative value: it could not authenticate
     /// our `Hello` (PROTOCOL.md §13).
+    ///
+    /// The refusal names no session, so it is believed only if it describes what we sent: a
+    /// refusal of signed frames reaching a station that signs nothing (or of unsigned ones
+    /// reaching one that signs) answered another station's Hello, and was left in the port
+    /// when that station exited. A stale refusal that does fit ours says what ours would
+    /// hear: the robot's key setup is the same for both. (A keyed station never sees an
+    /// old signed refusal: it is below our Hello's timestamp, `StaleTimestamp`.)
     fn on_robot_auth_refusal(&mut self, code: i32) {
+        let keyed = self.auth.keyed();
         let why = match code {
-            -1 => "the robot has a key and refused our unsigned frames",
-            -2 => "the robot refused our signature (it has another key)",
-            -4 => "the robot has no key and refused our signed frames",
+            -1 if !keyed => "the robot has a key and refused our unsigned frames",
+            -2 if keyed => "the robot refused our signature (it has another key)",
+            -4 if keyed => "the robot has no key and refused our signed frames",
             // -3 stale: our next Hello's timestamp follows the robot's, so it heals by itself.
             _ => return,
         };
@@ -459,15 +467,15 @@ impl LinkMachine {
         match msg {
             Owned::HelloReply(r) => self.on_hello_reply(now_ms, r),
             Owned::Telemetry(t) => {
-                self.robot_clock.observe(t.time_ms, now_ms);
+                self.observe_robot_clock(t.time_ms, now_ms);
                 self.stats.telemetry(now_ms);
                 self.events.push_back(LinkEvent::Telemetry(t));
             }
             Owned::Truth(t) => {
-                self.robot_clock.observe(t.time_ms, now_ms);
+                self.observe_robot_clock(t.time_ms, now_ms);
                 self.events.push_back(LinkEvent::Truth(t));
             }
-            Owned::Heartbeat(time_ms) => self.robot_clock.observe(time_ms, now_ms),
+            Owned::Heartbeat(time_ms) => self.observe_robot_clock(time_ms, now_ms),
             Owned::Localization(l) => self.events.push_back(LinkEvent::Localization(l)),
             Owned::Ack(a) => match self.commands.answer(a.cmd_seq) {
                 Some(f) => {
@@ -495,6 +503,19 @@ impl LinkMachine {
             Owned::Log { level, text } => self.events.push_back(LinkEvent::Log { level, text }),
             Owned::Transfer(t) => self.events.push_back(LinkEvent::Transfer(t)),
             Owned::Other => {}
+        }
+    }
+
+    /// Only frames of our own session time the robot's clock. What comes before our
+    /// `HelloReply` may be a backlog: the robot's frames to a station that left, queued in
+    /// the port while no one read it and all read now in one instant, seconds old. Timed
+    /// against our clock they make the robot's look hundreds of times fast, and heartbeats
+    /// would go out every `MIN_HEARTBEAT_MS` until the span diluted the error. The reply
+    /// is sent after the robot read our `Hello`, and a port keeps order, so every frame
+    /// after it is current.
+    fn observe_robot_clock(&mut self, robot_ms: u32, now_ms: u64) {
+        if self.connected() {
+            self.robot_clock.observe(robot_ms, now_ms);
         }
     }
 

@@ -336,6 +336,69 @@ fn a_robot_whose_clock_runs_ten_times_faster_gets_heartbeats_ten_times_as_often(
 }
 
 #[test]
+fn a_backlog_of_old_frames_read_at_open_does_not_hurry_the_heartbeats() {
+    // A robot that has run for a minute served a station that left 30 s ago; the port kept
+    // 1.5 s of the frames it sent that station (until its link timeout), and we read them
+    // all at once on opening, before the robot answers our Hello. Measured against our
+    // clock they span 30 s of the robot's in a few ms of ours.
+    let mut m = machine();
+    m.port_opened(0, "p");
+    let session = sent(&mut m)[0].3.expect("hello");
+    let backlog: Vec<u8> = (0..15u16)
+        .flat_map(|i| {
+            let time_ms = 30_000 + 100 * u32::from(i);
+            let t = Telemetry {
+                time_ms,
+                ..Telemetry::default()
+            };
+            frame(i, &Message::Telemetry(t))
+        })
+        .collect();
+    m.receive(1, &backlog);
+    m.receive(5, &reply(session, FINGERPRINT, true));
+    assert!(m.connected());
+    sent(&mut m);
+    // The robot now, 60 s into its run, in real time: telemetry every 100 ms.
+    let mut heartbeats = Vec::new();
+    for now in 6..=3_000u64 {
+        if now % 100 == 0 {
+            let t = Telemetry {
+                time_ms: 60_000 + now as u32,
+                ..Telemetry::default()
+            };
+            m.receive(now, &frame(100, &Message::Telemetry(t)));
+        }
+        m.poll(now);
+        for s in sent(&mut m) {
+            assert_eq!(s.1, Kind::Heartbeat);
+            heartbeats.push(now);
+        }
+    }
+    let gaps: Vec<u64> = heartbeats.windows(2).map(|w| w[1] - w[0]).collect();
+    assert!(
+        gaps.iter().all(|&g| g == 250),
+        "heartbeats 250 ms apart: {gaps:?}"
+    );
+    assert_eq!(heartbeats.len(), 12, "{heartbeats:?}");
+}
+
+#[test]
+fn a_ten_times_faster_robot_is_measured_from_its_session_despite_a_backlog() {
+    let mut m = machine();
+    m.port_opened(0, "p");
+    let session = sent(&mut m)[0].3.expect("hello");
+    let old = |time_ms| frame(0, &Message::Heartbeat(Heartbeat { time_ms }));
+    m.receive(1, &[old(5_000), old(6_000)].concat());
+    m.receive(5, &reply(session, FINGERPRINT, true));
+    for i in 1..=12u16 {
+        let t = 5 + 100 * u64::from(i);
+        let time_ms = 900_000 + (t * 10) as u32;
+        m.receive(t, &frame(i, &Message::Heartbeat(Heartbeat { time_ms })));
+    }
+    assert_eq!(m.robot_clock.heartbeat_period_ms(), 25);
+}
+
+#[test]
 fn silence_for_1500_ms_ends_the_session_fails_commands_and_handshakes_again() {
     let mut m = machine();
     let old = connect(&mut m);
@@ -566,6 +629,42 @@ mod auth {
         };
         assert!(msg.contains("this station has no key"), "{msg}");
         assert_eq!(m.stats(20).auth.unexpected_signature, 1);
+    }
+
+    #[test]
+    fn a_refusal_of_another_stations_signed_hello_is_not_taken_for_ours() {
+        // A keyed station tried a robot without a key and exited on its refusal; a refusal
+        // of one more Hello was still in the port. We sign nothing, so it is not ours.
+        let mut m = machine();
+        m.port_opened(0, "p");
+        let session = sent(&mut m)[0].3.expect("hello");
+        m.take_events();
+        let refusal = |value| {
+            frame(
+                0,
+                &Message::Event(Event {
+                    code: EventCode::HandshakeRefused,
+                    value,
+                }),
+            )
+        };
+        m.receive(1, &refusal(-4));
+        m.receive(1, &refusal(-2));
+        let events = m.take_events();
+        assert!(connections(&events).is_empty(), "{events:?}");
+        m.receive(5, &reply(session, FINGERPRINT, true));
+        assert!(m.connected());
+        // A keyed station is told the same refusal: the robot has no key.
+        let mut k = keyed_machine(1);
+        k.port_opened(0, "p");
+        k.take_events();
+        k.receive(1, &refusal(-4));
+        assert!(
+            matches!(k.connection(), Connection::Refused { message }
+                if message.contains("has no key")),
+            "{:?}",
+            k.connection()
+        );
     }
 
     #[test]

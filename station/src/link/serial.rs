@@ -51,12 +51,15 @@ impl Connector for SerialConnector {
 
     fn open(&mut self) -> Result<Box<dyn Transport>, OpenError> {
         if !self.paced {
-            return open_exclusive(&self.path, self.baud)
-                .map(|s| Box::new(s) as Box<dyn Transport>);
+            return open_exclusive(&self.path, self.baud).map(|mut s| {
+                discard_pending_input(&mut s);
+                Box::new(s) as Box<dyn Transport>
+            });
         }
         let builder = builder(&self.path, self.baud)?;
-        let port =
+        let mut port =
             mio_serial::SerialStream::open(&builder).map_err(|e| classify(&self.path, &e))?;
+        discard_pending_input(&mut port);
         PacedSerial::new(port)
             .map(|s| Box::new(s) as Box<dyn Transport>)
             .map_err(|e| OpenError::Other {
@@ -69,6 +72,16 @@ impl Connector for SerialConnector {
         // Follows symlinks (the emulator's `--link`, udev's by-id names) to the device.
         self.path.exists()
     }
+}
+
+/// Drops what the port received before we opened it (TCIFLUSH; a pty slave's queue too).
+/// The robot keeps talking for up to 1.5 s after a station leaves (its link timeout), and a
+/// pty keeps those bytes for the next station: telemetry seconds old, or the refusal of the
+/// last station's Hello. Read now, they would pass for answers to us. A port that cannot
+/// flush still works: the link machine does not act on a backlog (`LinkMachine`), this only
+/// spares it the reading.
+fn discard_pending_input(port: &mut dyn tokio_serial::SerialPort) {
+    let _ = port.clear(tokio_serial::ClearBuffer::Input);
 }
 
 /// Opens `path` exclusively at `baud`, 8N1, no flow control. Needs a tokio runtime.
