@@ -493,6 +493,26 @@ fn parse_speed(s: &str) -> Result<Speed, String> {
     }
 }
 
+/// Ends the process quietly, status 141 (128 + SIGPIPE, what a shell expects), when printing
+/// to stdout fails because the reader went away (`robot-emulator run --json | head -1`):
+/// Rust ignores SIGPIPE, so `println!` would panic with "failed printing to stdout" instead
+/// of the program ending as `cat` does. Every other panic goes to the hook before it.
+pub fn exit_quietly_on_broken_pipe() {
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let text = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if text.starts_with("failed printing to stdout") && text.contains("Broken pipe") {
+            std::process::exit(141);
+        }
+        previous(info);
+    }));
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,6 +8,7 @@ use clap::Parser;
 use emulator::cli::{Cli, Command, RunArgs, ServeArgs};
 
 fn main() -> ExitCode {
+    emulator::cli::exit_quietly_on_broken_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Run(args)) => run(&args),

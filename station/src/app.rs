@@ -670,7 +670,10 @@ impl App {
                 self.note(
                     Level::Error,
                     Source::Command,
-                    format!("refused: {what}: {}{detail}", refusal_text(&command, reason)),
+                    format!(
+                        "refused: {what}: {}{detail}",
+                        refusal_text(&command, reason)
+                    ),
                 );
             }
             CommandOutcome::Failed(CommandFailure::Superseded) => {}

@@ -487,6 +487,8 @@ fn parse_param(s: &str) -> Result<u16, String> {
 
 /// Parses the process arguments and runs; the exit code to return.
 pub fn run() -> ExitCode {
+    // Before the TUI's own hook, which chains to this one.
+    emulator::cli::exit_quietly_on_broken_pipe();
     let cli = Cli::parse();
     // Just before the runtime's clock starts: the TUI's timers then share its wake-ups.
     crate::pace::start();

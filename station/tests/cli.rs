@@ -192,3 +192,19 @@ fn ports_lists_without_failing() {
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert!(v["serial"].is_array() && v["pty"].is_array());
 }
+
+#[test]
+fn a_reader_that_goes_away_ends_the_output_quietly_as_with_sigpipe() {
+    // `station plan ... | head -1`: the reader has gone before the first line is written.
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_station"))
+        .args(["plan", "--map", "builtin:micro-rato-99"])
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(141), "{stderr}");
+}
