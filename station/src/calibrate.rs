@@ -232,6 +232,15 @@ pub fn examples(
     light: Option<(f64, f64)>,
 ) -> anyhow::Result<(Vec<Example<FRONT>>, Reference, usize)> {
     let mut labelled: Vec<(Sample, f64)> = Vec::new();
+    // The likeliest mistake first, in its own words: a robot calibrated far from any lamp.
+    if !samples.iter().any(Sample::lit) {
+        bail!(
+            "no front light reading below T1 = {T1} in {} frames: no lamp near the robot; set \
+             it down about 1 cm from one (in the emulator: station --arena builtin:forage \
+             --start 0.1825,0.62,0)",
+            samples.len()
+        );
+    }
     let (reference, n_turns) = match light {
         Some((lx, ly)) => {
             for s in samples.iter().filter(|s| s.lit()) {

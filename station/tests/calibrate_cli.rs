@@ -234,3 +234,28 @@ fn damaged_map_files_are_refused() {
     assert!(format!("{}", decode(&bin).unwrap_err()).contains("CRC"));
     assert!(decode(b"{\"format\": \"x\"}").is_err());
 }
+
+#[test]
+fn a_calibration_run_far_from_any_lamp_is_refused_saying_so() {
+    let d = dir("dark");
+    // No lamp in this world: every reading stays dark.
+    let cfg = SimConfig {
+        seed: 5,
+        start: Some(Pose {
+            x: 0.2,
+            y: 0.3,
+            heading: 0.0,
+        }),
+        ..SimConfig::new(&KHEPERA)
+    };
+    let mut s = Sim::new(open_box(), cfg).unwrap();
+    s.robot_mut()
+        .core
+        .apply(protocol::Command::SetMode(Mode::CalibrateLight), 0);
+    std::fs::write(d.join("dark.rec"), record(&mut s, 30)).unwrap();
+    let o = station(&["calibrate", "dark.rec", "--out", "som.json"], &d);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no lamp near the robot"), "{err}");
+    assert!(!d.join("som.json").exists());
+}
