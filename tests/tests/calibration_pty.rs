@@ -45,6 +45,16 @@ fn text(o: &Output) -> String {
     )
 }
 
+/// Runs the station expecting exit status 1 and every fragment in what it printed.
+fn fails_with(args: &[&str], fragments: &[&str]) {
+    let out = station(args);
+    let t = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{t}");
+    for f in fragments {
+        assert!(t.contains(f), "{f:?} not in: {t}");
+    }
+}
+
 #[test]
 fn a_calibration_file_goes_to_the_robot_and_comes_back_byte_identical() {
     let d = dir("khepera");
@@ -54,18 +64,15 @@ fn a_calibration_file_goes_to_the_robot_and_comes_back_byte_identical() {
 
     // Nothing trained yet: refused, saying what to do, and no file left behind.
     let back = d.join("back.bin");
-    let out = station(&[
-        "download-calibration",
-        "--port",
-        &port,
-        "--out",
-        back.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
-    assert!(
-        text(&out).contains("no trained light calibration"),
-        "{}",
-        text(&out)
+    fails_with(
+        &[
+            "download-calibration",
+            "--port",
+            &port,
+            "--out",
+            back.to_str().unwrap(),
+        ],
+        &["no trained light calibration"],
     );
     assert!(!back.exists());
 
@@ -110,15 +117,14 @@ fn a_calibration_file_goes_to_the_robot_and_comes_back_byte_identical() {
     assert!(out.status.success(), "{}", text(&out));
     let again = station::calibrate::decode(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(again, som);
-    let out = station(&[
+    let again_args = [
         "download-calibration",
         "--port",
         &port,
         "--out",
         json.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(text(&out).contains("--force"), "{}", text(&out));
+    ];
+    fails_with(&again_args, &["exists; pass --force"]);
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -131,36 +137,30 @@ fn bad_files_and_robots_without_light_sensors_are_refused() {
     let file = d.join("som.bin");
     let som = LightSom::random(&mut XorShift32::new(7), (50.0, 500.0), (0.0, 180.0));
     std::fs::write(&file, station::calibrate::encode_bin(&som)).unwrap();
-    let out = station(&[
-        "upload-calibration",
-        "--port",
-        &port,
-        "--calibration",
-        file.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
-    assert!(
-        text(&out).contains("no ambient light sensors"),
-        "{}",
-        text(&out)
+    fails_with(
+        &[
+            "upload-calibration",
+            "--port",
+            &port,
+            "--calibration",
+            file.to_str().unwrap(),
+        ],
+        &["no ambient light sensors"],
     );
 
     // A damaged file is refused before the port is opened, naming the file and the fault.
     let mut bytes = std::fs::read(&file).unwrap();
     bytes[20] ^= 0xff;
     std::fs::write(&file, bytes).unwrap();
-    let out = station(&[
-        "upload-calibration",
-        "--port",
-        "/nonexistent",
-        "--calibration",
-        file.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
-    let t = text(&out);
-    assert!(
-        t.contains("som.bin") && t.contains("byte 850: CRC mismatch"),
-        "{t}"
+    fails_with(
+        &[
+            "upload-calibration",
+            "--port",
+            "/nonexistent",
+            "--calibration",
+            file.to_str().unwrap(),
+        ],
+        &["som.bin", "byte 850: CRC mismatch"],
     );
     let _ = std::fs::remove_dir_all(&d);
 }

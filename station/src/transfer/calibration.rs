@@ -15,7 +15,7 @@ use clap::Args;
 use protocol::{caps, NackReason, ObjectKind};
 use serde_json::{json, Value};
 
-use super::command::{connect, fail, finish, progress_printer};
+use super::command::{connect, download_object, fail, finish, progress_printer};
 use super::engine::JobSpec;
 use super::objects::write_atomically;
 use super::{JobOutcome, TransferError};
@@ -109,18 +109,18 @@ pub async fn download(args: &DownloadCalibrationArgs) -> anyhow::Result<ExitCode
         let e = format!("{out} exists; pass --force to overwrite it");
         return Ok(fail(json, CMD, "exists", &e, Value::Null));
     }
-    let (mut client, _peer) = match connect(&args.port, args.timeout).await {
-        Ok(c) => c,
+    let object = ObjectKind::LightCalibration;
+    let download = download_object(
+        &args.port,
+        args.timeout,
+        json,
+        object,
+        "download calibration",
+    );
+    let report = match download.await {
+        Ok(r) => r,
         Err(e) => return Ok(fail(json, CMD, "not_connected", &e, Value::Null)),
     };
-    let spec = JobSpec::Download {
-        object: ObjectKind::LightCalibration,
-        have: None,
-    };
-    let report = client
-        .run(spec, progress_printer(json, "download calibration"))
-        .await;
-    client.shutdown().await;
     if report.outcome == JobOutcome::Failed(TransferError::Refused(NackReason::BadState)) {
         // The generic "not allowed in the current mode" would send the user looking for a mode.
         let e = "the robot holds no trained light calibration: calibrate it first (station send \

@@ -221,22 +221,37 @@ pub async fn upload_map(args: &UploadMapArgs) -> anyhow::Result<ExitCode> {
     Ok(finish(json, CMD, &report, extra))
 }
 
+/// Connects and downloads `object` (progress as `what` on a terminal): the report, or why
+/// the link did not come up.
+pub(super) async fn download_object(
+    port: &RequiredPort,
+    timeout: f64,
+    json: bool,
+    object: ObjectKind,
+    what: &'static str,
+) -> Result<JobReport, String> {
+    let (mut client, _peer) = connect(port, timeout).await?;
+    let spec = JobSpec::Download { object, have: None };
+    let report = client.run(spec, progress_printer(json, what)).await;
+    client.shutdown().await;
+    Ok(report)
+}
+
 /// Runs `station download-map`.
 pub async fn download_map(args: &DownloadMapArgs) -> anyhow::Result<ExitCode> {
     const CMD: &str = "download-map";
     let json = args.json;
-    let (mut client, _peer) = match connect(&args.port, args.timeout).await {
-        Ok(c) => c,
+    let download = download_object(
+        &args.port,
+        args.timeout,
+        json,
+        ObjectKind::Map,
+        "download map",
+    );
+    let report = match download.await {
+        Ok(r) => r,
         Err(e) => return Ok(fail(json, CMD, "not_connected", &e, Value::Null)),
     };
-    let spec = JobSpec::Download {
-        object: ObjectKind::Map,
-        have: None,
-    };
-    let report = client
-        .run(spec, progress_printer(json, "download map"))
-        .await;
-    client.shutdown().await;
     let (JobOutcome::Complete, Some(bytes)) = (&report.outcome, &report.bytes) else {
         return Ok(finish(json, CMD, &report, Value::Null));
     };
