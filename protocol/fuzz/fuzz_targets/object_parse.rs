@@ -1,12 +1,16 @@
-//! The object parsers (PROTOCOL.md §12) on arbitrary bytes: what a Map or Plan file given to
-//! `station upload-map` / `upload-plan` or a downloaded object goes through. Invariants: no
+//! The object parsers (PROTOCOL.md §12) on arbitrary bytes: what a Map, Plan or light
+//! calibration file given to `station upload-map` / `upload-plan` / `upload-calibration` or a
+//! downloaded object goes through. Invariants: no
 //! panic; `kind_of` and `parse` agree on the kind of whatever `parse` accepts; an accepted
 //! Map or Plan re-parses through its own view, and walking every cell or waypoint stays in
 //! bounds.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use protocol::object::{kind_of, parse, MapView, ObjectView, PlanView};
+use protocol::object::{
+    encode_light, kind_of, parse, MapView, ObjectView, PlanView, LIGHT_MAX_OUTPUT,
+    LIGHT_NEURONS, LIGHT_OBJECT_LEN,
+};
 
 fuzz_target!(|data: &[u8]| {
     let kind = kind_of(data);
@@ -35,5 +39,16 @@ fuzz_target!(|data: &[u8]| {
             let _ = p.meta;
         }
         ObjectView::Regions(_) => assert_eq!(kind, protocol::ObjectKind::Regions),
+        ObjectView::LightCalibration(l) => {
+            assert_eq!(kind, protocol::ObjectKind::LightCalibration);
+            // Every neuron reads back within the bound the parser checked; re-encoding
+            // gives the very bytes (the encoding is canonical).
+            let neurons: Vec<_> = l.neurons().collect();
+            assert_eq!(neurons.len(), LIGHT_NEURONS);
+            assert!(neurons.iter().all(|(_, o)| *o <= LIGHT_MAX_OUTPUT));
+            let mut out = vec![0; LIGHT_OBJECT_LEN];
+            let n = encode_light(neurons, &mut out).expect("a parsed network re-encodes");
+            assert_eq!(&out[..n], data);
+        }
     }
 });
