@@ -665,6 +665,13 @@ impl App {
                     Command::Plan { from, to } if reason == protocol::NackReason::BadPoint => {
                         self.plan_refusal_detail(from, to)
                     }
+                    // These modes need a target the mode key cannot give: say which key can.
+                    Command::SetMode(Mode::GoTo) => {
+                        " (press g and pick a point, or click the map)".into()
+                    }
+                    Command::SetMode(Mode::ExecutePlan) => {
+                        " (O plans on the robot, X executes its plan)".into()
+                    }
                     _ => String::new(),
                 };
                 self.note(

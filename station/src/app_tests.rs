@@ -216,3 +216,22 @@ fn a_stalled_light_calibration_is_logged_as_a_stall_not_an_unknown_code() {
         "{line:?}"
     );
 }
+
+#[test]
+fn a_refused_go_to_mode_says_which_key_gives_it_a_point() {
+    let mut app = connected_app();
+    app.update(Action::Link(LinkEvent::CommandDone {
+        id: 7,
+        command: Command::SetMode(Mode::GoTo),
+        outcome: CommandOutcome::Nacked {
+            reason: NackReason::BadState,
+            sends: 1,
+        },
+    }));
+    let line = app.log.window(1).next().map(|l| l.text.clone());
+    assert!(
+        line.as_deref()
+            .is_some_and(|t| t.contains("not allowed in the current mode (press g")),
+        "{line:?}"
+    );
+}

@@ -34,11 +34,18 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     let block = Block::bordered().title(title);
     let inner = block.inner(area);
     frame.render_widget(block, area);
-    let lines = text_lines(app, profile);
+    let beside = Layout::horizontal([Constraint::Percentage(40), Constraint::Percentage(60)]);
+    let wide = inner.width >= 70;
+    let text_w = if wide {
+        let [_, t] = beside.areas(inner);
+        t.width
+    } else {
+        inner.width
+    };
+    let lines = text_lines(app, profile, text_w);
     let text_h = lines.len() as u16;
-    let (glyph, text) = if inner.width >= 70 {
-        let [g, t] = Layout::horizontal([Constraint::Percentage(40), Constraint::Percentage(60)])
-            .areas(inner);
+    let (glyph, text) = if wide {
+        let [g, t] = beside.areas(inner);
         (g, t)
     } else {
         let [g, t] =
@@ -136,7 +143,38 @@ fn heat(frac: f64) -> Color {
     }
 }
 
-fn text_lines(app: &App, profile: &Profile) -> Vec<Line<'static>> {
+/// A line of readings as groups ("pose ..", "σ .."): a narrow panel breaks a line between
+/// groups rather than cutting it off.
+type Row = Vec<Vec<Span<'static>>>;
+
+/// Lays `rows` out in `width` columns: groups `gap` spaces apart (the flags' row one, others
+/// two), a group that does not fit starting a new line (a group wider than the panel is cut,
+/// as it would be anyway).
+fn fit(rows: Vec<(usize, Row)>, width: u16) -> Vec<Line<'static>> {
+    let width = usize::from(width);
+    let mut out = Vec::new();
+    for (gap, row) in rows {
+        let mut line: Vec<Span<'static>> = Vec::new();
+        let mut used = 0;
+        for group in row {
+            let w: usize = group.iter().map(Span::width).sum();
+            if !line.is_empty() && used + gap + w > width {
+                out.push(Line::from(std::mem::take(&mut line)));
+                used = 0;
+            }
+            if !line.is_empty() {
+                line.push(Span::raw(" ".repeat(gap)));
+                used += gap;
+            }
+            line.extend(group);
+            used += w;
+        }
+        out.push(Line::from(line));
+    }
+    out
+}
+
+fn text_lines(app: &App, profile: &Profile, width: u16) -> Vec<Line<'static>> {
     let Some(t) = app.telemetry else {
         return vec![Line::from("no telemetry yet".dark_gray())];
     };
@@ -144,40 +182,52 @@ fn text_lines(app: &App, profile: &Profile) -> Vec<Line<'static>> {
     let dim = Style::new().fg(Color::DarkGray);
     let label = |s: &'static str| Span::styled(s, dim);
     let deg = |mrad: i16| f64::from(mrad) / 1000.0 * 180.0 / std::f64::consts::PI;
-    let mut lines = vec![
-        Line::from(vec![
-            label("pose "),
-            Span::raw(format!(
-                "{:.3} {:.3} m {:.1}°",
-                f64::from(t.pose.x_mm) / 1000.0,
-                f64::from(t.pose.y_mm) / 1000.0,
-                deg(t.pose.heading_mrad)
-            )),
-            label("  σ "),
-            Span::raw(format!(
-                "{} mm {:.1}°",
-                t.sigma.xy_mm,
-                deg(t.sigma.heading_mrad as i16)
-            )),
-        ]),
-        Line::from(vec![
-            label("mode "),
-            Span::styled(mode_name(t.mode), Style::new().fg(Color::Cyan).bold()),
-            label("  behaviours "),
-            Span::raw(behaviour_names(t.behaviour.active)),
-        ]),
-        Line::from(vec![
-            label("wheels "),
-            Span::raw(format!(
-                "{} {} mm/s",
-                t.wheels.speed_mm_s[0], t.wheels.speed_mm_s[1]
-            )),
-            label("  motor "),
-            Span::raw(format!(
-                "{} {}",
-                t.behaviour.motor_mm_s[0], t.behaviour.motor_mm_s[1]
-            )),
-        ]),
+    let rows: Vec<Row> = vec![
+        vec![
+            vec![
+                label("pose "),
+                Span::raw(format!(
+                    "{:.3} {:.3} m {:.1}°",
+                    f64::from(t.pose.x_mm) / 1000.0,
+                    f64::from(t.pose.y_mm) / 1000.0,
+                    deg(t.pose.heading_mrad)
+                )),
+            ],
+            vec![
+                label("σ "),
+                Span::raw(format!(
+                    "{} mm {:.1}°",
+                    t.sigma.xy_mm,
+                    deg(t.sigma.heading_mrad as i16)
+                )),
+            ],
+        ],
+        vec![
+            vec![
+                label("mode "),
+                Span::styled(mode_name(t.mode), Style::new().fg(Color::Cyan).bold()),
+            ],
+            vec![
+                label("behaviours "),
+                Span::raw(behaviour_names(t.behaviour.active)),
+            ],
+        ],
+        vec![
+            vec![
+                label("wheels "),
+                Span::raw(format!(
+                    "{} {} mm/s",
+                    t.wheels.speed_mm_s[0], t.wheels.speed_mm_s[1]
+                )),
+            ],
+            vec![
+                label("motor "),
+                Span::raw(format!(
+                    "{} {}",
+                    t.behaviour.motor_mm_s[0], t.behaviour.motor_mm_s[1]
+                )),
+            ],
+        ],
     ];
     let enc = if has(caps::ENCODERS) {
         format!("{} {}", app.encoders.total[0], app.encoders.total[1])
@@ -189,12 +239,14 @@ fn text_lines(app: &App, profile: &Profile) -> Vec<Line<'static>> {
     } else {
         "—".into()
     };
-    lines.push(Line::from(vec![
-        label("encoders "),
-        Span::raw(enc),
-        label("  compass "),
-        Span::raw(compass),
-    ]));
+    let mut rows: Vec<(usize, Row)> = rows.into_iter().map(|r| (2, r)).collect();
+    rows.push((
+        2,
+        vec![
+            vec![label("encoders "), Span::raw(enc)],
+            vec![label("compass "), Span::raw(compass)],
+        ],
+    ));
     let battery = if has(caps::BATTERY) {
         format!("{} mV", t.battery_mv)
     } else {
@@ -213,39 +265,48 @@ fn text_lines(app: &App, profile: &Profile) -> Vec<Line<'static>> {
     } else {
         "—".into()
     };
-    lines.push(Line::from(vec![
-        label("battery "),
-        Span::raw(battery),
-        label("  beacon "),
-        Span::raw(beacon),
-    ]));
-    let flag = |bit: u8, name: &'static str| -> Span<'static> {
-        if t.flags & bit != 0 {
-            Span::styled(format!("■{name} "), Style::new().fg(Color::Yellow).bold())
+    rows.push((
+        2,
+        vec![
+            vec![label("battery "), Span::raw(battery)],
+            vec![label("beacon "), Span::raw(beacon)],
+        ],
+    ));
+    let flag = |bit: u8, name: &'static str| -> Vec<Span<'static>> {
+        vec![if t.flags & bit != 0 {
+            Span::styled(format!("■{name}"), Style::new().fg(Color::Yellow).bold())
         } else {
-            Span::styled(format!("□{name} "), dim)
-        }
+            Span::styled(format!("□{name}"), dim)
+        }]
     };
-    lines.push(Line::from(vec![
-        flag(flags::GROUND, "ground"),
-        flag(flags::LINE, "line"),
-        flag(flags::CONTACT, "contact"),
-        flag(flags::FAILSAFE, "failsafe"),
-        flag(flags::ARRIVED, "arrived"),
-        label("lines "),
-        Span::raw(t.line_events.to_string()),
-    ]));
-    lines.push(Line::from(vec![
-        label("IR "),
-        Span::raw(readings(&t.ir.values(), profile.ir.count)),
-    ]));
+    rows.push((
+        1,
+        vec![
+            flag(flags::GROUND, "ground"),
+            flag(flags::LINE, "line"),
+            flag(flags::CONTACT, "contact"),
+            flag(flags::FAILSAFE, "failsafe"),
+            flag(flags::ARRIVED, "arrived"),
+            vec![label("lines "), Span::raw(t.line_events.to_string())],
+        ],
+    ));
+    rows.push((
+        2,
+        vec![vec![
+            label("IR "),
+            Span::raw(readings(&t.ir.values(), profile.ir.count)),
+        ]],
+    ));
     if has(caps::AMBIENT_LIGHT) {
-        lines.push(Line::from(vec![
-            label("light "),
-            Span::raw(readings(&t.light.values(), 8)),
-        ]));
+        rows.push((
+            2,
+            vec![vec![
+                label("light "),
+                Span::raw(readings(&t.light.values(), 8)),
+            ]],
+        ));
     }
-    lines
+    fit(rows, width)
 }
 
 fn readings(v: &[u16; 8], n: usize) -> String {
