@@ -127,6 +127,9 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
                 "+ cursor ".green()
             } else if app.replaying {
                 "".into()
+            } else if area.width < 44 {
+                // The whole legend in a 40-column panel (80 x 24).
+                "g: go-to ".dark_gray()
             } else {
                 "g/click: go-to ".dark_gray()
             },
