@@ -242,6 +242,20 @@ pub enum ScenarioError {
     /// The timeout is not a finite positive number of seconds.
     #[error("timeout {0} s must be finite and > 0")]
     BadTimeout(f64),
+    /// A go-to goal outside the arena: the robot could only run until the timeout.
+    #[error(
+        "goal ({x:.3}, {y:.3}) m is outside arena {arena:?}, which spans x {x0:.3}..{x1:.3}, \
+         y {y0:.3}..{y1:.3} m"
+    )]
+    GoalOutside {
+        x: f64,
+        y: f64,
+        arena: String,
+        x0: f64,
+        x1: f64,
+        y0: f64,
+        y1: f64,
+    },
     /// The task has its own runner (foraging: [`forage::run_forage`]).
     #[error("task {0:?} has its own runner")]
     OtherRunner(Task),
@@ -261,6 +275,20 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
         Task::ReachBeacon | Task::ExploreThenPlan => None,
         Task::Forage => return Err(ScenarioError::OtherRunner(opts.task)),
     };
+    if let Some(g) = given {
+        let b = arena.bounds;
+        if !b.contains(crate::geometry::Point::new(g.x_m, g.y_m)) {
+            return Err(ScenarioError::GoalOutside {
+                x: g.x_m,
+                y: g.y_m,
+                arena: arena.name.clone(),
+                x0: b.min.x,
+                x1: b.max.x,
+                y0: b.min.y,
+                y1: b.max.y,
+            });
+        }
+    }
     let goal = given
         .or_else(|| {
             // The goal area's centre for the search tasks; a marked goal for go-to.
