@@ -403,6 +403,19 @@ impl RunArgs {
         } else {
             self.world.profile.profile()
         };
+        // Seed 004's search steers by compass and beacon; say so before the firmware refuses.
+        let search = matches!(task, Task::ReachBeacon | Task::ExploreThenPlan);
+        let sensors = protocol::caps::COMPASS | protocol::caps::BEACON;
+        if search && !profile.has(sensors) {
+            return Err(format!(
+                "--task {} searches for the beacon by compass and beacon sensor (seed 004), \
+                 which the {} profile lacks; use --profile micro-rato",
+                self.task
+                    .to_possible_value()
+                    .map_or_else(String::new, |v| v.get_name().to_string()),
+                profile.name
+            ));
+        }
         let mut o = ScenarioOptions::new(profile, task);
         o.seed = self.world.seed;
         o.timeout_s = timeout_s;
