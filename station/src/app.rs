@@ -295,8 +295,12 @@ impl App {
                     self.read_param(p.id);
                 }
             }
-            Action::ParamEdit => self.params.input = Some(String::new()),
+            Action::ParamEdit => {
+                self.params.input = Some(String::new());
+                self.params.input_error = None;
+            }
             Action::ParamInput(c) => {
+                self.params.input_error = None;
                 if let Some(s) = &mut self.params.input {
                     if s.len() < 24 {
                         s.push(c);
@@ -304,6 +308,7 @@ impl App {
                 }
             }
             Action::ParamBackspace => {
+                self.params.input_error = None;
                 if let Some(s) = &mut self.params.input {
                     s.pop();
                 }
@@ -435,7 +440,10 @@ impl App {
                     p.before = before;
                 }
             }
-            Err(e) => self.note(Level::Warn, Source::Command, format!("param: {e}")),
+            Err(e) => {
+                self.params.input_error = Some(e.clone());
+                self.note(Level::Warn, Source::Command, format!("param: {e}"));
+            }
         }
     }
 

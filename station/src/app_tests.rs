@@ -235,3 +235,23 @@ fn a_refused_go_to_mode_says_which_key_gives_it_a_point() {
         "{line:?}"
     );
 }
+
+#[test]
+fn a_value_that_is_not_a_number_is_shown_on_the_edit_line_and_nothing_is_sent() {
+    let mut app = connected_app();
+    app.update(Action::ShowView(View::Params));
+    app.update(Action::ParamEdit);
+    for c in "1.5.".chars() {
+        app.update(Action::ParamInput(c));
+    }
+    app.update(Action::ParamCommit);
+    assert!(app.take_outbox().is_empty());
+    assert_eq!(
+        app.params.input_error.as_deref(),
+        Some("\"1.5.\" is not a number")
+    );
+    // Still editing: the next key clears the complaint and fixes the text.
+    assert_eq!(app.params.input.as_deref(), Some("1.5."));
+    app.update(Action::ParamBackspace);
+    assert_eq!(app.params.input_error, None);
+}

@@ -35,6 +35,8 @@ pub struct ParamEditor {
     pub status: Vec<ParamStatus>,
     /// Text being typed for the selected parameter.
     pub input: Option<String>,
+    /// Why the typed text was not sent (shown on the edit line until the next key).
+    pub input_error: Option<String>,
 }
 
 impl Default for ParamEditor {
@@ -43,6 +45,7 @@ impl Default for ParamEditor {
             selected: 0,
             status: vec![ParamStatus::Unknown; PARAMS.len()],
             input: None,
+            input_error: None,
         }
     }
 }

@@ -66,15 +66,19 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             Span::styled(format!("{} = ", p.name), Style::new().fg(Color::Yellow)),
             Span::raw(text.clone()),
             Span::styled("▏", Style::new().fg(Color::Yellow)),
-            Span::styled(
-                format!(
-                    "  ({} .. {} {})",
-                    format_value(p.min),
-                    format_value(p.max),
-                    p.unit
+            match &app.params.input_error {
+                // Where the eyes are: a typo is not news for the log alone.
+                Some(e) => Span::styled(format!("  {e}"), Style::new().fg(Color::Red)),
+                None => Span::styled(
+                    format!(
+                        "  ({} .. {} {})",
+                        format_value(p.min),
+                        format_value(p.max),
+                        p.unit
+                    ),
+                    Style::new().fg(Color::DarkGray),
                 ),
-                Style::new().fg(Color::DarkGray),
-            ),
+            },
         ]),
         _ => Line::from(Span::styled(
             "values are read from the robot; a refused write shows the robot's reason",
