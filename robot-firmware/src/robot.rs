@@ -345,39 +345,30 @@ impl Core {
     /// A transfer frame: uploads to the robot (begin, chunk) and acks of its downloads.
     fn transfer(&mut self, m: &Message<'_>, now_ms: u32) -> Response {
         match m {
-            // A robot without light sensors has no use for a light calibration.
-            Message::TransferBegin(b)
-                if b.object == ObjectKind::LightCalibration
-                    && !self.profile.has(protocol::caps::AMBIENT_LIGHT) =>
-            {
-                Response::Send(Message::TransferAck(TransferAck {
-                    id: b.id,
-                    next: 0,
-                    status: TransferStatus::Rejected,
-                }))
-            }
-            Message::TransferBegin(b) if self.calibration_busy(b.object) => {
-                Response::Send(Message::TransferAck(TransferAck {
-                    id: b.id,
-                    next: 0,
-                    status: TransferStatus::Busy,
-                }))
-            }
             Message::TransferBegin(b) => {
-                Response::Send(Message::TransferAck(self.objects.on_begin(b)))
+                let ack = match self.upload_refusal(b.object) {
+                    Some(status) => TransferAck {
+                        id: b.id,
+                        next: 0,
+                        status,
+                    },
+                    None => self.objects.on_begin(b),
+                };
+                Response::Send(Message::TransferAck(ack))
             }
             // A calibration begun before `Mode::CalibrateLight` must not land in the middle of
-            // one: the chunk is answered Busy and the partial upload kept for later.
+            // one: the chunk is refused and the partial upload kept for later.
             Message::TransferChunk(c)
-                if self
+                if let Some(status) = self
                     .objects
                     .upload_progress()
-                    .is_some_and(|(o, id, ..)| id == c.id && self.calibration_busy(o)) =>
+                    .filter(|(_, id, ..)| *id == c.id)
+                    .and_then(|(o, ..)| self.upload_refusal(o)) =>
             {
                 Response::Send(Message::TransferAck(TransferAck {
                     id: c.id,
                     next: 0,
-                    status: TransferStatus::Busy,
+                    status,
                 }))
             }
             Message::TransferChunk(c) => {
@@ -395,9 +386,19 @@ impl Core {
         }
     }
 
-    /// Whether an upload of `object` must wait: a light calibration while one is being trained.
-    fn calibration_busy(&self, object: ObjectKind) -> bool {
-        object == ObjectKind::LightCalibration && self.mode == Mode::CalibrateLight
+    /// Why an upload of `object` is refused before its bytes are looked at: a light
+    /// calibration on a robot without light sensors (no use for it), or while one is being
+    /// trained (it would replace the network under training; try later).
+    fn upload_refusal(&self, object: ObjectKind) -> Option<TransferStatus> {
+        if object != ObjectKind::LightCalibration {
+            None
+        } else if !self.profile.has(protocol::caps::AMBIENT_LIGHT) {
+            Some(TransferStatus::Rejected)
+        } else if self.mode == Mode::CalibrateLight {
+            Some(TransferStatus::Busy)
+        } else {
+            None
+        }
     }
 
     /// Reports a new map, plan or calibration; a plan being executed is abandoned when replaced.

@@ -18,6 +18,8 @@
 //! adds the output component to the sensor components as they are, so the output's scale sets
 //! how much it steers training (seed 000 trains on raw degrees and sensor counts).
 
+use protocol::object::{encode_light, LightView, ObjectError, LIGHT_INPUTS, LIGHT_NEURONS};
+
 use crate::behaviour::XorShift32;
 
 /// One training example: `M` sensor values and the output they should map to (Eq 16).
@@ -149,6 +151,26 @@ pub struct Som<const N: usize, const M: usize, W: Store = f32> {
 /// The light-angle network of seed 000 §5.3: 60 neurons, 6 front sensors, in hundredths
 /// (840 bytes: the robot's RAM is tight, §1.1 aside).
 pub type LightSom = Som<60, 6, Centi>;
+
+// The network's wire form, one place for the robot (upload, download) and the station (files).
+impl LightSom {
+    /// Encodes the network as a LightCalibration object (PROTOCOL.md §12) into `out`.
+    pub fn encode_object(&self, out: &mut [u8]) -> Result<usize, ObjectError> {
+        let neurons = (0..LIGHT_NEURONS).map(|i| {
+            self.stored(i)
+                .map_or(([0; LIGHT_INPUTS], 0), |(w, o)| (w.map(|c| c.0), o.0))
+        });
+        encode_light(neurons, out)
+    }
+
+    /// Replaces every neuron with a parsed object's, in place (no second network on the
+    /// stack: the robot's RAM is tight).
+    pub fn load_object(&mut self, view: &LightView<'_>) {
+        for (i, (w, o)) in view.neurons().enumerate() {
+            self.set_stored(i, w.map(Centi), Centi(o));
+        }
+    }
+}
 
 impl<const N: usize, const M: usize, W: Store> Som<N, M, W> {
     /// A network with the given neurons (e.g. restored from flash or a file).

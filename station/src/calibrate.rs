@@ -41,7 +41,7 @@ use anyhow::{bail, Context};
 use clap::Args;
 use protocol::{Message, Mode, Telemetry};
 use robot_firmware::behaviour::XorShift32;
-use robot_firmware::som::{rescale, Centi, Example, LightSom, Schedule};
+use robot_firmware::som::{rescale, Example, LightSom, Schedule};
 use serde::Serialize;
 
 use crate::export::{walk, Direction, Item};
@@ -368,12 +368,9 @@ pub fn encode_bin(som: &LightSom) -> Vec<u8> {
 
 /// The network as a LightCalibration object (PROTOCOL.md §12), what the robot stores.
 pub fn light_object(som: &LightSom) -> anyhow::Result<Vec<u8>> {
-    let neurons = (0..NEURONS).map(|i| {
-        som.stored(i)
-            .map_or(([0; FRONT], 0), |(w, o)| (w.map(|c| c.0), o.0))
-    });
     let mut out = vec![0; protocol::object::LIGHT_OBJECT_LEN];
-    let n = protocol::object::encode_light(neurons, &mut out)
+    let n = som
+        .encode_object(&mut out)
         .map_err(|e| anyhow::anyhow!("light network: {e}"))?;
     out.truncate(n);
     Ok(out)
@@ -384,19 +381,37 @@ pub fn from_light_object(bytes: &[u8]) -> anyhow::Result<LightSom> {
     let view = protocol::object::LightView::parse(bytes)
         .map_err(|e| anyhow::anyhow!("light calibration object: {e}"))?;
     let mut som = LightSom::from_neurons([[0.0; FRONT]; NEURONS], [0.0; NEURONS]);
-    for (i, (w, o)) in view.neurons().enumerate() {
-        som.set_stored(i, w.map(Centi), Centi(o));
-    }
+    som.load_object(&view);
     Ok(som)
 }
 
 /// Reads the map in the file at `path`; errors name the file, and the line and column of a
 /// JSON syntax error (`som.json:3:14: JSON light map: expected value`).
 pub fn decode_file(path: &Path) -> anyhow::Result<LightSom> {
+    use std::io::Read as _;
     let shown = path.display();
-    let bytes = std::fs::read(path).map_err(|e| anyhow::anyhow!("cannot read {shown}: {e}"))?;
+    let cannot = |e: std::io::Error| anyhow::anyhow!("cannot read {shown}: {e}");
+    // Bounded: `--calibration /dev/zero` must end. A map is 854 bytes, its JSON about 11 KB.
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .map_err(cannot)?
+        .take(FILE_MAX + 1)
+        .read_to_end(&mut bytes)
+        .map_err(cannot)?;
+    if bytes.len() as u64 > FILE_MAX {
+        bail!("{shown}: longer than {FILE_MAX} bytes; not a light map");
+    }
+    decode_named(path, &bytes)
+}
+
+/// Longest light-map file read (JSON with generous white space).
+const FILE_MAX: u64 = 1 << 20;
+
+/// [`decode`] of `bytes` read from `path`, with [`decode_file`]'s errors.
+pub fn decode_named(path: &Path, bytes: &[u8]) -> anyhow::Result<LightSom> {
+    let shown = path.display();
     if !bytes.starts_with(MAGIC) {
-        if let Err(e) = serde_json::from_slice::<serde::de::IgnoredAny>(&bytes) {
+        if let Err(e) = serde_json::from_slice::<serde::de::IgnoredAny>(bytes) {
             // serde_json puts the position last ("... at line 3 column 14"): put it first.
             let text = e.to_string();
             let what = text.split(" at line ").next().unwrap_or(&text);
@@ -407,7 +422,7 @@ pub fn decode_file(path: &Path) -> anyhow::Result<LightSom> {
             );
         }
     }
-    decode(&bytes).map_err(|e| anyhow::anyhow!("{shown}: {e:#}"))
+    decode(bytes).map_err(|e| anyhow::anyhow!("{shown}: {e:#}"))
 }
 
 /// Reads a map written by [`encode_json`] or [`encode_bin`]; errors say what and where.

@@ -37,7 +37,7 @@
 //! robot wedged against something, so the sweep would never end): the robot stops, reports
 //! the code and keeps no map. Starting a calibration discards the previous map.
 
-use protocol::object::{encode_light, LightView, ObjectError, LIGHT_INPUTS, LIGHT_NEURONS};
+use protocol::object::{LightView, ObjectError};
 use protocol::{calibration, EventCode, Mode};
 
 use super::Core;
@@ -245,21 +245,14 @@ impl LightCalibration {
     /// Installs an uploaded network (a parsed LightCalibration object, PROTOCOL.md §12),
     /// neuron by neuron in place: no second 840-byte network on the stack.
     pub fn install_object(&mut self, view: &LightView<'_>) {
-        for (i, (w, o)) in view.neurons().enumerate() {
-            self.som.set_stored(i, w.map(Centi), Centi(o));
-        }
+        self.som.load_object(view);
         self.trained = true;
         self.phase = CalPhase::Off;
     }
 
     /// Encodes the network as a LightCalibration object into `out`; returns its length.
     pub fn encode(&self, out: &mut [u8]) -> Result<usize, ObjectError> {
-        let neurons = (0..LIGHT_NEURONS).map(|i| {
-            self.som
-                .stored(i)
-                .map_or(([0; LIGHT_INPUTS], 0), |(w, o)| (w.map(|c| c.0), o.0))
-        });
-        encode_light(neurons, out)
+        self.som.encode_object(out)
     }
 
     /// Starts over at `now_ms`: a fresh random network, the align turn next.

@@ -168,7 +168,21 @@ pub struct Loaded {
 /// else is read as a map (any arena format `station plan` reads, or builtin:micro-rato-99)
 /// and encoded with `opts`.
 pub fn load_for_upload(path: &str, opts: &MapOptions) -> Result<Loaded, ObjectFileError> {
-    if let Some(bytes) = read_object_file(Path::new(path))? {
+    // One read serves the object and calibration checks; arena files are parsed by path.
+    let file = Path::new(path);
+    // Not a regular file (a `builtin:` name, a device): never read here.
+    let bytes = if file.is_file() {
+        std::fs::read(file).map_err(|source| ObjectFileError::Read {
+            path: file.into(),
+            source,
+        })?
+    } else {
+        Vec::new()
+    };
+    if let Some(loaded) = load_calibration_file(file, &bytes)? {
+        return Ok(loaded);
+    }
+    if is_object_file(file, &bytes)? {
         let object = kind_of(&bytes).map_err(|source| ObjectFileError::Object {
             path: path.into(),
             source,
@@ -201,9 +215,6 @@ pub fn load_for_upload(path: &str, opts: &MapOptions) -> Result<Loaded, ObjectFi
             summary,
         });
     }
-    if let Some(loaded) = load_calibration_file(Path::new(path))? {
-        return Ok(loaded);
-    }
     let map = NavMap::load(path, opts)?;
     let m = map_object(&map)?;
     let summary = format!(
@@ -223,39 +234,29 @@ pub fn load_for_upload(path: &str, opts: &MapOptions) -> Result<Loaded, ObjectFi
     })
 }
 
-/// The bytes of `path` if it looks like an object file (format version, then a kind), checked
-/// by `protocol::object::parse`; `None` if it does not look like one (a map file).
-pub fn read_object_file(path: &Path) -> Result<Option<Vec<u8>>, ObjectFileError> {
-    if !path.is_file() {
-        return Ok(None);
-    }
-    let bytes = std::fs::read(path).map_err(|source| ObjectFileError::Read {
-        path: path.into(),
-        source,
-    })?;
+/// Whether `bytes` (of `path`) look like an object (format version, then a kind); one that
+/// does must pass `protocol::object::parse`, or the error names the byte.
+fn is_object_file(path: &Path, bytes: &[u8]) -> Result<bool, ObjectFileError> {
     let looks = bytes.first() == Some(&OBJECT_VERSION) && bytes.get(1).is_some_and(|k| *k <= 3);
     if !looks {
-        return Ok(None);
+        return Ok(false);
     }
-    parse(&bytes).map_err(|source| ObjectFileError::Object {
+    parse(bytes).map_err(|source| ObjectFileError::Object {
         path: path.into(),
         source,
     })?;
-    Ok(Some(bytes))
+    Ok(true)
 }
 
 /// A light calibration in `station calibrate`'s file formats (binary "LSOM", or JSON naming
 /// its format), as the LightCalibration object the robot takes; `None` for any other file.
-fn load_calibration_file(path: &Path) -> Result<Option<Loaded>, ObjectFileError> {
-    let Ok(bytes) = std::fs::read(path) else {
-        return Ok(None);
-    };
+fn load_calibration_file(path: &Path, bytes: &[u8]) -> Result<Option<Loaded>, ObjectFileError> {
     let json_form = bytes.first() == Some(&b'{')
-        && std::str::from_utf8(&bytes).is_ok_and(|t| t.contains("\"robot-station light-som\""));
+        && std::str::from_utf8(bytes).is_ok_and(|t| t.contains("\"robot-station light-som\""));
     if !bytes.starts_with(b"LSOM") && !json_form {
         return Ok(None);
     }
-    let object = crate::calibrate::decode_file(path)
+    let object = crate::calibrate::decode_named(path, bytes)
         .and_then(|som| crate::calibrate::light_object(&som))
         .map_err(|e| ObjectFileError::Calibration(format!("{e:#}")))?;
     let summary = format!(
