@@ -316,7 +316,6 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
     });
     let name = arena.name.clone();
     let mut sim = Sim::new(arena, opts.sim_config())?;
-    brief_firmware(&mut sim)?;
     set_arrival(&mut sim, opts.arrival_m, tolerance_m)?;
     let started = Instant::now();
     let timeout_ms = (opts.timeout_s * 1000.0).ceil() as u64;
@@ -472,36 +471,6 @@ fn plan_and_execute(
     let mut run = run_until_arrived(sim, "execute_plan", timeout_ms, judge);
     run.plan_regions = Some(u32::from(regions));
     Ok(run)
-}
-
-/// Tells the firmware what an operator would: the beacon position and the arena's bounds.
-fn brief_firmware(sim: &mut Sim) -> Result<(), ScenarioError> {
-    if !sim.robot().core.profile.has(protocol::caps::BEACON) {
-        return Ok(());
-    }
-    if let Some(b) = sim.world().beacon().map(|b| b.position) {
-        for (id, v) in [(param::BEACON_X_M, b.x), (param::BEACON_Y_M, b.y)] {
-            let cmd = Command::SetParam {
-                id: ParamId(id),
-                value: v as f32,
-            };
-            apply(sim, cmd, "SetParam(beacon)")?;
-        }
-    }
-    let b = sim.world().arena().bounds;
-    for (id, v) in [
-        (param::ARENA_MIN_X_M, b.min.x),
-        (param::ARENA_MIN_Y_M, b.min.y),
-        (param::ARENA_MAX_X_M, b.max.x),
-        (param::ARENA_MAX_Y_M, b.max.y),
-    ] {
-        let cmd = Command::SetParam {
-            id: ParamId(id),
-            value: v as f32,
-        };
-        apply(sim, cmd, "SetParam(arena bounds)")?;
-    }
-    Ok(())
 }
 
 /// Tells the firmware its arrival radius: the option, else `min(default, tolerance / 2)`.
