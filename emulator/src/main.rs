@@ -86,7 +86,9 @@ fn run(args: &RunArgs) -> Result<(), String> {
             "{}: {} in {:.1} s simulated ({:.3} s wall), {} collisions, {:.2} m travelled, \
              pose error {:.3} m, goal error {:.3} m",
             report.arena,
-            if report.reached {
+            if report.started_in_target {
+                "started inside target"
+            } else if report.reached {
                 "reached"
             } else {
                 "NOT reached"

@@ -197,8 +197,13 @@ pub struct ScenarioReport {
     pub goal: GoalPoint,
     /// The tolerance actually used, metres.
     pub tolerance_m: f64,
-    /// The firmware reported arrival and its TRUE position is within `tolerance_m` of the goal.
+    /// The firmware reported arrival and its TRUE position is within `tolerance_m` of the goal
+    /// (for the search tasks: inside the goal's target area); never when the run started
+    /// inside it.
     pub reached: bool,
+    /// The search task's robot started inside the target area: nothing to search for, so the
+    /// run is no success whatever it reports (the summary says "started inside target").
+    pub started_in_target: bool,
     /// The firmware reported arrival (whatever the truth).
     pub arrived: bool,
     /// Simulated seconds.
@@ -316,6 +321,11 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
     });
     let name = arena.name.clone();
     let mut sim = Sim::new(arena, opts.sim_config())?;
+    let started_in_target = matches!(opts.task, Task::ReachBeacon | Task::ExploreThenPlan)
+        && target.is_some_and(|t| {
+            let s = sim.truth();
+            (s.x - t.centre.x).hypot(s.y - t.centre.y) <= t.radius_m
+        });
     set_arrival(&mut sim, opts.arrival_m, tolerance_m)?;
     let started = Instant::now();
     let timeout_ms = (opts.timeout_s * 1000.0).ceil() as u64;
@@ -355,6 +365,7 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
         (Some(r), _) => (r.arrived, r.reached),
         (None, _) => (false, false),
     };
+    let reached = reached && !started_in_target;
     Ok(ScenarioReport {
         arena: name,
         profile: opts.profile.name,
@@ -363,6 +374,7 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
         goal,
         tolerance_m,
         reached,
+        started_in_target,
         arrived,
         sim_s: sim.now_us() as f64 * 1e-6,
         wall_s,

@@ -251,13 +251,18 @@ fn tell_the_arena(robot: &mut Robot, world: &World) {
         return;
     }
     let fw = |p: Point| robot_firmware::odometry::Point::new(p.x as f32, p.y as f32);
-    let params = &mut robot.core.dead.params;
+    let dead = &mut robot.core.dead;
     if let Some(b) = world.beacon() {
-        params.beacon = fw(b.position);
+        dead.params.beacon = fw(b.position);
     }
     let b = world.arena().bounds;
-    params.bounds.min = fw(b.min);
-    params.bounds.max = fw(b.max);
+    // `set_bounds` validates the start again as given: the robot was built with the default
+    // 5 x 5 m bounds, which had clamped a start beyond them (8 x 4 m lab: x 7.00 -> 4.88).
+    dead.set_bounds(robot_firmware::deadreckon::Bounds {
+        min: fw(b.min),
+        max: fw(b.max),
+        ..dead.params.bounds
+    });
 }
 
 /// A running simulation.

@@ -289,6 +289,10 @@ pub struct DeadReckoner {
     xi: f32,
     last_ms: Option<u32>,
     clamped: bool,
+    /// The position as given (start or `set_position`), before validation, kept until the
+    /// robot moves: bounds that arrive later (the arena's, after the robot was built with
+    /// the default 5 x 5 m) validate the given point again, not its clamp into the old ones.
+    given: Option<Point>,
 }
 
 impl DeadReckoner {
@@ -301,7 +305,23 @@ impl DeadReckoner {
             xi: params.xi_initial.clamp(0.0, 1.0),
             last_ms: None,
             clamped: false,
+            given: Some(start),
         }
+    }
+
+    /// Replaces the validation rectangle (seed 004 §4) and validates the position again: a
+    /// position given before the robot moved is re-validated as given, so a start outside the
+    /// old bounds but inside the new ones is kept exactly.
+    pub fn set_bounds(&mut self, bounds: Bounds) {
+        self.params.bounds = bounds;
+        self.bounds_changed();
+    }
+
+    /// Validates the position again after `params.bounds` changed in place (a parameter set
+    /// over the link).
+    pub fn bounds_changed(&mut self) {
+        let p = self.given.unwrap_or(self.position);
+        (self.position, _) = self.params.bounds.clamp(p);
     }
 
     /// Integrates from the previous call to `now_ms` (wrapping) at the given heading and
@@ -324,6 +344,10 @@ impl DeadReckoner {
         );
         // seed 004 §4: outside the arena -> the closest point inside.
         let (p, clamped) = self.params.bounds.clamp(moved);
+        if ds != 0.0 {
+            // Moved: the estimate is the robot's own now, validated in the bounds it has.
+            self.given = None;
+        }
         self.position = p;
         self.clamped = clamped;
         p
@@ -353,6 +377,7 @@ impl DeadReckoner {
             xi * self.position.y + (1.0 - xi) * p_l.y,
         );
         (self.position, _) = self.params.bounds.clamp(blended);
+        self.given = None;
         self.xi = (xi + self.params.xi_calibration_gain).clamp(0.0, 1.0);
         Ok(p_l)
     }
@@ -374,6 +399,7 @@ impl DeadReckoner {
     /// Replaces the position (validated), e.g. from a known start area.
     pub fn set_position(&mut self, p: Point) {
         (self.position, _) = self.params.bounds.clamp(p);
+        self.given = Some(p);
     }
 
     /// Confidence ξ in [0, 1].
@@ -463,6 +489,34 @@ mod tests {
             Bounds::default().clamp(Point::new(2.0, 2.0)),
             (Point::new(2.0, 2.0), false)
         );
+    }
+
+    #[test]
+    fn bounds_set_after_the_start_validate_the_start_as_given() {
+        // An 8 x 4 m lab: the robot is built with the default 5 x 5 m bounds, then told the
+        // arena's. The start x 7.00 must survive (it was clamped to 4.88 and kept).
+        let mut r = reckoner_at(7.0, 1.0);
+        assert_eq!(r.position(), Point::new(4.88, 1.0));
+        let lab = Bounds {
+            min: Point::new(0.0, 0.0),
+            max: Point::new(8.0, 4.0),
+            margin_m: 0.12,
+        };
+        r.set_bounds(lab);
+        assert_eq!(r.position(), Point::new(7.0, 1.0));
+        // Bounds set one coordinate at a time (link parameters) end at the same place.
+        let mut r = reckoner_at(7.0, 3.0);
+        r.params.bounds.max.x = 8.0;
+        r.bounds_changed();
+        r.params.bounds.max.y = 4.0;
+        r.bounds_changed();
+        assert_eq!(r.position(), Point::new(7.0, 3.0));
+        // Once the robot has moved, new bounds validate the current estimate.
+        r.step(0, input(0.0, 75.0));
+        r.step(500, input(0.0, 75.0));
+        let moved = r.position();
+        r.set_bounds(Bounds::default());
+        assert_eq!(r.position(), Point::new(4.88, moved.y));
     }
 
     #[test]

@@ -460,7 +460,7 @@ impl Core {
             }
             Command::SetParam { id, value } => {
                 let v = self.tunables().set(id.0, value)?;
-                self.after_param_change();
+                self.after_param_change(id.0);
                 self.push_event(EventCode::ParamChanged, i32::from(id.0));
                 return Ok(AckInfo::Param { id, value: v });
             }
@@ -520,10 +520,14 @@ impl Core {
         }
     }
 
-    fn after_param_change(&mut self) {
+    fn after_param_change(&mut self, id: u16) {
         // A new rate takes effect at once rather than after the old period.
         if self.config.telemetry_hz > 0 {
             self.next_telemetry_ms = 0;
+        }
+        // New arena bounds validate the position again (seed 004 §4), the start as given.
+        if (crate::params::id::ARENA_MIN_X_M..=crate::params::id::ARENA_MAX_Y_M).contains(&id) {
+            self.dead.bounds_changed();
         }
     }
 

@@ -118,6 +118,12 @@ impl Objects {
         &self.nav
     }
 
+    /// The navigation instance for a planning of the robot's own (exploration); the grid is
+    /// not changed through it (that goes through [`grid_mut`](Self::grid_mut)).
+    pub(crate) fn nav_mut(&mut self) -> &mut Nav64 {
+        &mut self.nav
+    }
+
     /// The map's id and points, if the robot holds a map (the id is refreshed first if the
     /// grid was changed in place).
     pub fn map(&mut self) -> Option<MapInfo> {

@@ -22,7 +22,7 @@
 use super::astar::{find_path, Plan, PlanError, SearchScratch};
 use super::grid::{grid_bytes, Geometry, Grid, GridPoint, MAX_SIDE};
 use super::ids::{packed_bytes, PackedIds};
-use super::segment::{segment, Regions, SegmentError, Square};
+use super::segment::{segment_with, Passable, Regions, SegmentError, Square};
 use super::smooth::{smooth, Smoothed};
 
 /// Fixed-capacity navigation storage: a `W` x `H` grid (`GB` bytes), a `BITS`-bit region map
@@ -128,6 +128,11 @@ impl<
 
     /// Segments the grid (seed 004 §6, Fig. 6); returns the number of regions.
     pub fn segment(&mut self) -> Result<usize, SegmentError> {
+        self.segment_with(Passable::Free)
+    }
+
+    /// Segments the grid with `passable` cells; returns the number of regions.
+    pub fn segment_with(&mut self, passable: Passable) -> Result<usize, SegmentError> {
         self.count = None;
         if !self.map.resize(self.grid.len()) {
             return Err(SegmentError::MapSizeMismatch {
@@ -135,7 +140,7 @@ impl<
                 got: self.map.capacity(),
             });
         }
-        let n = segment(&self.grid, &mut self.map, &mut self.squares)?.len();
+        let n = segment_with(&self.grid, &mut self.map, &mut self.squares, passable)?.len();
         // n <= R < u16::MAX (SIZES_OK), so this never saturates.
         self.count = Some(u16::try_from(n).unwrap_or(u16::MAX));
         Ok(n)
@@ -170,6 +175,12 @@ impl<
         let squares = self.squares.get(..n).ok_or(PlanError::NotSegmented)?;
         let regions = Regions::from_parts(&self.grid, &self.map, squares);
         smooth(&regions, plan, &self.path[..], margin, &mut self.smoothed)
+    }
+
+    /// Forgets the segmentation (one made for a purpose of its own, which a later `Plan`
+    /// command must not reuse).
+    pub fn forget_segmentation(&mut self) {
+        self.count = None;
     }
 
     /// Region store of the last raw plan.

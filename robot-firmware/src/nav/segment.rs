@@ -99,6 +99,26 @@ impl<M: ?Sized> Clone for Regions<'_, M> {
 }
 impl<M: ?Sized> Copy for Regions<'_, M> {}
 
+/// Which cells square regions are made of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Passable {
+    /// Free cells only; unknown counts as obstacle (seed 004 §6: the plans the robot executes).
+    Free,
+    /// Free and unknown cells: the free-space assumption of a search that plans on what it
+    /// has not yet seen (exploration's way out of a trap; seed 004: planning works on
+    /// incomplete maps).
+    FreeOrUnknown,
+}
+
+impl Passable {
+    fn admits(self, cell: Cell) -> bool {
+        match self {
+            Passable::Free => cell == Cell::Free,
+            Passable::FreeOrUnknown => cell != Cell::Obstacle,
+        }
+    }
+}
+
 /// Segments `grid` into squares by the rule of seed 004 §6, Fig. 6.
 ///
 /// Writes the squares to the front of `squares` and one region id per cell to `map`
@@ -112,6 +132,20 @@ where
     S: AsRef<[u8]>,
     M: IdStore + ?Sized,
 {
+    segment_with(grid, map, squares, Passable::Free)
+}
+
+/// [`segment`] with a choice of which cells count as passable.
+pub fn segment_with<'a, S, M>(
+    grid: &Grid<S>,
+    map: &'a mut M,
+    squares: &'a mut [Square],
+    passable: Passable,
+) -> Result<Regions<'a, M>, SegmentError>
+where
+    S: AsRef<[u8]>,
+    M: IdStore + ?Sized,
+{
     let expected = grid.len();
     if map.len() != expected {
         return Err(SegmentError::MapSizeMismatch {
@@ -120,7 +154,7 @@ where
         });
     }
     map.fill(M::NONE);
-    let count = scan(grid, map, squares)?;
+    let count = scan(grid, map, squares, passable)?;
     let squares: &'a [Square] = squares;
     Ok(Regions {
         width: grid.width(),
@@ -132,7 +166,12 @@ where
 }
 
 /// The scan of Fig. 6 over a map cleared to `NONE`; returns the number of squares.
-fn scan<S, M>(grid: &Grid<S>, map: &mut M, squares: &mut [Square]) -> Result<usize, SegmentError>
+fn scan<S, M>(
+    grid: &Grid<S>,
+    map: &mut M,
+    squares: &mut [Square],
+    passable: Passable,
+) -> Result<usize, SegmentError>
 where
     S: AsRef<[u8]>,
     M: IdStore + ?Sized,
@@ -148,7 +187,7 @@ where
             let i = y * w + x;
             // "if cell (i,j) is not yet included in a previously created square region" - and
             // only free cells start one: unknown counts as obstacle (seed 004 §6).
-            if map.get(i) != M::NONE || grid.cell_at(i) != Cell::Free {
+            if map.get(i) != M::NONE || !passable.admits(grid.cell_at(i)) {
                 x += 1;
                 continue;
             }
@@ -156,7 +195,7 @@ where
                 .get_mut(count)
                 .filter(|_| count < capacity)
                 .ok_or(SegmentError::TooManyRegions { capacity })?;
-            let size = largest_square(grid, map, x, y);
+            let size = largest_square(grid, map, x, y, passable);
             *slot = Square {
                 x: u16::try_from(x).unwrap_or(u16::MAX),
                 y: u16::try_from(y).unwrap_or(u16::MAX),
@@ -175,7 +214,7 @@ where
 /// which is itself free and unclaimed (seed 004 §6, Fig. 6: "determine and create the largest
 /// square region composed of only free space cells and having cell (i,j) as its top-left
 /// vertex"; a cell already in an earlier square cannot join a new one).
-fn largest_square<S, M>(grid: &Grid<S>, map: &M, x: usize, y: usize) -> u16
+fn largest_square<S, M>(grid: &Grid<S>, map: &M, x: usize, y: usize, passable: Passable) -> u16
 where
     S: AsRef<[u8]>,
     M: IdStore + ?Sized,
@@ -183,7 +222,7 @@ where
     let (w, h) = (usize::from(grid.width()), usize::from(grid.height()));
     let open = |cx: usize, cy: usize| {
         let i = cy * w + cx;
-        grid.cell_at(i) == Cell::Free && map.get(i) == M::NONE
+        passable.admits(grid.cell_at(i)) && map.get(i) == M::NONE
     };
     let mut s = 1usize;
     // Grow from s to s + 1 while the new bottom row and right column are open.

@@ -16,9 +16,12 @@
 use protocol::{Mode, NackReason, PointMm};
 
 use super::Core;
-use crate::explore::{ExploreInput, ExplorePhase};
+use crate::deadreckon::DegradeEvent;
+use crate::explore::{ExploreInput, ExplorePhase, ExploreStats, MapMarker};
 use crate::hal::MotorCommand;
-use crate::nav::{grid_bytes, Geometry, Grid};
+use crate::nav::{grid_bytes, Cell, Geometry, Grid, Passable};
+use crate::odometry::Point;
+use crate::transfer::Objects;
 use crate::MAP_CAPACITY;
 
 /// Map cell size for exploration (seed 004 §5: the position error is 0.3 m, so the grid is).
@@ -77,12 +80,20 @@ impl Core {
             pose: self.pose(),
             ir: &ir[..n],
             goal: self.dead.params.beacon,
-            on_goal_area: self.sensors.ground,
+            ground: self
+                .profile
+                .has(protocol::caps::GROUND_SENSOR)
+                .then_some(self.sensors.ground),
+            arrival_m: self.guided.arrival_m,
         };
-        let Some(grid) = self.objects.grid_mut() else {
+        if !self.objects.has_map() {
             return MotorCommand::STOP;
-        };
-        let cmd = self.explorer.step(&input, grid);
+        }
+        let before = self.explorer.stats();
+        let cmd = self
+            .explorer
+            .step(&input, &mut ExploreMap(&mut self.objects));
+        self.degrade_for(before, self.explorer.stats());
         if self.explorer.phase() == ExplorePhase::Arrived {
             if !self.arrived {
                 self.record_goal_found(input.pose.point());
@@ -91,6 +102,20 @@ impl Core {
             return MotorCommand::STOP;
         }
         cmd
+    }
+
+    /// Seed 004 §4: collisions, dead ends and long wall following lower the confidence xi,
+    /// so that the next beacon calibration corrects the position by more.
+    fn degrade_for(&mut self, before: ExploreStats, after: ExploreStats) {
+        let n = |a: u16, b: u16| b.wrapping_sub(a);
+        let collisions = n(before.collisions, after.collisions)
+            .saturating_add(n(before.long_follows, after.long_follows));
+        for _ in 0..collisions.min(4) {
+            self.dead.degrade(DegradeEvent::Collision);
+        }
+        for _ in 0..n(before.dead_ends, after.dead_ends).min(4) {
+            self.dead.degrade(DegradeEvent::DeadEnd);
+        }
     }
 
     /// Makes where the robot found the goal area the map's goal, so that a `Plan` with no
@@ -104,5 +129,53 @@ impl Core {
             x_mm: mm(here.x),
             y_mm: mm(here.y),
         });
+    }
+}
+
+/// The robot's map as exploration sees it: the grid to mark, and the planner over it.
+struct ExploreMap<'a>(&'a mut Objects);
+
+impl MapMarker for ExploreMap<'_> {
+    fn index(&self, p: Point) -> Option<(i32, i32)> {
+        MapMarker::index(self.0.nav().grid(), p)
+    }
+
+    fn cell_at(&self, p: Point) -> Option<Cell> {
+        MapMarker::cell_at(self.0.nav().grid(), p)
+    }
+
+    fn mark(&mut self, p: Point, cell: Cell) {
+        // Only a real change counts as one: the map's id is recomputed after changes.
+        if self.cell_at(p).is_some_and(|c| c != cell) {
+            if let Some(grid) = self.0.grid_mut() {
+                grid.mark(p, cell);
+            }
+        }
+    }
+
+    /// Seed 004 §6 on the incomplete map with unknown cells free; the first point of the
+    /// smoothed plan (a corner in line of sight), or its first region centre. The segmentation
+    /// is forgotten afterwards: a `Plan` command must segment with unknown as obstacle.
+    fn plan_towards(&mut self, from: Point, to: Point) -> Option<Point> {
+        let nav = self.0.nav_mut();
+        let point = (|| {
+            nav.segment_with(Passable::FreeOrUnknown).ok()?;
+            let geo = nav.grid().geometry();
+            let start = geo.metres_to_grid(from.x, from.y);
+            let goal = geo.metres_to_grid(to.x, to.y);
+            let plan = nav.plan(start, goal).ok()?;
+            // A quarter cell from square corners, as the station smooths.
+            let next = match nav.smooth(&plan, crate::nav::UNITS_PER_CELL as u32 / 4) {
+                Ok(sm) => sm.waypoint(nav.smoothed_points(), 1),
+                Err(_) => {
+                    let regions = nav.regions()?;
+                    plan.waypoint(&regions, nav.path(), 2.min(plan.waypoint_count() - 1))
+                }
+            }?;
+            let (x, y) = geo.grid_to_metres(next);
+            Some(Point::new(x, y))
+        })();
+        nav.forget_segmentation();
+        point
     }
 }
