@@ -151,8 +151,8 @@ impl Default for ExploreParams {
             follow_distance_m: 0.12,
             follow_gain: 150.0,
             min_follow_ms: 1500,
-            timeout_min_ms: 60_000,
-            timeout_max_ms: 150_000,
+            timeout_min_ms: 30_000,
+            timeout_max_ms: 60_000,
             leave_progress_m: 0.35,
             m_line_band_m: 0.08,
             follow_degrade_ms: 10_000,
@@ -338,9 +338,10 @@ impl Explorer {
                 let from_hit = here.distance_to(hit);
                 let away = away || from_hit > 2.0 * p.leave_progress_m;
                 if elapsed >= timeout_ms {
+                    // The paper's loop breaker; the detour was longer than the random timeout,
+                    // so the reactive search is not getting past this wall: plan.
                     self.stats.timeouts = self.stats.timeouts.wrapping_add(1);
-                    self.phase = ExplorePhase::Seek;
-                    return self.seek(inp, map);
+                    return self.start_plan(inp, map, side);
                 }
                 if away && from_hit < p.leave_progress_m * 0.5 {
                     // Round the whole obstacle back to the hit point without a leave point:
@@ -430,10 +431,7 @@ impl Explorer {
                 } else {
                     WallSide::Right
                 };
-                if r.tries >= 2 {
-                    return self.start_plan(inp, map, last);
-                }
-                last.other()
+                return self.start_plan(inp, map, last);
             }
             _ => self.choose_side(inp.pose, dir, map),
         };
@@ -517,14 +515,17 @@ impl Explorer {
             }
         }
         if blocked {
-            // Turn on the spot towards the side the plan's point is on until the way is clear.
-            let err = wrap_angle(here.bearing_to(target) - inp.pose.heading);
-            let s = if err >= 0.0 {
-                self.params.follow_speed
+            // A wall the map does not show yet (the IR sees it inside the robot's own cell):
+            // go round it as the reactive search does, on the side the plan's point is on.
+            let dir = here.bearing_to(target);
+            let side = if wrap_angle(dir - inp.pose.heading) >= 0.0 {
+                WallSide::Right
             } else {
-                -self.params.follow_speed
+                WallSide::Left
             };
-            return MotorCommand::new(units(-s), units(s));
+            self.remember_hit(map.index(here));
+            self.note_side(map.index(here), side);
+            return self.start_follow(inp, side, here.bearing_to(inp.goal));
         }
         self.steer(inp, target)
     }
