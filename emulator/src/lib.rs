@@ -2,6 +2,7 @@
 #![deny(unsafe_code)]
 
 pub mod arena;
+pub mod arena_gen;
 pub mod builtin;
 pub mod cli;
 pub mod fault;
