@@ -3,6 +3,7 @@
 
 pub mod arena;
 pub mod arena_gen;
+pub mod bench;
 pub mod builtin;
 pub mod cli;
 pub mod fault;
