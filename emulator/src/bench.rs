@@ -689,10 +689,12 @@ pub fn render(r: &BenchReport) -> String {
         "  pose error     {} (true vs believed, at the end)\n",
         fmt_spread(s.pose_error_m, "m")
     );
-    let causes: Vec<String> = s
-        .failures
+    let causes: Vec<String> = Cause::ALL
         .iter()
-        .map(|(k, v)| format!("{} {v}", k.replace('_', " ")))
+        .map(|c| {
+            let n = s.failures.get(c.name()).copied().unwrap_or(0);
+            format!("{} {n}", c.name().replace('_', " "))
+        })
         .collect();
     out += &format!("  failures       {}\n", causes.join(", "));
     if let Some(p) = s.plan {
