@@ -39,7 +39,7 @@ pub(crate) fn layout(name: &str, rng: &mut SimRng) -> Layout {
 const LABYRINTH_SHARE: f64 = 0.7;
 
 /// A corridor labyrinth: a random maze on a 4 x 4 or 5 x 5 grid of 1.25 or 1 m cells
-/// (carved depth-first, then a random 20-60 % of its inner walls removed, so there are loops
+/// (carved depth-first, then a random 10-40 % of its inner walls removed, so there are loops
 /// and open areas as in the real labs), its walls 0.05-0.35 m thick. Pieces that meet form
 /// one obstacle; any other gap is at least a cell less a wall's thickness (>= 0.65 m), over
 /// the 0.5 m rule. The goal circle is at a cell centre with no wall over it; the starts at
@@ -87,7 +87,7 @@ fn labyrinth(name: &str, rng: &mut SimRng) -> Layout {
         seen[nr * n + nc] = true;
         stack.push((nc, nr));
     }
-    let remove = uniform(rng, 0.2, 0.6);
+    let remove = uniform(rng, 0.1, 0.4);
     let mut walls = Vec::new();
     let clip = |v: f64| v.clamp(0.0, SIDE_M);
     for r in 0..n {
