@@ -43,6 +43,142 @@ pub enum Command {
     Serve(ServeArgs),
     /// Run a scenario headless at maximum speed and print a report.
     Run(RunArgs),
+    /// Arena files: `arena generate` writes a generated arena.
+    Arena(ArenaArgs),
+    /// Run one task over many arenas and seeds in parallel and report success rate, times,
+    /// collisions, final error and failures by cause (issue 14's generalisation benchmark).
+    Bench(BenchArgs),
+}
+
+/// `arena` subcommands.
+#[derive(Debug, Clone, Args)]
+pub struct ArenaArgs {
+    #[command(subcommand)]
+    pub command: ArenaCommand,
+}
+
+/// What to do with arenas.
+#[derive(Debug, Clone, Subcommand)]
+pub enum ArenaCommand {
+    /// Write a generated arena: CiberRato lab XML (plus its grid file of start positions,
+    /// `...Grid.xml` beside a `...Lab.xml`) or micromouse maze text. Same seed, same arena;
+    /// every arena is checked solvable at its robot's size before it is written.
+    Generate(GenerateArgs),
+}
+
+/// `arena generate` options.
+#[derive(Debug, Clone, Args)]
+pub struct GenerateArgs {
+    /// Micro-Rato labyrinth (seed 004 §2), micromouse maze, or Khepera box (seed 000 §4).
+    #[arg(long, value_enum)]
+    pub kind: crate::arena_gen::Kind,
+    /// The arena's seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output file: `...Lab.xml` for micro-rato and box (the grid file goes beside it), any
+    /// name for a maze.
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+}
+
+/// `bench` options.
+#[derive(Debug, Clone, Args)]
+pub struct BenchArgs {
+    /// The task every run does.
+    #[arg(long, value_enum)]
+    pub task: crate::bench::BenchTask,
+    /// Arenas: `generated:N` (N generated arenas, seeds 1..N, of --kind), a directory of
+    /// arena files, arena files, or built-in names; several may be given.
+    #[arg(long, num_args = 1.., default_value = "generated:200", value_name = "SPEC")]
+    pub arenas: Vec<String>,
+    /// Kind of generated arena [default: micro-rato for the search tasks, box otherwise].
+    #[arg(long, value_enum)]
+    pub kind: Option<crate::arena_gen::Kind>,
+    /// Seeds per arena: runs use seeds 1..=K.
+    #[arg(long, default_value_t = 1, value_name = "K")]
+    pub seeds: u64,
+    /// Runs in parallel [default: the number of cores].
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Robot [default: micro-rato for the search tasks, khepera for goto and forage].
+    #[arg(long, value_enum)]
+    pub profile: Option<ProfileArg>,
+    /// Simulated seconds per run [default: 300; forage: 1200, as `run`].
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub timeout: Option<f64>,
+    /// Switch every noise source off.
+    #[arg(long)]
+    pub no_noise: bool,
+    /// Print the whole report, with one row per run, as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Most seeds per arena `bench --seeds` takes.
+pub const MAX_BENCH_SEEDS: u64 = 10_000;
+/// Most worker threads `bench --jobs` takes.
+pub const MAX_BENCH_JOBS: usize = 1024;
+
+impl BenchArgs {
+    /// The benchmark these arguments describe.
+    pub fn options(&self) -> Result<crate::bench::BenchOptions, String> {
+        use crate::bench::BenchTask;
+        if !(1..=MAX_BENCH_SEEDS).contains(&self.seeds) {
+            return Err(format!(
+                "--seeds {}: must be 1..={MAX_BENCH_SEEDS}",
+                self.seeds
+            ));
+        }
+        let jobs = match self.jobs {
+            Some(j) if !(1..=MAX_BENCH_JOBS).contains(&j) => {
+                return Err(format!("--jobs {j}: must be 1..={MAX_BENCH_JOBS}"))
+            }
+            Some(j) => j,
+            None => std::thread::available_parallelism().map_or(1, usize::from),
+        };
+        let default_timeout = if self.task == BenchTask::Forage {
+            FORAGE_TIMEOUT_S
+        } else {
+            DEFAULT_TIMEOUT_S
+        };
+        let timeout_s = match self.timeout {
+            None => default_timeout,
+            Some(t) if t.is_finite() && t > 0.0 => t,
+            Some(t) => return Err(format!("--timeout {t}: must be positive seconds")),
+        };
+        let profile = match (self.task, self.profile) {
+            // The foraging runner is the Khepera's (gripper, light sensors).
+            (BenchTask::Forage, _) | (_, None) => self.task.default_profile(),
+            (_, Some(p)) => p.profile(),
+        };
+        let search = matches!(
+            self.task,
+            BenchTask::ReachBeacon | BenchTask::ExploreThenPlan
+        );
+        if search && !profile.has(protocol::caps::COMPASS | protocol::caps::BEACON) {
+            return Err(format!(
+                "--profile {}: the search tasks need compass and beacon sensor (seed 004); \
+                 use --profile micro-rato",
+                profile.name
+            ));
+        }
+        let kind = self.kind.unwrap_or_else(|| self.task.default_kind());
+        let arenas = crate::bench::resolve_arenas(&self.arenas, kind)?;
+        Ok(crate::bench::BenchOptions {
+            task: self.task,
+            profile,
+            arenas,
+            seeds: self.seeds,
+            jobs,
+            timeout_s,
+            noise: if self.no_noise {
+                Noise::none()
+            } else {
+                Noise::default()
+            },
+            progress: !self.json,
+        })
+    }
 }
 
 /// Robot and world.

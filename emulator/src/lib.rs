@@ -2,6 +2,8 @@
 #![deny(unsafe_code)]
 
 pub mod arena;
+pub mod arena_gen;
+pub mod bench;
 pub mod builtin;
 pub mod cli;
 pub mod fault;

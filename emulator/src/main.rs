@@ -13,6 +13,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Run(args)) => run(&args),
         Some(Command::Serve(args)) => serve(&args),
+        Some(Command::Arena(args)) => arena(&args),
+        Some(Command::Bench(args)) => bench(&args),
         None => serve(&cli.serve),
     };
     match result {
@@ -22,6 +24,35 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn arena(args: &emulator::cli::ArenaArgs) -> Result<(), String> {
+    match &args.command {
+        emulator::cli::ArenaCommand::Generate(g) => {
+            // Refuse a bad --out before generating anything.
+            emulator::arena_gen::out_paths(g.kind, &g.out).map_err(|e| e.to_string())?;
+            let arena = emulator::arena_gen::generate(g.kind, g.seed).map_err(|e| e.to_string())?;
+            let written = emulator::arena_gen::write(&arena, &g.out).map_err(|e| e.to_string())?;
+            for p in written {
+                println!("{}", p.display());
+            }
+            Ok(())
+        }
+    }
+}
+
+fn bench(args: &emulator::cli::BenchArgs) -> Result<(), String> {
+    let opts = args.options()?;
+    let report = emulator::bench::run(&opts);
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string(&report).map_err(|e| e.to_string())?
+        );
+    } else {
+        print!("{}", emulator::bench::render(&report));
+    }
+    Ok(())
 }
 
 fn serve(args: &ServeArgs) -> Result<(), String> {

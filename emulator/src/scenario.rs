@@ -51,6 +51,10 @@ pub const SETTLE_MS: u64 = 500;
 pub const KHEPERA_TOLERANCE_M: f64 = 0.05;
 /// Micro-rato tolerance for a goal that is not the arena's target. seed 004 §4: 0.3 m.
 pub const RATO_POINT_TOLERANCE_M: f64 = 0.3;
+/// The end of a run over which [`RunReport::last_window_span_m`] is measured, seconds.
+pub const STUCK_WINDOW_S: f64 = 60.0;
+/// Sampling period of that window, ms.
+const WINDOW_SAMPLE_MS: u64 = 100;
 
 /// A point in the map frame, metres.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -100,6 +104,10 @@ pub struct RunReport {
     pub map_known_cells: Option<u32>,
     /// Regions and waypoints of the plan run 2 executed.
     pub plan_regions: Option<u32>,
+    /// Farthest the TRUE position was from where this run ended during its last
+    /// [`STUCK_WINDOW_S`], metres: a run that timed out with this under a body diameter was
+    /// stuck, not still searching.
+    pub last_window_span_m: f64,
 }
 
 /// How a scenario is run. [`ScenarioOptions::new`] gives the defaults.
@@ -403,15 +411,28 @@ fn run_until_arrived(
 ) -> RunReport {
     let (t0, c0, d0) = (sim.now_us(), sim.collisions(), sim.distance_m());
     let mut arrived = false;
-    for _ in 0..timeout_ms {
+    let samples = (STUCK_WINDOW_S * 1000.0) as usize / WINDOW_SAMPLE_MS as usize;
+    let mut window = std::collections::VecDeque::with_capacity(samples + 1);
+    for i in 0..timeout_ms {
         sim.step();
         if sim.robot().core.arrived {
             arrived = true;
             sim.run_for(SETTLE_MS);
             break;
         }
+        if i % WINDOW_SAMPLE_MS == 0 {
+            if window.len() == samples {
+                window.pop_front();
+            }
+            let p = sim.truth();
+            window.push_back((p.x, p.y));
+        }
     }
     let t = sim.truth();
+    let last_window_span_m = window
+        .iter()
+        .map(|&(x, y)| (x - t.x).hypot(y - t.y))
+        .fold(0.0, f64::max);
     let goal_error = (t.x - judge.goal.x_m).hypot(t.y - judge.goal.y_m);
     let known = sim.robot().core.objects.nav().grid();
     let map_known_cells = sim.robot().core.objects.has_map().then(|| {
@@ -430,6 +451,7 @@ fn run_until_arrived(
         pose_error_m: sim.pose_error_m(),
         map_known_cells,
         plan_regions: None,
+        last_window_span_m,
     }
 }
 

@@ -517,7 +517,7 @@ impl Sim {
 }
 
 /// The start pose: given, the arena's first, or a free spot; checked free.
-fn start_pose(world: &World, given: Option<Pose>, radius: f64) -> Result<Pose, SimError> {
+pub fn start_pose(world: &World, given: Option<Pose>, radius: f64) -> Result<Pose, SimError> {
     let pose = match given.or_else(|| world.arena().starts.first().copied()) {
         Some(p) => p,
         None => {

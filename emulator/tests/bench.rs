@@ -1,0 +1,143 @@
+//! The generalisation benchmark on a small fixed subset: the report's JSON has every field,
+//! one row per (arena, seed) in order, and its counts add up. No timings are asserted.
+
+use emulator::arena_gen::Kind;
+use emulator::bench::{self, ArenaSource, BenchOptions, BenchTask};
+use emulator::sensors::Noise;
+
+fn options(task: BenchTask, arenas: Vec<ArenaSource>, seeds: u64) -> BenchOptions {
+    BenchOptions {
+        task,
+        profile: task.default_profile(),
+        arenas,
+        seeds,
+        jobs: 2,
+        timeout_s: 120.0,
+        noise: Noise::default(),
+        progress: false,
+    }
+}
+
+#[test]
+fn a_small_reach_beacon_bench_has_the_right_shape_and_counts() {
+    let mut arenas: Vec<ArenaSource> = (1..=3)
+        .map(|s| ArenaSource::Generated(Kind::MicroRato, s))
+        .collect();
+    arenas.push(ArenaSource::Named("/nonexistent/lab.xml".into()));
+    let report = bench::run(&options(BenchTask::ReachBeacon, arenas, 2));
+    let json = serde_json::to_value(&report).expect("serialises");
+    for key in [
+        "task",
+        "profile",
+        "arenas",
+        "seeds",
+        "timeout_s",
+        "jobs",
+        "wall_s",
+        "summary",
+        "rows",
+    ] {
+        assert!(json.get(key).is_some(), "missing {key}");
+    }
+    assert_eq!(json["task"], "reach-beacon");
+    let rows = json["rows"].as_array().expect("rows");
+    assert_eq!(rows.len(), 8, "4 arenas x 2 seeds");
+    let order: Vec<(String, u64)> = rows
+        .iter()
+        .map(|r| {
+            (
+                r["arena"].as_str().unwrap_or("").to_string(),
+                r["seed"].as_u64().unwrap_or(0),
+            )
+        })
+        .collect();
+    assert_eq!(order[0], ("micro-rato-0001".to_string(), 1));
+    assert_eq!(order[1], ("micro-rato-0001".to_string(), 2));
+    assert_eq!(order[5], ("micro-rato-0003".to_string(), 2));
+    // The missing file is an import error, with the importer's message, on both seeds.
+    for r in &rows[6..] {
+        assert_eq!(r["cause"], "import_error");
+        assert!(r["error"]
+            .as_str()
+            .unwrap_or("")
+            .contains("/nonexistent/lab.xml"));
+    }
+    let s = &json["summary"];
+    assert_eq!(s["runs"], 8);
+    let failures = s["failures"].as_object().expect("failures");
+    for cause in [
+        "stuck",
+        "timeout",
+        "wrong_arrival",
+        "started_inside_target",
+        "import_error",
+        "setup_error",
+        "panic",
+    ] {
+        assert!(failures.contains_key(cause), "{cause}");
+    }
+    let failed: u64 = failures
+        .values()
+        .filter_map(serde_json::Value::as_u64)
+        .sum();
+    assert_eq!(s["successes"].as_u64().unwrap_or(99) + failed, 8);
+    assert_eq!(failures["import_error"], 2);
+    // Success is the runner's truth test, never the firmware's word alone.
+    for r in rows.iter().filter(|r| r["success"] == true) {
+        assert_eq!(r["reached"], true);
+        assert_eq!(r["started_inside"], false);
+        assert!(r["goal_error_m"].as_f64().unwrap_or(9.0) <= 0.5 + 1e-3);
+    }
+    assert!(s["plan"].is_null() && s["forage"].is_null());
+}
+
+#[test]
+fn the_same_bench_gives_the_same_rows_whatever_the_jobs() {
+    let arenas: Vec<ArenaSource> = (1..=2)
+        .map(|s| ArenaSource::Generated(Kind::Box, s))
+        .collect();
+    let mut one = options(BenchTask::Goto, arenas.clone(), 1);
+    one.jobs = 1;
+    let a = bench::run(&one);
+    let b = bench::run(&options(BenchTask::Goto, arenas, 1));
+    let strip = |r: &bench::BenchReport| {
+        r.rows
+            .iter()
+            .map(|x| (x.arena.clone(), x.seed, x.cause, x.sim_s, x.goal_error_m))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(strip(&a), strip(&b));
+    assert_eq!(a.profile, "khepera");
+}
+
+#[test]
+fn a_robot_started_in_the_target_is_not_a_success() {
+    // Box arena 1 with its start moved onto the goal: whatever the runner reports, the bench
+    // must call it started_inside_target.
+    let mut g = emulator::arena_gen::generate(Kind::Box, 1).expect("generates");
+    let t = *g.arena.target().expect("target");
+    g.arena.starts[0].x = t.centre.x;
+    g.arena.starts[0].y = t.centre.y;
+    let dir = std::env::temp_dir().join(format!("bench-inside-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let lab = dir.join("insideLab.xml");
+    emulator::arena_gen::write(&g, &lab).expect("writes");
+    // Rewrite the grid file with the start on the goal.
+    let unit = emulator::arena::CIBERRATO_UNIT_M;
+    let grid = format!(
+        "<Grid>\n  <Position X=\"{:.4}\" Y=\"{:.4}\" Dir=\"0\"/>\n</Grid>\n",
+        t.centre.x / unit,
+        t.centre.y / unit
+    );
+    std::fs::write(dir.join("insideGrid.xml"), grid).expect("grid");
+    let arenas = vec![ArenaSource::Named(lab.to_string_lossy().into_owned())];
+    let r = bench::run(&options(BenchTask::Goto, arenas, 1));
+    assert_eq!(
+        r.rows[0].cause,
+        Some(bench::Cause::StartedInsideTarget),
+        "{:?}",
+        r.rows[0]
+    );
+    assert!(!r.rows[0].success);
+    let _ = std::fs::remove_dir_all(&dir);
+}
