@@ -13,7 +13,7 @@
 //! linearly and saturate instead of overflowing. Cannot fail.
 
 use super::turn::{turn_on_spot, TurnParams};
-use super::{units, MotorCommand};
+use super::{units, MotorCommand, Side};
 use crate::odometry::{wrap_angle, Point, Pose};
 
 /// Parameters of drift (seed 000 §4.4).
@@ -244,6 +244,25 @@ impl Drift {
         }
         // Re-encountered the nearest point.
         self.left_nearest = false;
+        self.escalate(p)
+    }
+
+    /// The robot is going round in circles: it came back to its nearest point, or the
+    /// turning schema had to turn it by 180° (it could not leave its circle, or it faced a
+    /// dead end, seed 000 §4.5). The first time the drift is halved; every further time
+    /// navigation pauses, longer with each failure (§4.4). Returns true when it pauses.
+    ///
+    /// A 180° turn counts because a robot pressed against a wall across its way never leaves
+    /// the 5 cm around its nearest point, so it would never "re-encounter" it: avoidance and
+    /// drift cancel and only the circle criterion notices.
+    pub fn cyclic(&mut self, p: &DriftParams) -> bool {
+        if !matches!(self.phase, DriftPhase::Aligning | DriftPhase::Driving) {
+            return false;
+        }
+        self.escalate(p)
+    }
+
+    fn escalate(&mut self, p: &DriftParams) -> bool {
         self.revisits = self.revisits.saturating_add(1);
         if self.revisits == 1 {
             self.factor *= p.revisit_factor;
@@ -257,12 +276,23 @@ impl Drift {
         true
     }
 
-    /// After a pause: a fresh start from wherever the robot now is (failures are kept so the
-    /// next pause is longer).
+    /// The side whose edge the current pause follows: `first` on odd failures, the other
+    /// side on even ones, so that successive, longer pauses search both ways round the
+    /// obstacle (a trap that one side leaves only after a long way, the other may leave soon).
+    pub fn pause_side(&self, first: Side) -> Side {
+        if self.failures % 2 == 1 {
+            first
+        } else {
+            first.other()
+        }
+    }
+
+    /// After a pause: navigation starts again from wherever the robot now is. The nearest
+    /// point is kept, and so is the failure count, so that driving back into the same trap
+    /// counts at once as a further failure and the next pause is longer.
     fn restart(&mut self) -> DriftPhase {
-        self.nearest = None;
-        self.left_nearest = false;
-        self.revisits = 0;
+        self.left_nearest = true;
+        self.revisits = self.revisits.max(1);
         self.factor = 1.0;
         self.approach = false;
         DriftPhase::Aligning
