@@ -277,4 +277,26 @@ mod tests {
         assert_eq!(out.delta, MotorCommand::STOP);
         assert_eq!(f.memory(), Some(-150));
     }
+
+    #[test]
+    fn a_seeking_follower_with_no_wall_in_view_curves_towards_its_side_until_it_sees_one() {
+        let p = EdgeParams::default();
+        let mut f = EdgeFollow::seeking(Side::Right);
+        let out = f.step(&[0; 8], &p);
+        assert_eq!(out.phase, EdgePhase::Lost { cycles: 1 });
+        assert_eq!(out.delta, MotorCommand::new(0, -4));
+        let out = f.step(&[0, 0, 0, 0, 0, 300, 0, 0], &p);
+        assert_eq!(out.phase, EdgePhase::Following);
+        assert_eq!(f.memory(), Some(-300));
+        // With a wall in view at the reset it memorises at once, as the plain follower does.
+        let mut g = EdgeFollow::seeking(Side::Left);
+        assert_eq!(g.step(&left(300), &p).phase, EdgePhase::Following);
+        assert_eq!(g.memory(), Some(-300));
+        g.reset();
+        assert_eq!(
+            g.step(&left(5), &p).phase,
+            EdgePhase::Lost { cycles: 1 },
+            "after a reset too"
+        );
+    }
 }
