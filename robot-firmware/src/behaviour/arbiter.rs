@@ -287,6 +287,15 @@ impl Arbiter {
             let p = &self.params.turn;
             let out = self.turning.step(&ir, inp.pose, monitor, p, &mut self.rng);
             st.dead_end = out.dead_end;
+            let half_turn = matches!(
+                self.turning.active().map(|t| t.reason),
+                Some(TurnReason::Circle | TurnReason::DeadEnd)
+            );
+            if !was_turning && half_turn && matches!(self.mode, Mode::GoTo(_)) {
+                // A 180° turn means the robot was trapped: one more sign of cyclic
+                // behaviour for drift's escalation (seed 000 §4.4).
+                self.drift.cyclic(&self.params.drift);
+            }
             out.cmd.map(|c| self.held_turn.fresh(c))
         } else if was_turning {
             st.stale.insert(BehaviourSet::TURN);
@@ -328,7 +337,10 @@ impl Arbiter {
                     DriftPhase::Reached => return MotorCommand::STOP,
                     DriftPhase::Paused { .. } => {
                         if !was_paused {
-                            self.edge.reset();
+                            // Follow the obstacle's edge, searching for it first; the side
+                            // alternates between failures.
+                            let side = self.drift.pause_side(self.params.pause_side);
+                            self.edge = EdgeFollow::seeking(side);
                         }
                         correction = self.edge_step(inp, st);
                     }

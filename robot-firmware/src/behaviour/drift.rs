@@ -4,16 +4,24 @@
 //! proportional to the heading error is superimposed, strong beyond a switch angle and weak
 //! below it. To break cycles the nearest point reached is memorised: coming back to it (within
 //! 5 cm) the first time halves the drift; coming back again pauses navigation for a number of
-//! cycles that grows with each failure (the arbiter follows an edge meanwhile), after which
-//! navigation restarts from the new place. Within 15 cm the robot turns to the target again and
-//! halves its propulsion; within 5 cm the target is reached.
+//! cycles that grows with each failure (the arbiter follows the obstacle's edge meanwhile,
+//! alternating sides between failures), after which navigation restarts from the new place.
+//! Within 15 cm the robot turns to the target again and halves its propulsion; within 5 cm the
+//! target is reached.
+//!
+//! A 180° turn of the turning schema (the robot could not leave its circle, or faced a dead
+//! end, §4.5) counts as cyclic behaviour exactly like a return to the nearest point
+//! ([`Drift::cyclic`]): a robot pressed against a wall across its way never leaves the 5 cm
+//! around its nearest point, so without this it would sit there for the whole run. The
+//! nearest point and the failure count survive a pause, so driving back into the same trap
+//! pauses again at once, for longer.
 //!
 //! Invariants: the drift only slows the motor on the side of the target (like edge following,
 //! it is added to avoidance); `Reached` is final until a new target is set; pauses grow
 //! linearly and saturate instead of overflowing. Cannot fail.
 
 use super::turn::{turn_on_spot, TurnParams};
-use super::{units, MotorCommand};
+use super::{units, MotorCommand, Side};
 use crate::odometry::{wrap_angle, Point, Pose};
 
 /// Parameters of drift (seed 000 §4.4).
@@ -244,6 +252,25 @@ impl Drift {
         }
         // Re-encountered the nearest point.
         self.left_nearest = false;
+        self.escalate(p)
+    }
+
+    /// The robot is going round in circles: it came back to its nearest point, or the
+    /// turning schema had to turn it by 180° (it could not leave its circle, or it faced a
+    /// dead end, seed 000 §4.5). The first time the drift is halved; every further time
+    /// navigation pauses, longer with each failure (§4.4). Returns true when it pauses.
+    ///
+    /// A 180° turn counts because a robot pressed against a wall across its way never leaves
+    /// the 5 cm around its nearest point, so it would never "re-encounter" it: avoidance and
+    /// drift cancel and only the circle criterion notices.
+    pub fn cyclic(&mut self, p: &DriftParams) -> bool {
+        if !matches!(self.phase, DriftPhase::Aligning | DriftPhase::Driving) {
+            return false;
+        }
+        self.escalate(p)
+    }
+
+    fn escalate(&mut self, p: &DriftParams) -> bool {
         self.revisits = self.revisits.saturating_add(1);
         if self.revisits == 1 {
             self.factor *= p.revisit_factor;
@@ -257,12 +284,23 @@ impl Drift {
         true
     }
 
-    /// After a pause: a fresh start from wherever the robot now is (failures are kept so the
-    /// next pause is longer).
+    /// The side whose edge the current pause follows: `first` on odd failures, the other
+    /// side on even ones, so that successive, longer pauses search both ways round the
+    /// obstacle (a trap that one side leaves only after a long way, the other may leave soon).
+    pub fn pause_side(&self, first: Side) -> Side {
+        if self.failures % 2 == 1 {
+            first
+        } else {
+            first.other()
+        }
+    }
+
+    /// After a pause: navigation starts again from wherever the robot now is. The nearest
+    /// point is kept, and so is the failure count, so that driving back into the same trap
+    /// counts at once as a further failure and the next pause is longer.
     fn restart(&mut self) -> DriftPhase {
-        self.nearest = None;
-        self.left_nearest = false;
-        self.revisits = 0;
+        self.left_nearest = true;
+        self.revisits = self.revisits.max(1);
         self.factor = 1.0;
         self.approach = false;
         DriftPhase::Aligning
@@ -361,13 +399,32 @@ mod tests {
             "restarts from the new place"
         );
         assert_eq!(d.factor(), 1.0);
-        // Second failure (1.86 rad faces the target from (0.3, 0)): pause twice as long.
-        for x in [0.3, 0.5, 0.3, 0.5] {
-            step_at(&mut d, x, 0.0, 1.86);
-        }
-        let out = step_at(&mut d, 0.3, 0.0, 1.86);
+        // The nearest point is kept: driving back to it is at once the second failure
+        // (1.86 rad faces the target from (0.3, 0)), and the pause is twice as long.
+        step_at(&mut d, 0.3, 0.0, 1.86);
+        let out = step_at(&mut d, 0.0, 0.01, FRAC_PI_2);
         assert_eq!(out.phase, DriftPhase::Paused { remaining: 200 });
         assert_eq!(d.failures(), 2);
+    }
+
+    #[test]
+    fn a_half_turn_is_cyclic_behaviour_halving_first_then_pausing_on_alternate_sides() {
+        let p = DriftParams::default();
+        let mut d = Drift::new(Point::new(0.0, 1.0));
+        step_at(&mut d, 0.0, 0.0, FRAC_PI_2);
+        assert!(!d.cyclic(&p));
+        assert_eq!(d.factor(), 0.5);
+        assert!(d.cyclic(&p));
+        assert_eq!(d.phase(), DriftPhase::Paused { remaining: 100 });
+        assert_eq!(d.pause_side(Side::Left), Side::Left);
+        assert!(!d.cyclic(&p), "a turn during a pause changes nothing");
+        for _ in 0..100 {
+            step_at(&mut d, 0.3, 0.0, 0.0);
+        }
+        assert_eq!(d.phase(), DriftPhase::Aligning);
+        assert!(d.cyclic(&p), "after a pause the next sign pauses again");
+        assert_eq!(d.phase(), DriftPhase::Paused { remaining: 200 });
+        assert_eq!(d.pause_side(Side::Left), Side::Right);
     }
 
     #[test]

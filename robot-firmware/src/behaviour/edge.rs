@@ -80,6 +80,9 @@ pub struct EdgeFollow {
     side: Side,
     s_mem: Option<i32>,
     phase: EdgePhase,
+    /// At a reset with no wall in view, look for one (the lost-wall curve) instead of
+    /// memorising the floor reading, which would make the follower drive straight on.
+    seek: bool,
 }
 
 impl EdgeFollow {
@@ -89,6 +92,18 @@ impl EdgeFollow {
             side,
             s_mem: None,
             phase: EdgePhase::Following,
+            seek: false,
+        }
+    }
+
+    /// A follower that, after each reset, first curves towards `side` until a wall is in view
+    /// (at most `lost_max_cycles`, as for a lost wall). Drift's pauses use it: they are meant
+    /// to follow the obstacle that blocked the way (seed 000 §4.4), which after a turn is
+    /// usually a few centimetres off, beyond the side sensor's 3.3 cm.
+    pub const fn seeking(side: Side) -> Self {
+        Self {
+            seek: true,
+            ..Self::new(side)
         }
     }
 
@@ -120,6 +135,11 @@ impl EdgeFollow {
             Side::Right => S_RIGHT,
         };
         let s = i32::from(ir[idx]);
+        if self.s_mem.is_none() && self.seek && s < i32::from(p.found_level) {
+            // Nothing to memorise yet: search for the wall as if it had just been lost.
+            self.s_mem = Some(-s);
+            self.phase = EdgePhase::Lost { cycles: 0 };
+        }
         let mem = *self.s_mem.get_or_insert(-s);
         let e = s + mem;
         let mut delta = MotorCommand::STOP;
@@ -256,5 +276,27 @@ mod tests {
         assert_eq!(out.phase, EdgePhase::Following);
         assert_eq!(out.delta, MotorCommand::STOP);
         assert_eq!(f.memory(), Some(-150));
+    }
+
+    #[test]
+    fn a_seeking_follower_with_no_wall_in_view_curves_towards_its_side_until_it_sees_one() {
+        let p = EdgeParams::default();
+        let mut f = EdgeFollow::seeking(Side::Right);
+        let out = f.step(&[0; 8], &p);
+        assert_eq!(out.phase, EdgePhase::Lost { cycles: 1 });
+        assert_eq!(out.delta, MotorCommand::new(0, -4));
+        let out = f.step(&[0, 0, 0, 0, 0, 300, 0, 0], &p);
+        assert_eq!(out.phase, EdgePhase::Following);
+        assert_eq!(f.memory(), Some(-300));
+        // With a wall in view at the reset it memorises at once, as the plain follower does.
+        let mut g = EdgeFollow::seeking(Side::Left);
+        assert_eq!(g.step(&left(300), &p).phase, EdgePhase::Following);
+        assert_eq!(g.memory(), Some(-300));
+        g.reset();
+        assert_eq!(
+            g.step(&left(5), &p).phase,
+            EdgePhase::Lost { cycles: 1 },
+            "after a reset too"
+        );
     }
 }

@@ -95,6 +95,14 @@ pub enum Side {
 }
 
 impl Side {
+    /// The opposite side.
+    pub const fn other(self) -> Self {
+        match self {
+            Side::Left => Side::Right,
+            Side::Right => Side::Left,
+        }
+    }
+
     /// A command that changes only this side's motor by `delta`.
     pub const fn motor(self, delta: i16) -> MotorCommand {
         match self {

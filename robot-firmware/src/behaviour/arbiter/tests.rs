@@ -248,3 +248,30 @@ fn a_stale_pose_reuses_the_last_drift_correction() {
     assert_eq!(a.step(&stale), MotorCommand::new(0, 6));
     assert!(a.state().stale.contains(BehaviourSet::DRIFT));
 }
+
+#[test]
+fn go_to_pressed_against_a_wall_across_its_way_pauses_to_follow_the_edge() {
+    // A flat wall ahead (no dead-end pattern): avoidance and drift cancel, the robot stays put
+    // and never leaves its nearest point. The circle criterion's 180° turns must count as
+    // cyclic behaviour: first the drift is halved, then navigation pauses (seed 000 §4.4).
+    let mut a = arbiter(Mode::GoTo(Point::new(1.0, 0.0)));
+    let wall = [0, 200, 650, 650, 200, 0, 0, 0];
+    let mut pose = Pose::new(0.0, 0.0, 0.0);
+    let mut paused_at = None;
+    for cycle in 0..2000 {
+        // Only the heading changes: the wall stops the robot; facing away it sees nothing.
+        let facing = libm::cosf(pose.heading) > 0.7;
+        let cmd = a.step(&at(if facing { wall } else { CLEAR }, pose));
+        let turned = drive(pose, cmd);
+        pose = Pose::new(0.0, 0.0, turned.heading);
+        if matches!(a.state().drift_phase, DriftPhase::Paused { .. }) {
+            paused_at = Some(cycle);
+            break;
+        }
+    }
+    let cycle = paused_at.expect("navigation never paused: the robot sits at the wall");
+    assert!(a.drift().failures() >= 1);
+    assert_eq!(a.drift().factor(), 0.5, "halved on the first 180° turn");
+    // Two circle periods (200 cycles each) plus the turns.
+    assert!(cycle < 700, "{cycle}");
+}
