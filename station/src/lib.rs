@@ -12,6 +12,8 @@
 //! - `transfer`: map and plan uploads and downloads (the engine, `station upload-map` ...).
 //! - `tui`: the terminal loop; `pace`: the timer grid its periodic work shares; `cli`,
 //!   `headless`, `builtin`: the binary's edge.
+//! - `output_file`: how every file the station writes reaches its name (atomic, O_EXCL
+//!   temporary, no special file replaced).
 #![deny(unsafe_code)]
 
 pub mod action;
@@ -23,6 +25,7 @@ pub mod export;
 pub mod headless;
 pub mod input;
 pub mod link;
+pub mod output_file;
 pub mod pace;
 pub mod plan;
 pub mod record;
