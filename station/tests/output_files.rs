@@ -95,7 +95,10 @@ fn a_symlink_planted_at_the_old_temporary_name_of_a_plan_object_is_not_written_t
         },
     );
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(std::fs::read(&victim).unwrap(), b"precious");
+    assert!(
+        std::fs::read(&victim).unwrap() == b"precious",
+        "the station wrote through the planted symlink"
+    );
     let obj = std::fs::read(d.join("plan.obj")).unwrap();
     assert!(protocol::object::PlanView::parse(&obj).is_ok());
     assert!(
@@ -117,7 +120,10 @@ fn a_symlink_planted_at_the_old_temporary_name_of_an_export_is_not_written_throu
         std::os::unix::fs::symlink(&victim, d.join(format!(".out.csv.tmp-{pid}"))).unwrap();
     });
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(std::fs::read(&victim).unwrap(), b"precious");
+    assert!(
+        std::fs::read(&victim).unwrap() == b"precious",
+        "the station wrote through the planted symlink"
+    );
     let csv = std::fs::read_to_string(d.join("out.csv")).unwrap();
     assert!(csv.lines().count() > 10, "{csv}");
     let _ = std::fs::remove_dir_all(&d);
