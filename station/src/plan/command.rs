@@ -149,10 +149,9 @@ pub fn plan(args: &PlanArgs) -> anyhow::Result<ExitCode> {
         }
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        print!(
-            "{}",
-            plan_text(&planner, &r, &goal_note(planner.map(), args.to, r.goal()))
-        );
+        // The map's name comes from the arena file.
+        let text = plan_text(&planner, &r, &goal_note(planner.map(), args.to, r.goal()));
+        print!("{}", crate::terminal_text::printable_text(&text));
         if let Some(o) = object {
             println!(
                 "plan object: {} bytes, id {}, map id {} -> {}",
@@ -172,7 +171,10 @@ pub fn segment(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
     if args.json {
         println!("{}", serde_json::to_string_pretty(&segment_json(&planner))?);
     } else {
-        print!("{}", segment_text(&planner));
+        print!(
+            "{}",
+            crate::terminal_text::printable_text(&segment_text(&planner))
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -102,7 +102,10 @@ pub(super) fn fail(
         merge(&mut v, extra);
         println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
     } else {
-        eprintln!("station {command}: {error}");
+        eprintln!(
+            "station {command}: {}",
+            crate::terminal_text::printable_text(error)
+        );
     }
     ExitCode::FAILURE
 }
@@ -134,9 +137,9 @@ pub(super) fn finish(json: bool, command: &str, r: &JobReport, extra: Value) -> 
         merge(&mut v, extra);
         println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
     } else if r.outcome.is_success() {
-        println!("{}", r.text());
+        println!("{}", crate::terminal_text::printable_text(&r.text()));
     } else {
-        eprintln!("{}", r.text());
+        eprintln!("{}", crate::terminal_text::printable_text(&r.text()));
     }
     if r.outcome.is_success() {
         ExitCode::SUCCESS
@@ -203,7 +206,7 @@ pub async fn upload_map(args: &UploadMapArgs) -> anyhow::Result<ExitCode> {
     };
     let extra = json!({"file": args.map.map, "map": map_json(&m)});
     if !json {
-        println!("{}", loaded.summary);
+        println!("{}", crate::terminal_text::printable_text(&loaded.summary));
     }
     let (mut client, peer) = match connect(&args.port, args.timeout).await {
         Ok(c) => c,
