@@ -44,7 +44,7 @@ impl Device for Liar {
                 Feed::Error { rest, .. } => input = rest,
                 Feed::Frame { frame, rest } => {
                     input = rest;
-                    let mut msg = frame.message.clone();
+                    let mut msg = frame.message;
                     if let Message::HelloReply(r) = &mut msg {
                         r.firmware = HOSTILE;
                         r.firmware_version = "1.0\u{1b}[31m";
