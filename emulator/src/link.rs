@@ -453,14 +453,26 @@ pub fn spawn(opts: EmulatorOptions) -> Result<RunningEmulator, SpawnError> {
 }
 
 /// Reads a link key file: 64 hex digits (surrounding white space ignored). The error names
-/// the file and what is wrong with it.
+/// the file and what is wrong with it. A regular file that group or others may access is
+/// refused, as ssh refuses such a private key: whoever can read the key can drive the robot.
 pub fn read_key_file(path: &Path) -> Result<[u8; protocol::sign::KEY_LEN], String> {
     use std::io::Read;
     let cannot = |e: std::io::Error| format!("cannot read key file {}: {e}", path.display());
+    let file = std::fs::File::open(path).map_err(cannot)?;
+    // The open file's mode, not the path's: no window for a swap in between. Only regular
+    // files: a pipe (`--key-file <(pass show robot)`) is the caller's own.
+    let meta = file.metadata().map_err(cannot)?;
+    if let Some(mode) = loose_mode(&meta) {
+        return Err(format!(
+            "key file {p} is accessible by group or others (mode {mode:04o}); a link key must \
+             be private, as an ssh private key must: run `chmod 600 {p}`",
+            p = path.display()
+        ));
+    }
     // Read a bounded prefix: a key is 64 digits, and `--key-file /dev/zero` must not hang.
     let mut text = String::new();
-    std::fs::File::open(path)
-        .and_then(|f| f.take(KEY_FILE_MAX + 1).read_to_string(&mut text))
+    file.take(KEY_FILE_MAX + 1)
+        .read_to_string(&mut text)
         .map_err(cannot)?;
     if text.len() as u64 > KEY_FILE_MAX {
         return Err(format!(
@@ -469,6 +481,19 @@ pub fn read_key_file(path: &Path) -> Result<[u8; protocol::sign::KEY_LEN], Strin
         ));
     }
     protocol::sign::parse_key_hex(&text).map_err(|e| format!("key file {}: {e}", path.display()))
+}
+
+/// The permission bits of a regular file that group or others may read, write or execute.
+#[cfg(unix)]
+fn loose_mode(meta: &std::fs::Metadata) -> Option<u32> {
+    use std::os::unix::fs::PermissionsExt as _;
+    let mode = meta.permissions().mode() & 0o7777;
+    (meta.is_file() && mode & 0o077 != 0).then_some(mode)
+}
+
+#[cfg(not(unix))]
+fn loose_mode(_: &std::fs::Metadata) -> Option<u32> {
+    None
 }
 
 /// Longest key file read, bytes (64 digits with room for white space and line endings).
@@ -484,9 +509,11 @@ mod tests {
         let key = "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff";
         let ok = dir.join(format!("emu-key-ok-{}", std::process::id()));
         std::fs::write(&ok, format!("  {key}\n")).unwrap();
+        private(&ok, 0o600);
         assert!(read_key_file(&ok).is_ok());
         let long = dir.join(format!("emu-key-long-{}", std::process::id()));
         std::fs::write(&long, format!("{key}{}", " ".repeat(5000))).unwrap();
+        private(&long, 0o600);
         let e = read_key_file(&long).unwrap_err();
         assert!(
             e.contains("longer than 4096 bytes") && e.contains("emu-key-long"),
@@ -494,5 +521,31 @@ mod tests {
         );
         let _ = std::fs::remove_file(ok);
         let _ = std::fs::remove_file(long);
+    }
+
+    fn private(path: &Path, mode: u32) {
+        use std::os::unix::fs::PermissionsExt as _;
+        std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode)).unwrap();
+    }
+
+    #[test]
+    fn key_files_that_group_or_others_may_access_are_refused_with_the_mode_and_the_fix() {
+        let key = "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff";
+        let path = std::env::temp_dir().join(format!("emu-key-mode-{}", std::process::id()));
+        std::fs::write(&path, key).unwrap();
+        for mode in [0o644, 0o640, 0o604, 0o620, 0o666] {
+            private(&path, mode);
+            let e = read_key_file(&path).unwrap_err();
+            assert!(
+                e.contains(&format!("(mode {mode:04o})"))
+                    && e.contains(&format!("chmod 600 {}", path.display())),
+                "{e}"
+            );
+        }
+        for mode in [0o600, 0o400] {
+            private(&path, mode);
+            assert!(read_key_file(&path).is_ok(), "{mode:o}");
+        }
+        let _ = std::fs::remove_file(path);
     }
 }

@@ -80,7 +80,7 @@ pub struct CalibrateArgs {
     /// Use a damaged or torn recording up to its last good record.
     #[arg(long)]
     pub salvage: bool,
-    /// Overwrite --out if it exists.
+    /// Overwrite --out if it exists (a device, FIFO or directory is never replaced).
     #[arg(long)]
     pub force: bool,
     /// Print the report as one JSON object.
@@ -582,18 +582,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
         encode_bin(&som)
     };
     report.bytes = bytes.len();
-    let (tmp, ()) = crate::export::write_temp(&args.out, |w| {
-        use std::io::Write;
-        w.write_all(&bytes)
-            .map_err(|source| crate::export::ExportError::Io {
-                path: args.out.clone(),
-                source,
-            })
-    })?;
-    if let Err(e) = std::fs::rename(&tmp, &args.out) {
-        let _ = std::fs::remove_file(&tmp);
-        bail!("{}: {e}", args.out.display());
-    }
+    crate::output_file::write_atomically(&args.out, &bytes, args.force)?;
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {

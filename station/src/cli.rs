@@ -505,7 +505,11 @@ pub fn run() -> ExitCode {
     match rt.block_on(crate::headless::dispatch(cli)) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("station: {}", error_text(&e));
+            // Errors quote file names, file contents and robot refusals.
+            eprintln!(
+                "station: {}",
+                crate::terminal_text::printable_text(&error_text(&e))
+            );
             ExitCode::FAILURE
         }
     }

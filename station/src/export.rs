@@ -4,7 +4,7 @@
 //! Layer: a walk over a parsed `Recording` that decodes both directions with the protocol's
 //! `FrameDecoder` (one per direction, the robot's reset when a port closed, as live) and hands
 //! each message to a writer (`csv`, `mcap`), plus the file I/O: each output is written to a
-//! hidden temporary file beside it and synced, and the outputs are renamed to their final names
+//! temporary file beside it (`output_file`), and the outputs are renamed to their final names
 //! only when all of them are complete.
 //! Invariants: bad input (not a recording, another version, a torn or corrupted record) is
 //! refused before any output file is created, with the byte offset, unless `--salvage` asks
@@ -14,8 +14,6 @@
 pub mod csv;
 pub mod mcap;
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -23,6 +21,7 @@ use anyhow::bail;
 use clap::Args;
 use protocol::{Feed, FrameDecoder, FrameError, Message};
 
+use crate::output_file::{OutputError, OutputFile};
 use crate::record::{LinkState, RecordKind, Recording};
 
 /// Arguments of `station export`.
@@ -42,7 +41,7 @@ pub struct ExportArgs {
     /// Export a damaged or torn recording up to its last good record instead of refusing it.
     #[arg(long)]
     pub salvage: bool,
-    /// Overwrite output files that exist.
+    /// Overwrite output files that exist (a device, FIFO or directory is never replaced).
     #[arg(long)]
     pub force: bool,
 }
@@ -57,6 +56,8 @@ pub enum ExportError {
     },
     #[error("{path}: MCAP: {message}")]
     Mcap { path: PathBuf, message: String },
+    #[error(transparent)]
+    Output(#[from] OutputError),
 }
 
 /// Which way a frame went.
@@ -149,27 +150,24 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         bail!("--mcap and --csv name the same file");
     }
     let rec = open_whole(&args.file, args.salvage)?;
-    // Both outputs are complete before either takes its final name.
+    // Both outputs are complete before either takes its final name; an output not committed
+    // is removed when dropped.
     let mut done = Vec::new();
     let mut notes = Vec::new();
-    let result = (|| {
-        if let Some(out) = &args.mcap {
-            let (tmp, n) = write_temp(out, |w| mcap::write(&rec, w, out))?;
-            done.push((tmp, out.clone()));
-            notes.push(format!("wrote {} ({n} messages)", out.display()));
-        }
-        if let Some(out) = &args.csv {
-            let (tmp, n) = write_temp(out, |w| csv::write(&rec, w).map_err(|e| io(out, e)))?;
-            done.push((tmp, out.clone()));
-            notes.push(format!("wrote {} ({n} telemetry rows)", out.display()));
-        }
-        commit(&done)
-    })();
-    if let Err(e) = result {
-        for (tmp, _) in &done {
-            let _ = std::fs::remove_file(tmp);
-        }
-        return Err(e.into());
+    if let Some(out) = &args.mcap {
+        let mut f = OutputFile::create(out, args.force)?;
+        let n = mcap::write(&rec, f.writer(), out)?;
+        done.push(f);
+        notes.push(format!("wrote {} ({n} messages)", out.display()));
+    }
+    if let Some(out) = &args.csv {
+        let mut f = OutputFile::create(out, args.force)?;
+        let n = csv::write(&rec, f.writer()).map_err(|e| io(out, e))?;
+        done.push(f);
+        notes.push(format!("wrote {} ({n} telemetry rows)", out.display()));
+    }
+    for f in done {
+        f.commit()?;
     }
     for n in notes {
         eprintln!("{n}");
@@ -197,19 +195,9 @@ pub(crate) fn open_whole(path: &Path, salvage: bool) -> anyhow::Result<Recording
     Ok(rec)
 }
 
-/// Refuses an output that is a directory, lies in a missing directory, is the input, or
-/// exists (unless `force`): like `station record`, nothing is overwritten by surprise.
+/// Refuses an output that `output_file::check` refuses (a special file, a directory, a
+/// missing directory, an existing file without `force`) or that is the input.
 pub(crate) fn check_out(out: &Path, input: &Path, force: bool) -> anyhow::Result<()> {
-    if out.is_dir() {
-        bail!("{} is a directory; give a file name", out.display());
-    }
-    let dir = match out.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    if !dir.is_dir() {
-        bail!("the directory {} does not exist", dir.display());
-    }
     let same = match (out.canonicalize(), input.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
         _ => out == input,
@@ -217,9 +205,7 @@ pub(crate) fn check_out(out: &Path, input: &Path, force: bool) -> anyhow::Result
     if same {
         bail!("the output {} is the input", out.display());
     }
-    if out.exists() && !force {
-        bail!("{} exists; pass --force to overwrite it", out.display());
-    }
+    crate::output_file::check(out, force)?;
     Ok(())
 }
 
@@ -228,39 +214,4 @@ fn io(path: &Path, source: std::io::Error) -> ExportError {
         path: path.to_path_buf(),
         source,
     }
-}
-
-/// Writes a hidden temporary file beside `out` through `body` and syncs it; returns its path.
-/// On failure the temporary file is removed.
-pub fn write_temp<T>(
-    out: &Path,
-    body: impl FnOnce(&mut BufWriter<File>) -> Result<T, ExportError>,
-) -> Result<(PathBuf, T), ExportError> {
-    let name = out
-        .file_name()
-        .map_or_else(|| "export".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = out.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| {
-        let file = File::create(&tmp).map_err(|e| io(&tmp, e))?;
-        let mut w = BufWriter::new(file);
-        let value = body(&mut w)?;
-        w.flush().map_err(|e| io(&tmp, e))?;
-        w.get_ref().sync_all().map_err(|e| io(&tmp, e))?;
-        Ok(value)
-    })();
-    match result {
-        Ok(v) => Ok((tmp, v)),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
-}
-
-/// Renames each temporary file to its final name.
-fn commit(done: &[(PathBuf, PathBuf)]) -> Result<(), ExportError> {
-    for (tmp, out) in done {
-        std::fs::rename(tmp, out).map_err(|e| io(out, e))?;
-    }
-    Ok(())
 }

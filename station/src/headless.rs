@@ -316,9 +316,9 @@ async fn send(
     if json {
         println!("{}", serde_json::to_string_pretty(&value)?);
     } else if ok {
-        println!("{text}");
+        println!("{}", crate::terminal_text::printable_text(&text));
     } else {
-        eprintln!("{text}");
+        eprintln!("{}", crate::terminal_text::printable_text(&text));
     }
     Ok(if ok {
         ExitCode::SUCCESS
@@ -353,7 +353,9 @@ async fn stats(
         println!("port        {}", port.port.display());
         println!(
             "robot       {} {} {:?}",
-            peer.firmware, peer.firmware_version, peer.profile
+            crate::terminal_text::printable(&peer.firmware),
+            crate::terminal_text::printable(&peer.firmware_version),
+            peer.profile
         );
         println!(
             "state       {} for {:.1} s",

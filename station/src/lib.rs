@@ -12,6 +12,9 @@
 //! - `transfer`: map and plan uploads and downloads (the engine, `station upload-map` ...).
 //! - `tui`: the terminal loop; `pace`: the timer grid its periodic work shares; `cli`,
 //!   `headless`, `builtin`: the binary's edge.
+//! - `terminal_text`: the one sanitiser for wire- and file-supplied text before a terminal.
+//! - `output_file`: how every file the station writes reaches its name (atomic, O_EXCL
+//!   temporary, no special file replaced).
 #![deny(unsafe_code)]
 
 pub mod action;
@@ -23,10 +26,12 @@ pub mod export;
 pub mod headless;
 pub mod input;
 pub mod link;
+pub mod output_file;
 pub mod pace;
 pub mod plan;
 pub mod record;
 pub mod replay;
+pub mod terminal_text;
 pub mod transfer;
 pub mod tui;
 pub mod ui;

@@ -259,8 +259,8 @@ pub enum RecordError {
     Read { path: PathBuf, source: ReadError },
     #[error("{path} does not exist{hint}")]
     Missing { path: PathBuf, hint: String },
-    #[error("{path} already exists (use --force to overwrite it)")]
-    Exists { path: PathBuf },
+    #[error(transparent)]
+    Output(#[from] crate::output_file::OutputError),
     #[error(
         "{path} exists: an unfinished recording (a crash?); replay or rename it, then try again"
     )]

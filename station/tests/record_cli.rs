@@ -190,7 +190,7 @@ fn bad_arguments_and_files_exit_non_zero_without_creating_files() {
         (
             &["record", "--port", "/dev/null", "--out", "keep.rec"],
             1,
-            "already exists",
+            "exists; pass --force to overwrite it",
         ),
         (
             &[

@@ -29,6 +29,9 @@ fn dir(name: &str) -> PathBuf {
 fn key_file(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, format!("{text}\n")).unwrap();
+    // A key group or others may read is refused (as ssh refuses such a private key).
+    use std::os::unix::fs::PermissionsExt as _;
+    std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o600)).unwrap();
     p
 }
 
@@ -214,6 +217,15 @@ fn bad_key_files_are_refused_naming_the_file_and_the_fault() {
     );
     let e = station::cli::load_key(Some(&short)).unwrap_err();
     assert!(e.contains("--key-file") && e.contains("short.key"), "{e}");
+    // A good key that others may read: refused by both, with the mode and the fix.
+    let open = key_file(&d, "open.key", KEY);
+    use std::os::unix::fs::PermissionsExt as _;
+    std::fs::set_permissions(&open, std::fs::Permissions::from_mode(0o644)).unwrap();
+    let fix = format!("chmod 600 {}", open.display());
+    let e = emu(&open);
+    assert!(e.contains("(mode 0644)") && e.contains(&fix), "{e}");
+    let e = station::cli::load_key(Some(&open)).unwrap_err();
+    assert!(e.contains("--key-file") && e.contains(&fix), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }
 

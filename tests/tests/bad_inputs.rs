@@ -191,6 +191,15 @@ fn every_malformed_input_is_refused_clearly_without_panic_or_leftovers() {
         }
     }
     let _ = std::fs::remove_dir_all(&work);
+    // Cases name /dev/null and /dev/full as outputs (with inputs that fail later, so that even
+    // a station that stopped refusing them would not reach the write); they must survive.
+    for dev in ["/dev/null", "/dev/full"] {
+        use std::os::unix::fs::FileTypeExt as _;
+        let t = std::fs::symlink_metadata(dev).unwrap().file_type();
+        if !t.is_char_device() {
+            failures.push(format!("{dev} is no longer a character device"));
+        }
+    }
     println!("{} cases over {files} files", cases.len());
     assert!(
         failures.is_empty(),

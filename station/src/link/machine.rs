@@ -33,6 +33,7 @@ use super::api::{
 use super::clock::RobotClock;
 use super::commands::{CommandTable, InFlight};
 use super::stats::{LinkStats, StatsCollector};
+use crate::terminal_text::printable;
 
 /// Time between two `Hello`s while handshaking (PROTOCOL.md §4).
 pub const HELLO_RETRY_MS: u64 = 200;
@@ -712,7 +713,7 @@ impl From<Message<'_>> for Owned {
             Message::Event(e) => Owned::Event(e),
             Message::Log(l) => Owned::Log {
                 level: l.level,
-                text: l.text.to_string(),
+                text: printable(l.text).into_owned(),
             },
             Message::TransferBegin(b) => Owned::Transfer(TransferIn::Begin(b)),
             Message::TransferChunk(c) => Owned::Transfer(TransferIn::Chunk {
@@ -733,8 +734,10 @@ fn owned_reply(r: &HelloReply<'_>) -> OwnedHelloReply {
         protocol: r.protocol,
         session: r.session,
         accepted: r.accepted,
-        firmware: r.firmware.to_string(),
-        firmware_version: r.firmware_version.to_string(),
+        // Robot-supplied text is made printable once, here: every screen, message and
+        // report (the schema-mismatch refusal, `station stats`) then shows it safely.
+        firmware: printable(r.firmware).into_owned(),
+        firmware_version: printable(r.firmware_version).into_owned(),
         profile: r.profile,
         capabilities: r.capabilities,
         map_capacity: r.map_capacity,

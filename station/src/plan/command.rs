@@ -7,6 +7,7 @@
 
 use std::process::ExitCode;
 
+use anyhow::Context as _;
 use clap::Args;
 
 use super::map::{GoalKind, MapOptions, NavMap};
@@ -54,6 +55,10 @@ pub struct PlanArgs {
     /// map id is that of this map as `station upload-map` sends it (same --cell, --radius).
     #[arg(long, value_name = "FILE")]
     pub out_object: Option<std::path::PathBuf>,
+    /// Overwrite the --out-object file if it exists (a device, FIFO or directory is never
+    /// replaced).
+    #[arg(long, requires = "out_object")]
+    pub force: bool,
 }
 
 /// `station segment`.
@@ -123,13 +128,17 @@ fn planner(args: &MapArgs) -> anyhow::Result<Planner> {
 
 /// Runs `station plan`.
 pub fn plan(args: &PlanArgs) -> anyhow::Result<ExitCode> {
+    // Before the map is read: an output that cannot be written is refused at once.
+    if let Some(out) = &args.out_object {
+        crate::output_file::check(out, args.force).context("--out-object")?;
+    }
     let planner = planner(&args.map)?;
     let r = planner
         .plan(args.from, args.to, args.smooth)
         .map_err(|e| failure(&args.map.map, &e))?;
     let object = match &args.out_object {
         Some(path) => Some(crate::transfer::command::write_plan_object(
-            &planner, &r, path,
+            &planner, &r, path, args.force,
         )?),
         None => None,
     };
@@ -140,10 +149,9 @@ pub fn plan(args: &PlanArgs) -> anyhow::Result<ExitCode> {
         }
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        print!(
-            "{}",
-            plan_text(&planner, &r, &goal_note(planner.map(), args.to, r.goal()))
-        );
+        // The map's name comes from the arena file.
+        let text = plan_text(&planner, &r, &goal_note(planner.map(), args.to, r.goal()));
+        print!("{}", crate::terminal_text::printable_text(&text));
         if let Some(o) = object {
             println!(
                 "plan object: {} bytes, id {}, map id {} -> {}",
@@ -163,7 +171,10 @@ pub fn segment(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
     if args.json {
         println!("{}", serde_json::to_string_pretty(&segment_json(&planner))?);
     } else {
-        print!("{}", segment_text(&planner));
+        print!(
+            "{}",
+            crate::terminal_text::printable_text(&segment_text(&planner))
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -46,7 +46,7 @@ pub struct RecordArgs {
     /// Ask the robot for this telemetry rate (Hz, 1..=50) at every handshake.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=50))]
     pub rate: Option<u8>,
-    /// Overwrite FILE if it exists.
+    /// Overwrite FILE if it exists (a device, FIFO or directory is never replaced).
     #[arg(long)]
     pub force: bool,
     /// Print a JSON summary.
@@ -177,28 +177,13 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
 
 /// Refuses an output that cannot be written, before a port is opened or a file created.
 fn check_out(out: &Path, force: bool) -> anyhow::Result<()> {
-    if out.is_dir() {
-        bail!("{} is a directory; give a file name", out.display());
-    }
-    if out.exists() && !force {
-        bail!(
-            "{} already exists (use --force to overwrite it)",
-            out.display()
-        );
-    }
+    crate::output_file::check(out, force)?;
     let partial = partial_path(out);
     if partial.exists() {
         bail!(
             "{} exists: an unfinished recording (a crash?); replay or rename it, then try again",
             partial.display()
         );
-    }
-    let dir = match out.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    if !dir.is_dir() {
-        bail!("the directory {} does not exist", dir.display());
     }
     Ok(())
 }

@@ -31,6 +31,8 @@ pub struct RecordWriter {
     file: Option<BufWriter<File>>,
     partial: PathBuf,
     path: PathBuf,
+    /// Whether `finish` may replace an existing file at `path`.
+    overwrite: bool,
     last_t: u64,
     records: u64,
     bytes: u64,
@@ -50,13 +52,10 @@ pub struct Written {
 
 impl RecordWriter {
     /// Creates `path.partial` and writes the header. Refuses an existing `path` unless
-    /// `overwrite`, and always refuses an existing `path.partial` (an unfinished recording).
+    /// `overwrite`, a `path` that is not a regular file always (`output_file::check`), and an
+    /// existing `path.partial` (an unfinished recording) always.
     pub fn create(path: &Path, meta: &Meta, overwrite: bool) -> Result<RecordWriter, RecordError> {
-        if !overwrite && path.exists() {
-            return Err(RecordError::Exists {
-                path: path.to_path_buf(),
-            });
-        }
+        crate::output_file::check(path, overwrite)?;
         let partial = partial_path(path);
         let io = |source| RecordError::Io {
             path: partial.clone(),
@@ -83,6 +82,7 @@ impl RecordWriter {
             file: None,
             partial: partial.clone(),
             path: path.to_path_buf(),
+            overwrite,
             last_t: 0,
             records: 0,
             scratch: Vec::with_capacity(512),
@@ -187,21 +187,9 @@ impl RecordWriter {
         self.append(t_us, RecordKind::End, reason.as_bytes())?;
         self.flush(true)?;
         drop(self.file.take());
-        std::fs::rename(&self.partial, &self.path).map_err(|source| RecordError::Io {
-            path: self.path.clone(),
-            source,
-        })?;
-        // Make the rename itself durable.
-        if let Some(dir) = self.path.parent() {
-            let dir = if dir.as_os_str().is_empty() {
-                Path::new(".")
-            } else {
-                dir
-            };
-            if let Ok(d) = File::open(dir) {
-                let _ = d.sync_all();
-            }
-        }
+        // By the station's one rule (a special file is never replaced, an existing file only
+        // when overwriting); on failure FILE.partial stays for a reader.
+        crate::output_file::publish(&self.partial, &self.path, self.overwrite)?;
         Ok(Written {
             path: self.path.clone(),
             records: self.records,
@@ -280,7 +268,9 @@ mod tests {
         std::fs::write(&path, b"precious").unwrap();
         assert!(matches!(
             RecordWriter::create(&path, &Meta::default(), false),
-            Err(RecordError::Exists { .. })
+            Err(RecordError::Output(
+                crate::output_file::OutputError::Exists { .. }
+            ))
         ));
         assert_eq!(std::fs::read(&path).unwrap(), b"precious");
         let w = RecordWriter::create(&path, &Meta::default(), true).unwrap();

@@ -60,7 +60,8 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
                 serde_json::to_string_pretty(&s).context("cannot print JSON")?
             );
         } else {
-            print!("{}", text(&file, &s));
+            // The summary quotes the recording's metadata and link texts.
+            print!("{}", crate::terminal_text::printable_text(&text(&file, &s)));
         }
         if let Some(d) = &rec.damage {
             eprintln!("station: {file}: {d}");

@@ -17,10 +17,10 @@ use serde_json::{json, Value};
 
 use super::command::{connect, download_object, fail, finish, progress_printer};
 use super::engine::JobSpec;
-use super::objects::write_atomically;
 use super::{JobOutcome, TransferError};
 use crate::calibrate;
 use crate::cli::{parse_seconds, RequiredPort};
+use crate::output_file::write_atomically;
 
 /// `station upload-calibration`.
 #[derive(Debug, Args, Clone)]
@@ -49,7 +49,7 @@ pub struct DownloadCalibrationArgs {
     /// formats of `station calibrate`). A temporary file is renamed when complete.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub out: PathBuf,
-    /// Overwrite FILE if it exists.
+    /// Overwrite FILE if it exists (a device, FIFO or directory is never replaced).
     #[arg(long)]
     pub force: bool,
     /// Print JSON: bytes, id, crc, outcome, elapsed_ms, out.
@@ -105,9 +105,12 @@ pub async fn download(args: &DownloadCalibrationArgs) -> anyhow::Result<ExitCode
     let json = args.json;
     let out = args.out.display().to_string();
     // Before the link: a download that cannot be kept is not worth the robot's time.
-    if args.out.exists() && !args.force {
-        let e = format!("{out} exists; pass --force to overwrite it");
-        return Ok(fail(json, CMD, "exists", &e, Value::Null));
+    if let Err(e) = crate::output_file::check(&args.out, args.force) {
+        let reason = match e {
+            crate::output_file::OutputError::Exists { .. } => "exists",
+            _ => "bad_output",
+        };
+        return Ok(fail(json, CMD, reason, &e.to_string(), Value::Null));
     }
     let object = ObjectKind::LightCalibration;
     let download = download_object(
@@ -138,7 +141,8 @@ pub async fn download(args: &DownloadCalibrationArgs) -> anyhow::Result<ExitCode
         }
     });
     let written = file.and_then(|f| {
-        write_atomically(&args.out, &f).map_err(|e| anyhow::anyhow!("cannot write {out}: {e}"))
+        write_atomically(&args.out, &f, args.force)
+            .map_err(|e| anyhow::anyhow!("cannot write {out}: {e}"))
     });
     if let Err(e) = written {
         return Ok(fail(

@@ -22,11 +22,12 @@ use super::client::TransferClient;
 use super::engine::JobSpec;
 use super::objects::{
     check_capacity, load_for_upload, map_ascii, map_object, plan_object, plan_waypoints,
-    read_plan_file, write_atomically, MapObject,
+    read_plan_file, MapObject,
 };
 use super::{JobOutcome, JobReport};
 use crate::cli::{parse_seconds, RequiredPort};
 use crate::link::{LinkEvent, PeerInfo};
+use crate::output_file::{check as check_output, write_atomically};
 use crate::plan::command::MapArgs;
 use crate::plan::{MapOptions, PlanResult, Planner};
 
@@ -56,6 +57,9 @@ pub struct DownloadMapArgs {
     /// upload-map --map FILE` and `station plan --map FILE` read it back.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub out: Option<PathBuf>,
+    /// Overwrite --out if it exists (a device, FIFO or directory is never replaced).
+    #[arg(long, requires = "out")]
+    pub force: bool,
     /// Print the map: top row first, # obstacle, . free, ? unknown, S start, G goal.
     #[arg(long)]
     pub ascii: bool,
@@ -98,7 +102,10 @@ pub(super) fn fail(
         merge(&mut v, extra);
         println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
     } else {
-        eprintln!("station {command}: {error}");
+        eprintln!(
+            "station {command}: {}",
+            crate::terminal_text::printable_text(error)
+        );
     }
     ExitCode::FAILURE
 }
@@ -130,9 +137,9 @@ pub(super) fn finish(json: bool, command: &str, r: &JobReport, extra: Value) -> 
         merge(&mut v, extra);
         println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
     } else if r.outcome.is_success() {
-        println!("{}", r.text());
+        println!("{}", crate::terminal_text::printable_text(&r.text()));
     } else {
-        eprintln!("{}", r.text());
+        eprintln!("{}", crate::terminal_text::printable_text(&r.text()));
     }
     if r.outcome.is_success() {
         ExitCode::SUCCESS
@@ -199,7 +206,7 @@ pub async fn upload_map(args: &UploadMapArgs) -> anyhow::Result<ExitCode> {
     };
     let extra = json!({"file": args.map.map, "map": map_json(&m)});
     if !json {
-        println!("{}", loaded.summary);
+        println!("{}", crate::terminal_text::printable_text(&loaded.summary));
     }
     let (mut client, peer) = match connect(&args.port, args.timeout).await {
         Ok(c) => c,
@@ -241,6 +248,10 @@ pub(super) async fn download_object(
 pub async fn download_map(args: &DownloadMapArgs) -> anyhow::Result<ExitCode> {
     const CMD: &str = "download-map";
     let json = args.json;
+    // Before the link: a download that cannot be kept is not worth the robot's time.
+    if let Some(Err(e)) = args.out.as_deref().map(|o| check_output(o, args.force)) {
+        return Ok(fail(json, CMD, "bad_output", &e.to_string(), Value::Null));
+    }
     let download = download_object(
         &args.port,
         args.timeout,
@@ -270,7 +281,7 @@ pub async fn download_map(args: &DownloadMapArgs) -> anyhow::Result<ExitCode> {
         merge(&mut extra, json!({"map": map_json(&m)}));
     }
     if let Some(out) = &args.out {
-        if let Err(e) = write_atomically(out, bytes) {
+        if let Err(e) = write_atomically(out, bytes, args.force) {
             let e = format!("cannot write {}: {e}", out.display());
             return Ok(fail(json, CMD, "write_failed", &e, report.json()));
         }
@@ -338,16 +349,17 @@ pub async fn upload_plan(args: &UploadPlanArgs) -> anyhow::Result<ExitCode> {
     Ok(code)
 }
 
-/// `station plan --out-object FILE`: writes the Plan object of `r` (made on `planner`'s map)
-/// atomically; returns what to report (path, bytes, id, map id, waypoints).
+/// `station plan --out-object FILE [--force]`: writes the Plan object of `r` (made on
+/// `planner`'s map) atomically; returns what to report (path, bytes, id, map id, waypoints).
 pub fn write_plan_object(
     planner: &Planner,
     r: &PlanResult,
     path: &std::path::Path,
+    force: bool,
 ) -> anyhow::Result<Value> {
     let map = map_object(planner.map())?;
     let bytes = plan_object(planner, r, map.id)?;
-    write_atomically(path, &bytes)
+    write_atomically(path, &bytes, force)
         .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
     let id = protocol::crc32c(&bytes);
     let waypoints = plan_waypoints(&bytes).map(|w| w.len()).unwrap_or(0);

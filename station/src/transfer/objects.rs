@@ -15,7 +15,6 @@
 //! ([`ObjectFileError`]), a map larger than the robot holds ([`CapacityError`]), an object
 //! that cannot be encoded (`ObjectError`), an I/O error writing a file.
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use protocol::object::{
@@ -337,28 +336,6 @@ pub fn plan_waypoints(bytes: &[u8]) -> Result<Vec<(f64, f64)>, ObjectError> {
         .collect())
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same directory, flushed to
-/// disk, then renamed over `path`. A reader sees the old file or the new one, never a part.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let name = path
-        .file_name()
-        .map_or_else(|| "object".into(), |n| n.to_string_lossy().into_owned());
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let tmp = dir.join(format!(".{name}.{}.partial", std::process::id()));
-    let write = || -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    };
-    write().inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -426,19 +403,6 @@ mod tests {
         };
         let e = e.to_string();
         assert!(e.contains("som.bin") && e.contains("CRC mismatch"), "{e}");
-        let _ = std::fs::remove_dir_all(&dir);
-    }
-
-    #[test]
-    fn an_atomic_write_leaves_no_temporary_file() {
-        let dir = std::env::temp_dir().join(format!("station-objects-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("dir");
-        let path = dir.join("map.obj");
-        write_atomically(&path, b"one").expect("writes");
-        write_atomically(&path, b"two").expect("replaces");
-        assert_eq!(std::fs::read(&path).expect("reads"), b"two");
-        let names: Vec<_> = std::fs::read_dir(&dir).expect("lists").flatten().collect();
-        assert_eq!(names.len(), 1);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
