@@ -111,9 +111,9 @@ pub enum SimError {
     #[error("start pose has a non-finite coordinate")]
     StartNotFinite,
     /// The arena reaches beyond the positions the link can carry.
-    #[error("arena {arena:?}: {source}")]
+    #[error("{arena}: {source}")]
     OutOfLinkRange {
-        /// Arena name.
+        /// The arena's file (or built-in name).
         arena: String,
         /// The corner that does not fit.
         source: protocol::units::OutOfRange,
@@ -291,7 +291,7 @@ impl Sim {
             ("arena max y", b.max.y),
         ] {
             protocol::units::mm_from_m(field, m).map_err(|source| SimError::OutOfLinkRange {
-                arena: arena.name.clone(),
+                arena: arena.source.display().to_string(),
                 source,
             })?;
         }
