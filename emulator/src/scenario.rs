@@ -31,7 +31,8 @@
 
 use std::time::Instant;
 
-use protocol::{Command, NackReason, ParamId, PointMm};
+use protocol::units::{point_mm, OutOfRange};
+use protocol::{Command, NackReason, ParamId};
 use robot_firmware::link::Reply;
 use robot_firmware::params::id as param;
 use robot_firmware::Profile;
@@ -241,6 +242,9 @@ pub enum ScenarioError {
     /// The simulation could not be set up.
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// A position the link's whole millimetres cannot carry.
+    #[error("{0}")]
+    Range(#[from] OutOfRange),
     /// No goal in the task and none in the arena.
     #[error("the task names no goal and arena {0:?} has neither a goal nor a target")]
     NoGoal(String),
@@ -341,10 +345,7 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
     let mut runs = Vec::new();
     match opts.task {
         Task::GoTo(_) => {
-            let cmd = Command::GoTo(PointMm {
-                x_mm: mm(goal.x_m),
-                y_mm: mm(goal.y_m),
-            });
+            let cmd = Command::GoTo(point_mm(["goal x", "goal y"], (goal.x_m, goal.y_m))?);
             apply(&mut sim, cmd, "GoTo")?;
             runs.push(run_until_arrived(&mut sim, "go_to", timeout_ms, &judge));
         }
@@ -467,14 +468,8 @@ fn plan_and_execute(
     let found = sim.believed();
     apply(sim, Command::Stop, "Stop")?;
     apply(sim, Command::Segment, "Segment")?;
-    let from = PointMm {
-        x_mm: mm(start.x),
-        y_mm: mm(start.y),
-    };
-    let to = PointMm {
-        x_mm: mm(found.x),
-        y_mm: mm(found.y),
-    };
+    let from = point_mm(["start x", "start y"], (start.x, start.y))?;
+    let to = point_mm(["goal found x", "goal found y"], (found.x, found.y))?;
     apply(
         sim,
         Command::Plan {
@@ -496,8 +491,8 @@ fn plan_and_execute(
     // known); the compass gives the heading.
     sim.place(start)?;
     let pose = protocol::Pose {
-        x_mm: mm(start.x),
-        y_mm: mm(start.y),
+        x_mm: from.x_mm,
+        y_mm: from.y_mm,
         heading_mrad: (start.heading * 1000.0).round() as i16,
     };
     apply(sim, Command::SetPose { pose }, "SetPose")?;
@@ -536,9 +531,4 @@ fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), Scenario
         Reply::Ack(_) => Ok(()),
         Reply::Nack(reason) => Err(ScenarioError::Refused { what, reason }),
     }
-}
-
-fn mm(m: f64) -> i32 {
-    // `as` saturates; the firmware refuses points beyond 1 km anyway.
-    (m * 1000.0).round() as i32
 }

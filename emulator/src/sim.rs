@@ -110,6 +110,14 @@ pub enum SimError {
     /// A start pose with a non-finite coordinate.
     #[error("start pose has a non-finite coordinate")]
     StartNotFinite,
+    /// The arena reaches beyond the positions the link can carry.
+    #[error("{arena}: {source}")]
+    OutOfLinkRange {
+        /// The arena's file (or built-in name).
+        arena: String,
+        /// The corner that does not fit.
+        source: protocol::units::OutOfRange,
+    },
     /// No start pose given, none in the arena, and no free spot found.
     #[error("arena {arena:?} has no start pose and no free spot for a {diameter_m} m robot")]
     NoFreeSpot {
@@ -278,6 +286,20 @@ pub struct Sim {
 impl Sim {
     /// Builds the world, the body at its start pose and the robot (believing that pose).
     pub fn new(arena: Arena, cfg: SimConfig) -> Result<Sim, SimError> {
+        // Every pose reported is whole millimetres in an i32 (PROTOCOL.md §6): an arena
+        // beyond them could only be reported clamped, so it is refused here, by its corner.
+        let b = arena.bounds;
+        for (field, m) in [
+            ("arena min x", b.min.x),
+            ("arena min y", b.min.y),
+            ("arena max x", b.max.x),
+            ("arena max y", b.max.y),
+        ] {
+            protocol::units::mm_from_m(field, m).map_err(|source| SimError::OutOfLinkRange {
+                arena: arena.source.display().to_string(),
+                source,
+            })?;
+        }
         let profile = cfg.profile;
         let noise = cfg.noise.sanitised();
         let floor = match cfg.floor_grid_m {

@@ -360,12 +360,12 @@ impl Uart {
     }
 }
 
-/// A pose in wire units (mm, mrad), saturating; the heading in (-pi, pi] fits an i16.
+/// A pose in wire units (mm, mrad), clamped (the arena was checked to fit the wire when it
+/// was loaded); the heading in (-pi, pi] fits an i16.
 pub fn wire_pose(p: Pose) -> WirePose {
     WirePose {
-        // `as` saturates and maps NaN to 0.
-        x_mm: (p.x * 1000.0).round() as i32,
-        y_mm: (p.y * 1000.0).round() as i32,
+        x_mm: protocol::units::mm_from_m_clamped(p.x),
+        y_mm: protocol::units::mm_from_m_clamped(p.y),
         heading_mrad: (p.heading * 1000.0).round() as i16,
     }
 }

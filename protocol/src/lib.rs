@@ -22,6 +22,7 @@ pub mod packed;
 pub mod seq;
 pub mod sign;
 pub mod transfer;
+pub mod units;
 
 pub use frame::{
     crc32c, encode, encode_raw, encode_signed, parse_raw, DecoderStats, EncodeError, Feed, Frame,

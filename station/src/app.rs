@@ -18,7 +18,8 @@ pub mod transfers;
 
 use std::collections::HashMap;
 
-use protocol::{AckInfo, Command, EmuTruth, Event, EventCode, Mode, PointMm, Telemetry};
+use protocol::units::point_mm;
+use protocol::{AckInfo, Command, EmuTruth, Event, EventCode, Mode, Telemetry};
 
 use crate::action::Action;
 use crate::link::api::{command_text, param_name, refusal_text};
@@ -410,12 +411,16 @@ impl App {
     }
 
     fn go_to(&mut self, x: f64, y: f64) {
+        let goal = match point_mm(["go-to x", "go-to y"], (x, y)) {
+            Ok(p) => p,
+            Err(e) => {
+                self.note(Level::Warn, Source::Command, format!("not sent: {e}"));
+                return;
+            }
+        };
         self.teleop.driving = false;
         self.map.goal = Some((x, y));
-        self.send(Command::GoTo(PointMm {
-            x_mm: m_to_mm(x),
-            y_mm: m_to_mm(y),
-        }));
+        self.send(Command::GoTo(goal));
     }
 
     fn read_param(&mut self, id: u16) {
@@ -747,11 +752,6 @@ fn pose_m(p: &protocol::Pose) -> (f64, f64, f64) {
         f64::from(p.y_mm) / 1000.0,
         f64::from(p.heading_mrad) / 1000.0,
     )
-}
-
-fn m_to_mm(m: f64) -> i32 {
-    // `as` saturates; a point kilometres away is refused by the robot (BadPoint).
-    (m * 1000.0).round() as i32
 }
 
 /// A mode's name for display.

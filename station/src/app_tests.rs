@@ -195,7 +195,7 @@ fn a_click_on_the_map_sends_go_to_in_millimetres() {
     });
     assert_eq!(
         app.take_outbox()[0].1,
-        Command::GoTo(PointMm {
+        Command::GoTo(protocol::PointMm {
             x_mm: 1250,
             y_mm: -500
         })

@@ -13,7 +13,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use protocol::{Command, Mode, ParamId, PointMm};
+use protocol::units::{point_mm, OutOfRange};
+use protocol::{Command, Mode, ParamId};
 
 use crate::link::serial::DEFAULT_BAUD;
 
@@ -381,15 +382,12 @@ impl From<ModeArg> for Mode {
 }
 
 impl SendCmd {
-    /// The wire command.
-    pub fn to_command(&self) -> Command {
-        match *self {
+    /// The wire command; a point beyond the wire's millimetres is refused by name.
+    pub fn to_command(&self) -> Result<Command, OutOfRange> {
+        Ok(match *self {
             SendCmd::Mode { mode } => Command::SetMode(mode.into()),
             SendCmd::Teleop { v_mm_s, w_mrad_s } => Command::Teleop { v_mm_s, w_mrad_s },
-            SendCmd::Goto { x, y } => Command::GoTo(PointMm {
-                x_mm: (x * 1000.0).round() as i32,
-                y_mm: (y * 1000.0).round() as i32,
-            }),
+            SendCmd::Goto { x, y } => Command::GoTo(point_mm(["goto X", "goto Y"], (x, y))?),
             SendCmd::Param {
                 op: ParamOp::Set { name, value },
             } => Command::SetParam {
@@ -404,18 +402,13 @@ impl SendCmd {
             SendCmd::Explore => Command::StartExploration,
             SendCmd::Segment => Command::Segment,
             SendCmd::Plan { from, to } => Command::Plan {
-                from: from.map(point_mm),
-                to: to.map(point_mm),
+                from: from
+                    .map(|p| point_mm(["--from X", "--from Y"], p))
+                    .transpose()?,
+                to: to.map(|p| point_mm(["--to X", "--to Y"], p)).transpose()?,
             },
             SendCmd::Execute { plan_id } => Command::ExecutePlan { plan_id },
-        }
-    }
-}
-
-fn point_mm((x, y): (f64, f64)) -> PointMm {
-    PointMm {
-        x_mm: (x * 1000.0).round() as i32,
-        y_mm: (y * 1000.0).round() as i32,
+        })
     }
 }
 
@@ -532,6 +525,7 @@ fn error_text(e: &anyhow::Error) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use protocol::PointMm;
 
     #[test]
     fn an_error_that_already_quotes_its_cause_prints_it_once() {
@@ -605,7 +599,7 @@ mod tests {
             let Some(Sub::Send { command, .. }) = cli.command else {
                 panic!("not a send: {args:?}");
             };
-            assert_eq!(command.to_command(), *want, "{args:?}");
+            assert_eq!(command.to_command(), Ok(*want), "{args:?}");
         }
     }
 

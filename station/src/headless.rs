@@ -257,7 +257,7 @@ async fn send(
     cmd: &SendCmd,
 ) -> anyhow::Result<ExitCode> {
     let (mut link, _peer) = connect(port, timeout).await?;
-    let command = cmd.to_command();
+    let command = cmd.to_command()?;
     let outcome = link.handle.call(command).await;
     // A plan made on the robot is named by its PlanInstalled event: `execute` needs the id.
     let plan_id = match (command, outcome.is_ack()) {

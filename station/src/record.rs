@@ -24,7 +24,8 @@
 //!          meta_len  u32      length of meta, at most 65536
 //!          meta      bytes    a UTF-8 JSON object (see `Meta`; unknown keys are ignored)
 //!          crc       u32      CRC-32C of every header byte before it
-//! record   t_us      varint   microseconds since the recording started, never decreasing
+//! record   t_us      varint   microseconds since the recording started, never decreasing,
+//!                             at most `MAX_T_US` (a year)
 //!          kind      u8       0 from robot, 1 to robot, 2 link event, 3 end (below)
 //!          len       varint   length of data, at most 1 MiB
 //!          data      len bytes
@@ -68,6 +69,10 @@ pub const HEADER_FIXED: usize = 16;
 pub const MAX_META: usize = 64 * 1024;
 /// Longest record data accepted.
 pub const MAX_DATA: usize = 1024 * 1024;
+/// Latest record time accepted, µs: a year. A later time is damage, not a very long
+/// recording: nothing records for a year, and a reader must not take a stray 2^64 - 1 at its
+/// word (consumers' work is linear in the records, but durations and positions are shown).
+pub const MAX_T_US: u64 = 365 * 24 * 3600 * 1_000_000;
 /// What a finished recording's name gets while it is written.
 pub const PARTIAL_SUFFIX: &str = ".partial";
 
@@ -312,6 +317,17 @@ impl Recording {
                         damage = Some(ReadError::BadRecord {
                             offset: at as u64,
                             why: format!("time goes back from {last_t} us to {} us", rec.t_us),
+                        });
+                        break;
+                    }
+                    if rec.t_us > MAX_T_US {
+                        damage = Some(ReadError::BadRecord {
+                            offset: at as u64,
+                            why: format!(
+                                "time {} us is more than a year ({MAX_T_US} us) after the \
+                                 recording's start",
+                                rec.t_us
+                            ),
                         });
                         break;
                     }
@@ -653,6 +669,22 @@ mod tests {
         b.extend_from_slice(&[0x00, 0x00, 0xff, 0xff, 0xff, 0x7f]);
         let r = Recording::parse(&b).unwrap();
         assert!(matches!(r.damage, Some(ReadError::BadRecord { .. })));
+    }
+
+    #[test]
+    fn a_time_beyond_a_year_is_damage_at_its_record() {
+        for t in [MAX_T_US + 1, u64::MAX] {
+            let mut b = encode_header(&Meta::default());
+            encode_record(&mut b, 0, RecordKind::Link, &[1, b'm']);
+            encode_record(&mut b, MAX_T_US, RecordKind::FromRobot, &[0]);
+            let at = b.len() as u64;
+            encode_record(&mut b, t, RecordKind::FromRobot, &[0]);
+            let r = Recording::parse(&b).unwrap();
+            let e = r.damage.clone().expect("refused");
+            assert_eq!(e.offset(), at);
+            assert!(e.to_string().contains("more than a year"), "{e}");
+            assert_eq!(r.duration_us(), MAX_T_US, "read up to there");
+        }
     }
 
     #[test]

@@ -44,6 +44,8 @@ pub struct ReplayFeed {
     station: StationSide,
     connection: Connection,
     connected_since_ms: Option<u64>,
+    /// Times the link's timers ran: the feed's work besides the records themselves.
+    timer_runs: u64,
 }
 
 impl ReplayFeed {
@@ -68,6 +70,7 @@ impl ReplayFeed {
                 reason: "replay starting".into(),
             },
             connected_since_ms: None,
+            timer_runs: 0,
         }
     }
 
@@ -84,6 +87,17 @@ impl ReplayFeed {
     /// Frames of each kind seen so far: (from the robot, to the robot), by `Kind as usize`.
     pub fn frame_counts(&self) -> (&[u64; KINDS], &[u64; KINDS]) {
         (&self.station.frames_in, &self.station.frames_out)
+    }
+
+    /// Good frames from the robot so far, of every kind.
+    pub fn frames_from_robot(&self) -> u64 {
+        self.station.frames_in.iter().sum()
+    }
+
+    /// How many times the link's timers have run (each record runs them once, and so does
+    /// every `advance_to` past the last record fed): the work a replay does besides decoding.
+    pub fn timer_runs(&self) -> u64 {
+        self.timer_runs
     }
 
     /// Decoding errors in the station's own bytes (normally none).
@@ -202,6 +216,7 @@ impl ReplayFeed {
     }
 
     fn poll(&mut self, now_ms: u64, out: &mut Vec<Action>) {
+        self.timer_runs += 1;
         self.machine.poll(now_ms);
         // Whatever the machine would send (Hellos, heartbeats) goes nowhere.
         let _ = self.machine.take_output();

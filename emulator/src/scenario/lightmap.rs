@@ -30,7 +30,8 @@
 //! What can fail: the setup ([`SimError`]), a refused command, the calibration
 //! ([`ScenarioError`]). The run itself cannot fail.
 
-use protocol::{Command, Mode, PointMm};
+use protocol::units::{mm_from_m, point_mm};
+use protocol::{Command, Mode};
 use robot_firmware::landmarks::{
     triangulate, BearingFix, LandmarkError, LightMap, LightMapParams, Sighting,
 };
@@ -147,15 +148,9 @@ fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), Scenario
     }
 }
 
-fn mm(m: f32) -> i32 {
-    (m * 1000.0).round() as i32
-}
-
 fn go_to(sim: &mut Sim, p: FwPoint) -> Result<(), ScenarioError> {
-    let cmd = Command::GoTo(PointMm {
-        x_mm: mm(p.x),
-        y_mm: mm(p.y),
-    });
+    let to = (f64::from(p.x), f64::from(p.y));
+    let cmd = Command::GoTo(point_mm(["go-to x", "go-to y"], to)?);
     apply(sim, cmd, "GoTo")
 }
 
@@ -317,8 +312,8 @@ fn run_with(
                 if opts.correct {
                     let p = sim.robot().core.pose();
                     let pose = protocol::Pose {
-                        x_mm: mm(p.x + correction.x),
-                        y_mm: mm(p.y + correction.y),
+                        x_mm: mm_from_m("corrected x", f64::from(p.x + correction.x))?,
+                        y_mm: mm_from_m("corrected y", f64::from(p.y + correction.y))?,
                         heading_mrad: (p.heading * 1000.0).round() as i16,
                     };
                     apply(&mut sim, Command::SetPose { pose }, "SetPose")?;

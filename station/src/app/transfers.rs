@@ -23,6 +23,7 @@
 
 use std::collections::HashMap;
 
+use protocol::units::point_mm;
 use protocol::{Command, EventCode, Mode, ObjectKind, PointMm};
 
 use super::log::{Level, Source};
@@ -256,15 +257,15 @@ impl App {
         } else {
             self.map.goal
         };
-        let mm = |(x, y): (f64, f64)| PointMm {
-            x_mm: (x * 1000.0).round() as i32,
-            y_mm: (y * 1000.0).round() as i32,
+        let to = match to.map(|p| point_mm(["goal x", "goal y"], p)).transpose() {
+            Ok(to) => to,
+            Err(e) => {
+                self.note(Level::Warn, Source::Command, format!("not sent: {e}"));
+                return;
+            }
         };
         self.send(Command::Segment);
-        self.send(Command::Plan {
-            from: None,
-            to: to.map(mm),
-        });
+        self.send(Command::Plan { from: None, to });
     }
 
     /// What the station can say about a `Plan` the robot refused with `BadPoint`: the points

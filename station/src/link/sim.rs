@@ -174,8 +174,9 @@ impl SimCore {
         let truth = EmuTruth {
             time_ms: now_ms as u32,
             pose: Pose {
-                x_mm: (x * 1000.0).round() as i32,
-                y_mm: (y * 1000.0).round() as i32,
+                // The simulated world is the built-in arena, well inside the wire's range.
+                x_mm: protocol::units::mm_from_m_clamped(x),
+                y_mm: protocol::units::mm_from_m_clamped(y),
                 heading_mrad: (h * 1000.0).round() as i16,
             },
             collisions: 0,

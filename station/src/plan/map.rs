@@ -31,6 +31,7 @@
 use robot_firmware::nav::{grid_bytes, Cell, Geometry, Grid, GridPoint, MAX_SIDE};
 
 use emulator::arena::{rasterise, Arena, ArenaFormat, LoadOptions, RasterMap};
+use protocol::units::mm_from_m;
 
 use super::{End, NavError};
 
@@ -240,6 +241,7 @@ impl NavMap {
         cells: &[u8],
     ) -> Result<NavMap, NavError> {
         let geometry = Geometry::new(cell_mm, origin_mm.0, origin_mm.1)?;
+        check_extent(&geometry, width, height)?;
         let n = grid_bytes(width.into(), height.into());
         let bytes = cells.get(..n).unwrap_or(cells).to_vec();
         let grid = Grid::new(width, height, geometry, bytes)?;
@@ -294,19 +296,19 @@ impl NavMap {
         ]
     }
 
-    /// A map-frame point in whole millimetres and grid units, as the robot converts it.
-    pub fn endpoint(&self, (x, y): (f64, f64)) -> Endpoint {
-        let mm = |m: f64| (m * 1000.0).round().clamp(-2.0e9, 2.0e9) as i32;
-        let mm = (mm(x), mm(y));
-        Endpoint {
+    /// A map-frame point in whole millimetres and grid units, as the robot converts it;
+    /// `None` beyond the wire's millimetres (outside any map, whose extent fits them).
+    pub fn endpoint(&self, (x, y): (f64, f64)) -> Option<Endpoint> {
+        let mm = (mm_from_m("x", x).ok()?, mm_from_m("y", y).ok()?);
+        Some(Endpoint {
             mm,
             grid: self.grid.geometry().to_grid(mm.0, mm.1),
-        }
+        })
     }
 
     /// A map-frame point in grid units (through whole millimetres).
-    pub fn to_grid(&self, p: (f64, f64)) -> GridPoint {
-        self.endpoint(p).grid
+    pub fn to_grid(&self, p: (f64, f64)) -> Option<GridPoint> {
+        self.endpoint(p).map(|e| e.grid)
     }
 
     /// Grid units to metres (whole millimetres).
@@ -317,14 +319,15 @@ impl NavMap {
 
     /// The cell holding a map-frame point, if inside the grid.
     pub fn cell_of(&self, p: (f64, f64)) -> Option<(u16, u16)> {
-        let (cx, cy) = self.to_grid(p).cell();
+        let (cx, cy) = self.to_grid(p)?.cell();
         self.grid.contains(cx, cy).then_some((cx as u16, cy as u16))
     }
 
     /// A given point, checked: inside the grid and in a free cell.
     pub fn check_point(&self, end: End, p: (f64, f64)) -> Result<Endpoint, NavError> {
-        let g = self.endpoint(p);
-        let Some((col, row)) = self.cell_of(p) else {
+        // One conversion decides both: a point is inside exactly when its whole millimetres
+        // fall in a cell (the bounds reported are those cells' edges).
+        let (Some(g), Some((col, row))) = (self.endpoint(p), self.cell_of(p)) else {
             let [x0, y0, x1, y1] = self.bounds();
             return Err(NavError::Outside {
                 end,
@@ -382,7 +385,7 @@ impl NavMap {
         let (ox, oy) = self.origin();
         let margin = c / 4.0;
         let reach = (area.radius_m / c).ceil() as i64 + 1;
-        let (ccx, ccy) = self.to_grid(area.centre).cell();
+        let (ccx, ccy) = self.to_grid(area.centre)?.cell();
         let mut best: Option<(f64, Endpoint)> = None;
         for row in (i64::from(ccy) - reach)..=(i64::from(ccy) + reach) {
             for col in (i64::from(ccx) - reach)..=(i64::from(ccx) + reach) {
@@ -396,7 +399,9 @@ impl NavMap {
                 let (x0, y0) = (ox + col as f64 * c, oy + row as f64 * c);
                 let px = cx.clamp(x0 + margin, x0 + c - margin);
                 let py = cy.clamp(y0 + margin, y0 + c - margin);
-                let e = self.endpoint((px, py));
+                let Some(e) = self.endpoint((px, py)) else {
+                    continue;
+                };
                 let (mx, my) = e.metres();
                 let d = (mx - cx).hypot(my - cy);
                 if d > area.radius_m || best.is_some_and(|(b, _)| b <= d) {
@@ -453,14 +458,28 @@ impl NavMap {
 fn nav_grid(raster: &RasterMap, cell_mm: u32) -> Result<Grid<Vec<u8>>, NavError> {
     let cell_m = raster.cell_m;
     let (w, h) = (side(raster.width, cell_m)?, side(raster.height, cell_m)?);
-    let mm = |m: f64| (m * 1000.0).round() as i32;
-    let geometry = Geometry::new(cell_mm, mm(raster.origin[0]), mm(raster.origin[1]))?;
+    let geometry = Geometry::new(
+        cell_mm,
+        mm_from_m("map origin x", raster.origin[0])?,
+        mm_from_m("map origin y", raster.origin[1])?,
+    )?;
+    check_extent(&geometry, w, h)?;
     let mut grid = Grid::new(w, h, geometry, vec![0u8; grid_bytes(w.into(), h.into())])?;
     for (i, c) in raster.cells.iter().enumerate() {
         let (x, y) = (i % usize::from(w), i / usize::from(w));
         grid.set(x, y, *c)?;
     }
     Ok(grid)
+}
+
+/// Refuses a grid whose far edges lie beyond the wire's millimetres: every point inside a map
+/// must have a position the robot can be sent (and `cell_of` and `bounds` must agree).
+fn check_extent(g: &Geometry, width: u16, height: u16) -> Result<(), NavError> {
+    let (ox, oy) = g.origin_mm();
+    let far = |o: i32, n: u16| (i64::from(o) + i64::from(n) * i64::from(g.cell_mm())) as f64 / 1e3;
+    mm_from_m("map's far edge x", far(ox, width))?;
+    mm_from_m("map's far edge y", far(oy, height))?;
+    Ok(())
 }
 
 /// The target circle (CiberRato), else a disc of one map unit around the goal marker.
@@ -579,6 +598,52 @@ mod tests {
         assert_eq!((x, y), (2.925, 2.571));
         let (cx, cy) = g.grid.cell();
         assert_eq!(m.grid.get(cx as usize, cy as usize), Cell::Free);
+    }
+
+    /// A 7 x 4 ASCII map of 0.3 m cells at `origin` ("X Y"), start at cell (1, 2).
+    fn ascii_at(name: &str, origin: &str) -> Result<NavMap, NavError> {
+        let path =
+            std::env::temp_dir().join(format!("robot-map-{}-{name}.txt", std::process::id()));
+        let text = format!("# cell 0.3\n# origin {origin}\n#######\n#S    #\n#    G#\n#######\n");
+        std::fs::write(&path, text).expect("writes");
+        let m = NavMap::load(&path.display().to_string(), &MapOptions::default());
+        let _ = std::fs::remove_file(&path);
+        m
+    }
+
+    #[test]
+    fn a_map_beyond_the_links_millimetres_is_refused_by_field() {
+        for (origin, field) in [
+            ("5000000 0", "map origin x 5000000 m does not fit"),
+            ("0 -2147483.9", "map origin y -2147483.9 m does not fit"),
+            // The origin fits, the far edge (2.1 m on) does not: points inside could not be sent.
+            ("2147483.5 0", "map's far edge x 2147485.6 m does not fit"),
+        ] {
+            let e = ascii_at("far", origin).expect_err(origin).to_string();
+            assert!(e.contains(field), "{origin}: {e}");
+        }
+    }
+
+    #[test]
+    fn near_the_limit_the_check_agrees_with_the_bounds_it_reports() {
+        // Far edge at 2147483.6 m, 47 mm inside the link's range.
+        let m = ascii_at("near", "2147481.5 0").expect("fits");
+        let s = m
+            .resolve_start(None)
+            .expect("the start marker is in a free cell");
+        assert_eq!(s.grid.cell(), (1, 2));
+        assert_eq!(s.mm, (2_147_481_950, 750));
+        let [x0, _, x1, _] = m.bounds();
+        for x in [x0 + 0.01, x1 - 0.01] {
+            let e = m
+                .check_point(End::Start, (x, 0.75))
+                .expect_err("a border wall");
+            assert!(matches!(e, NavError::Blocked { .. }), "{x}: {e}");
+        }
+        for x in [x0 - 0.01, x1 + 0.01, 3e6] {
+            let e = m.check_point(End::Start, (x, 0.75)).expect_err("outside");
+            assert!(matches!(e, NavError::Outside { .. }), "{x}: {e}");
+        }
     }
 
     #[test]

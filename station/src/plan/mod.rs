@@ -62,6 +62,9 @@ pub enum NavError {
     /// `--cell` or `--radius` out of range.
     #[error("{0}")]
     BadOption(String),
+    /// A position the link's whole millimetres cannot carry.
+    #[error("{0}")]
+    Range(#[from] protocol::units::OutOfRange),
     /// The grid exceeds nav's limit.
     #[error(
         "a {width} x {height} grid of {cell_m} m cells exceeds the planner's {max} cells a \

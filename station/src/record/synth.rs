@@ -78,15 +78,21 @@ impl Synth {
     /// The opening of a session with `peer`: handshaking, the station's wake-up byte and
     /// `Hello`, the robot's accepting `HelloReply` at 5 ms, connected at 5.1 ms.
     pub fn handshake(&mut self, peer: PeerInfo) {
+        self.handshake_at(0, peer);
+    }
+
+    /// The same starting at `t0_us` (a session after a gap): handshaking at `t0_us`, the reply
+    /// 5 ms later, connected 5.1 ms later.
+    pub fn handshake_at(&mut self, t0_us: u64, peer: PeerInfo) {
         self.link(
-            0,
+            t0_us,
             &Connection::Handshaking {
                 port: "memory".into(),
             },
         );
-        self.raw(100, RecordKind::ToRobot, &[0]);
+        self.raw(t0_us + 100, RecordKind::ToRobot, &[0]);
         self.to_robot(
-            100,
+            t0_us + 100,
             &Message::Hello(protocol::Hello {
                 fingerprint: FINGERPRINT,
                 protocol: PROTOCOL_VERSION,
@@ -95,7 +101,7 @@ impl Synth {
             }),
         );
         self.from_robot(
-            5_000,
+            t0_us + 5_000,
             &Message::HelloReply(HelloReply {
                 fingerprint: FINGERPRINT,
                 protocol: PROTOCOL_VERSION,
@@ -110,7 +116,7 @@ impl Synth {
                 failsafe_ms: 300,
             }),
         );
-        self.link(5_100, &Connection::Connected(peer));
+        self.link(t0_us + 5_100, &Connection::Connected(peer));
     }
 
     /// The file's bytes, finished with an end record.

@@ -2,8 +2,10 @@
 //!
 //! Layer: pure, over a parsed `Recording`: it runs the same `ReplayFeed` the TUI uses, at
 //! once, and counts what comes out (frames by kind both ways, telemetry rate, sessions and
-//! gaps, decoding errors, loss, commands and their outcomes). A gap is the time from losing a
-//! session to the next one (or the end), with the reason the link gave. Cannot fail.
+//! gaps, decoding errors, loss, commands and their outcomes). A gap is the robot's silence
+//! around a lost session: from its last frame before the loss to its first frame after, once a
+//! session is back (or to the end), with the reason the link gave. The work is linear in the
+//! records, whatever times they carry. Cannot fail.
 
 use std::collections::BTreeMap;
 
@@ -69,11 +71,14 @@ pub struct TelemetrySummary {
     pub last_s: Option<f64>,
 }
 
-/// A time without a session.
+/// A time without a session, measured by the robot's frames: from the last frame of the lost
+/// session to the robot's first frame after it (not from the link timeout to the handshake).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Gap {
+    /// The last frame before the session was lost.
     pub start_s: f64,
-    /// `None`: the recording ended before a new session.
+    /// The robot's first frame after `start_s`, once a new session came; `None`: the
+    /// recording ended before a new session.
     pub end_s: Option<f64>,
     pub duration_s: f64,
     pub reason: String,
@@ -81,20 +86,35 @@ pub struct Gap {
 
 /// Replays the whole recording at once and counts.
 pub fn summarize(rec: &Recording) -> Summary {
+    replay(rec).0
+}
+
+/// The summary and the feed's timer runs (its work besides the records).
+fn replay(rec: &Recording) -> (Summary, u64) {
     let mut feed = ReplayFeed::new(&rec.meta.port);
     let mut c = Counter::default();
     let mut actions = Vec::new();
     let duration = rec.duration_us();
-    // One second of recording at a time keeps the action buffer small.
-    let mut t = 0u64;
-    loop {
-        t = t.saturating_add(1_000_000).min(duration);
+    // Work follows the records, not the recorded time (a record's time is anything up to a
+    // year): one step per record time, and an empty span before a record is crossed in one
+    // step that runs the link's timers just before it (a command expires before a late reply,
+    // as live). Each step's actions are counted before the next, keeping the buffer small.
+    while let Some(t) = rec.records.get(feed.next_index()).map(|r| r.t_us) {
+        if t > feed.position_us().saturating_add(1) {
+            feed.advance_to(&rec.records, t - 1, &mut actions);
+            for a in actions.drain(..) {
+                c.action(a);
+            }
+        }
+        let frames = feed.frames_from_robot();
         feed.advance_to(&rec.records, t, &mut actions);
+        // Frames first: a frame and a link change in the same microsecond count as the frame
+        // coming first (the live station decided on what it had read).
+        if feed.frames_from_robot() > frames {
+            c.frame(t / 1000);
+        }
         for a in actions.drain(..) {
             c.action(a);
-        }
-        if t >= duration {
-            break;
         }
     }
     c.finish(duration);
@@ -109,7 +129,8 @@ pub fn summarize(rec: &Recording) -> Summary {
             .collect()
     };
     let telemetry = c.telemetry();
-    Summary {
+    let timer_runs = feed.timer_runs();
+    let summary = Summary {
         format_version: VERSION,
         meta: rec.meta.clone(),
         file_bytes: rec.file_len,
@@ -135,7 +156,8 @@ pub fn summarize(rec: &Recording) -> Summary {
         rtt_ms: stats.rtt_ms,
         robot_log_lines: c.logs,
         robot_events: c.events,
-    }
+    };
+    (summary, timer_runs)
 }
 
 #[derive(Default)]
@@ -153,11 +175,30 @@ struct Counter {
     connected: bool,
     since_ms: u64,
     connected_ms: u64,
-    gap: Option<(u64, String)>,
+    /// When the robot's last good frame arrived.
+    last_frame_ms: Option<u64>,
+    gap: Option<OpenGap>,
     gaps: Vec<Gap>,
 }
 
+/// A gap whose session has not come back yet.
+struct OpenGap {
+    /// The last frame of the lost session (or the loss itself, if it had none).
+    start_ms: u64,
+    /// The robot's first frame since then, once one came.
+    first_frame_ms: Option<u64>,
+    reason: String,
+}
+
 impl Counter {
+    /// The robot's bytes held at least one good frame at `now_ms`.
+    fn frame(&mut self, now_ms: u64) {
+        self.last_frame_ms = Some(now_ms);
+        if let Some(g) = &mut self.gap {
+            g.first_frame_ms.get_or_insert(now_ms);
+        }
+    }
+
     fn action(&mut self, a: Action) {
         match a {
             Action::Tick { now_ms } => self.now_ms = now_ms,
@@ -186,8 +227,11 @@ impl Counter {
                 if self.robot.is_none() {
                     self.robot = Some(PeerRecord::from(&p));
                 }
-                if let Some((start, reason)) = self.gap.take() {
-                    self.gaps.push(gap(start, Some(self.now_ms), reason));
+                if let Some(g) = self.gap.take() {
+                    // The outage ends when the robot was heard again, which is usually the
+                    // reply that opened this session, but may be bytes held up by a stall.
+                    let end = g.first_frame_ms.unwrap_or(self.now_ms);
+                    self.gaps.push(gap(g.start_ms, Some(end), g.reason));
                 }
                 if !self.connected {
                     self.since_ms = self.now_ms;
@@ -202,11 +246,18 @@ impl Counter {
                 };
                 if self.connected {
                     self.connected_ms += self.now_ms.saturating_sub(self.since_ms);
-                    self.gap = Some((self.now_ms, reason));
-                } else if let Some((_, r)) = &mut self.gap {
+                    // The robot went silent at its last frame, not when the station noticed
+                    // (the link timeout fires 1.5 s later, PROTOCOL.md §4).
+                    let start_ms = self.last_frame_ms.unwrap_or(self.now_ms).min(self.now_ms);
+                    self.gap = Some(OpenGap {
+                        start_ms,
+                        first_frame_ms: None,
+                        reason,
+                    });
+                } else if let Some(g) = &mut self.gap {
                     // A closed port says more than the handshaking that follows it.
                     if !matches!(other, Connection::Handshaking { .. }) {
-                        *r = reason;
+                        g.reason = reason;
                     }
                 }
                 self.connected = false;
@@ -218,9 +269,9 @@ impl Counter {
         if self.connected {
             self.connected_ms += (duration_us / 1000).saturating_sub(self.since_ms);
         }
-        if let Some((start, reason)) = self.gap.take() {
-            let mut g = gap(start, None, reason);
-            g.duration_s = (duration_us / 1000).saturating_sub(start) as f64 / 1000.0;
+        if let Some(open) = self.gap.take() {
+            let mut g = gap(open.start_ms, None, open.reason);
+            g.duration_s = (duration_us / 1000).saturating_sub(open.start_ms) as f64 / 1000.0;
             self.gaps.push(g);
         }
     }
@@ -399,6 +450,90 @@ pub fn utc(unix_ms: u64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::record::synth::{demo_peer, telemetry, Synth};
+    use protocol::Message;
+
+    /// 10 Hz telemetry from a robot that falls silent after its frame at 4.31 s (as under
+    /// `robot-emulator --stall 5,2`): the live link times out at 5.81 s, the held-up bytes
+    /// arrive at 6.34 s, a new session opens at 6.35 s, and telemetry runs to 8 s.
+    fn stalled() -> Recording {
+        let mut s = Synth::new(&Meta::default());
+        s.handshake(demo_peer());
+        let mut i = 0;
+        let mut telemetry_at = |s: &mut Synth, t_us: u64| {
+            s.from_robot(t_us, &Message::Telemetry(telemetry(i, 10)));
+            i += 1;
+        };
+        for k in 0..=43 {
+            telemetry_at(&mut s, 10_000 + k * 100_000);
+        }
+        s.link(
+            5_810_000,
+            &Connection::Handshaking {
+                port: "memory".into(),
+            },
+        );
+        telemetry_at(&mut s, 6_340_000);
+        s.handshake_at(6_345_000, demo_peer());
+        for k in 64..80 {
+            telemetry_at(&mut s, 10_000 + k * 100_000);
+        }
+        Recording::parse_strict(&s.finish(8_000_000, "done")).unwrap()
+    }
+
+    #[test]
+    fn a_gap_runs_from_the_last_frame_to_the_first_frame_after() {
+        let s = summarize(&stalled());
+        assert_eq!(s.sessions, 2);
+        assert_eq!(
+            s.gaps,
+            vec![Gap {
+                start_s: 4.31,
+                end_s: Some(6.34),
+                duration_s: 2.03,
+                reason: "no frames for 1.5 s (link timeout)".into(),
+            }]
+        );
+    }
+
+    #[test]
+    fn a_gap_to_the_end_starts_at_the_last_frame() {
+        let mut s = Synth::new(&Meta::default());
+        s.handshake(demo_peer());
+        s.from_robot(100_000, &Message::Telemetry(telemetry(0, 10)));
+        s.link(
+            1_600_000,
+            &Connection::Handshaking {
+                port: "memory".into(),
+            },
+        );
+        let rec = Recording::parse_strict(&s.finish(3_000_000, "done")).unwrap();
+        let g = &summarize(&rec).gaps;
+        assert_eq!(g.len(), 1);
+        assert_eq!(
+            (g[0].start_s, g[0].end_s, g[0].duration_s),
+            (0.1, None, 2.9)
+        );
+    }
+
+    #[test]
+    fn the_work_follows_the_records_not_the_recorded_time() {
+        // Ten hours between two records: one-second steps ran the timers 36 000 times (and a
+        // record near a year, 31.5 million).
+        let mut s = Synth::new(&Meta::default());
+        s.handshake(demo_peer());
+        s.from_robot(1_000_000, &Message::Telemetry(telemetry(0, 10)));
+        s.from_robot(36_000_000_000, &Message::Telemetry(telemetry(1, 10)));
+        let rec = Recording::parse_strict(&s.finish(36_000_000_001, "done")).unwrap();
+        let (sum, runs) = replay(&rec);
+        let records = rec.records.len() as u64;
+        assert!(
+            runs <= 2 * records,
+            "{runs} timer runs for {records} records"
+        );
+        assert_eq!(sum.telemetry.frames, 2);
+        assert_eq!(sum.duration_s, 36_000.000001);
+    }
 
     #[test]
     fn utc_dates_are_civil() {

@@ -73,6 +73,9 @@ pub enum ObjectFileError {
     Object { path: PathBuf, source: ObjectError },
     #[error("{0}")]
     Map(#[from] NavError),
+    /// A map file that loads but cannot be gridded (a load error names the file itself).
+    #[error("{path}: {source}")]
+    MapFile { path: String, source: NavError },
     #[error("cannot encode the object: {0}")]
     Encode(ObjectError),
     #[error("the planner holds no segmentation for this map")]
@@ -214,7 +217,13 @@ pub fn load_for_upload(path: &str, opts: &MapOptions) -> Result<Loaded, ObjectFi
             summary,
         });
     }
-    let map = NavMap::load(path, opts)?;
+    let map = NavMap::load(path, opts).map_err(|e| match e {
+        NavError::Load(_) => ObjectFileError::Map(e),
+        source => ObjectFileError::MapFile {
+            path: path.to_string(),
+            source,
+        },
+    })?;
     let m = map_object(&map)?;
     let summary = format!(
         "map {} ({} x {} cells of {} m), {} bytes, id {:#010x}",

@@ -115,6 +115,9 @@ def recordings(good):
           header(meta) + record(0, 3, b"stopped") + record(10, 0, b"\x00"))
     write("recordings/12-huge-record.rec", header(meta) + varint(0) + b"\x00" + varint(1 << 30))
     write("recordings/13-header-only-truncated.rec", good[:10])
+    # A last record at 2^64 - 1 us: the summary once stepped through it a second at a time.
+    write("recordings/14-time-beyond-a-year.rec",
+          header(meta) + first + record(2**64 - 1, 0, b"\x00"))
 
 
 def light_bin(outputs=None, neurons=60, inputs=6):
