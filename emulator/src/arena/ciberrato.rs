@@ -405,7 +405,9 @@ impl<'a> Warnings<'a> {
         if self.kept.len() < MAX_WARNINGS {
             let (line, col) = self.t.line_col(offset);
             let path = self.t.path.display();
-            self.kept.push(format!("{path}:{line}:{col}: {message}"));
+            let text = format!("{path}:{line}:{col}: {message}");
+            // Warnings reach terminals; attribute values may hold control characters (&#7;).
+            self.kept.push(text.chars().flat_map(char::escape_debug).collect());
         } else {
             self.more += 1;
         }
