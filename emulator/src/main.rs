@@ -73,8 +73,7 @@ fn run(args: &RunArgs) -> Result<(), String> {
         return light_map(args);
     }
     let opts = args.options()?;
-    let arena = load_arena(&args.world.arena, &load_options(args))
-        .map_err(|e| e.to_string())?;
+    let arena = load_arena(&args.world.arena, &load_options(args)).map_err(|e| e.to_string())?;
     let report = emulator::scenario::run_scenario(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
         println!(
@@ -104,8 +103,7 @@ fn run(args: &RunArgs) -> Result<(), String> {
 
 fn forage(args: &RunArgs) -> Result<(), String> {
     let opts = args.options()?;
-    let arena =
-        load_arena(args.arena(), &load_options(args)).map_err(|e| e.to_string())?;
+    let arena = load_arena(args.arena(), &load_options(args)).map_err(|e| e.to_string())?;
     let r = emulator::scenario::forage::run_forage(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
@@ -137,8 +135,7 @@ fn forage(args: &RunArgs) -> Result<(), String> {
 
 fn line_correct(args: &RunArgs) -> Result<(), String> {
     let opts = args.line_correct_options()?;
-    let arena = load_arena(&args.world.arena, &load_options(args))
-        .map_err(|e| e.to_string())?;
+    let arena = load_arena(&args.world.arena, &load_options(args)).map_err(|e| e.to_string())?;
     let r = emulator::line_correct::run_line_correct(arena, &opts).map_err(|e| e.to_string())?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);

@@ -407,7 +407,15 @@ impl<'a> Warnings<'a> {
             let path = self.t.path.display();
             let text = format!("{path}:{line}:{col}: {message}");
             // Warnings reach terminals; attribute values may hold control characters (&#7;).
-            self.kept.push(text.chars().flat_map(char::escape_debug).collect());
+            let mut clean = String::with_capacity(text.len());
+            for c in text.chars() {
+                if c.is_control() {
+                    clean.extend(c.escape_default());
+                } else {
+                    clean.push(c);
+                }
+            }
+            self.kept.push(clean);
         } else {
             self.more += 1;
         }
