@@ -136,10 +136,21 @@ pub struct FoundGrid {
 
 /// Finds a lab's grid file in its folder: a name from [`grid_names_for`] as spelt, then the
 /// same ignoring case (`Ciber2003_Manga1Lab.xml` has `Ciber2003_manga1Grid.xml`), and for a
-/// lab whose name has no `lab` in it (`Ciber2001Final.xml`), the folder's only file whose name
-/// contains `grid` or `grd`. Reads at most [`MAX_DIR_ENTRIES`] directory entries.
+/// lab whose name has no `lab` in it, `<name>Grid.xml` or else (`Ciber2001Final.xml`) the
+/// folder's only file whose name contains `grid` or `grd` after a prefix of the lab's name. Reads at most [`MAX_DIR_ENTRIES`] directory entries.
 pub fn find_grid(lab: &Path) -> FoundGrid {
     let names = grid_names_for(lab);
+    // A name without `lab` may still have its grid beside it as `<name>Grid.xml` (the
+    // emulator's own `wallsMicRato99Grid.xml`).
+    let named_lab = !names.is_empty();
+    let names = if named_lab {
+        names
+    } else {
+        let stem = lab.file_stem().map(|s| s.to_string_lossy().into_owned());
+        let ext = lab.extension().and_then(|e| e.to_str()).unwrap_or("xml");
+        stem.map(|s| vec![lab.with_file_name(format!("{s}Grid.{ext}"))])
+            .unwrap_or_default()
+    };
     if let Some(p) = names.iter().find(|p| p.is_file()) {
         let note = (Some(p) != names.first())
             .then(|| format!("{}: grid file {} (start poses)", lab.display(), p.display()));
@@ -185,7 +196,7 @@ pub fn find_grid(lab: &Path) -> FoundGrid {
             })
         });
         match (grids.next(), grids.next()) {
-            (Some(g), None) if names.is_empty() => Some(g),
+            (Some(g), None) if !named_lab => Some(g),
             _ => None,
         }
     };
@@ -209,7 +220,7 @@ pub fn find_grid(lab: &Path) -> FoundGrid {
         // A name with no `lab` in it promises no grid file; one with `lab` does.
         None => FoundGrid {
             path: None,
-            note: names.first().map(|n| {
+            note: names.first().filter(|_| named_lab).map(|n| {
                 format!(
                     "{}: no grid file found beside it (looked for {} and the like); the start \
                      pose is the emulator's choice (give --grid FILE)",
