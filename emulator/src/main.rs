@@ -59,7 +59,7 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
     let opts = args.options()?;
     let profile = opts.sim.profile.name;
     let arena_name = opts.arena.clone();
-    let arena = emulator::builtin::load(&opts.arena, &opts.load).map_err(|e| e.to_string())?;
+    let arena = load_arena(&opts.arena, &opts.load).map_err(|e| e.to_string())?;
     let sim = emulator::sim::Sim::new(arena, opts.sim.clone()).map_err(|e| e.to_string())?;
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
@@ -104,8 +104,7 @@ fn run(args: &RunArgs) -> Result<(), String> {
         return light_map(args);
     }
     let opts = args.options()?;
-    let arena = emulator::builtin::load(&args.world.arena, &load_options(args))
-        .map_err(|e| e.to_string())?;
+    let arena = load_arena(&args.world.arena, &load_options(args)).map_err(|e| e.to_string())?;
     let report = emulator::scenario::run_scenario(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
         println!(
@@ -137,8 +136,7 @@ fn run(args: &RunArgs) -> Result<(), String> {
 
 fn forage(args: &RunArgs) -> Result<(), String> {
     let opts = args.options()?;
-    let arena =
-        emulator::builtin::load(args.arena(), &load_options(args)).map_err(|e| e.to_string())?;
+    let arena = load_arena(args.arena(), &load_options(args)).map_err(|e| e.to_string())?;
     let r = emulator::scenario::forage::run_forage(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
@@ -170,8 +168,7 @@ fn forage(args: &RunArgs) -> Result<(), String> {
 
 fn line_correct(args: &RunArgs) -> Result<(), String> {
     let opts = args.line_correct_options()?;
-    let arena = emulator::builtin::load(&args.world.arena, &load_options(args))
-        .map_err(|e| e.to_string())?;
+    let arena = load_arena(&args.world.arena, &load_options(args)).map_err(|e| e.to_string())?;
     let r = emulator::line_correct::run_line_correct(arena, &opts).map_err(|e| e.to_string())?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
@@ -205,6 +202,19 @@ fn line_correct(args: &RunArgs) -> Result<(), String> {
         );
     }
     Ok(())
+}
+
+/// Loads an arena (built-in name or file) and prints the importer's warnings on stderr: a
+/// dropped wall or an unexpected grid file must never go unnoticed.
+fn load_arena(
+    name: &str,
+    opts: &emulator::arena::LoadOptions,
+) -> Result<emulator::arena::Arena, emulator::arena::ArenaError> {
+    let arena = emulator::builtin::load(name, opts)?;
+    for w in &arena.warnings {
+        eprintln!("robot-emulator: warning: {w}");
+    }
+    Ok(arena)
 }
 
 fn load_options(args: &RunArgs) -> emulator::arena::LoadOptions {

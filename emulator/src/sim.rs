@@ -194,7 +194,7 @@ impl Hal for SimHal {
     }
 
     fn beacon(&mut self) -> Option<BeaconReading> {
-        self.beacon.read(self.world.beacon(), self.body.pose())
+        self.beacon.read_any(self.world.beacons(), self.body.pose())
     }
 
     fn battery_mv(&mut self) -> u16 {

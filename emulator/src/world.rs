@@ -118,12 +118,12 @@ impl WorldBeacon {
     }
 }
 
-/// An arena with its walls indexed, plus beacon, target, lights and floor grid.
+/// An arena with its walls indexed, plus beacons, targets, lights and floor grid.
 #[derive(Clone, Debug)]
 pub struct World {
     arena: Arena,
     walls: SegmentSet,
-    beacon: Option<WorldBeacon>,
+    beacons: Vec<WorldBeacon>,
     lights: Vec<Light>,
     floor: Option<FloorGrid>,
 }
@@ -151,16 +151,20 @@ impl World {
                 });
             }
         }
-        let beacon = arena.beacon().map(|b| WorldBeacon {
-            position: b.position,
-            height_m: b.height_m,
-            // CiberRato: walls lower than the beacon do not hide it.
-            blockers: arena.segment_set_taller_than(b.height_m),
-        });
+        let beacons = arena
+            .beacons
+            .iter()
+            .map(|b| WorldBeacon {
+                position: b.position,
+                height_m: b.height_m,
+                // CiberRato: walls lower than the beacon do not hide it.
+                blockers: arena.segment_set_hiding(b.height_m),
+            })
+            .collect();
         Ok(World {
             walls: arena.segment_set(),
             arena,
-            beacon,
+            beacons,
             lights,
             floor,
         })
@@ -176,21 +180,43 @@ impl World {
         &self.walls
     }
 
-    /// The beacon, if the arena has one.
+    /// The first beacon, if the arena has one (what the firmware is told it seeks).
     pub fn beacon(&self) -> Option<&WorldBeacon> {
-        self.beacon.as_ref()
+        self.beacons.first()
     }
 
-    /// The target area, if any.
+    /// Every beacon, in the file's order (CiberRato labs may have several).
+    pub fn beacons(&self) -> &[WorldBeacon] {
+        &self.beacons
+    }
+
+    /// The first target area, if any.
     pub fn target(&self) -> Option<Target> {
         self.arena.target().copied()
     }
 
-    /// True when `p` is inside the target circle (edge included).
-    pub fn in_target(&self, p: Point) -> bool {
+    /// The target areas a beacon search may end in: those with a beacon inside (CiberRato
+    /// marks each beacon's area with a target), or every target when none has one. A target
+    /// without a beacon beside beaconed ones is a start or home area (CiberRato 2011: the
+    /// robot starts in target 1 and must find target 0), not somewhere to arrive.
+    pub fn goal_targets(&self) -> impl Iterator<Item = &Target> + '_ {
+        let marks = |t: &Target| {
+            self.beacons
+                .iter()
+                .any(|b| (b.position - t.centre).norm() <= t.radius_m)
+        };
+        let any_marked = self.arena.targets.iter().any(marks);
         self.arena
-            .target()
-            .is_some_and(|t| (p - t.centre).norm() <= t.radius_m)
+            .targets
+            .iter()
+            .filter(move |t| !any_marked || marks(t))
+    }
+
+    /// True when `p` is inside a goal target circle (edge included): what the ground sensor
+    /// sees and where a beacon search is judged to have arrived.
+    pub fn in_target(&self, p: Point) -> bool {
+        self.goal_targets()
+            .any(|t| (p - t.centre).norm() <= t.radius_m)
     }
 
     /// Light sources.

@@ -187,7 +187,7 @@ fn ciber_2005_lab_takes_its_start_poses_from_the_grid_file_beside_it() {
     assert!(none.starts.is_empty());
     // A beacon 2 units high is hidden only by the 14 walls 3 units high, not the 18 of 1 unit.
     let b = a.beacon().unwrap();
-    let tall = a.segment_set_taller_than(b.height_m);
+    let tall = a.segment_set_hiding(b.height_m);
     let tall_walls = a
         .walls
         .iter()

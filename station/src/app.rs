@@ -180,7 +180,12 @@ struct Pending {
 
 impl App {
     pub fn new(opts: AppOptions) -> Self {
-        App {
+        let warnings = opts
+            .arena
+            .as_ref()
+            .map(|a| a.warnings.clone())
+            .unwrap_or_default();
+        let mut app = App {
             now_ms: 0,
             replaying: false,
             size: (80, 24),
@@ -217,7 +222,12 @@ impl App {
             pending: HashMap::new(),
             rate_asked: None,
             outbox: Vec::new(),
+        };
+        // An importer's warning is never silent: the file may not be what the user thinks.
+        for w in warnings {
+            app.note(Level::Warn, Source::Arena, w);
         }
+        app
     }
 
     /// Commands to send, with the ids their outcomes will carry; empties the outbox.

@@ -255,3 +255,35 @@ fn a_value_that_is_not_a_number_is_shown_on_the_edit_line_and_nothing_is_sent() 
     app.update(Action::ParamBackspace);
     assert_eq!(app.params.input_error, None);
 }
+
+#[test]
+fn the_arena_importers_warnings_are_in_the_log_from_the_start() {
+    // A <Row> lab with an unknown element: the importer's warning must reach the operator.
+    let dir = std::env::temp_dir().join(format!("station-arena-warn-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let lab = dir.join("rows.xml");
+    std::fs::write(
+        &lab,
+        r#"<Lab Width="14" Height="4"><Row Pos="0" Pattern="  |"/><Decor/></Lab>"#,
+    )
+    .unwrap();
+    let overlay = ArenaOverlay::load(&lab).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(overlay.walls.len(), 1);
+    let app = App::new(AppOptions {
+        arena: Some(overlay),
+        ..AppOptions::default()
+    });
+    let warned: Vec<_> = app
+        .log
+        .window(10)
+        .filter(|l| l.level == Level::Warn && l.source == Source::Arena)
+        .collect();
+    assert_eq!(
+        warned.len(),
+        1,
+        "{:?}",
+        app.log.window(10).collect::<Vec<_>>()
+    );
+    assert!(warned[0].text.contains("unknown element 'Decor'"));
+}

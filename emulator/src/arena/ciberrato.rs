@@ -1,6 +1,17 @@
-//! CiberRato lab XML (`<Lab Name Width Height>` with `<Beacon X Y Height>`, `<Target X Y
-//! Radius>`, `<Wall Height><Corner X Y/>…</Wall>`) and its grid file (`<Grid><Position X Y
-//! Dir/>…`, start poses with Dir in degrees).
+//! CiberRato lab XML (`<Lab Name Width Height>` with any number of `<Beacon X Y Height>`,
+//! `<Target X Y Radius>`, `<Wall Height><Corner X Y/>…</Wall>` and `<Row Pos Pattern>`) and its
+//! grid file (`<Grid><Position X Y Dir/>…`, start poses with Dir in degrees), read as the
+//! CiberRato simulator's own parser reads them (`simulator/cblabhandler.cpp`, `cbwall.cpp`,
+//! `cbgridhandler.cpp` in nunolau/ciberRatoTools):
+//! - `<Row>` rows describe a maze of 2-unit cells in ASCII (see [`row_walls`]);
+//! - a wall without `Height` is 4 units high (`cbWall`'s default);
+//! - a corner repeated consecutively (also the last repeating the first) is dropped, with a
+//!   warning: the simulator keeps such walls;
+//! - every beacon and target is kept, in file order.
+//!
+//! Warnings (unknown names, dropped repeats, clipped rows, how the grid file was found) are kept
+//! in [`Arena::warnings`], at most [`MAX_WARNINGS`] of them plus a count of the rest, so a file
+//! of 60,000 unknown elements costs 60,000 cheap counts, not 60,000 line:column scans.
 //!
 //! Layer: arena importer. Units: CiberRato units scaled by [`LoadOptions::ciberrato_unit_m`]
 //! (default 5/17.5 m per unit, so Micro-Rato'99's 17.5-unit lab is the real 5 m arena); wall
@@ -8,14 +19,17 @@
 //! lab's frame is already x right, y up, origin at the lower-left corner.
 //!
 //! Invariants of the result: the lab rectangle (0..Width, 0..Height) is a wall
-//! (`enclosed`); every corner, beacon, target centre and start position lies inside it; wall
-//! polygons have >= 3 corners, non-zero area and no self-crossing.
+//! (`enclosed`); every corner, beacon, target centre and start position lies inside it (row
+//! walls are clipped to it); wall polygons have >= 3 distinct consecutive corners, non-zero
+//! area and no self-crossing.
 //!
 //! What can fail: malformed XML (roxmltree's message, at its line:column), a wrong root element,
 //! missing or non-finite attributes, non-positive sizes, absurd sizes (> [`MAX_LAB_UNITS`]),
-//! too few corners, points outside the lab, a misspelt element or attribute name (a name that
-//! is merely unknown becomes a warning). Each error names file:line:column.
+//! too few corners, points outside the lab, a row `Pos` that is not a whole number, a misspelt
+//! element or attribute name (a name that is merely unknown becomes a warning). Each error
+//! names file:line:column. Time and memory are linear in the file.
 
+use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
 use roxmltree::{Document, Node, ParsingOptions};
@@ -33,6 +47,24 @@ pub const MAX_WALL_CORNERS: usize = 4096;
 // Caps the DOM so a hostile file cannot make the parser allocate without bound.
 const MAX_XML_NODES: u32 = 1_000_000;
 
+/// Most warnings kept per file; the rest are counted in one closing line.
+pub const MAX_WARNINGS: usize = 20;
+
+/// A wall's height when the file gives none, in CiberRato units (`cbWall::cbWall`).
+pub const DEFAULT_WALL_HEIGHT: f64 = 4.0;
+
+/// Side of one `<Row>` maze cell, CiberRato units (`PATHCUBESIZE` in `cblabhandler.cpp`).
+pub const ROW_CELL: f64 = 2.0;
+
+/// Half a `<Row>` wall's thickness as a fraction of the cell (`PATHWALLWIDTH`): 0.1 units.
+pub const ROW_WALL_HALF: f64 = 0.05;
+
+/// Pattern characters per `<Row>` cell: two for the cell, one for the wall on its right.
+const ROW_CHARS_PER_CELL: usize = 3;
+
+/// Most directory entries looked at when searching for a lab's grid file.
+const MAX_DIR_ENTRIES: usize = 10_000;
+
 /// Loads a lab file and, per [`LoadOptions::ciberrato_grid`], its grid file.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Arena, ArenaError> {
     let text = read_text(path)?;
@@ -43,7 +75,11 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Arena, ArenaError> {
 pub fn load_text(path: &Path, text: &str, opts: &LoadOptions) -> Result<Arena, ArenaError> {
     let mut arena = parse_lab(path, text, opts.ciberrato_unit_m)?;
     let grid = match &opts.ciberrato_grid {
-        GridFile::Auto => grid_path_for(path).filter(|p| p.is_file()),
+        GridFile::Auto => {
+            let found = find_grid(path);
+            arena.warnings.extend(found.note);
+            found.path
+        }
         GridFile::None => None,
         GridFile::Path(p) => Some(p.clone()),
     };
@@ -57,14 +93,143 @@ pub fn load_text(path: &Path, text: &str, opts: &LoadOptions) -> Result<Arena, A
 }
 
 /// The grid file that obviously goes with a lab file: `…Lab.xml` -> `…Grid.xml` (also `lab`
-/// -> `grid`, `LAB` -> `GRID`), in the same folder. `None` when the name does not say.
+/// -> `grid`, `LAB` -> `GRID`), in the same folder. `None` when the name does not say. This is
+/// the name alone; [`find_grid`] also looks at the folder for the other names real
+/// competitions used.
 pub fn grid_path_for(lab: &Path) -> Option<PathBuf> {
-    let stem = lab.file_stem()?.to_str()?;
+    grid_names_for(lab).into_iter().next()
+}
+
+/// The names a lab's grid file has had in real competitions, most usual first, in the lab's
+/// folder: the last `lab` in the stem (any case) replaced by `Grid` or `grd` in the case the
+/// stem uses, so `X_FinalLab.xml` -> `X_FinalGrid.xml`, `ciber2002Lab1.xml` ->
+/// `ciber2002Grid1.xml`, `X-final-lab.xml` -> `X-final-grd.xml`.
+fn grid_names_for(lab: &Path) -> Vec<PathBuf> {
+    let Some(stem) = lab.file_stem().and_then(|s| s.to_str()) else {
+        return Vec::new();
+    };
     let ext = lab.extension().and_then(|e| e.to_str()).unwrap_or("xml");
-    let (base, grid) = [("Lab", "Grid"), ("lab", "grid"), ("LAB", "GRID")]
+    let Some(at) = stem.to_ascii_lowercase().rfind("lab") else {
+        return Vec::new();
+    };
+    let (base, word, rest) = (&stem[..at], &stem[at..at + 3], &stem[at + 3..]);
+    let cased = |g: &str| match word {
+        "LAB" => g.to_ascii_uppercase(),
+        "lab" => g.to_ascii_lowercase(),
+        _ => g.to_string(),
+    };
+    ["Grid", "grd"]
         .iter()
-        .find_map(|(l, g)| stem.strip_suffix(l).map(|b| (b, *g)))?;
-    Some(lab.with_file_name(format!("{base}{grid}.{ext}")))
+        .map(|g| lab.with_file_name(format!("{base}{}{rest}.{ext}", cased(g))))
+        .collect()
+}
+
+/// What [`find_grid`] found: the grid file, and a warning when the pairing was not by the
+/// usual name (or nothing was found), so the user sees which start poses are used.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FoundGrid {
+    /// The grid file, if one was found.
+    pub path: Option<PathBuf>,
+    /// How it was found when that is worth saying.
+    pub note: Option<String>,
+}
+
+/// Finds a lab's grid file in its folder: a name from [`grid_names_for`] as spelt, then the
+/// same ignoring case (`Ciber2003_Manga1Lab.xml` has `Ciber2003_manga1Grid.xml`), and for a
+/// lab whose name has no `lab` in it, `<name>Grid.xml` or else (`Ciber2001Final.xml`) the
+/// folder's only file whose name contains `grid` or `grd` after a prefix of the lab's name. Reads at most [`MAX_DIR_ENTRIES`] directory entries.
+pub fn find_grid(lab: &Path) -> FoundGrid {
+    let names = grid_names_for(lab);
+    // A name without `lab` may still have its grid beside it as `<name>Grid.xml` (the
+    // emulator's own `wallsMicRato99Grid.xml`).
+    let named_lab = !names.is_empty();
+    let names = if named_lab {
+        names
+    } else {
+        let stem = lab.file_stem().map(|s| s.to_string_lossy().into_owned());
+        let ext = lab.extension().and_then(|e| e.to_str()).unwrap_or("xml");
+        stem.map(|s| vec![lab.with_file_name(format!("{s}Grid.{ext}"))])
+            .unwrap_or_default()
+    };
+    if let Some(p) = names.iter().find(|p| p.is_file()) {
+        let note = (Some(p) != names.first())
+            .then(|| format!("{}: grid file {} (start poses)", lab.display(), p.display()));
+        return FoundGrid {
+            path: Some(p.clone()),
+            note,
+        };
+    }
+    let dir = lab
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let entries: Vec<OsString> = std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.flatten()
+                .take(MAX_DIR_ENTRIES)
+                .filter(|e| e.file_type().is_ok_and(|t| t.is_file() || t.is_symlink()))
+                .map(|e| e.file_name())
+                .collect()
+        })
+        .unwrap_or_default();
+    let lower = |s: &std::ffi::OsStr| s.to_string_lossy().to_ascii_lowercase();
+    let by_case = names.iter().find_map(|want| {
+        let want = lower(want.file_name()?);
+        entries.iter().find(|e| lower(e) == want)
+    });
+    let lab_stem = lab.file_stem().map(lower).unwrap_or_default();
+    let only = || {
+        let mut grids = entries.iter().filter(|e| {
+            let n = lower(e);
+            let Some(stem) = n.strip_suffix(".xml") else {
+                return false;
+            };
+            // `Ciber2001Grid.xml` serves `Ciber2001Final.xml`: what precedes `grid` must begin
+            // the lab's name, so a folder of unrelated labs pairs nothing.
+            let base = stem
+                .rfind("grid")
+                .or_else(|| stem.rfind("grd"))
+                .map(|i| &stem[..i]);
+            base.is_some_and(|b| {
+                let b = b.trim_end_matches(['_', '-', ' ', '.']);
+                !b.is_empty() && lab_stem.starts_with(b)
+            })
+        });
+        match (grids.next(), grids.next()) {
+            (Some(g), None) if !named_lab => Some(g),
+            _ => None,
+        }
+    };
+    match by_case.or_else(only) {
+        Some(name) => {
+            let p = dir.join(name);
+            let how = if by_case.is_some() {
+                "its name differs only in case"
+            } else {
+                "the folder's only grid file"
+            };
+            FoundGrid {
+                note: Some(format!(
+                    "{}: grid file {} ({how}; give --grid to choose another)",
+                    lab.display(),
+                    p.display()
+                )),
+                path: Some(p),
+            }
+        }
+        // A name with no `lab` in it promises no grid file; one with `lab` does.
+        None => FoundGrid {
+            path: None,
+            note: names.first().filter(|_| named_lab).map(|n| {
+                format!(
+                    "{}: no grid file found beside it (looked for {} and the like); the start \
+                     pose is the emulator's choice (give --grid FILE)",
+                    lab.display(),
+                    n.display()
+                )
+            }),
+        },
+    }
 }
 
 /// Parses a lab's XML text; `unit_m` is metres per CiberRato unit.
@@ -79,7 +244,7 @@ pub fn parse_lab(path: &Path, text: &str, unit_m: f64) -> Result<Arena, ArenaErr
         }
         other => return Err(err_node(t, lab, format!("expected a <Lab> root element, found <{other}>"))),
     }
-    let mut warnings = Vec::new();
+    let mut warnings = Warnings::new(t);
     check_attrs(t, lab, &["Name", "Width", "Height"], &mut warnings)?;
     let width = positive_attr(t, lab, "Width")?;
     let height = positive_attr(t, lab, "Height")?;
@@ -114,13 +279,21 @@ pub fn parse_lab(path: &Path, text: &str, unit_m: f64) -> Result<Arena, ArenaErr
         unit_m,
         warnings: Vec::new(),
     };
+    let mut push_wall = |w: Wall| {
+        arena.walls.push(Wall {
+            corners: w.corners.iter().map(|&c| scale(c)).collect(),
+            height_m: w.height_m.map(|h| h * unit_m),
+        });
+    };
+    let mut beacons = Vec::new();
+    let mut targets = Vec::new();
     for node in lab.children().filter(Node::is_element) {
         match node.tag_name().name() {
             "Beacon" => {
                 check_attrs(t, node, &["X", "Y", "Height"], &mut warnings)?;
                 let p = point_in(t, node, &lab_box)?;
                 let h = non_negative_attr(t, node, "Height")?;
-                arena.beacons.push(Beacon {
+                beacons.push(Beacon {
                     position: scale(p),
                     height_m: h * unit_m,
                 });
@@ -129,32 +302,32 @@ pub fn parse_lab(path: &Path, text: &str, unit_m: f64) -> Result<Arena, ArenaErr
                 check_attrs(t, node, &["X", "Y", "Radius"], &mut warnings)?;
                 let p = point_in(t, node, &lab_box)?;
                 let r = positive_attr(t, node, "Radius")?;
-                arena.targets.push(Target {
+                targets.push(Target {
                     centre: scale(p),
                     radius_m: r * unit_m,
                 });
-                // The target's centre is where a CiberRato robot is sent: the goal point.
-                arena.goal = arena.goal.or(Some(scale(p)));
             }
-            "Wall" => {
-                let wall = parse_wall(t, node, &lab_box, &mut warnings)?;
-                let corners = wall.corners.iter().map(|&c| scale(c)).collect();
-                arena.walls.push(Wall {
-                    corners,
-                    height_m: wall.height_m.map(|h| h * unit_m),
-                });
+            "Wall" => push_wall(parse_wall(t, node, &lab_box, &mut warnings)?),
+            "Row" => {
+                for w in parse_row(t, node, &lab_box, &mut warnings)? {
+                    push_wall(w);
+                }
             }
             other => note_unknown(
                 t,
                 node,
                 "element",
                 other,
-                &["Beacon", "Target", "Wall"],
+                &["Beacon", "Target", "Wall", "Row"],
                 &mut warnings,
             )?,
         }
     }
-    arena.warnings = warnings;
+    // The first target's centre is where a CiberRato robot is sent: the goal point.
+    arena.goal = targets.first().map(|t| t.centre);
+    arena.beacons = beacons;
+    arena.targets = targets;
+    arena.warnings = warnings.finish();
     Ok(arena)
 }
 
@@ -184,7 +357,8 @@ pub fn parse_grid(
             ))
         }
     }
-    check_attrs(t, grid, &[], warnings)?;
+    let mut w = Warnings::new(t);
+    check_attrs(t, grid, &[], &mut w)?;
     let u = lab.unit_m;
     let lab_box = Aabb {
         min: Point::origin(),
@@ -199,11 +373,11 @@ pub fn parse_grid(
                 "element",
                 node.tag_name().name(),
                 &["Position"],
-                warnings,
+                &mut w,
             )?;
             continue;
         }
-        check_attrs(t, node, &["X", "Y", "Dir"], warnings)?;
+        check_attrs(t, node, &["X", "Y", "Dir"], &mut w)?;
         let p = point_in(t, node, &lab_box)?;
         let dir = num_attr(t, node, "Dir")?.unwrap_or(0.0);
         starts.push(Pose {
@@ -213,13 +387,61 @@ pub fn parse_grid(
         });
     }
     if starts.is_empty() {
-        warnings.push(format!(
-            "{}:{}: grid file has no <Position> elements",
-            path.display(),
-            line_of(t, grid)
-        ));
+        w.push(grid.range().start, "grid file has no <Position> elements");
     }
+    warnings.extend(w.finish());
     Ok(starts)
+}
+
+/// A file's warnings, each `file:line:col: message`: the first [`MAX_WARNINGS`] are kept and
+/// located, the rest only counted (locating one scans the text before it, so locating all of
+/// 60,000 would be quadratic).
+struct Warnings<'a> {
+    t: Text<'a>,
+    kept: Vec<String>,
+    more: usize,
+}
+
+impl<'a> Warnings<'a> {
+    fn new(t: Text<'a>) -> Self {
+        Warnings {
+            t,
+            kept: Vec::new(),
+            more: 0,
+        }
+    }
+
+    /// A warning about the text at byte `offset`.
+    fn push(&mut self, offset: usize, message: impl std::fmt::Display) {
+        if self.kept.len() < MAX_WARNINGS {
+            let (line, col) = self.t.line_col(offset);
+            let path = self.t.path.display();
+            let text = format!("{path}:{line}:{col}: {message}");
+            // Warnings reach terminals; attribute values may hold control characters (&#7;).
+            let mut clean = String::with_capacity(text.len());
+            for c in text.chars() {
+                if c.is_control() {
+                    clean.extend(c.escape_default());
+                } else {
+                    clean.push(c);
+                }
+            }
+            self.kept.push(clean);
+        } else {
+            self.more += 1;
+        }
+    }
+
+    fn finish(mut self) -> Vec<String> {
+        if self.more > 0 {
+            self.kept.push(format!(
+                "{}: {} more warnings not shown",
+                self.t.path.display(),
+                self.more
+            ));
+        }
+        self.kept
+    }
 }
 
 fn parse_xml<'a>(t: Text<'a>) -> Result<Document<'a>, ArenaError> {
@@ -253,7 +475,7 @@ fn parse_wall(
     t: Text<'_>,
     node: Node<'_, '_>,
     lab: &Aabb,
-    warnings: &mut Vec<String>,
+    warnings: &mut Warnings<'_>,
 ) -> Result<Wall, ArenaError> {
     check_attrs(t, node, &["Height"], warnings)?;
     let height = match num_attr(t, node, "Height")? {
@@ -265,31 +487,57 @@ fn parse_wall(
                 format!("wall Height {h} must be > 0"),
             ))
         }
-        h => h,
+        Some(h) => h,
+        None => DEFAULT_WALL_HEIGHT,
     };
-    let mut corners = Vec::new();
+    let mut corners: Vec<Point> = Vec::new();
+    let mut repeats = 0usize;
     for c in node.children().filter(Node::is_element) {
         if c.tag_name().name() != "Corner" {
             note_unknown(t, c, "element", c.tag_name().name(), &["Corner"], warnings)?;
             continue;
         }
         check_attrs(t, c, &["X", "Y"], warnings)?;
-        corners.push(point_in(t, c, lab)?);
+        let p = point_in(t, c, lab)?;
+        // CiberRato keeps a wall whose corner repeats (a zero-length side); so do we, without
+        // the repeat, which would otherwise look like the polygon touching itself.
+        if corners.last() == Some(&p) {
+            repeats += 1;
+            warnings.push(
+                c.range().start,
+                format!(
+                    "corner ({}, {}) repeats the one before it; the repeat is dropped",
+                    p.x, p.y
+                ),
+            );
+            continue;
+        }
+        if corners.len() >= MAX_WALL_CORNERS {
+            let msg = format!("a wall with more than {MAX_WALL_CORNERS} corners is absurd");
+            return Err(err_node(t, node, msg));
+        }
+        corners.push(p);
     }
-    if corners.len() > MAX_WALL_CORNERS {
-        let msg = format!(
-            "a wall with {} corners is absurd (limit {MAX_WALL_CORNERS})",
-            corners.len()
-        );
-        return Err(err_node(t, node, msg));
+    if corners.len() > 1 && corners.first() == corners.last() {
+        if let Some(p) = corners.pop() {
+            repeats += 1;
+            warnings.push(
+                node.range().start,
+                format!(
+                    "the last corner ({}, {}) repeats the first (walls are closed anyway); dropped",
+                    p.x, p.y
+                ),
+            );
+        }
     }
     if corners.len() < 3 {
         return Err(err_node(
             t,
             node,
             format!(
-                "a wall needs at least 3 <Corner>s, this one has {}",
-                corners.len()
+                "a wall needs at least 3 <Corner>s, this one has {}{}",
+                corners.len(),
+                if repeats > 0 { " besides repeats" } else { "" }
             ),
         ));
     }
@@ -317,8 +565,131 @@ fn parse_wall(
     }
     Ok(Wall {
         corners,
-        height_m: height,
+        height_m: Some(height),
     })
+}
+
+/// The walls of one `<Row Pos Pattern>`, in CiberRato units, clipped to the lab.
+fn parse_row(
+    t: Text<'_>,
+    node: Node<'_, '_>,
+    lab: &Aabb,
+    warnings: &mut Warnings<'_>,
+) -> Result<Vec<Wall>, ArenaError> {
+    check_attrs(t, node, &["Pos", "Pattern"], warnings)?;
+    let pos = match node.attribute("Pos") {
+        Some(v) => match v.trim().parse::<u32>() {
+            Ok(p) => p,
+            Err(_) => {
+                let msg =
+                    format!("Pos=\"{v}\" must be a whole number >= 0 (the row, 0 at the bottom)");
+                return Err(err_attr(t, node, "Pos", msg));
+            }
+        },
+        None => {
+            warnings.push(
+                node.range().start,
+                "<Row> without Pos is row 0, as in CiberRato",
+            );
+            0
+        }
+    };
+    let Some(pattern) = node.attribute("Pattern") else {
+        warnings.push(node.range().start, "<Row> without Pattern has no walls");
+        return Ok(Vec::new());
+    };
+    let (walls, run_to_end) = row_walls(pos, pattern, lab.max.x);
+    if run_to_end {
+        warnings.push(
+            node.range().start,
+            "a horizontal wall runs to the end of the pattern, past the lab's last cell; kept",
+        );
+    }
+    let mut out = Vec::with_capacity(walls.len());
+    let mut outside = 0usize;
+    for r in walls {
+        let clipped = Aabb {
+            min: Point::new(r.min.x.max(lab.min.x), r.min.y.max(lab.min.y)),
+            max: Point::new(r.max.x.min(lab.max.x), r.max.y.min(lab.max.y)),
+        };
+        if clipped.width() <= 0.0 || clipped.height() <= 0.0 {
+            outside += 1;
+            continue;
+        }
+        if clipped != r {
+            outside += 1;
+        }
+        out.push(Wall::rectangle(clipped, Some(DEFAULT_WALL_HEIGHT)));
+    }
+    if outside > 0 {
+        warnings.push(
+            node.range().start,
+            format!("{outside} wall(s) of this row reach outside the lab and were cut at its edge"),
+        );
+    }
+    Ok(out)
+}
+
+/// The wall rectangles of a `<Row>` (CiberRato units), as `cbLabHandler` builds them: the
+/// pattern has 3 characters per 2-unit cell (column `c` is cell `c / 3`). An even row `pos`
+/// holds cells `pos .. pos + 2` units high, where `|` at column `c` is a vertical wall at
+/// `x = 2 (c + 1) / 3`; an odd row holds the horizontal walls at `y = pos + 1`, where a run of
+/// `-` on the cells' first columns (`c % 3 == 0`) is one wall, ended by a space there. Other
+/// characters (`+`, decorations) do nothing. Walls are 0.1 units thick either side of their
+/// line. CiberRato ends a run at the last cell of its 28-unit-wide labs (column 39); here at
+/// the last cell of this lab's width, and at the end of the pattern (the flag says so; the
+/// simulator drops such a run).
+pub fn row_walls(pos: u32, pattern: &str, lab_width: f64) -> (Vec<Aabb>, bool) {
+    let half = ROW_WALL_HALF * ROW_CELL;
+    let row = f64::from(pos);
+    let cells = (lab_width / ROW_CELL).ceil().max(1.0);
+    let last_cell_col = (cells as usize - 1).saturating_mul(ROW_CHARS_PER_CELL);
+    let x_of = |col: usize| col as f64 / ROW_CHARS_PER_CELL as f64 * ROW_CELL;
+    let mut walls = Vec::new();
+    if pos % 2 == 0 {
+        for (col, ch) in pattern.chars().enumerate() {
+            if ch == '|' {
+                let x = x_of(col + 1);
+                walls.push(Aabb {
+                    min: Point::new(x - half, row),
+                    max: Point::new(x + half, row + ROW_CELL),
+                });
+            }
+        }
+        return (walls, false);
+    }
+    let y = row + 1.0;
+    let horizontal = |start: usize, end: usize| Aabb {
+        min: Point::new(x_of(start), y - half),
+        max: Point::new(x_of(end) + ROW_CELL, y + half),
+    };
+    let mut start: Option<usize> = None;
+    let mut last_col = 0;
+    for (col, ch) in pattern.chars().enumerate() {
+        last_col = col;
+        if col % ROW_CHARS_PER_CELL != 0 {
+            continue;
+        }
+        match (ch, start) {
+            ('-', None) if col == last_cell_col => walls.push(horizontal(col, col)),
+            ('-', None) => start = Some(col),
+            ('-', Some(s)) if col == last_cell_col => {
+                walls.push(horizontal(s, col));
+                start = None;
+            }
+            (' ', Some(s)) => {
+                walls.push(horizontal(s, col - ROW_CHARS_PER_CELL));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    let run_to_end = start.is_some();
+    if let Some(s) = start {
+        let end = last_col - last_col % ROW_CHARS_PER_CELL;
+        walls.push(horizontal(s, end));
+    }
+    (walls, run_to_end)
 }
 
 /// Reads X and Y and checks the point lies in the lab (a small tolerance absorbs decimals).
@@ -398,15 +769,14 @@ fn check_attrs(
     t: Text<'_>,
     node: Node<'_, '_>,
     known: &[&str],
-    warnings: &mut Vec<String>,
+    warnings: &mut Warnings<'_>,
 ) -> Result<(), ArenaError> {
     for a in node.attributes() {
         if !known.contains(&a.name()) {
             let what = format!("attribute of <{}>", node.tag_name().name());
-            let (line, col) = t.line_col(a.range_qname().start);
             match unknown_name(&what, a.name(), known) {
-                Ok(w) => warnings.push(format!("{}:{line}:{col}: {w}", t.path.display())),
-                Err(e) => return Err(ArenaError::at_line(t.path, line, Some(col), e)),
+                Ok(w) => warnings.push(a.range_qname().start, w),
+                Err(e) => return Err(t.err_at(a.range_qname().start, e)),
             }
         }
     }
@@ -419,20 +789,15 @@ fn note_unknown(
     what: &str,
     name: &str,
     known: &[&str],
-    warnings: &mut Vec<String>,
+    warnings: &mut Warnings<'_>,
 ) -> Result<(), ArenaError> {
     match unknown_name(what, name, known) {
         Ok(w) => {
-            let (line, col) = t.line_col(node.range().start);
-            warnings.push(format!("{}:{line}:{col}: {w}", t.path.display()));
+            warnings.push(node.range().start, w);
             Ok(())
         }
         Err(e) => Err(err_node(t, node, e)),
     }
-}
-
-fn line_of(t: Text<'_>, node: Node<'_, '_>) -> u32 {
-    t.line_col(node.range().start).0
 }
 
 fn err_node(t: Text<'_>, node: Node<'_, '_>, msg: impl Into<String>) -> ArenaError {

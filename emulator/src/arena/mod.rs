@@ -199,10 +199,11 @@ impl Arena {
         SegmentSet::new(self.segments())
     }
 
-    /// Walls taller than `height_m` (walls of unknown height and the boundary count as tall):
-    /// what blocks a beacon at that height (CiberRato: low walls do not hide the beacon).
-    pub fn segment_set_taller_than(&self, height_m: f64) -> SegmentSet {
-        SegmentSet::new(self.segments_where(|w| w.height_m.is_none_or(|h| h > height_m)))
+    /// Walls at least `height_m` tall (walls of unknown height and the boundary count as tall):
+    /// what hides a beacon at that height. CiberRato (`cbLab::wallDistanceAboveHeight`) skips
+    /// only walls lower than the beacon, so a wall exactly as tall hides it.
+    pub fn segment_set_hiding(&self, height_m: f64) -> SegmentSet {
+        SegmentSet::new(self.segments_where(|w| w.height_m.is_none_or(|h| h >= height_m)))
     }
 
     fn segments_where(&self, keep: impl Fn(&Wall) -> bool) -> Vec<Segment> {

@@ -109,18 +109,9 @@ impl BeaconSensor {
             strength: 0,
         };
         let Some(b) = beacon else { return Some(none) };
-        let here = Point::new(pose.x, pose.y);
-        let v = b.position - here;
-        let distance = v.norm();
-        let bearing = wrap_pi(v.y.atan2(v.x) - pose.heading);
-        let farthest = f64::from(self.model.distance_m.last().copied().unwrap_or(0.0));
-        if distance.is_nan()
-            || distance > farthest
-            || bearing.abs() > BEACON_HALF_FOV_RAD
-            || !b.visible_from(here)
-        {
+        let Some((distance, bearing)) = self.sees(b, pose) else {
             return Some(none);
-        }
+        };
         let nominal = f64::from(self.model.strength_at(distance as f32));
         let strength = nominal * (1.0 + self.rng.gaussian(self.strength_sigma));
         let noisy_bearing = wrap_pi(bearing + self.rng.gaussian(self.bearing_sigma_rad));
@@ -128,6 +119,33 @@ impl BeaconSensor {
             bearing_rad: noisy_bearing as f32,
             strength: strength.round().clamp(0.0, 255.0) as u8,
         })
+    }
+
+    /// One reading among several beacons: the receiver locks on the strongest signal, the
+    /// nearest beacon it sees (CiberRato gives a robot one sensor per beacon; this robot has
+    /// one receiver). With one beacon, exactly [`BeaconSensor::read`].
+    pub fn read_any(&mut self, beacons: &[WorldBeacon], pose: Pose) -> Option<BeaconReading> {
+        let seen = beacons
+            .iter()
+            .filter_map(|b| self.sees(b, pose).map(|(d, _)| (d, b)))
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map(|(_, b)| b);
+        self.read(seen.or(beacons.first()), pose)
+    }
+
+    /// Distance and bearing (relative to the heading) of a beacon the receiver sees: inside
+    /// its field of view and range, not hidden by a wall as tall as the beacon.
+    fn sees(&self, b: &WorldBeacon, pose: Pose) -> Option<(f64, f64)> {
+        let here = Point::new(pose.x, pose.y);
+        let v = b.position - here;
+        let distance = v.norm();
+        let bearing = wrap_pi(v.y.atan2(v.x) - pose.heading);
+        let farthest = f64::from(self.model.distance_m.last().copied().unwrap_or(0.0));
+        let seen = !distance.is_nan()
+            && distance <= farthest
+            && bearing.abs() <= BEACON_HALF_FOV_RAD
+            && b.visible_from(here);
+        seen.then_some((distance, bearing))
     }
 }
 

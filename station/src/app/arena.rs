@@ -24,6 +24,8 @@ pub struct ArenaOverlay {
     pub lights: Vec<(f64, f64)>,
     /// The foraging site (seed 000 §7), when the arena has one.
     pub forage: Option<ForageOverlay>,
+    /// The importer's warnings (file:line: what), shown in the log when the app starts.
+    pub warnings: Vec<String>,
 }
 
 /// What the map draws of a foraging site: home base, objects where they start, landmarks.
@@ -80,6 +82,7 @@ impl ArenaOverlay {
                 .collect(),
             forage: emulator::forage::ForageSite::of_builtin(a)
                 .map(|s| ForageOverlay::from_site(&s)),
+            warnings: a.warnings.clone(),
         }
     }
 

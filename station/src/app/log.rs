@@ -39,6 +39,8 @@ pub enum Source {
     Command,
     /// The link itself.
     Link,
+    /// The arena file's importer (warnings about the file).
+    Arena,
 }
 
 #[derive(Clone, Debug, PartialEq)]

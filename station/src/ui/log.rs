@@ -39,6 +39,7 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
                 Source::Event => "event",
                 Source::Command => "cmd",
                 Source::Link => "link",
+                Source::Arena => "arena",
             };
             wrap(&l.text, room)
                 .into_iter()
