@@ -32,23 +32,31 @@ for line in dis.splitlines():
         indirect.add(cur)
 cycles = set()
 
-@lru_cache(maxsize=None)
-def worst(f, depth=0):
-    if depth > 200:
-        cycles.add(f); return (frames.get(f, 0), (f,))
+memo, visiting = {}, set()
+
+def worst(f):
+    """(bytes, path) of the deepest chain from f; a call back into the chain is a cycle."""
+    if f in memo:
+        return memo[f]
+    if f in visiting:
+        cycles.add(f)
+        return (0, ())
+    visiting.add(f)
     best = (0, ())
     for c in calls.get(f, ()):
-        w = worst(c, depth + 1)
+        w = worst(c)
         if w[0] > best[0]:
             best = w
-    return (frames.get(f, 0) + best[0], (f,) + best[1])
+    visiting.discard(f)
+    memo[f] = (frames.get(f, 0) + best[0], (f,) + best[1])
+    return memo[f]
 
 def demangle(names):
     out = subprocess.run(["rustfilt"], input="\n".join(names), capture_output=True, text=True) if False else None
     return names
 
 sys.setrecursionlimit(10000)
-for label, pat in [("Robot::step", r"robot_firmware5robot.*Robot.*4step"), ("link handler (Link::step)", r"robot_firmware4link.*Link.*4step")]:
+for label, pat in [("Robot::step", r"^size_probe_robot_step$"), ("link handler (Link::receive, handle inlined)", r"robot_firmware4linkNtB4_4Link7receive")]:
     roots = [f for f in calls if re.search(pat, f)]
     if not roots:
         print(f"{label}: not found in the image"); continue
