@@ -67,7 +67,9 @@ pub use fixed::{FixedNav, Nav64, NAV64_BYTES};
 pub use graph::{Adjacency, Edge, GraphError, RegionGraph};
 pub use grid::{grid_bytes, Cell, Geometry, Grid, GridError, GridPoint, MAX_SIDE, UNITS_PER_CELL};
 pub use ids::{packed_bytes, IdStore, PackedIds};
-pub use segment::{segment, segment_with, Neighbours, Passable, Regions, SegmentError, Square};
+pub use segment::{
+    max_regions, segment, segment_with, Neighbours, Passable, Regions, SegmentError, Square,
+};
 pub use smooth::{line_of_sight, polyline_length, smooth, Smoothed};
 
 #[cfg(test)]

@@ -119,6 +119,30 @@ impl Passable {
     }
 }
 
+/// The most squares [`segment`] can make of a `width` x `height` grid, whatever its cells
+/// (and whichever [`Passable`]): `width * height - (width / 2) * (height / 2)`; 3072 for
+/// 64 x 64, 588 for 28 x 28, 217 for 17 x 17. Fixed storage sized by it never fails with
+/// `TooManyRegions`.
+///
+/// Why (a checkerboard's 2048 of 64 x 64 is NOT the worst case): cut the grid into aligned
+/// 2 x 2 blocks, cells (2i..2i+1, 2j..2j+1), with the odd last row or column left over. A
+/// block holds at most 3 square top-left cells. If all 4 of its cells are passable and its
+/// first cell a = (2i, 2j) starts a square, that square grows to side 2 (and then covers the
+/// block: 1 start) unless one of b = (2i+1, 2j), c = (2i, 2j+1), d = (2i+1, 2j+1) is already
+/// claimed when a is scanned. Only squares started earlier claim cells, i.e. in an earlier
+/// row, or in row 2j left of a; the latter would cover a. An earlier-row square covering c
+/// covers a (it spans rows < 2j through 2j+1 in column 2i), and one covering d covers b. So
+/// a starts a side-1 square only when b is claimed by an earlier square, and then b starts
+/// none: at most 3 starts. A block with a blocked cell has at most 3 passable cells. Leftover
+/// cells are at most one square each. Hence squares <= W*H - floor(W/2)*floor(H/2), and the
+/// bound is reached: block cell (odd, odd) of every block and leave the rest passable; every
+/// 2 x 2 window then holds a blocked cell, so every passable cell is a square of its own.
+/// `tests/segmentation.rs` checks the bound on every grid up to 16 cells and the pattern on
+/// 64 x 64.
+pub const fn max_regions(width: usize, height: usize) -> usize {
+    width * height - (width / 2) * (height / 2)
+}
+
 /// Segments `grid` into squares by the rule of seed 004 §6, Fig. 6.
 ///
 /// Writes the squares to the front of `squares` and one region id per cell to `map`

@@ -227,3 +227,94 @@ fn neighbour_walk_matches_the_quadratic_pairwise_check_on_generated_grids() {
         assert_eq!(walk, reference::edges(&seg.squares));
     }
 }
+
+/// A grid with cell (odd, odd) of every aligned 2 x 2 block an obstacle, the rest free: the
+/// worst case of `max_regions` (every free cell is a square of its own).
+fn lattice(w: usize, h: usize) -> crate::nav::Grid<Vec<u8>> {
+    use crate::nav::{grid_bytes, Cell, Geometry, Grid};
+    let mut g = Grid::new(
+        w as u16,
+        h as u16,
+        Geometry::SEED_004,
+        vec![0; grid_bytes(w, h)],
+    )
+    .expect("valid size");
+    for y in 0..h {
+        for x in 0..w {
+            let blocked = x % 2 == 1 && y % 2 == 1;
+            let c = if blocked { Cell::Obstacle } else { Cell::Free };
+            g.set(x, y, c).expect("inside");
+        }
+    }
+    g
+}
+
+#[test]
+fn no_grid_up_to_16_cells_has_more_squares_than_max_regions_and_the_bound_is_reached() {
+    use crate::nav::{grid_bytes, max_regions, Cell, Geometry, Grid};
+    // Every free/obstacle pattern of every size up to 16 cells (unknown segments as an
+    // obstacle, so two states cover all grids).
+    for (w, h) in [
+        (1, 1),
+        (2, 2),
+        (3, 3),
+        (2, 5),
+        (5, 2),
+        (3, 4),
+        (4, 3),
+        (4, 4),
+        (2, 8),
+    ] {
+        let cells = w * h;
+        let mut most = 0;
+        for bits in 0u32..(1 << cells) {
+            let mut g = Grid::new(
+                w as u16,
+                h as u16,
+                Geometry::SEED_004,
+                vec![0; grid_bytes(w, h)],
+            )
+            .expect("valid size");
+            for i in 0..cells {
+                let c = if bits >> i & 1 == 1 {
+                    Cell::Free
+                } else {
+                    Cell::Obstacle
+                };
+                g.set(i % w, i / w, c).expect("inside");
+            }
+            let n = Seg::new(&g)
+                .expect("one square per cell fits")
+                .squares
+                .len();
+            assert!(
+                n <= max_regions(w, h),
+                "{w} x {h} pattern {bits:#x}: {n} squares"
+            );
+            most = most.max(n);
+        }
+        assert_eq!(most, max_regions(w, h), "{w} x {h}: the bound is tight");
+    }
+}
+
+#[test]
+fn the_64_by_64_worst_case_is_3072_squares_not_the_checkerboards_2048() {
+    use crate::nav::{max_regions, Cell};
+    assert_eq!(max_regions(64, 64), 3072);
+    for (w, h) in [(64, 64), (63, 64), (17, 17), (28, 28), (1, 64)] {
+        let n = Seg::new(&lattice(w, h)).expect("fits").squares.len();
+        assert_eq!(n, max_regions(w, h), "{w} x {h}");
+    }
+    let mut board = lattice(64, 64);
+    for y in 0..64 {
+        for x in 0..64 {
+            let c = if (x + y) % 2 == 0 {
+                Cell::Free
+            } else {
+                Cell::Obstacle
+            };
+            board.set(x, y, c).expect("inside");
+        }
+    }
+    assert_eq!(Seg::new(&board).expect("fits").squares.len(), 2048);
+}
