@@ -16,8 +16,8 @@
 //!   failsafe clock; a refused `Hello` is answered with `Event HandshakeRefused` and a
 //!   negative reason, so the station can say why instead of timing out.
 //!
-//! Memory: one 262-byte decoder, `REPLY_CACHE` remembered replies of 28 bytes, a `TX_QUEUE`-byte queue, the 104-byte signing state, a few
-//! dozen bytes of other state.
+//! Memory: one 262-byte decoder, `REPLY_CACHE` remembered replies of 28 bytes, a
+//! `TX_QUEUE`-byte queue, the 104-byte signing state, a few dozen bytes of other state.
 
 use heapless::Deque;
 use protocol::sign::{AuthError, AuthStats, LinkAuth, LinkKey, KEY_LEN, ROBOT_LINK};
