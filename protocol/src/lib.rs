@@ -24,9 +24,9 @@ pub mod sign;
 pub mod transfer;
 
 pub use frame::{
-    crc32c, encode, encode_raw, encode_signed, parse_raw, payload_digest, DecoderStats,
-    EncodeError, Feed, Frame, FrameDecoder, FrameError, Header, PayloadError, MAX_FRAME,
-    MAX_PAYLOAD, MAX_SIGNED_PAYLOAD, PROTOCOL_VERSION,
+    crc32c, encode, encode_raw, encode_signed, parse_raw, retry_digest, DecoderStats, EncodeError,
+    Feed, Frame, FrameDecoder, FrameError, Header, PayloadError, MAX_FRAME, MAX_PAYLOAD,
+    MAX_SIGNED_PAYLOAD, PROTOCOL_VERSION,
 };
 pub use msg::*;
 pub use packed::Packed10x8;

@@ -16,14 +16,14 @@
 //!   failsafe clock; a refused `Hello` is answered with `Event HandshakeRefused` and a
 //!   negative reason, so the station can say why instead of timing out.
 //!
-//! Memory: one 262-byte decoder, `REPLY_CACHE` remembered replies of 28 bytes, a
+//! Memory: one 262-byte decoder, `REPLY_CACHE` remembered replies of 24 bytes, a
 //! `TX_QUEUE`-byte queue, the 104-byte signing state, a few dozen bytes of other state.
 
 use heapless::Deque;
 use protocol::sign::{AuthError, AuthStats, LinkAuth, LinkKey, KEY_LEN, ROBOT_LINK};
 use protocol::timing::REPLY_MEMORY_MS;
 use protocol::{
-    payload_digest, Ack, AckInfo, Command, Event, EventCode, Feed, Frame, FrameDecoder, HelloReply,
+    retry_digest, Ack, AckInfo, Command, Event, EventCode, Feed, Frame, FrameDecoder, HelloReply,
     Message, Nack, NackReason, SeqTracker, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION,
 };
 
@@ -62,14 +62,16 @@ pub enum Response {
     Send(Message<'static>),
 }
 
-/// A command's reply, remembered to answer that command's retries (PROTOCOL.md §7).
+/// A command's reply, remembered to answer that command's retries (PROTOCOL.md §7). 24 bytes:
+/// the seq lives in the digest (a retry's own header supplies it for the answer), so eight
+/// of these cost 24 bytes more than the seq-only memory they replaced.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Remembered {
     /// The robot's clock when the command was executed, ms.
     at_ms: u32,
-    /// `payload_digest` of the command: a new command reusing the number is not a retry.
+    /// `retry_digest` of the command's seq and payload: a new command reusing the number
+    /// has another content, so it is not a retry.
     digest: u32,
-    seq: u16,
     reply: Reply,
 }
 
@@ -279,14 +281,14 @@ impl Link {
                 }
                 Message::Command(command) => {
                     let seq = header.seq;
-                    // The command decoded, so it re-encodes; 0 would only make it unmatchable.
-                    let digest = payload_digest(&Message::Command(command)).unwrap_or(0);
+                    // The command decoded, so it re-encodes; 0 could only fail to match.
+                    let digest = retry_digest(seq, &Message::Command(command)).unwrap_or(0);
                     st.forget_expired(now_ms);
                     let reply = if st.session.is_none() {
                         st.counters.refused_before_handshake =
                             st.counters.refused_before_handshake.wrapping_add(1);
                         Reply::Nack(NackReason::NoHandshake)
-                    } else if let Some(r) = st.remembered(seq, digest) {
+                    } else if let Some(r) = st.remembered(digest) {
                         st.counters.retries_answered = st.counters.retries_answered.wrapping_add(1);
                         r
                     } else {
@@ -298,7 +300,7 @@ impl Link {
                                 Reply::Nack(NackReason::BadState)
                             }
                         };
-                        st.remember(seq, digest, r, now_ms);
+                        st.remember(digest, r, now_ms);
                         r
                     };
                     st.send_reply(seq, reply, now_ms);
@@ -357,17 +359,17 @@ impl LinkState {
         self.send_low_priority(&Message::Event(ev), now_ms);
     }
 
-    /// The reply to a true retry: same number, same content, still remembered.
-    fn remembered(&self, seq: u16, digest: u32) -> Option<Reply> {
+    /// The reply to a true retry: same number and content (one digest), still remembered.
+    fn remembered(&self, digest: u32) -> Option<Reply> {
         self.replies
             .iter()
             .flatten()
-            .find(|r| r.seq == seq && r.digest == digest)
+            .find(|r| r.digest == digest)
             .map(|r| r.reply)
     }
 
     /// Remembers a reply in a free slot, or in place of the oldest one.
-    fn remember(&mut self, seq: u16, digest: u32, reply: Reply, now_ms: u32) {
+    fn remember(&mut self, digest: u32, reply: Reply, now_ms: u32) {
         let age = |slot: &Option<Remembered>| match slot {
             None => u32::MAX,
             Some(r) => now_ms.wrapping_sub(r.at_ms),
@@ -376,7 +378,6 @@ impl LinkState {
             *slot = Some(Remembered {
                 at_ms: now_ms,
                 digest,
-                seq,
                 reply,
             });
         }
