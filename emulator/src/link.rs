@@ -33,6 +33,11 @@ pub trait Device {
     fn cycles(&self) -> u32;
     /// The control-cycle period, microseconds.
     fn cycle_us(&self) -> u32;
+    /// Bytes from the station that never reached the robot's software (a burst beyond its
+    /// serial port's buffers); 0 for a device that loses none.
+    fn to_robot_dropped(&self) -> u64 {
+        0
+    }
     /// Gives the robot its link key (PROTOCOL.md §13); `serve` calls it before the first byte.
     fn set_link_key(&mut self, _key: Option<&[u8; protocol::sign::KEY_LEN]>) {}
 }
@@ -90,6 +95,9 @@ pub struct ServeStats {
     pub bytes_from_robot: u64,
     /// Bytes the pty would not take (no station attached, or its buffer full).
     pub bytes_unsent: u64,
+    /// Bytes from the station the robot's serial port dropped: a burst beyond its line buffer
+    /// or receive FIFO, as a real UART overrun loses them.
+    pub bytes_to_robot_dropped: u64,
     pub to_robot_faults: FaultCounts,
     pub from_robot_faults: FaultCounts,
     pub disconnects: u32,
@@ -254,6 +262,7 @@ pub fn serve<D: Device>(
     }
     stats.sim_s = (dev.now_us() - sim0) as f64 * 1e-6;
     stats.wall_s = wall0.elapsed().as_secs_f64();
+    stats.bytes_to_robot_dropped = dev.to_robot_dropped();
     stats.to_robot_faults = to_robot.stats().into();
     stats.from_robot_faults = from_robot.stats().into();
     // The first period after start-up includes the pty setup; drop it.
@@ -381,9 +390,13 @@ impl Device for crate::sim::Sim {
     }
 
     fn push_inbound(&mut self, bytes: &[u8]) {
-        // The UART's inbound queue is bounded; what it refuses is counted there, as a UART
+        // The UART's line buffer is bounded; what it refuses is counted there, as a UART
         // overrun would be.
         self.uart_mut().push_inbound(bytes);
+    }
+
+    fn to_robot_dropped(&self) -> u64 {
+        self.uart().stats().to_robot_dropped()
     }
 
     fn take_outbound(&mut self, out: &mut Vec<u8>) {

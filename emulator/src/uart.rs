@@ -10,7 +10,12 @@
 //!   ([`Uart::take_outbound`]) when its last bit has been sent.
 //! - RX: the host queues bytes with [`Uart::push_inbound`]; they arrive at the line rate into
 //!   a 256-byte FIFO that [`Uart::serial_read`] empties; a byte arriving at a full FIFO is
-//!   lost and counted (`rx_overflow`), as on a UART whose driver is too slow.
+//!   lost and counted (`rx_overflow`), as on a UART whose driver is too slow. The bytes on
+//!   their way are the station's serial transmit buffer, [`LINE_BUFFER`] bytes as in a
+//!   Linux serial driver: what a burst adds beyond it is dropped and counted
+//!   (`inbound_refused`). A pty takes any burst at once, which no serial line does, so a
+//!   deeper queue would make the robot answer minutes late after a flood (1 MiB took 91 s at
+//!   115200 baud), where a real robot answers as soon as the line is clear.
 //! - Truth channel (emulator only): a `protocol::FrameDecoder` watches the robot's transmitted
 //!   bytes; when a Telemetry frame has been sent, an `EmuTruth` frame (its own sequence
 //!   counter; `time_ms` of that telemetry; the TRUE pose at that time, mm and mrad; collisions)
@@ -38,8 +43,10 @@ pub const BITS_PER_BYTE: u64 = 10;
 pub const TX_FIFO: usize = 64;
 /// Receive FIFO of the robot's UART, bytes.
 pub const RX_FIFO: usize = 256;
-/// Most bytes the host may have queued towards the robot.
-pub const INBOUND_LIMIT: usize = 1 << 20;
+/// Most bytes on their way to the robot: a serial driver's transmit buffer (Linux's
+/// `UART_XMIT_SIZE`). The station's largest burst, a transfer window of 4 chunks with
+/// commands and a heartbeat, is about 1.2 KB; it drains in 0.36 s at 115200 baud.
+pub const LINE_BUFFER: usize = 4096;
 /// Most transmitted bytes kept for the host before the oldest are dropped.
 pub const OUTBOUND_LIMIT: usize = 1 << 20;
 /// Highest baud rate accepted.
@@ -105,12 +112,20 @@ pub struct UartStats {
     pub rx_bytes: u64,
     /// Bytes lost because the RX FIFO was full.
     pub rx_overflow: u64,
-    /// Bytes the host offered that did not fit the inbound queue.
+    /// Bytes the host offered beyond `LINE_BUFFER` (a burst faster than the line), dropped.
     pub inbound_refused: u64,
     /// Transmitted bytes dropped because the host did not take them.
     pub outbound_dropped: u64,
     /// `EmuTruth` frames sent.
     pub truth_frames: u32,
+}
+
+impl UartStats {
+    /// Bytes from the station that never reached the robot's software: refused by the line
+    /// buffer or lost at a full receive FIFO.
+    pub fn to_robot_dropped(&self) -> u64 {
+        self.inbound_refused.saturating_add(self.rx_overflow)
+    }
 }
 
 /// The serial port.
@@ -208,9 +223,10 @@ impl Uart {
 
     // ---- host side ----
 
-    /// Host: queues bytes to send to the robot; returns how many fitted.
+    /// Host: queues bytes to send to the robot; returns how many fitted (the rest are
+    /// dropped and counted).
     pub fn push_inbound(&mut self, bytes: &[u8]) -> usize {
-        let room = INBOUND_LIMIT.saturating_sub(self.inbound.len());
+        let room = LINE_BUFFER.saturating_sub(self.inbound.len());
         let n = bytes.len().min(room);
         self.inbound.extend(bytes.iter().take(n));
         self.stats.inbound_refused += (bytes.len() - n) as u64;
@@ -400,6 +416,36 @@ mod tests {
         let mut buf = [0u8; 512];
         assert_eq!(u.serial_read(&mut buf), RX_FIFO);
         assert!(Uart::new(0, false).is_err());
+    }
+
+    #[test]
+    fn a_burst_beyond_the_line_buffer_is_dropped_and_the_line_is_clear_soon_after() {
+        let mut u = Uart::new(115_200, false).expect("valid baud");
+        let h = TruthHistory::default();
+        let burst = vec![0x55u8; 1 << 20];
+        assert_eq!(u.push_inbound(&burst), LINE_BUFFER);
+        assert_eq!(
+            u.stats().to_robot_dropped(),
+            (burst.len() - LINE_BUFFER) as u64
+        );
+        // The robot reads every millisecond; the line buffer drains at 11,520 B/s.
+        let mut buf = [0u8; RX_FIFO];
+        let mut t_us = 0;
+        while u.inbound_len() > 0 {
+            t_us += 1000;
+            u.tick(t_us, &h);
+            u.serial_read(&mut buf);
+        }
+        assert!(t_us <= 400_000, "line clear after {t_us} us");
+        assert_eq!(
+            u.stats().rx_overflow,
+            0,
+            "a robot reading every ms loses nothing"
+        );
+        // The next frame goes through.
+        assert_eq!(u.push_inbound(&[1, 2, 3]), 3);
+        u.tick(t_us + 1000, &h);
+        assert_eq!(u.serial_read(&mut buf), 3);
     }
 
     #[test]

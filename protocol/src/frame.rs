@@ -257,6 +257,20 @@ fn finish_raw(
     Ok(n + 1)
 }
 
+/// CRC-32C of `seq` (little-endian) followed by `msg`'s payload as `encode` writes it: one
+/// number for "this message under this sequence number", the same for every send of it
+/// whatever its signature or timestamp. The robot keys a remembered command reply by it, so
+/// that only a true retry is answered from memory (PROTOCOL.md §7). Postcard's encoding is
+/// canonical, so equal messages give equal digests.
+pub fn retry_digest(seq: u16, msg: &Message<'_>) -> Result<u32, EncodeError> {
+    let mut body = [0u8; MAX_PAYLOAD];
+    let n = serialize_payload(msg, &mut body)?;
+    let mut digest = CRC32C.digest();
+    digest.update(&seq.to_le_bytes());
+    digest.update(body.get(..n).ok_or(EncodeError::PayloadTooLarge)?);
+    Ok(digest.finalize())
+}
+
 fn serialize_payload(msg: &Message<'_>, body: &mut [u8]) -> Result<usize, EncodeError> {
     fn ser<T: serde::Serialize>(v: &T, body: &mut [u8]) -> Result<usize, EncodeError> {
         postcard::to_slice(v, body)

@@ -25,9 +25,9 @@ pub mod transfer;
 pub mod units;
 
 pub use frame::{
-    crc32c, encode, encode_raw, encode_signed, parse_raw, DecoderStats, EncodeError, Feed, Frame,
-    FrameDecoder, FrameError, Header, PayloadError, MAX_FRAME, MAX_PAYLOAD, MAX_SIGNED_PAYLOAD,
-    PROTOCOL_VERSION,
+    crc32c, encode, encode_raw, encode_signed, parse_raw, retry_digest, DecoderStats, EncodeError,
+    Feed, Frame, FrameDecoder, FrameError, Header, PayloadError, MAX_FRAME, MAX_PAYLOAD,
+    MAX_SIGNED_PAYLOAD, PROTOCOL_VERSION,
 };
 pub use msg::*;
 pub use packed::Packed10x8;
@@ -53,6 +53,10 @@ pub mod timing {
     pub const COMMAND_RETRY_MS: u32 = 200;
     /// Sends of one command before it is reported failed (first try included).
     pub const COMMAND_ATTEMPTS: u32 = 5;
+    /// How long the robot remembers a command's reply to answer its retries: twice the
+    /// station's retry budget (`COMMAND_RETRY_MS` x `COMMAND_ATTEMPTS`), so a true retry is
+    /// always recognised and a number reused later never is (PROTOCOL.md §7).
+    pub const REPLY_MEMORY_MS: u32 = 2 * COMMAND_RETRY_MS * COMMAND_ATTEMPTS;
     /// Manual-mode failsafe default: motors stop after this much silence from the station.
     pub const FAILSAFE_DEFAULT_MS: u16 = 300;
     /// Chunks a transfer sender keeps unacknowledged.

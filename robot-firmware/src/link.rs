@@ -4,8 +4,11 @@
 //! the time, asks it what to do with each command, and drains its queue into the serial port.
 //! Invariants, each from PROTOCOL.md §4 and §7:
 //! - no command is executed before a valid handshake (`Nack NoHandshake`);
-//! - a command whose sequence number is among the last `REPLY_CACHE` answered is not executed
-//!   again: its remembered reply is re-sent;
+//! - a command is answered from memory only if it is a true retry: the same sequence number
+//!   and the same content (a digest of its payload) as one of the last `REPLY_CACHE` answered,
+//!   at most `REPLY_MEMORY_MS` ago by the robot's clock. Anything else is a new command and is
+//!   executed or refused: the station's 16-bit counter wraps in a long session, and a Stop that
+//!   reuses an old number must stop the robot, not get the old command's Ack;
 //! - a frame goes into the outgoing queue whole or not at all, so the wire never carries a
 //!   torn frame; telemetry is skipped (and counted) rather than crowding out replies;
 //! - with a key (`set_key`, PROTOCOL.md §13) every frame sent is signed and only frames that
@@ -13,14 +16,15 @@
 //!   failsafe clock; a refused `Hello` is answered with `Event HandshakeRefused` and a
 //!   negative reason, so the station can say why instead of timing out.
 //!
-//! Memory: one 262-byte decoder, a `TX_QUEUE`-byte queue, the 104-byte signing state, a few
-//! dozen bytes of other state.
+//! Memory: one 262-byte decoder, `REPLY_CACHE` remembered replies of 24 bytes, a
+//! `TX_QUEUE`-byte queue, the 104-byte signing state, a few dozen bytes of other state.
 
 use heapless::Deque;
 use protocol::sign::{AuthError, AuthStats, LinkAuth, LinkKey, KEY_LEN, ROBOT_LINK};
+use protocol::timing::REPLY_MEMORY_MS;
 use protocol::{
-    Ack, AckInfo, Command, Event, EventCode, Feed, Frame, FrameDecoder, HelloReply, Message, Nack,
-    NackReason, SeqTracker, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION,
+    retry_digest, Ack, AckInfo, Command, Event, EventCode, Feed, Frame, FrameDecoder, HelloReply,
+    Message, Nack, NackReason, SeqTracker, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION,
 };
 
 /// Bytes of the outgoing queue: several frames, so a burst of replies never blocks.
@@ -56,6 +60,25 @@ pub enum Response {
     Reply(Reply),
     /// A frame to send, e.g. a `TransferAck`.
     Send(Message<'static>),
+}
+
+/// A command's reply, remembered to answer that command's retries (PROTOCOL.md §7). 24 bytes:
+/// the seq lives in the digest (a retry's own header supplies it for the answer), so eight
+/// of these cost 24 bytes more than the seq-only memory they replaced.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Remembered {
+    /// The robot's clock when the command was executed, ms.
+    at_ms: u32,
+    /// `retry_digest` of the command's seq and payload: a new command reusing the number
+    /// has another content, so it is not a retry.
+    digest: u32,
+    reply: Reply,
+}
+
+impl Remembered {
+    fn expired(&self, now_ms: u32) -> bool {
+        now_ms.wrapping_sub(self.at_ms) > REPLY_MEMORY_MS
+    }
 }
 
 /// Link counters for diagnostics.
@@ -98,8 +121,7 @@ struct LinkState {
     last_rx_ms: u32,
     /// Time of the last frame queued to the station.
     last_tx_ms: u32,
-    replies: [Option<(u16, Reply)>; REPLY_CACHE],
-    next_reply_slot: usize,
+    replies: [Option<Remembered>; REPLY_CACHE],
     peer_seq: SeqTracker,
     counters: LinkCounters,
     auth: LinkAuth,
@@ -122,7 +144,6 @@ impl Link {
                 last_rx_ms: 0,
                 last_tx_ms: 0,
                 replies: [None; REPLY_CACHE],
-                next_reply_slot: 0,
                 peer_seq: SeqTracker::new(),
                 counters: LinkCounters {
                     frames_out: 0,
@@ -178,11 +199,14 @@ impl Link {
         &self.st.peer_seq
     }
 
-    /// Forgets the session when the station has been silent for `timeout_ms`.
+    /// Forgets the session when the station has been silent for `timeout_ms`, and replies
+    /// older than `REPLY_MEMORY_MS` (called every cycle, so none outlives it by more than a
+    /// cycle, and the wrapping clock can never make an old one look young).
     pub fn expire(&mut self, now_ms: u32, timeout_ms: u32) {
         if self.st.session.is_some() && now_ms.wrapping_sub(self.st.last_rx_ms) > timeout_ms {
             self.st.session = None;
         }
+        self.st.forget_expired(now_ms);
     }
 
     /// Feeds received bytes and calls `on` for every frame the robot must act on; queues what
@@ -257,11 +281,14 @@ impl Link {
                 }
                 Message::Command(command) => {
                     let seq = header.seq;
+                    // The command decoded, so it re-encodes; 0 could only fail to match.
+                    let digest = retry_digest(seq, &Message::Command(command)).unwrap_or(0);
+                    st.forget_expired(now_ms);
                     let reply = if st.session.is_none() {
                         st.counters.refused_before_handshake =
                             st.counters.refused_before_handshake.wrapping_add(1);
                         Reply::Nack(NackReason::NoHandshake)
-                    } else if let Some(r) = st.remembered(seq) {
+                    } else if let Some(r) = st.remembered(digest) {
                         st.counters.retries_answered = st.counters.retries_answered.wrapping_add(1);
                         r
                     } else {
@@ -273,7 +300,7 @@ impl Link {
                                 Reply::Nack(NackReason::BadState)
                             }
                         };
-                        st.remember(seq, r);
+                        st.remember(digest, r, now_ms);
                         r
                     };
                     st.send_reply(seq, reply, now_ms);
@@ -332,19 +359,36 @@ impl LinkState {
         self.send_low_priority(&Message::Event(ev), now_ms);
     }
 
-    fn remembered(&self, seq: u16) -> Option<Reply> {
+    /// The reply to a true retry: same number and content (one digest), still remembered.
+    fn remembered(&self, digest: u32) -> Option<Reply> {
         self.replies
             .iter()
             .flatten()
-            .find(|(s, _)| *s == seq)
-            .map(|(_, r)| *r)
+            .find(|r| r.digest == digest)
+            .map(|r| r.reply)
     }
 
-    fn remember(&mut self, seq: u16, reply: Reply) {
-        if let Some(slot) = self.replies.get_mut(self.next_reply_slot) {
-            *slot = Some((seq, reply));
+    /// Remembers a reply in a free slot, or in place of the oldest one.
+    fn remember(&mut self, digest: u32, reply: Reply, now_ms: u32) {
+        let age = |slot: &Option<Remembered>| match slot {
+            None => u32::MAX,
+            Some(r) => now_ms.wrapping_sub(r.at_ms),
+        };
+        if let Some(slot) = self.replies.iter_mut().max_by_key(|s| age(s)) {
+            *slot = Some(Remembered {
+                at_ms: now_ms,
+                digest,
+                reply,
+            });
         }
-        self.next_reply_slot = (self.next_reply_slot + 1) % REPLY_CACHE;
+    }
+
+    fn forget_expired(&mut self, now_ms: u32) {
+        for slot in &mut self.replies {
+            if slot.is_some_and(|r| r.expired(now_ms)) {
+                *slot = None;
+            }
+        }
     }
 
     fn send_reply(&mut self, cmd_seq: u16, reply: Reply, now_ms: u32) {

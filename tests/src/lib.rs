@@ -62,6 +62,20 @@ impl TestStation {
         Ok(s)
     }
 
+    /// Writes raw bytes, waiting while the port's buffer is full, for up to `within`;
+    /// returns how many were written.
+    pub fn write_raw(&mut self, bytes: &[u8], within: Duration) -> usize {
+        let end = Instant::now() + within;
+        let mut done = 0;
+        while done < bytes.len() && Instant::now() < end {
+            match self.port.write(&bytes[done..]) {
+                Ok(n) => done += n,
+                Err(_) => std::thread::sleep(Duration::from_millis(1)),
+            }
+        }
+        done
+    }
+
     pub fn command(&mut self, c: Command) -> std::io::Result<u16> {
         self.send(&Message::Command(c))
     }

@@ -134,3 +134,37 @@ fn the_station_can_close_and_reopen_the_port() {
         std::thread::sleep(Duration::from_millis(100));
     }
 }
+
+/// Issue 13 item 9: a 1 MiB burst from the station used to queue whole in front of the robot's
+/// UART and drain at the baud rate, so the emulator stopped answering for 91 s. Its serial
+/// port now holds what a real one holds; the rest is dropped and counted.
+#[test]
+fn after_a_one_mebibyte_burst_the_robot_answers_within_a_second_or_two() {
+    let baud = 115_200;
+    let mut emu = start(baud);
+    let mut st = TestStation::open(emu.path(), baud).unwrap();
+    st.handshake(Duration::from_secs(3)).expect("handshake");
+    // Garbage without a frame delimiter: one undecodable frame as long as the burst.
+    let burst = vec![0x55u8; 1 << 20];
+    let written = st.write_raw(&burst, Duration::from_secs(20));
+    assert_eq!(written, burst.len(), "the pty took the burst");
+    // The line carries 11,520 B/s: a 4 KB line buffer is clear in 0.36 s of simulated time.
+    // The bound is generous for a loaded machine; the old 1 MiB queue needed 91 s.
+    let t0 = std::time::Instant::now();
+    st.handshake(Duration::from_secs(10))
+        .expect("the robot answers a Hello soon after the burst");
+    let answered_s = t0.elapsed().as_secs_f64();
+    let seq = st.command(Command::Stop).unwrap();
+    let acked = st
+        .collect(Duration::from_secs(2))
+        .iter()
+        .any(|(_, r)| *r == Received::Ack { cmd_seq: seq });
+    assert!(acked, "the Stop after the burst is answered");
+    println!("Hello answered {answered_s:.2} s after a 1 MiB burst");
+    let stats = emu.stop().expect("the loop ran").expect("no pty error");
+    assert!(
+        stats.bytes_to_robot_dropped >= (1 << 20) - 8192,
+        "dropped {} of the burst's bytes",
+        stats.bytes_to_robot_dropped
+    );
+}

@@ -8,6 +8,10 @@
 //! - commands are sent only in a handshaken session; one submitted otherwise fails at once
 //!   with `NotConnected`, and the ones in flight when the session ends fail with `LinkLost`;
 //! - every submitted command produces exactly one `CommandDone`;
+//! - no two commands of one session share a sequence number, so the robot's remembered reply
+//!   to one can never answer another (PROTOCOL.md §7): once `RENEW_AFTER_FRAMES` frames have
+//!   gone out since the handshake, new commands wait, and when none is in flight the station
+//!   handshakes again (a renewal), which clears the robot's memory, then sends them;
 //! - a fingerprint or protocol mismatch is reported once with both builds named, and retried
 //!   only slowly (the robot may be reflashed), never every 200 ms;
 //! - with a key (`set_key`, PROTOCOL.md §13) every frame sent is signed and a received frame
@@ -41,6 +45,10 @@ pub const HELLO_RETRY_MS: u64 = 200;
 pub const REFUSED_RETRY_MS: u64 = 2000;
 /// How often a statistics snapshot is published.
 pub const STATS_PERIOD_MS: u64 = 250;
+/// Frames sent in one session after which new commands wait for a renewed handshake: the
+/// 16-bit counter has 4,096 numbers left before it could reach the session's first command
+/// (PROTOCOL.md §7), far more than the frames sent while the commands in flight finish.
+pub const RENEW_AFTER_FRAMES: u32 = 65_536 - 4_096;
 
 /// Settings of one link.
 #[derive(Clone, Debug)]
@@ -67,6 +75,10 @@ pub struct LinkMachine {
     port: String,
     decoder: FrameDecoder,
     tx_seq: u16,
+    /// Sequence numbers used since the session's handshake (PROTOCOL.md §7).
+    session_frames: u32,
+    /// When a renewal handshake started: commands submitted meanwhile wait instead of failing.
+    renewal_since_ms: Option<u64>,
     rng: u64,
     out: Vec<u8>,
     events: VecDeque<LinkEvent>,
@@ -97,6 +109,8 @@ impl LinkMachine {
             port: String::new(),
             decoder: FrameDecoder::new(),
             tx_seq: 0,
+            session_frames: 0,
+            renewal_since_ms: None,
             rng,
             out: Vec::new(),
             events: VecDeque::new(),
@@ -189,7 +203,7 @@ impl LinkMachine {
     /// Submits a command. Its outcome arrives as a `CommandDone` event.
     pub fn submit(&mut self, now_ms: u64, id: CommandId, command: Command) {
         self.stats.commands.submitted += 1;
-        if !self.connected() {
+        if !self.connected() && self.renewal_since_ms.is_none() {
             self.finish(
                 id,
                 command,
@@ -253,6 +267,16 @@ impl LinkMachine {
 
     /// Runs the timers: hello retries, heartbeats, command retries, link timeout, statistics.
     pub fn poll(&mut self, now_ms: u64) {
+        if self
+            .renewal_since_ms
+            .is_some_and(|t| now_ms.saturating_sub(t) >= u64::from(LINK_TIMEOUT_MS))
+        {
+            // The robot did not answer the renewal: the waiting commands fail like any
+            // others on a lost link; the handshake goes on.
+            self.renewal_since_ms = None;
+            self.stats.link_timeouts = self.stats.link_timeouts.saturating_add(1);
+            self.fail_all(CommandFailure::LinkLost);
+        }
         match self.state.clone() {
             State::Closed => {}
             State::Handshaking {
@@ -345,6 +369,9 @@ impl LinkMachine {
             self.finish(f.id, f.command, CommandOutcome::Failed(failure));
         }
         self.pump(now_ms);
+        if !self.connected() {
+            return; // a renewal began
+        }
         if now_ms.saturating_sub(self.last_tx_ms) >= self.robot_clock.heartbeat_period_ms() {
             let time_ms = now_ms as u32; // the wire's clock wraps (PROTOCOL.md §6 kind 2)
             self.send(now_ms, &Message::Heartbeat(Heartbeat { time_ms }));
@@ -352,6 +379,7 @@ impl LinkMachine {
     }
 
     fn start_handshake(&mut self, now_ms: u64) {
+        self.renewal_since_ms = None;
         let session = self.next_nonce();
         self.robot_clock.reset();
         self.stats.robot_seq.reset();
@@ -368,6 +396,21 @@ impl LinkMachine {
         self.set_connection(Connection::Handshaking {
             port: self.port.clone(),
         });
+    }
+
+    /// Handshakes again within a live session, once nothing is in flight, before the counter
+    /// could reach a number the robot remembers a reply for (PROTOCOL.md §7). Returns whether
+    /// new commands must wait.
+    fn renew_if_due(&mut self, now_ms: u64) -> bool {
+        if self.session_frames < RENEW_AFTER_FRAMES {
+            return false;
+        }
+        if self.commands.in_flight() == 0 {
+            self.stats.renewals = self.stats.renewals.saturating_add(1);
+            self.start_handshake(now_ms);
+            self.renewal_since_ms = Some(now_ms);
+        }
+        true
     }
 
     fn send_hello(&mut self, now_ms: u64, session: u32) {
@@ -557,6 +600,8 @@ impl LinkMachine {
                 session: r.session,
                 since_ms: now_ms,
             };
+            self.session_frames = 0;
+            self.renewal_since_ms = None;
             self.set_connection(Connection::Connected(PeerInfo {
                 session: r.session,
                 firmware: r.firmware,
@@ -567,6 +612,8 @@ impl LinkMachine {
                 telemetry_hz: r.telemetry_hz,
                 failsafe_ms: r.failsafe_ms,
             }));
+            // Commands that waited through a renewal go out in the new session.
+            self.pump(now_ms);
         } else {
             let message = format!(
                 "robot firmware {} {} has schema {} (protocol {}); this station has schema {} \
@@ -583,6 +630,9 @@ impl LinkMachine {
     }
 
     fn refuse(&mut self, now_ms: u64, message: String) {
+        if self.renewal_since_ms.take().is_some() {
+            self.fail_all(CommandFailure::LinkLost);
+        }
         let session = match self.state {
             State::Handshaking { session, .. } | State::Refused { session, .. } => session,
             _ => self.next_nonce(),
@@ -596,10 +646,10 @@ impl LinkMachine {
 
     /// Sends queued commands while slots are free.
     fn pump(&mut self, now_ms: u64) {
-        if !self.connected() {
-            return;
-        }
-        while let Some((id, command)) = self.commands.next_to_send() {
+        while self.connected() && !self.renew_if_due(now_ms) {
+            let Some((id, command)) = self.commands.next_to_send() else {
+                return;
+            };
             let seq = self.send(now_ms, &Message::Command(command));
             self.commands.sent(id, seq, command, now_ms);
         }
@@ -636,6 +686,7 @@ impl LinkMachine {
     fn send(&mut self, now_ms: u64, msg: &Message<'_>) -> u16 {
         let seq = self.tx_seq;
         self.tx_seq = self.tx_seq.wrapping_add(1);
+        self.session_frames = self.session_frames.saturating_add(1);
         self.send_with_seq(now_ms, seq, msg);
         seq
     }

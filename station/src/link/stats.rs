@@ -48,6 +48,8 @@ pub struct LinkStats {
     pub handshakes: u32,
     /// Sessions ended by 1.5 s of silence.
     pub link_timeouts: u32,
+    /// Handshakes renewed before the sequence counter could wrap (PROTOCOL.md §7).
+    pub renewals: u32,
     /// Link authentication (PROTOCOL.md §13).
     pub auth: AuthCounts,
 }
@@ -213,6 +215,7 @@ pub struct StatsCollector {
     pub port_opens: u32,
     pub handshakes: u32,
     pub link_timeouts: u32,
+    pub renewals: u32,
     telemetry_times: VecDeque<u64>,
     rtt: VecDeque<u64>,
     byte_marks: VecDeque<(u64, u64, u64)>,
@@ -293,6 +296,7 @@ impl StatsCollector {
             port_opens: self.port_opens,
             handshakes: self.handshakes,
             link_timeouts: self.link_timeouts,
+            renewals: self.renewals,
             auth: AuthCounts::default(),
         }
     }
