@@ -65,6 +65,10 @@ pub struct MapMeta {
 /// files are refused before they reach it.
 pub const MAX_YAML_DEPTH: usize = 32;
 
+/// Largest map YAML read: map_server's are a few hundred bytes, and the YAML library holds
+/// about 70 bytes of events and values per byte of a dense list, so this bounds its memory.
+pub const MAX_YAML_BYTES: usize = 4 << 20;
+
 /// Unknown keys warned about one by one; the rest are counted in one line.
 const MAX_KEY_WARNINGS: usize = 8;
 
@@ -235,6 +239,15 @@ pub fn parse_meta(
     warnings: &mut Vec<String>,
 ) -> Result<MapMeta, ArenaError> {
     let t = Text { path, text };
+    if text.len() > MAX_YAML_BYTES {
+        return Err(ArenaError::at_file(
+            path,
+            format!(
+                "map YAML is {} bytes; map_server YAMLs are a few hundred (limit {MAX_YAML_BYTES})",
+                text.len()
+            ),
+        ));
+    }
     if let Some(at) = too_deep(text, MAX_YAML_DEPTH) {
         return Err(t.err_at(
             at,

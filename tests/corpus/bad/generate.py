@@ -164,14 +164,24 @@ def big(out, scale=1):
     # 60,000 unknown top-level keys (660 KB).
     keys = "".join("k%06d: 1\n" % i for i in range(60000 * scale))
     write(os.path.join(g, "yaml_keys.yaml"), ("image: small.pgm\n" + ROS_KEYS + keys).encode())
-    # An origin of two million elements: the error must quote an excerpt, not the list.
-    origin = "origin: [" + ", ".join(["0"] * 2000000) + "]\n"
+    # An origin of a million elements (3 MB): the error must quote an excerpt, not the list.
+    origin = "origin: [" + ", ".join(["0"] * 1000000) + "]\n"
     write(os.path.join(g, "yaml_long_origin.yaml"),
           ("image: small.pgm\nresolution: 0.05\n" + origin +
            "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n").encode())
-    # A 100 KB unknown key name (echoed whole before).
-    write(os.path.join(g, "yaml_long_key.yaml"),
-          ("image: small.pgm\n" + ROS_KEYS + "x" * 1000 + ": 1\n").encode())
+    # 60,000 unknown keys, then a misspelt one: the error must come in bounded time.
+    write(os.path.join(g, "yaml_keys_misspelt.yaml"),
+          ("image: small.pgm\n" + ROS_KEYS + keys + "resolutin: 1\n").encode())
+    # A 100 KB image name (echoed whole before).
+    write(os.path.join(g, "yaml_long_image.yaml"),
+          ("image: " + "x" * 100000 + ".pgm\n" + ROS_KEYS).encode())
+    # A 128 x 128 maze: at the station's smallest cell (5 mm) more than its 2048 cells a side.
+    m = 128
+    rows = ["o" + "---o" * m]
+    for r in range(m):
+        rows.append("|" + "   |" * m)
+        rows.append("o" + "---o" * m)
+    write(os.path.join(g, "maze_128.txt"), ("\n".join(rows) + "\n").encode())
     # An 8192 x 8192 map at 0.5 m (4 km a side): past the station's 2048-cell grid at any
     # --cell it accepts, so it must be refused from the PGM's header, before its 64 MiB of
     # pixels are read (the pixels are left out: a refusal must not need them).
