@@ -61,7 +61,8 @@ fn deep_yaml_nesting_is_refused_at_the_first_level_too_deep() {
 fn nesting_inside_quotes_and_comments_is_not_nesting() {
     let dir = folder("quoted");
     let deep = "[".repeat(100);
-    let text = format!("image: small.pgm\n{ROS_KEYS}comment: '{deep}'\nother: \"{deep}\" # {deep}\n");
+    let text =
+        format!("image: small.pgm\n{ROS_KEYS}comment: '{deep}'\nother: \"{deep}\" # {deep}\n");
     let p = write(&dir, "m.yaml", &text);
     let a = load(&p, &LoadOptions::default()).unwrap();
     assert_eq!(a.raster.unwrap().width, 4);

@@ -167,7 +167,8 @@ pub(crate) fn excerpt(s: &str) -> String {
     excerpt_n(s, EXCERPT_CHARS)
 }
 
-fn excerpt_n(s: &str, max_chars: usize) -> String {
+/// [`excerpt`] with a longer limit, for a library's message that may quote the file.
+pub(crate) fn excerpt_n(s: &str, max_chars: usize) -> String {
     let mut out = String::new();
     let mut end = s.len();
     for (n, (i, c)) in s.char_indices().enumerate() {

@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 use serde_yaml_ng::Value;
 
 use super::error::{
-    excerpt, read_bytes, read_head, read_text, to_u32, unknown_name, ArenaError, Text,
+    excerpt, excerpt_n, read_bytes, read_head, read_text, to_u32, unknown_name, ArenaError, Text,
 };
 use super::raster::{obstacle_walls, RasterMap};
 use super::{pgm, Arena, ArenaFormat, Cell, GridLimit};
@@ -110,37 +110,15 @@ pub fn parse_with(path: &Path, text: &str, limit: Option<GridLimit>) -> Result<A
         check_limit(&meta, h.width, h.height, limit)?;
     }
     let bytes = read_bytes(&meta.image)?;
-    let hdr = pgm::header(&meta.image, &bytes)?;
-    check_limit(&meta, hdr.width, hdr.height, limit)?;
-    let (w, h) = (hdr.width as usize, hdr.height as usize);
-    // One byte a cell; each pixel value classified once (at most 65,536 of them).
-    let table: Vec<Cell> = (0..=hdr.maxval)
-        .map(|p| classify(p, hdr.maxval, &meta))
-        .collect();
-    let mut cells = vec![Cell::Unknown; w * h];
-    let img = pgm::decode(&meta.image, &bytes, |i, p| {
-        // Image rows run top to bottom; raster rows bottom to top (y up).
-        let (row, col) = (h - 1 - i / w, i % w);
-        if let (Some(c), Some(&v)) = (cells.get_mut(row * w + col), table.get(usize::from(p))) {
-            *c = v;
-        }
-    })?;
+    let (raster, trailing) = raster_from_pgm(&meta, &bytes, limit)?;
     drop(bytes);
-    if let Some(at) = img.trailing {
+    if let Some(at) = trailing {
         warnings.push(format!(
             "{}: byte {at}: data after the image ignored",
             meta.image.display()
         ));
     }
-    let raster = RasterMap {
-        width: hdr.width,
-        height: hdr.height,
-        cell_m: meta.resolution,
-        origin: [meta.origin[0], meta.origin[1]],
-        cells,
-        start: None,
-        goal: None,
-    };
+    let (w, h) = (raster.width as usize, raster.height as usize);
     let bounds = Aabb {
         min: Point::new(meta.origin[0], meta.origin[1]),
         max: Point::new(
@@ -167,6 +145,40 @@ pub fn parse_with(path: &Path, text: &str, limit: Option<GridLimit>) -> Result<A
         unit_m: meta.resolution,
         warnings,
     })
+}
+
+/// The occupancy grid of a map's PGM (`meta.image` names it in errors), one byte a cell,
+/// refused from its header when beyond `limit`; also the offset of data after the image.
+pub fn raster_from_pgm(
+    meta: &MapMeta,
+    bytes: &[u8],
+    limit: Option<GridLimit>,
+) -> Result<(RasterMap, Option<usize>), ArenaError> {
+    let hdr = pgm::header(&meta.image, bytes)?;
+    check_limit(meta, hdr.width, hdr.height, limit)?;
+    let (w, h) = (hdr.width as usize, hdr.height as usize);
+    // Each pixel value classified once (at most 65,536 of them).
+    let table: Vec<Cell> = (0..=hdr.maxval)
+        .map(|p| classify(p, hdr.maxval, meta))
+        .collect();
+    let mut cells = vec![Cell::Unknown; w * h];
+    let img = pgm::decode(&meta.image, bytes, |i, p| {
+        // Image rows run top to bottom; raster rows bottom to top (y up).
+        let (row, col) = (h - 1 - i / w, i % w);
+        if let (Some(c), Some(&v)) = (cells.get_mut(row * w + col), table.get(usize::from(p))) {
+            *c = v;
+        }
+    })?;
+    let raster = RasterMap {
+        width: hdr.width,
+        height: hdr.height,
+        cell_m: meta.resolution,
+        origin: [meta.origin[0], meta.origin[1]],
+        cells,
+        start: None,
+        goal: None,
+    };
+    Ok((raster, img.trailing))
 }
 
 /// Bytes read for an image's header before the whole image: its magic and three numbers, with
@@ -528,13 +540,10 @@ fn too_deep(text: &str, max: usize) -> Option<usize> {
     None
 }
 
-/// A YAML library message, cut like every quote of file content (it may quote a scalar).
+/// A YAML library message, cut and escaped like every quote of file content (it may quote a
+/// key or scalar).
 fn excerpt_n_bytes(msg: &str) -> String {
-    if msg.len() > 200 {
-        excerpt(msg)
-    } else {
-        msg.to_string()
-    }
+    excerpt_n(msg, 160)
 }
 
 /// A value for an error message: its kind and size for collections (a two-million-element
