@@ -28,7 +28,7 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
-use super::error::{to_u32, ArenaError};
+use super::error::{excerpt, to_u32, ArenaError};
 use super::{Arena, ArenaFormat, GridLimit, LoadOptions, Pose, Wall, MAX_GRID_SIDE};
 use crate::geometry::{Aabb, Point};
 
@@ -183,7 +183,10 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
         return Err(err(
             first,
             0,
-            format!("expected a row of posts ('o' or '+'), found '{post}'"),
+            format!(
+                "expected a row of posts ('o' or '+'), found '{}'",
+                quote(post)
+            ),
         ));
     }
     // Post spacing from the first line: posts at 0, k, 2k, ...
@@ -253,7 +256,7 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
                     return Err(err(
                         ln,
                         j * k,
-                        format!("expected a post '{post}', found '{}'", ch(j * k)),
+                        format!("expected a post '{post}', found '{}'", quote(ch(j * k))),
                     ));
                 }
                 if j == cols {
@@ -265,7 +268,7 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
                 } else if let Some(o) = span.iter().position(|&c| c != ' ') {
                     // Point at a stray character, or else where dashes and blanks first mix.
                     let (o, what) = match span.iter().position(|&c| c != ' ' && c != '-') {
-                        Some(x) => (x, format!("unexpected '{}'", span[x])),
+                        Some(x) => (x, format!("unexpected '{}'", quote(span[x]))),
                         None => (
                             span.iter().position(|&c| c != span[0]).unwrap_or(o),
                             "broken wall".to_string(),
@@ -285,7 +288,7 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
                         return Err(err(
                             ln,
                             j * k,
-                            format!("expected '|' or blank for a wall, found '{c}'"),
+                            format!("expected '|' or blank for a wall, found '{}'", quote(c)),
                         ))
                     }
                 }
@@ -306,8 +309,9 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
                                 ln,
                                 c,
                                 format!(
-                                "unexpected '{x}' in a cell (only S and G marks are understood)"
-                            ),
+                                    "unexpected '{}' in a cell (only S and G marks are understood)",
+                                    quote(x)
+                                ),
                             ))
                         }
                     }
@@ -316,6 +320,11 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
         }
     }
     Ok(maze)
+}
+
+/// A character of the file for a message (a control character escaped).
+fn quote(c: char) -> String {
+    excerpt(c.encode_utf8(&mut [0; 4]))
 }
 
 /// Builds the arena for a maze at the given pitch.

@@ -159,6 +159,22 @@ pub(crate) fn header(path: &Path, bytes: &[u8]) -> Result<Header, ArenaError> {
     })
 }
 
+impl Header {
+    /// False when `len` bytes cannot hold this image's pixels (P5: one or two bytes each; P2:
+    /// a digit and a separator each), so that a lying header is refused before the caller
+    /// allocates its grid.
+    pub fn fits(&self, len: usize) -> bool {
+        let count = self.width as usize * self.height as usize;
+        let each = match (self.plain, self.maxval > 255) {
+            (true, _) => 2,
+            (false, true) => 2,
+            (false, false) => 1,
+        };
+        let data = len.saturating_sub(self.end + 1);
+        data + usize::from(self.plain) >= count * each
+    }
+}
+
 /// Decodes a P5 or P2 PGM, giving `sink` each pixel's index (row-major, top row first) and
 /// value.
 pub(crate) fn decode(
@@ -293,6 +309,28 @@ mod tests {
     fn the_header_alone_gives_the_size() {
         let h = header(Path::new("a.pgm"), b"P5 8192 8192 255\n").unwrap();
         assert_eq!((h.width, h.height, h.maxval), (8192, 8192, 255));
+        assert!(!h.fits(17));
+    }
+
+    #[test]
+    fn fits_is_exact_for_the_smallest_images() {
+        for (bytes, ok) in [
+            (&b"P5 2 1 255\n\x00\x01"[..], true),
+            (b"P5 2 1 255\n\x00", false),
+            (b"P5 1 1 1000\n\x00\x01", true),
+            (b"P5 1 1 1000\n\x00", false),
+            (b"P2 2 1 255\n0 1", true),
+            (b"P2 2 1 255\n0 ", false),
+        ] {
+            let h = header(Path::new("a.pgm"), bytes).unwrap();
+            assert_eq!(
+                h.fits(bytes.len()),
+                ok,
+                "{:?}",
+                String::from_utf8_lossy(bytes)
+            );
+            assert_eq!(pixels(bytes).is_ok(), ok);
+        }
     }
 
     #[test]

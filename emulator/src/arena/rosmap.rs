@@ -156,6 +156,10 @@ pub fn raster_from_pgm(
 ) -> Result<(RasterMap, Option<usize>), ArenaError> {
     let hdr = pgm::header(&meta.image, bytes)?;
     check_limit(meta, hdr.width, hdr.height, limit)?;
+    if !hdr.fits(bytes.len()) {
+        // Too short for its header's size: decoding without storing finds the fault.
+        pgm::decode(&meta.image, bytes, |_, _| {})?;
+    }
     let (w, h) = (hdr.width as usize, hdr.height as usize);
     // Each pixel value classified once (at most 65,536 of them).
     let table: Vec<Cell> = (0..=hdr.maxval)
