@@ -107,7 +107,14 @@ pub fn parse_with(path: &Path, text: &str, limit: Option<GridLimit>) -> Result<A
     // below reports whatever is wrong with it.
     let head = read_head(&meta.image, HEADER_BYTES)?;
     if let Ok(h) = pgm::header(&meta.image, &head) {
-        check_limit(&meta, h.width, h.height, limit)?;
+        // The message names the YAML too: it is the file the user gave.
+        check_limit(&meta, h.width, h.height, limit).map_err(|e| match e {
+            ArenaError::Invalid { at, message } => ArenaError::Invalid {
+                at,
+                message: format!("{message} (the image of {})", path.display()),
+            },
+            e => e,
+        })?;
     }
     let bytes = read_bytes(&meta.image)?;
     let (raster, trailing) = raster_from_pgm(&meta, &bytes, limit)?;
