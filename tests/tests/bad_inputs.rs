@@ -125,9 +125,27 @@ fn run(bin: &Path, args: &[String], cwd: &Path) -> std::process::Output {
     child.wait_with_output().unwrap()
 }
 
+/// The large hostile files `generate.py big` writes (not committed): generated once into
+/// `dir`/generated, copied into the work folder of the cases that name them.
+fn generate_big(dir: &Path) -> PathBuf {
+    let _ = std::fs::remove_dir_all(dir);
+    std::fs::create_dir_all(dir).unwrap();
+    let status = Command::new("python3")
+        .arg(corpus().join("generate.py"))
+        .arg("big")
+        .arg(dir)
+        .status()
+        .expect("python3 runs tests/corpus/bad/generate.py (the large generated cases)");
+    assert!(status.success(), "generate.py big failed");
+    dir.join("generated")
+}
+
 #[test]
 fn every_malformed_input_is_refused_clearly_without_panic_or_leftovers() {
     let cases = manifest();
+    let big = generate_big(
+        &std::env::temp_dir().join(format!("e2e-bad-inputs-big-{}", std::process::id())),
+    );
     let files = listing(&corpus())
         .into_iter()
         .filter(|(p, _)| p.components().count() == 2)
@@ -139,6 +157,9 @@ fn every_malformed_input_is_refused_clearly_without_panic_or_leftovers() {
     for c in &cases {
         let _ = std::fs::remove_dir_all(&work);
         copy_dir(&corpus(), &work);
+        if c.args.iter().any(|a| a.starts_with("generated/")) {
+            copy_dir(&big, &work.join("generated"));
+        }
         let before = listing(&work);
         let out = run(&workspace_bin(&c.binary), &c.args, &work);
         let text = format!(
@@ -200,6 +221,7 @@ fn every_malformed_input_is_refused_clearly_without_panic_or_leftovers() {
             failures.push(format!("{dev} is no longer a character device"));
         }
     }
+    let _ = std::fs::remove_dir_all(big.parent().unwrap());
     println!("{} cases over {files} files", cases.len());
     assert!(
         failures.is_empty(),

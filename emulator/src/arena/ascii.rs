@@ -31,7 +31,7 @@
 
 use std::path::Path;
 
-use super::error::{did_you_mean, parse_finite, to_u32, ArenaError};
+use super::error::{did_you_mean, excerpt, parse_finite, to_u32, ArenaError};
 use super::raster::{obstacle_walls, RasterMap};
 use super::{Arena, ArenaFormat, Cell, LoadOptions, Pose, MAX_GRID_SIDE};
 use crate::geometry::{Aabb, Point};
@@ -75,7 +75,11 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<Arena, Arena
                     KEYS.join(", ")
                 ),
             };
-            return Err(err(i, key_col, format!("unknown header key '{key}'{hint}")));
+            return Err(err(
+                i,
+                key_col,
+                format!("unknown header key '{}'{hint}", excerpt(key)),
+            ));
         }
         if key != "note" && seen.contains(&key) {
             return Err(err(i, key_col, format!("header key '{key}' given twice")));
@@ -218,12 +222,17 @@ fn parse_header_value(
         if parts.len() != n {
             return Err((
                 col,
-                format!("'{key}' takes {n} number(s), found {:?}", value),
+                format!("'{key}' takes {n} number(s), found '{}'", excerpt(value)),
             ));
         }
         parts
             .iter()
-            .map(|p| parse_finite(p).ok_or((col, format!("'{key}': {p:?} is not a finite number"))))
+            .map(|p| {
+                parse_finite(p).ok_or((
+                    col,
+                    format!("'{key}': '{}' is not a finite number", excerpt(p)),
+                ))
+            })
             .collect()
     };
     match key {

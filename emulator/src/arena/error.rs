@@ -103,10 +103,15 @@ impl ArenaError {
             path: path.to_path_buf(),
             position,
         };
-        ArenaError::Invalid {
-            at,
-            message: message.into(),
-        }
+        // The last line of defence for item 12 of issue 13: a message that quotes file content
+        // without `excerpt` still cannot flood a terminal.
+        let message = message.into();
+        let message = if message.len() > MAX_MESSAGE_BYTES {
+            excerpt_n(&message, MAX_MESSAGE_BYTES)
+        } else {
+            message
+        };
+        ArenaError::Invalid { at, message }
     }
 
     pub(crate) fn at_line(
@@ -148,6 +153,41 @@ impl<'a> Text<'a> {
     }
 }
 
+/// How much of a file's text an error message quotes: enough to recognise a name or value.
+pub const EXCERPT_CHARS: usize = 48;
+
+/// Longest error message (the file's location aside); longer ones are cut, see [`excerpt`].
+const MAX_MESSAGE_BYTES: usize = 1024;
+
+/// File text quoted in a message: at most [`EXCERPT_CHARS`] characters, control characters
+/// escaped (they must not reach a terminal raw), and the length of what was left out, so that
+/// a two-million-element value or a 100 KB key reads as a short line. Every importer quotes
+/// file content through this.
+pub(crate) fn excerpt(s: &str) -> String {
+    excerpt_n(s, EXCERPT_CHARS)
+}
+
+/// [`excerpt`] with a longer limit, for a library's message that may quote the file.
+pub(crate) fn excerpt_n(s: &str, max_chars: usize) -> String {
+    let mut out = String::new();
+    let mut end = s.len();
+    for (n, (i, c)) in s.char_indices().enumerate() {
+        if n == max_chars {
+            end = i;
+            break;
+        }
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    if end < s.len() {
+        out.push_str(&format!("… ({} more bytes)", s.len() - end));
+    }
+    out
+}
+
 pub(crate) fn to_u32(n: usize) -> u32 {
     u32::try_from(n).unwrap_or(u32::MAX)
 }
@@ -168,6 +208,22 @@ pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>, ArenaError> {
         ));
     }
     std::fs::read(path).map_err(|e| ArenaError::io(path, e))
+}
+
+/// Reads at most the first `max` bytes of a regular file (a header, before deciding to read
+/// the rest).
+pub(crate) fn read_head(path: &Path, max: u64) -> Result<Vec<u8>, ArenaError> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| ArenaError::io(path, e))?;
+    let meta = file.metadata().map_err(|e| ArenaError::io(path, e))?;
+    if !meta.is_file() {
+        return Err(ArenaError::at_file(path, "not a regular file"));
+    }
+    let mut out = Vec::new();
+    file.take(max)
+        .read_to_end(&mut out)
+        .map_err(|e| ArenaError::io(path, e))?;
+    Ok(out)
 }
 
 /// Reads a whole UTF-8 text file; invalid UTF-8 is reported at its line and column.
@@ -198,8 +254,11 @@ pub(crate) fn parse_finite(s: &str) -> Option<f64> {
 /// The known name a misspelt one most likely meant (edit distance <= 2, ignoring case).
 pub(crate) fn did_you_mean<'k>(word: &str, known: &[&'k str]) -> Option<&'k str> {
     let w = word.to_ascii_lowercase();
+    let chars = w.chars().count();
     known
         .iter()
+        // Lengths more than 2 apart are more than 2 edits apart: a huge name costs nothing.
+        .filter(|k| k.chars().count().abs_diff(chars) <= 2)
         .map(|k| (edit_distance(&w, &k.to_ascii_lowercase()), *k))
         .filter(|(d, _)| *d <= 2)
         .min_by_key(|(d, _)| *d)
@@ -212,9 +271,13 @@ pub(crate) fn did_you_mean<'k>(word: &str, known: &[&'k str]) -> Option<&'k str>
 /// (`Ok(message)`), as the original tools ignore unknown names too.
 pub(crate) fn unknown_name(what: &str, name: &str, known: &[&str]) -> Result<String, String> {
     match did_you_mean(name, known) {
-        Some(k) => Err(format!("unknown {what} '{name}'; did you mean '{k}'?")),
+        Some(k) => Err(format!(
+            "unknown {what} '{}'; did you mean '{k}'?",
+            excerpt(name)
+        )),
         None => Ok(format!(
-            "unknown {what} '{name}' ignored (known: {})",
+            "unknown {what} '{}' ignored (known: {})",
+            excerpt(name),
             known.join(", ")
         )),
     }
@@ -275,6 +338,27 @@ mod tests {
         assert_eq!(t.line_col(3), (2, 1));
         assert_eq!(t.line_col(7), (2, 4));
         assert_eq!(t.line_col(999), (3, 2));
+    }
+
+    #[test]
+    fn excerpts_are_short_and_escape_control_characters() {
+        assert_eq!(excerpt("origin"), "origin");
+        assert_eq!(excerpt("a\x1b]0;x\x07"), "a\\u{1b}]0;x\\u{7}");
+        let long = "0, ".repeat(2_000_000);
+        let e = excerpt(&long);
+        assert!(e.len() < 100, "{e}");
+        assert!(e.ends_with("… (5999952 more bytes)"), "{e}");
+        // Cut on a character boundary.
+        assert!(excerpt(&"é".repeat(100)).starts_with(&"é".repeat(EXCERPT_CHARS)));
+    }
+
+    #[test]
+    fn messages_are_capped_whatever_they_quote() {
+        let e = ArenaError::at_line(Path::new("m.yaml"), 1, None, "x".repeat(1 << 20));
+        assert!(e.to_string().len() < 1200);
+        let name = "k".repeat(100_000);
+        let w = unknown_name("key", &name, &["image"]).unwrap();
+        assert!(w.len() < 200, "{w}");
     }
 
     #[test]

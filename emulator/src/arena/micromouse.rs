@@ -28,8 +28,8 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
-use super::error::{to_u32, ArenaError};
-use super::{Arena, ArenaFormat, LoadOptions, Pose, Wall, MAX_GRID_SIDE};
+use super::error::{excerpt, to_u32, ArenaError};
+use super::{Arena, ArenaFormat, GridLimit, LoadOptions, Pose, Wall, MAX_GRID_SIDE};
 use crate::geometry::{Aabb, Point};
 
 /// A maze's wall layout, independent of its physical size. Row 0 is the south row.
@@ -124,7 +124,31 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<Arena, Arena
             ),
         });
     }
+    if let Some(l) = opts.grid_limit {
+        check_limit(path, &maze, pitch, l)?;
+    }
     Ok(to_arena(&maze, path, pitch, opts))
+}
+
+/// Refuses a maze the caller's grid cannot hold, before its walls are built: at
+/// `cols * pitch / cell` cells a side it is refused whatever margin the caller adds.
+fn check_limit(path: &Path, maze: &Maze, pitch: f64, l: GridLimit) -> Result<(), ArenaError> {
+    let cell = l.maze_cell_m.unwrap_or(pitch / 2.0);
+    let side = |n: u32| f64::from(n) * pitch / cell - 1e-9;
+    let max = f64::from(l.max_side);
+    if side(maze.cols) <= max && side(maze.rows) <= max {
+        return Ok(());
+    }
+    let coarser = (f64::from(maze.cols.max(maze.rows)) * pitch / max * 1000.0).ceil() / 1000.0;
+    Err(ArenaError::at_file(
+        path,
+        format!(
+            "a {} x {} maze at {pitch} m pitch needs more than {max} cells of {cell} m a side, \
+             beyond what {} takes (refused before building its walls); cells of at least \
+             {coarser} m would fit",
+            maze.cols, maze.rows, l.who
+        ),
+    ))
 }
 
 /// Reads the maze layout from the text.
@@ -132,9 +156,11 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
     let err = |line: usize, col: usize, msg: String| {
         ArenaError::at_line(path, to_u32(line + 1), Some(to_u32(col + 1)), msg)
     };
-    let all: Vec<Vec<char>> = text
+    // Lines stay slices of the text; each is split into characters only while it is read
+    // (a character array of the whole file took 4 bytes a character).
+    let all: Vec<&str> = text
         .split('\n')
-        .map(|l| l.trim_end_matches(['\r', ' ']).chars().collect())
+        .map(|l| l.trim_end_matches(['\r', ' ']))
         .collect();
     let first = all
         .iter()
@@ -143,7 +169,7 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
     let last = all.iter().rposition(|l| !l.is_empty()).unwrap_or(first);
     let lines = &all[first..=last];
     for (i, l) in lines.iter().enumerate() {
-        if let Some(c) = l.iter().position(|&c| c == '\t') {
+        if let Some(c) = l.chars().position(|c| c == '\t') {
             return Err(err(
                 first + i,
                 c,
@@ -151,16 +177,20 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
             ));
         }
     }
-    let post = lines[0][0];
+    let first_line: Vec<char> = lines[0].chars().collect();
+    let post = first_line[0];
     if post != 'o' && post != '+' {
         return Err(err(
             first,
             0,
-            format!("expected a row of posts ('o' or '+'), found '{post}'"),
+            format!(
+                "expected a row of posts ('o' or '+'), found '{}'",
+                quote(post)
+            ),
         ));
     }
     // Post spacing from the first line: posts at 0, k, 2k, ...
-    let posts: Vec<usize> = lines[0]
+    let posts: Vec<usize> = first_line
         .iter()
         .enumerate()
         .filter(|(_, &c)| c == post)
@@ -208,8 +238,9 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
         goals: Vec::new(),
     };
     let width = cols * k + 1;
-    for (i, line) in lines.iter().enumerate() {
+    for (i, text_line) in lines.iter().enumerate() {
         let ln = first + i;
+        let line: Vec<char> = text_line.chars().collect();
         if line.len() > width {
             return Err(err(
                 ln,
@@ -225,7 +256,7 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
                     return Err(err(
                         ln,
                         j * k,
-                        format!("expected a post '{post}', found '{}'", ch(j * k)),
+                        format!("expected a post '{post}', found '{}'", quote(ch(j * k))),
                     ));
                 }
                 if j == cols {
@@ -237,7 +268,7 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
                 } else if let Some(o) = span.iter().position(|&c| c != ' ') {
                     // Point at a stray character, or else where dashes and blanks first mix.
                     let (o, what) = match span.iter().position(|&c| c != ' ' && c != '-') {
-                        Some(x) => (x, format!("unexpected '{}'", span[x])),
+                        Some(x) => (x, format!("unexpected '{}'", quote(span[x]))),
                         None => (
                             span.iter().position(|&c| c != span[0]).unwrap_or(o),
                             "broken wall".to_string(),
@@ -257,7 +288,7 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
                         return Err(err(
                             ln,
                             j * k,
-                            format!("expected '|' or blank for a wall, found '{c}'"),
+                            format!("expected '|' or blank for a wall, found '{}'", quote(c)),
                         ))
                     }
                 }
@@ -268,16 +299,19 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
                 for c in j * k + 1..(j + 1) * k {
                     match ch(c) {
                         ' ' => {}
-                        'S' if !maze.starts.contains(&cell) => maze.starts.push(cell),
-                        'G' if !maze.goals.contains(&cell) => maze.goals.push(cell),
+                        // A cell's marks are read together, so a repeat is the last one
+                        // pushed (searching the whole list was quadratic in marked cells).
+                        'S' if maze.starts.last() != Some(&cell) => maze.starts.push(cell),
+                        'G' if maze.goals.last() != Some(&cell) => maze.goals.push(cell),
                         'S' | 'G' => {}
                         x => {
                             return Err(err(
                                 ln,
                                 c,
                                 format!(
-                                "unexpected '{x}' in a cell (only S and G marks are understood)"
-                            ),
+                                    "unexpected '{}' in a cell (only S and G marks are understood)",
+                                    quote(x)
+                                ),
                             ))
                         }
                     }
@@ -286,6 +320,11 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
         }
     }
     Ok(maze)
+}
+
+/// A character of the file for a message (a control character escaped).
+fn quote(c: char) -> String {
+    excerpt(c.encode_utf8(&mut [0; 4]))
 }
 
 /// Builds the arena for a maze at the given pitch.

@@ -38,7 +38,7 @@ pub mod rosmap;
 
 use std::path::{Path, PathBuf};
 
-pub use error::{ArenaError, Location, Position, MAX_FILE_BYTES};
+pub use error::{ArenaError, Location, Position, EXCERPT_CHARS, MAX_FILE_BYTES};
 pub use raster::{rasterise, RasterError, RasterMap};
 pub use robot_firmware::nav::grid::Cell;
 
@@ -253,6 +253,23 @@ pub struct LoadOptions {
     pub maze_wall_height_m: f64,
     /// ASCII grid cell size when the file has no `# cell` header (default 0.3 m, seed 004 §5).
     pub ascii_cell_m: f64,
+    /// The grid the caller will build from the arena, if it has a limit (default none): a
+    /// raster map beyond it is refused from its image header, before the pixels are read.
+    pub grid_limit: Option<GridLimit>,
+}
+
+/// A caller's limit on the grid it builds from an arena: it rasterises at `cell_m` (mazes at
+/// `maze_cell_m`) and takes at most `max_side` cells a side (the station's planner: 2048).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridLimit {
+    /// Cell side the caller rasterises raster maps at, metres.
+    pub cell_m: f64,
+    /// Cell side for mazes; `None`: half the maze's pitch.
+    pub maze_cell_m: Option<f64>,
+    /// Most cells a side it takes.
+    pub max_side: u32,
+    /// Who sets the limit, for the message ("the station's planner").
+    pub who: &'static str,
 }
 
 impl Default for LoadOptions {
@@ -264,6 +281,7 @@ impl Default for LoadOptions {
             maze_wall_m: 0.012,
             maze_wall_height_m: 0.05,
             ascii_cell_m: 0.3,
+            grid_limit: None,
         }
     }
 }
@@ -285,6 +303,12 @@ impl LoadOptions {
         positive("maze_wall_m", self.maze_wall_m)?;
         positive("maze_wall_height_m", self.maze_wall_height_m)?;
         positive("ascii_cell_m", self.ascii_cell_m)?;
+        if let Some(l) = self.grid_limit {
+            positive("grid_limit.cell_m", l.cell_m)?;
+            if let Some(c) = l.maze_cell_m {
+                positive("grid_limit.maze_cell_m", c)?;
+            }
+        }
         if let Some(p) = self.maze_pitch_m {
             positive("maze_pitch_m", p)?;
             if self.maze_wall_m >= p {
@@ -310,7 +334,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Arena, ArenaError> {
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("xml") => ciberrato::load(path, opts),
-        Some("yaml" | "yml") => rosmap::load(path),
+        Some("yaml" | "yml") => rosmap::load_with(path, opts.grid_limit),
         Some("pgm") => Err(pgm_without_yaml(path)),
         _ => {
             let bytes = error::read_bytes(path)?;
@@ -332,7 +356,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Arena, ArenaError> {
                 micromouse::parse(path, &text, opts)
             } else if ext.as_deref() != Some("txt") && text.lines().any(|l| l.starts_with("image:"))
             {
-                rosmap::parse(path, &text)
+                rosmap::parse_with(path, &text, opts.grid_limit)
             } else {
                 ascii::parse(path, &text, opts)
             }

@@ -1,8 +1,10 @@
 //! Netpbm greyscale images: binary P5 and plain (ASCII) P2, 8- or 16-bit, for ROS maps.
 //!
 //! Layer: a decoder under [`super::rosmap`]; bytes in, pixels out, no I/O.
-//! Invariant of a decoded [`Pgm`]: `pixels.len() == width * height`, every pixel <= `maxval`,
-//! rows top to bottom as in the file.
+//! [`header`] reads only the magic and the three numbers, so a caller can refuse a size from
+//! the first bytes of the file; [`decode`] hands each pixel to a sink (row-major, top row
+//! first, each <= `maxval`) instead of building a pixel array: the caller stores what it needs
+//! (a cell byte), so memory stays at the file plus one byte a pixel.
 //! What can fail: a wrong magic (PNG, PBM, PPM are named as such), header numbers missing,
 //! zero, or past [`MAX_GRID_SIDE`], maxval outside 1..=65535, truncated pixel data, a pixel above
 //! maxval. P5 errors give the byte offset; P2 errors give line:column.
@@ -12,14 +14,22 @@ use std::path::Path;
 use super::error::{to_u32, ArenaError, Position};
 use super::MAX_GRID_SIDE;
 
-/// A decoded greyscale image.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub(crate) struct Pgm {
+/// A PGM's header.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Header {
     pub width: u32,
     pub height: u32,
     pub maxval: u16,
-    /// Row-major, top row first.
-    pub pixels: Vec<u16>,
+    /// Plain (P2, text) rather than binary (P5) pixels.
+    plain: bool,
+    /// Offset just past maxval.
+    end: usize,
+}
+
+/// What [`decode`] found besides the pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Decoded {
+    pub header: Header,
     /// Offset of non-whitespace data after the image, if any (map_server ignores it).
     pub trailing: Option<usize>,
 }
@@ -104,8 +114,8 @@ impl Reader<'_> {
     }
 }
 
-/// Decodes a P5 or P2 PGM.
-pub(crate) fn decode(path: &Path, bytes: &[u8]) -> Result<Pgm, ArenaError> {
+/// Reads a P5 or P2 PGM's header (magic, width, height, maxval) and checks its numbers.
+pub(crate) fn header(path: &Path, bytes: &[u8]) -> Result<Header, ArenaError> {
     let magic = bytes.get(..2).unwrap_or(bytes);
     let plain = match magic {
         b"P5" => false,
@@ -140,28 +150,60 @@ pub(crate) fn decode(path: &Path, bytes: &[u8]) -> Result<Pgm, ArenaError> {
     if maxval == 0 || maxval > 65535 {
         return Err(r.err(m_at, format!("maxval {maxval} must be 1..=65535")));
     }
-    let maxval = u16::try_from(maxval).unwrap_or(u16::MAX);
-    let (width, height) = (to_u32(w as usize), to_u32(h as usize));
-    let count = (w * h) as usize;
-    let (pixels, trailing) = if plain {
-        plain_pixels(&mut r, count, maxval)?
-    } else {
-        binary_pixels(&r, count, maxval)?
-    };
-    Ok(Pgm {
-        width,
-        height,
-        maxval,
-        pixels,
-        trailing,
+    Ok(Header {
+        width: to_u32(w as usize),
+        height: to_u32(h as usize),
+        maxval: u16::try_from(maxval).unwrap_or(u16::MAX),
+        plain,
+        end: r.at,
     })
+}
+
+impl Header {
+    /// False when `len` bytes cannot hold this image's pixels (P5: one or two bytes each; P2:
+    /// a digit and a separator each), so that a lying header is refused before the caller
+    /// allocates its grid.
+    pub fn fits(&self, len: usize) -> bool {
+        let count = self.width as usize * self.height as usize;
+        let each = match (self.plain, self.maxval > 255) {
+            (true, _) => 2,
+            (false, true) => 2,
+            (false, false) => 1,
+        };
+        let data = len.saturating_sub(self.end + 1);
+        data + usize::from(self.plain) >= count * each
+    }
+}
+
+/// Decodes a P5 or P2 PGM, giving `sink` each pixel's index (row-major, top row first) and
+/// value.
+pub(crate) fn decode(
+    path: &Path,
+    bytes: &[u8],
+    sink: impl FnMut(usize, u16),
+) -> Result<Decoded, ArenaError> {
+    let header = header(path, bytes)?;
+    let mut r = Reader {
+        path,
+        bytes,
+        at: header.end,
+        plain: header.plain,
+    };
+    let count = header.width as usize * header.height as usize;
+    let trailing = if header.plain {
+        plain_pixels(&mut r, count, header.maxval, sink)?
+    } else {
+        binary_pixels(&r, count, header.maxval, sink)?
+    };
+    Ok(Decoded { header, trailing })
 }
 
 fn binary_pixels(
     r: &Reader<'_>,
     count: usize,
     maxval: u16,
-) -> Result<(Vec<u16>, Option<usize>), ArenaError> {
+    mut sink: impl FnMut(usize, u16),
+) -> Result<Option<usize>, ArenaError> {
     // Exactly one whitespace byte separates maxval from the data (the data may begin with
     // bytes that look like whitespace, so no more are skipped).
     match r.bytes.get(r.at) {
@@ -184,35 +226,35 @@ fn binary_pixels(
         ));
     }
     let data = &r.bytes[start..start + need];
-    let pixels: Vec<u16> = if wide {
-        data.chunks_exact(2)
-            .map(|c| u16::from_be_bytes([c[0], c[1]]))
-            .collect()
-    } else {
-        data.iter().map(|&b| u16::from(b)).collect()
-    };
-    if let Some(i) = pixels.iter().position(|&p| p > maxval) {
-        let at = start + i * if wide { 2 } else { 1 };
-        return Err(r.err(
-            at,
-            format!("pixel value {} exceeds maxval {maxval}", pixels[i]),
-        ));
+    let size = if wide { 2 } else { 1 };
+    for (i, c) in data.chunks_exact(size).enumerate() {
+        let p = match *c {
+            [hi, lo] => u16::from_be_bytes([hi, lo]),
+            [b] => u16::from(b),
+            _ => 0,
+        };
+        if p > maxval {
+            return Err(r.err(
+                start + i * size,
+                format!("pixel value {p} exceeds maxval {maxval}"),
+            ));
+        }
+        sink(i, p);
     }
     let rest = start + need;
     let trailing = r.bytes[rest..]
         .iter()
         .position(|b| !b.is_ascii_whitespace())
         .map(|i| rest + i);
-    Ok((pixels, trailing))
+    Ok(trailing)
 }
 
 fn plain_pixels(
     r: &mut Reader<'_>,
     count: usize,
     maxval: u16,
-) -> Result<(Vec<u16>, Option<usize>), ArenaError> {
-    // Each value takes at least two bytes ("0 "), so a lying header cannot make us reserve more.
-    let mut pixels = Vec::with_capacity(count.min(r.bytes.len() / 2 + 1));
+    mut sink: impl FnMut(usize, u16),
+) -> Result<Option<usize>, ArenaError> {
     for i in 0..count {
         r.skip_space();
         if r.at >= r.bytes.len() {
@@ -225,44 +267,75 @@ fn plain_pixels(
         if v > u64::from(maxval) {
             return Err(r.err(at, format!("pixel value {v} exceeds maxval {maxval}")));
         }
-        pixels.push(u16::try_from(v).unwrap_or(maxval));
+        sink(i, u16::try_from(v).unwrap_or(maxval));
     }
     r.skip_space();
     let trailing = (r.at < r.bytes.len()).then_some(r.at);
-    Ok((pixels, trailing))
+    Ok(trailing)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn pixels(bytes: &[u8]) -> Result<(Header, Vec<u16>), ArenaError> {
+        let mut out = Vec::new();
+        let d = decode(Path::new("a.pgm"), bytes, |i, p| {
+            assert_eq!(i, out.len());
+            out.push(p);
+        })?;
+        Ok((d.header, out))
+    }
+
     #[test]
     fn binary_and_plain_decode_the_same_image() {
-        let p5 = decode(
-            Path::new("a.pgm"),
-            b"P5\n# c\n3 2\n255\n\x00\x7f\xff\x01\x02\x03",
-        )
-        .unwrap();
-        let p2 = decode(
-            Path::new("a.pgm"),
-            b"P2 3 2 255\n0 127 255\n1 2 # note\n3\n",
-        )
-        .unwrap();
-        assert_eq!(p5.pixels, vec![0, 127, 255, 1, 2, 3]);
+        let (h5, p5) = pixels(b"P5\n# c\n3 2\n255\n\x00\x7f\xff\x01\x02\x03").unwrap();
+        let (h2, p2) = pixels(b"P2 3 2 255\n0 127 255\n1 2 # note\n3\n").unwrap();
+        assert_eq!(p5, vec![0, 127, 255, 1, 2, 3]);
         assert_eq!(p5, p2);
+        assert_eq!(
+            (h5.width, h5.height, h5.maxval),
+            (h2.width, h2.height, h2.maxval)
+        );
     }
 
     #[test]
     fn sixteen_bit_pixels_are_big_endian() {
-        let p = decode(Path::new("a.pgm"), b"P5 2 1 1000 \x03\xe8\x00\x01").unwrap();
-        assert_eq!(p.pixels, vec![1000, 1]);
+        let (_, p) = pixels(b"P5 2 1 1000 \x03\xe8\x00\x01").unwrap();
+        assert_eq!(p, vec![1000, 1]);
+    }
+
+    #[test]
+    fn the_header_alone_gives_the_size() {
+        let h = header(Path::new("a.pgm"), b"P5 8192 8192 255\n").unwrap();
+        assert_eq!((h.width, h.height, h.maxval), (8192, 8192, 255));
+        assert!(!h.fits(17));
+    }
+
+    #[test]
+    fn fits_is_exact_for_the_smallest_images() {
+        for (bytes, ok) in [
+            (&b"P5 2 1 255\n\x00\x01"[..], true),
+            (b"P5 2 1 255\n\x00", false),
+            (b"P5 1 1 1000\n\x00\x01", true),
+            (b"P5 1 1 1000\n\x00", false),
+            (b"P2 2 1 255\n0 1", true),
+            (b"P2 2 1 255\n0 ", false),
+        ] {
+            let h = header(Path::new("a.pgm"), bytes).unwrap();
+            assert_eq!(
+                h.fits(bytes.len()),
+                ok,
+                "{:?}",
+                String::from_utf8_lossy(bytes)
+            );
+            assert_eq!(pixels(bytes).is_ok(), ok);
+        }
     }
 
     #[test]
     fn truncated_binary_data_reports_the_end_offset() {
-        let e = decode(Path::new("a.pgm"), b"P5 4 4 255\n\x00\x00")
-            .unwrap_err()
-            .to_string();
+        let e = pixels(b"P5 4 4 255\n\x00\x00").unwrap_err().to_string();
         assert!(e.starts_with("a.pgm: byte 13: truncated"), "{e}");
     }
 }

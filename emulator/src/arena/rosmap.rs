@@ -17,13 +17,16 @@
 //! (`resoluton`), an image file that does not exist or is not a PGM, and every PGM defect.
 //! A non-zero origin yaw is ignored with a warning, as map_server does.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use serde_yaml_ng::Value;
 
-use super::error::{read_bytes, read_text, to_u32, unknown_name, ArenaError, Text};
+use super::error::{
+    excerpt, excerpt_n, read_bytes, read_head, read_text, to_u32, unknown_name, ArenaError, Text,
+};
 use super::raster::{obstacle_walls, RasterMap};
-use super::{pgm, Arena, ArenaFormat, Cell};
+use super::{pgm, Arena, ArenaFormat, Cell, GridLimit};
 use crate::geometry::{Aabb, Point};
 
 /// How pixel values map to occupancy (map_server's `mode`).
@@ -57,6 +60,18 @@ pub struct MapMeta {
     pub mode: MapMode,
 }
 
+/// Deepest nesting of YAML collections accepted: a map YAML needs 1 (`origin`); the YAML
+/// parser's cost grows with depth times length (100,000 nested `[` took minutes), so deeper
+/// files are refused before they reach it.
+pub const MAX_YAML_DEPTH: usize = 32;
+
+/// Largest map YAML read: map_server's are a few hundred bytes, and the YAML library holds
+/// about 70 bytes of events and values per byte of a dense list, so this bounds its memory.
+pub const MAX_YAML_BYTES: usize = 4 << 20;
+
+/// Unknown keys warned about one by one; the rest are counted in one line.
+const MAX_KEY_WARNINGS: usize = 8;
+
 const KEYS: [&str; 7] = [
     "image",
     "resolution",
@@ -69,38 +84,48 @@ const KEYS: [&str; 7] = [
 
 /// Loads a map YAML and its image.
 pub fn load(path: &Path) -> Result<Arena, ArenaError> {
+    load_with(path, None)
+}
+
+/// Loads a map YAML and its image, refusing from the image's header (before its pixels are
+/// read) a map larger than `limit`.
+pub fn load_with(path: &Path, limit: Option<GridLimit>) -> Result<Arena, ArenaError> {
     let text = read_text(path)?;
-    parse(path, &text)
+    parse_with(path, &text, limit)
 }
 
 /// Parses a map YAML's text (the image is read from disk).
 pub fn parse(path: &Path, text: &str) -> Result<Arena, ArenaError> {
+    parse_with(path, text, None)
+}
+
+/// [`parse`] with a caller's grid limit (see [`load_with`]).
+pub fn parse_with(path: &Path, text: &str, limit: Option<GridLimit>) -> Result<Arena, ArenaError> {
     let mut warnings = Vec::new();
     let meta = parse_meta(path, text, &mut warnings)?;
+    // The header from the file's first bytes; if it does not fit in them, the full decode
+    // below reports whatever is wrong with it.
+    let head = read_head(&meta.image, HEADER_BYTES)?;
+    if let Ok(h) = pgm::header(&meta.image, &head) {
+        // The message names the YAML too: it is the file the user gave.
+        check_limit(&meta, h.width, h.height, limit).map_err(|e| match e {
+            ArenaError::Invalid { at, message } => ArenaError::Invalid {
+                at,
+                message: format!("{message} (the image of {})", path.display()),
+            },
+            e => e,
+        })?;
+    }
     let bytes = read_bytes(&meta.image)?;
-    let img = pgm::decode(&meta.image, &bytes)?;
-    if let Some(at) = img.trailing {
+    let (raster, trailing) = raster_from_pgm(&meta, &bytes, limit)?;
+    drop(bytes);
+    if let Some(at) = trailing {
         warnings.push(format!(
             "{}: byte {at}: data after the image ignored",
             meta.image.display()
         ));
     }
-    let (w, h) = (img.width as usize, img.height as usize);
-    let mut cells = vec![Cell::Unknown; w * h];
-    for (i, &p) in img.pixels.iter().enumerate() {
-        // Image rows run top to bottom; raster rows bottom to top (y up).
-        let (row, col) = (h - 1 - i / w, i % w);
-        cells[row * w + col] = classify(p, img.maxval, &meta);
-    }
-    let raster = RasterMap {
-        width: img.width,
-        height: img.height,
-        cell_m: meta.resolution,
-        origin: [meta.origin[0], meta.origin[1]],
-        cells,
-        start: None,
-        goal: None,
-    };
+    let (w, h) = (raster.width as usize, raster.height as usize);
     let bounds = Aabb {
         min: Point::new(meta.origin[0], meta.origin[1]),
         max: Point::new(
@@ -127,6 +152,78 @@ pub fn parse(path: &Path, text: &str) -> Result<Arena, ArenaError> {
         unit_m: meta.resolution,
         warnings,
     })
+}
+
+/// The occupancy grid of a map's PGM (`meta.image` names it in errors), one byte a cell,
+/// refused from its header when beyond `limit`; also the offset of data after the image.
+pub fn raster_from_pgm(
+    meta: &MapMeta,
+    bytes: &[u8],
+    limit: Option<GridLimit>,
+) -> Result<(RasterMap, Option<usize>), ArenaError> {
+    let hdr = pgm::header(&meta.image, bytes)?;
+    check_limit(meta, hdr.width, hdr.height, limit)?;
+    if !hdr.fits(bytes.len()) {
+        // Too short for its header's size: decoding without storing finds the fault.
+        pgm::decode(&meta.image, bytes, |_, _| {})?;
+    }
+    let (w, h) = (hdr.width as usize, hdr.height as usize);
+    // Each pixel value classified once (at most 65,536 of them).
+    let table: Vec<Cell> = (0..=hdr.maxval)
+        .map(|p| classify(p, hdr.maxval, meta))
+        .collect();
+    let mut cells = vec![Cell::Unknown; w * h];
+    let img = pgm::decode(&meta.image, bytes, |i, p| {
+        // Image rows run top to bottom; raster rows bottom to top (y up).
+        let (row, col) = (h - 1 - i / w, i % w);
+        if let (Some(c), Some(&v)) = (cells.get_mut(row * w + col), table.get(usize::from(p))) {
+            *c = v;
+        }
+    })?;
+    let raster = RasterMap {
+        width: hdr.width,
+        height: hdr.height,
+        cell_m: meta.resolution,
+        origin: [meta.origin[0], meta.origin[1]],
+        cells,
+        start: None,
+        goal: None,
+    };
+    Ok((raster, img.trailing))
+}
+
+/// Bytes read for an image's header before the whole image: its magic and three numbers, with
+/// room for comments.
+const HEADER_BYTES: u64 = 4096;
+
+/// Refuses a `width` x `height` image that `limit` will refuse anyway, naming the sizes.
+fn check_limit(
+    meta: &MapMeta,
+    width: u32,
+    height: u32,
+    limit: Option<GridLimit>,
+) -> Result<(), ArenaError> {
+    let Some(l) = limit else { return Ok(()) };
+    let (wm, hm) = (
+        f64::from(width) * meta.resolution,
+        f64::from(height) * meta.resolution,
+    );
+    let cells = |m: f64| (m / l.cell_m - 1e-9).ceil().max(1.0);
+    let (cw, ch) = (cells(wm), cells(hm));
+    let max = f64::from(l.max_side);
+    if cw <= max && ch <= max {
+        return Ok(());
+    }
+    let coarser = (wm.max(hm) / max * 1000.0).ceil() / 1000.0;
+    Err(ArenaError::at_file(
+        &meta.image,
+        format!(
+            "a {width} x {height} image at {} m/pixel is {wm:.1} x {hm:.1} m: {cw} x {ch} cells \
+             of {} m, beyond the {max} cells a side {} takes (refused before reading the \
+             pixels); use cells of at least {coarser} m",
+            meta.resolution, l.cell_m, l.who
+        ),
+    ))
 }
 
 /// One pixel's cell, by map_server's rules (see the module doc).
@@ -165,9 +262,24 @@ pub fn parse_meta(
     warnings: &mut Vec<String>,
 ) -> Result<MapMeta, ArenaError> {
     let t = Text { path, text };
+    if text.len() > MAX_YAML_BYTES {
+        return Err(ArenaError::at_file(
+            path,
+            format!(
+                "map YAML is {} bytes; map_server YAMLs are a few hundred (limit {MAX_YAML_BYTES})",
+                text.len()
+            ),
+        ));
+    }
+    if let Some(at) = too_deep(text, MAX_YAML_DEPTH) {
+        return Err(t.err_at(
+            at,
+            format!("YAML nested deeper than {MAX_YAML_DEPTH} levels; a map YAML needs 1"),
+        ));
+    }
     let doc: Value = serde_yaml_ng::from_str(text).map_err(|e| {
         let msg = e.to_string();
-        let msg = msg.split(" at line ").next().unwrap_or(&msg).to_string();
+        let msg = excerpt_n_bytes(msg.split(" at line ").next().unwrap_or(&msg));
         match e.location() {
             Some(l) => ArenaError::at_line(
                 path,
@@ -189,26 +301,43 @@ pub fn parse_meta(
             ),
         ));
     };
+    // One pass over the text for every key's position: looking each up anew was quadratic
+    // in the number of keys (60,000 unknown keys took a minute).
+    let positions = key_positions(text);
+    let key_position = |key: &str| positions.get(key).copied().unwrap_or((1, None));
     let err = |key: &str, msg: String| {
-        let (line, col) = key_position(t, key);
+        let (line, col) = key_position(key);
         ArenaError::at_line(path, line, col, msg)
     };
+    let mut unknown = 0usize;
     for key in map.keys() {
         let Some(k) = key.as_str() else {
             return Err(ArenaError::at_line(
                 path,
                 1,
                 None,
-                format!("keys must be strings, found {key:?}"),
+                format!("keys must be strings, found {}", show(key)),
             ));
         };
         if !KEYS.contains(&k) {
-            let (line, col) = key_position(t, k);
+            let (line, col) = key_position(k);
             match unknown_name("key", k, &KEYS) {
-                Ok(w) => warnings.push(format!("{}:{line}: {w}", path.display())),
+                Ok(w) => {
+                    unknown += 1;
+                    if unknown <= MAX_KEY_WARNINGS {
+                        warnings.push(format!("{}:{line}: {w}", path.display()));
+                    }
+                }
                 Err(e) => return Err(ArenaError::at_line(path, line, col, e)),
             }
         }
+    }
+    if unknown > MAX_KEY_WARNINGS {
+        warnings.push(format!(
+            "{}: {} more unknown keys ignored",
+            path.display(),
+            unknown - MAX_KEY_WARNINGS
+        ));
     }
     let get = |key: &str| {
         map.get(key)
@@ -260,7 +389,7 @@ pub fn parse_meta(
         }
     };
     if origin[2] != 0.0 {
-        let (line, _) = key_position(t, "origin");
+        let (line, _) = key_position("origin");
         warnings.push(format!(
             "{}:{line}: origin yaw {} ignored (map_server ignores it too)",
             path.display(),
@@ -316,8 +445,9 @@ pub fn parse_meta(
         return Err(err(
             "image",
             format!(
-                "image '{image}' not found (looked for {})",
-                resolved.display()
+                "image '{}' not found (looked for {})",
+                excerpt(&image),
+                excerpt(&resolved.display().to_string())
             ),
         ));
     }
@@ -332,33 +462,115 @@ pub fn parse_meta(
     })
 }
 
-/// The line (and column) where a top-level key is written, for errors about its value; line 1
-/// when it cannot be found (flow-style YAML).
-fn key_position(t: Text<'_>, key: &str) -> (u32, Option<u32>) {
-    for (i, line) in t.text.lines().enumerate() {
+/// The line (and column) where each key is first written (`key:` at the start of a line,
+/// optionally quoted), for errors about its value; keys not found this way (flow-style YAML)
+/// are reported at line 1. One pass over the text.
+fn key_positions(text: &str) -> HashMap<&str, (u32, Option<u32>)> {
+    let mut out = HashMap::new();
+    for (i, line) in text.lines().enumerate() {
         let body = line.trim_start();
         let indent = line.len() - body.len();
         let body = body.trim_start_matches(['"', '\'']);
-        if let Some(rest) = body.strip_prefix(key) {
-            if rest
-                .trim_start_matches(['"', '\''])
-                .trim_start()
-                .starts_with(':')
-            {
-                return (to_u32(i + 1), Some(to_u32(indent + 1)));
-            }
+        let Some(colon) = body.find(':') else {
+            continue;
+        };
+        let key = body[..colon].trim_end().trim_end_matches(['"', '\'']);
+        if !key.is_empty() {
+            out.entry(key)
+                .or_insert((to_u32(i + 1), Some(to_u32(indent + 1))));
         }
     }
-    (1, None)
+    out
 }
 
+/// The byte offset where YAML collections nest deeper than `max` (flow `[`/`{`, and block
+/// sequences opened on one line, `- - - x`), if they do. A linear scan that skips quoted
+/// scalars and comments; brackets inside plain scalars (`a[1].pgm`) count too, which can only
+/// refuse a file with more than `max` of them unclosed.
+fn too_deep(text: &str, max: usize) -> Option<usize> {
+    let bytes = text.as_bytes();
+    let mut depth = 0usize;
+    let mut i = 0;
+    let mut line_start = true;
+    let mut block = 0usize;
+    let mut prev = b'\n';
+    while let Some(&b) = bytes.get(i) {
+        match b {
+            b'\n' => {
+                line_start = true;
+                block = 0;
+            }
+            b'#' if prev.is_ascii_whitespace() => {
+                while bytes.get(i).is_some_and(|&c| c != b'\n') {
+                    i += 1;
+                }
+                continue;
+            }
+            b'\'' | b'"'
+                if matches!(
+                    prev,
+                    b' ' | b'\t' | b'\n' | b'[' | b'{' | b',' | b':' | b'-'
+                ) =>
+            {
+                // A quoted scalar: skip to its closing quote ('' and \" escape one).
+                i += 1;
+                while let Some(&c) = bytes.get(i) {
+                    if b == b'"' && c == b'\\' {
+                        i += 2;
+                        continue;
+                    }
+                    if c == b {
+                        if b == b'\'' && bytes.get(i + 1) == Some(&b'\'') {
+                            i += 2;
+                            continue;
+                        }
+                        break;
+                    }
+                    i += 1;
+                }
+                line_start = false;
+            }
+            b'[' | b'{' => {
+                depth += 1;
+                line_start = false;
+            }
+            b']' | b'}' => {
+                depth = depth.saturating_sub(1);
+                line_start = false;
+            }
+            b'-' if line_start && matches!(bytes.get(i + 1), Some(b' ' | b'\t')) => block += 1,
+            b' ' | b'\t' => {}
+            _ => line_start = false,
+        }
+        if depth + block > max {
+            return Some(i);
+        }
+        prev = bytes.get(i).copied().unwrap_or(b'\n');
+        i += 1;
+    }
+    None
+}
+
+/// A YAML library message, cut and escaped like every quote of file content (it may quote a
+/// key or scalar).
+fn excerpt_n_bytes(msg: &str) -> String {
+    excerpt_n(msg, 160)
+}
+
+/// A value for an error message: its kind and size for collections (a two-million-element
+/// `origin` was once echoed whole), an excerpt for scalars.
 fn show(v: &Value) -> String {
     match v {
         Value::Null => "nothing".into(),
-        Value::String(s) => format!("'{s}'"),
-        other => serde_yaml_ng::to_string(other)
-            .map(|s| s.trim().replace('\n', " "))
-            .unwrap_or_default(),
+        Value::String(s) => format!("'{}'", excerpt(s)),
+        Value::Sequence(s) => format!("a list of {} items", s.len()),
+        Value::Mapping(m) => format!("a mapping of {} keys", m.len()),
+        Value::Tagged(t) => format!("a value tagged {}", excerpt(&t.tag.to_string())),
+        other => excerpt(
+            &serde_yaml_ng::to_string(other)
+                .map(|s| s.trim().replace('\n', " "))
+                .unwrap_or_default(),
+        ),
     }
 }
 

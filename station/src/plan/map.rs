@@ -137,7 +137,23 @@ impl NavMap {
             );
             return Ok(map);
         }
-        let arena = emulator::builtin::load(spec, &LoadOptions::default())?;
+        // A raster map too large for the grid at this cell size is refused from its image's
+        // header, before its pixels are read (an 8192 x 8192 map took 4.7 GB to refuse), and
+        // a maze before its walls are built.
+        // A maze's cell is half its pitch unless --cell says otherwise.
+        let mm = |c: f64| cell_mm(c).ok().map(|mm| f64::from(mm) / 1000.0);
+        let load = LoadOptions {
+            grid_limit: mm(opts.cell_m.unwrap_or(DEFAULT_CELL_M)).map(|cell_m| {
+                emulator::arena::GridLimit {
+                    cell_m,
+                    maze_cell_m: opts.cell_m.and_then(mm),
+                    max_side: u32::from(MAX_SIDE),
+                    who: "the station's planner",
+                }
+            }),
+            ..LoadOptions::default()
+        };
+        let arena = emulator::builtin::load(spec, &load)?;
         NavMap::from_arena(&arena, spec, opts)
     }
 

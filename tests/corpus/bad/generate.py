@@ -7,6 +7,10 @@ Run from this directory with a good recording and a good Plan object at hand:
     python3 generate.py /tmp/good.rec /tmp/good.plan
 Arena files (arenas/) are copies of emulator/tests/data/bad. MANIFEST.tsv says how each file
 is used and what the error must say; keep the two in step.
+
+The large hostile arenas (hundreds of KB each: deep nesting, tens of thousands of unknown keys,
+huge values) are not committed: `python3 generate.py big DIR` writes them into DIR/generated/,
+and tests/tests/bad_inputs.rs does that itself before running the cases that name them.
 """
 import os
 import json
@@ -148,7 +152,52 @@ def calibrations():
     write("calibrations/06-syntax.json", light_json()[:-7] + b",,]}")
 
 
+ROS_KEYS = "resolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+
+
+def big(out, scale=1):
+    """Hostile arenas whose cost grows with size: a quadratic importer takes minutes on them.
+    `scale` multiplies the element counts (benchmarks use 5: 300,000 keys)."""
+    g = os.path.join(out, "generated")
+    pgm = b"P5 4 4 255\n" + bytes([254]) * 16
+    write(os.path.join(g, "small.pgm"), pgm)
+    # 100,000 nested flow sequences (200 KB).
+    write(os.path.join(g, "yaml_nested.yaml"),
+          ("image: small.pgm\n" + ROS_KEYS + "extra: " + "[ " * (100000 * scale) + "\n").encode())
+    # 60,000 unknown top-level keys (660 KB).
+    keys = "".join("k%06d: 1\n" % i for i in range(60000 * scale))
+    write(os.path.join(g, "yaml_keys.yaml"), ("image: small.pgm\n" + ROS_KEYS + keys).encode())
+    # An origin of a million elements (3 MB): the error must quote an excerpt, not the list.
+    origin = "origin: [" + ", ".join(["0"] * 1000000) + "]\n"
+    write(os.path.join(g, "yaml_long_origin.yaml"),
+          ("image: small.pgm\nresolution: 0.05\n" + origin +
+           "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n").encode())
+    # 60,000 unknown keys, then a misspelt one: the error must come in bounded time.
+    write(os.path.join(g, "yaml_keys_misspelt.yaml"),
+          ("image: small.pgm\n" + ROS_KEYS + keys + "resolutin: 1\n").encode())
+    # A 100 KB image name (echoed whole before).
+    write(os.path.join(g, "yaml_long_image.yaml"),
+          ("image: " + "x" * 100000 + ".pgm\n" + ROS_KEYS).encode())
+    # A 128 x 128 maze: at the station's smallest cell (5 mm) more than its 2048 cells a side.
+    m = 128
+    rows = ["o" + "---o" * m]
+    for r in range(m):
+        rows.append("|" + "   |" * m)
+        rows.append("o" + "---o" * m)
+    write(os.path.join(g, "maze_128.txt"), ("\n".join(rows) + "\n").encode())
+    # An 8192 x 8192 map at 0.5 m (4 km a side): past the station's 2048-cell grid at any
+    # --cell it accepts, so it must be refused from the PGM's header, before its 64 MiB of
+    # pixels are read (the pixels are left out: a refusal must not need them).
+    write(os.path.join(g, "huge_map.pgm"), b"P5 8192 8192 255\n")
+    write(os.path.join(g, "huge_map.yaml"),
+          b"image: huge_map.pgm\nresolution: 0.5\norigin: [0, 0, 0]\nnegate: 0\n"
+          b"occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+
+
 if __name__ == "__main__":
+    if sys.argv[1:2] == ["big"]:
+        big(sys.argv[2], int(sys.argv[3]) if len(sys.argv) > 3 else 1)
+        sys.exit(0)
     good_rec = open(sys.argv[1], "rb").read()
     good_plan = open(sys.argv[2], "rb").read()
     maps()
