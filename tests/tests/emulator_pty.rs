@@ -31,6 +31,9 @@ fn handshake_then_telemetry_at_the_configured_rate_within_the_baud_rate() {
     let before = st.bytes_in;
     let mut telemetry = 0;
     let mut truth = 0;
+    // Rates over the time the loop really took: on a loaded machine eight 250 ms windows
+    // plus the sends take longer than 2 s, and more frames arrive in them.
+    let started = std::time::Instant::now();
     for _ in 0..8 {
         st.send(&Message::Heartbeat(Heartbeat { time_ms: 0 }))
             .unwrap();
@@ -42,11 +45,15 @@ fn handshake_then_telemetry_at_the_configured_rate_within_the_baud_rate() {
             }
         }
     }
-    let bytes_per_s = (st.bytes_in - before) as f64 / 2.0;
-    println!("2 s at 50 Hz: {telemetry} telemetry, {truth} truth frames, {bytes_per_s:.0} B/s");
+    let secs = started.elapsed().as_secs_f64();
+    let bytes_per_s = (st.bytes_in - before) as f64 / secs;
+    let hz = f64::from(telemetry) / secs;
+    println!(
+        "{secs:.2} s at 50 Hz: {telemetry} telemetry ({hz:.1} Hz), {truth} truth frames, {bytes_per_s:.0} B/s"
+    );
     assert!(
-        (85..=105).contains(&telemetry),
-        "{telemetry} telemetry frames in 2 s at 50 Hz"
+        (42.5..=52.5).contains(&hz),
+        "{telemetry} telemetry frames in {secs:.2} s: {hz:.1} Hz at 50 Hz"
     );
     assert!(truth >= telemetry - 2, "EmuTruth follows telemetry");
     assert!(
