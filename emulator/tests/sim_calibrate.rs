@@ -15,10 +15,13 @@
 //! Where label noise would come from: the labels are the odometry's angle turned (times the
 //! measured turn ratio) from the turn's reference. The test measures, from the emulator's
 //! truth, how far that angle is from the true angle turned at every training cycle
-//! (`label_error`): robot-firmware/tests/paper_000_som.rs ASSUMES 2 deg (1 sigma) of it to
-//! land on the paper's 1.52 deg; the emulated calibration has far less (asserted below 1 deg
-//! RMS), so the reproduction's result is the exact-label figure. The reference's own error
-//! (the light's direction from the sweeps) is not in this measure. Run with `--nocapture`.
+//! (label error): robot-firmware/tests/paper_000_som.rs ASSUMES 2 deg (1 sigma) of it to
+//! land on the paper's 1.52 deg. Measured: with nominal wheels 0.00-0.18 deg RMS per seed
+//! (asserted < 0.5); with 53.3 mm wheels 0.03-1.33 deg RMS (max 8.3 deg, a turn whose drift
+//! estimate is off; asserted RMS < 2), and the seeds with more label error have the larger
+//! bearing errors (0.03 -> 0.84 deg mean, 1.33 -> 1.53 deg): the noise comes from the
+//! robot's estimate of its turn-rate error. The reference's own error (the light's direction
+//! from the sweeps) is not in this measure. Run with `--nocapture`.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::f64::consts::PI;
@@ -162,7 +165,7 @@ fn sweep(sim: &mut Sim, gap: f64) -> (f64, f64) {
     (mean, errors.iter().copied().fold(0.0, f64::max))
 }
 
-fn experiment(label: &str, wheel: Option<f64>) -> (f64, f64, f64) {
+fn experiment(label: &str, wheel: Option<f64>) -> (f64, f64, f64, f64) {
     println!("\nonline calibration, {label}");
     println!("seed | sim s | drift deg/turn | label err rms  max | 1 cm mean   max | 4 cm mean");
     let mut acc = (0.0, 0.0, 0.0);
@@ -183,14 +186,13 @@ fn experiment(label: &str, wheel: Option<f64>) -> (f64, f64, f64) {
         "average: mean {:.2} deg (paper 1.52), max {:.2} deg (paper 6.52), 4 cm mean {:.2}",
         out.0, out.1, out.2
     );
-    // The emulated odometry labels are far better than the 2 deg paper_000_som.rs assumes.
-    assert!(label_rms < 1.0, "label error rms up to {label_rms} deg");
-    out
+    (out.0, out.1, out.2, label_rms)
 }
 
 #[test]
 fn the_robot_calibrates_itself_to_the_papers_accuracy() {
-    let (mean, max, far) = experiment("nominal wheels", None);
+    let (mean, max, far, label_rms) = experiment("nominal wheels", None);
+    assert!(label_rms < 0.5, "label error rms up to {label_rms} deg");
     assert!(mean <= 1.52 * 1.25, "mean {mean}");
     assert!(max <= 6.52 * 1.35, "max {max}");
     assert!(far > mean, "4 cm {far} vs 1 cm {mean}");
@@ -202,7 +204,8 @@ fn a_robot_whose_wheels_are_53_mm_apart_calibrates_as_well() {
     // odometry uses 52 mm: odometry over-reports every turn by 2.5 % (the light drifts about
     // -9 deg per turn through the odometry frame). The robot measures that drift and scales
     // its labels, so the paper's tolerances hold here too.
-    let (mean, max, _) = experiment("true wheel distance 53.3 mm", Some(0.0533));
+    let (mean, max, _, label_rms) = experiment("true wheel distance 53.3 mm", Some(0.0533));
+    assert!(label_rms < 2.0, "label error rms up to {label_rms} deg");
     assert!(mean <= 1.52 * 1.25, "mean {mean}");
     assert!(max <= 6.52 * 1.35, "max {max}");
 }
