@@ -345,6 +345,11 @@ pub enum TaskArg {
     /// each (paper: 5 without, 24+ with). Its own arena and the khepera: --arena and
     /// --profile are ignored.
     LightMap,
+    /// Seed 000 §3.3 Tables 1-2: a Khepera with 53.3 mm wheels wall-follows two laps of the
+    /// 75 x 60 cm box; the encoder counts it sends are re-integrated with the tables' swept
+    /// wheel distance and pulse length. Its own arena and the khepera: --arena and --profile
+    /// are ignored.
+    OdometryLaps,
 }
 
 impl WorldArgs {
@@ -527,6 +532,9 @@ impl RunArgs {
                 return Err("--goal is for --task go-to; foraging heads for the lamps".to_string())
             }
             TaskArg::Forage => Task::Forage,
+            TaskArg::OdometryLaps => {
+                return Err("--task odometry-laps is run by `scenario::odometry_laps`".to_string())
+            }
             TaskArg::LightMap => {
                 return Err("--task light-map is run by `scenario::lightmap`".to_string())
             }

@@ -103,6 +103,9 @@ fn run(args: &RunArgs) -> Result<(), String> {
     if args.task == emulator::cli::TaskArg::LightMap {
         return light_map(args);
     }
+    if args.task == emulator::cli::TaskArg::OdometryLaps {
+        return odometry_laps(args);
+    }
     let opts = args.options()?;
     let arena = load_arena(&args.world.arena, &load_options(args)).map_err(|e| e.to_string())?;
     let report = emulator::scenario::run_scenario(arena, opts).map_err(|e| e.to_string())?;
@@ -248,5 +251,46 @@ fn light_map(args: &RunArgs) -> Result<(), String> {
         }
         println!("paper (seed 000 §6.1): 5 without correction; stopped after 24 with it");
     }
+    Ok(())
+}
+
+/// `--task odometry-laps`: seed 000 §3.3 Tables 1-2 from the counts the robot sends.
+fn odometry_laps(args: &RunArgs) -> Result<(), String> {
+    use emulator::scenario::odometry_laps::{run_odometry_laps, OdometryLapsOptions};
+    let r =
+        run_odometry_laps(&OdometryLapsOptions::new(args.world.seed)).map_err(|e| e.to_string())?;
+    if args.json {
+        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        return Ok(());
+    }
+    println!(
+        "{} laps ({}) in {:.1} s simulated, {:.2} m, {} telemetry frames ({} moving), \
+         {} collisions; true rotation {:+.1} deg, counts at d 52 / dl 0.080 say {:+.1} deg",
+        r.laps,
+        r.ended,
+        r.sim_s,
+        r.distance_m,
+        r.frames,
+        r.moving_deltas,
+        r.collisions,
+        r.true_rotation_deg,
+        r.nominal_rotation_deg
+    );
+    println!("table  d mm  dl mm   paper    ours");
+    for e in &r.tables {
+        println!(
+            "{:>5} {:>5.1} {:>6.3} {:>7.2} {:>7.2}",
+            e.table, e.d_mm, e.dl_mm, e.paper_deg, e.ours_deg
+        );
+    }
+    println!(
+        "largest difference {:.2} deg{}",
+        r.max_difference_deg,
+        if r.clean_laps {
+            ""
+        } else {
+            " (the robot turned round at a corner: not two clean laps, not the paper's run)"
+        }
+    );
     Ok(())
 }

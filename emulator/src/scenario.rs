@@ -45,6 +45,7 @@ use crate::sim::{Sim, SimConfig, SimError};
 
 pub mod forage;
 pub mod lightmap;
+pub mod odometry_laps;
 
 /// Settle time after the firmware reports arrival, ms (a few motor time constants).
 pub const SETTLE_MS: u64 = 500;

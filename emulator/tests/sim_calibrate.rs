@@ -7,10 +7,24 @@
 //!
 //! Paper (offline, errors against odometry labels on the training rotation): mean 1.52 deg,
 //! max 6.52 deg. Here the errors are against the truth, on fresh readings, so they include the
-//! robot's own heading reference (found from the first turn) and its odometry. Tolerances:
-//! the seed-averaged mean within 1.52 deg + 25 %, the seed-averaged max within 6.52 deg + 35 %
-//! (as robot-firmware/tests/paper_000_som.rs). Run with `--nocapture` for the table.
+//! robot's own heading reference (found from the first turn) and its odometry. Tolerances,
+//! one-sided because an error against the truth below the paper's is no failure: the
+//! seed-averaged mean at most 1.52 deg + 25 %, the seed-averaged max at most 6.52 deg + 35 %,
+//! the 4 cm mean above the 1 cm mean. Seeds 1-6.
+//!
+//! Where label noise would come from: the labels are the odometry's angle turned (times the
+//! measured turn ratio) from the turn's reference. The test measures, from the emulator's
+//! truth, how far that angle is from the true angle turned at every training cycle
+//! (label error): robot-firmware/tests/paper_000_som.rs ASSUMES 2 deg (1 sigma) of it to
+//! land on the paper's 1.52 deg. Measured: with nominal wheels 0.00-0.18 deg RMS per seed
+//! (asserted < 0.5); with 53.3 mm wheels 0.03-1.33 deg RMS (max 8.3 deg, a turn whose drift
+//! estimate is off; asserted RMS < 2), and the seeds with more label error have the larger
+//! bearing errors (0.03 -> 0.84 deg mean, 1.33 -> 1.53 deg): the noise comes from the
+//! robot's estimate of its turn-rate error. The reference's own error (the light's direction
+//! from the sweeps) is not in this measure. Run with `--nocapture`.
 #![allow(clippy::unwrap_used, clippy::panic)]
+
+use std::f64::consts::PI;
 
 use emulator::arena::{Arena, Light, Pose};
 use emulator::geometry::Point;
@@ -38,6 +52,10 @@ fn spot(gap: f64) -> Point {
 
 struct Outcome {
     sim_s: f64,
+    /// RMS and max of (odometry angle turned x turn ratio - true angle turned) within each
+    /// training turn, degrees.
+    label_rms: f64,
+    label_max: f64,
     drift_deg: f64,
     mean: f64,
     max: f64,
@@ -67,12 +85,37 @@ fn calibrate(seed: u64, true_wheel_distance_m: Option<f64>, start_heading: f64) 
         .core
         .apply(Command::SetMode(Mode::CalibrateLight), 0);
     assert_eq!(reply, Reply::Ack(protocol::AckInfo::Done));
-    // 21 turns of about 20 s; give it 600 s.
-    for _ in 0..600_000 {
+    // 21 turns of about 20 s; give it 600 s. Each control cycle (80 ms): the angle turned
+    // since the epoch began, by odometry (scaled by the robot's measured turn ratio) and by
+    // the truth.
+    let wrap = |a: f64| emulator::physics::wrap_pi(a);
+    let (mut turn, mut odo_turn, mut true_turn) = ((u32::MAX, false), 0.0f64, 0.0f64);
+    let (mut prev_odo, mut prev_true) = (0.0f64, 0.0f64);
+    let mut label_errors = Vec::new();
+    for ms in 0..600_000u32 {
         sim.step();
         if sim.robot().core.mode != Mode::CalibrateLight {
             break;
         }
+        if ms % 80 != 0 {
+            continue;
+        }
+        let core = &sim.robot().core;
+        let (odo, truth) = (f64::from(core.pose().heading), sim.truth().heading);
+        let training = core.light_cal.phase() == robot_firmware::robot::CalPhase::Train;
+        // A training turn is one epoch; the align turns before it are not labelled.
+        if (core.light_cal.epoch(), training) != turn {
+            (turn, odo_turn, true_turn) = ((core.light_cal.epoch(), training), 0.0, 0.0);
+        } else {
+            odo_turn += wrap(odo - prev_odo);
+            true_turn += wrap(truth - prev_true);
+            if training {
+                let drift = f64::from(core.light_cal.drift_per_turn());
+                let scale = 2.0 * PI / (2.0 * PI - drift);
+                label_errors.push((odo_turn * scale - true_turn).to_degrees());
+            }
+        }
+        (prev_odo, prev_true) = (odo, truth);
     }
     let core = &sim.robot().core;
     assert_eq!(core.mode, Mode::Idle, "seed {seed}: still calibrating");
@@ -81,8 +124,11 @@ fn calibrate(seed: u64, true_wheel_distance_m: Option<f64>, start_heading: f64) 
     let drift = core.light_cal.drift_per_turn().to_degrees();
     let (mean, max) = sweep(&mut sim, 0.01);
     let (far_mean, _) = sweep(&mut sim, 0.04);
+    let n = label_errors.len().max(1) as f64;
     Outcome {
         sim_s,
+        label_rms: (label_errors.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
+        label_max: label_errors.iter().map(|e| e.abs()).fold(0.0, f64::max),
         drift_deg: f64::from(drift),
         mean,
         max,
@@ -119,17 +165,19 @@ fn sweep(sim: &mut Sim, gap: f64) -> (f64, f64) {
     (mean, errors.iter().copied().fold(0.0, f64::max))
 }
 
-fn experiment(label: &str, wheel: Option<f64>) -> (f64, f64, f64) {
+fn experiment(label: &str, wheel: Option<f64>) -> (f64, f64, f64, f64) {
     println!("\nonline calibration, {label}");
-    println!("seed | sim s | drift deg/turn | 1 cm mean   max | 4 cm mean");
+    println!("seed | sim s | drift deg/turn | label err rms  max | 1 cm mean   max | 4 cm mean");
     let mut acc = (0.0, 0.0, 0.0);
+    let mut label_rms: f64 = 0.0;
     for seed in 1..=SEEDS {
         // Start facing anywhere: the first turn finds the lamp.
         let o = calibrate(seed, wheel, seed as f64 * 1.1);
         println!(
-            "{seed:>4} | {:>5.0} | {:>14.2} | {:>9.2} {:>5.2} | {:>9.2}",
-            o.sim_s, o.drift_deg, o.mean, o.max, o.far_mean
+            "{seed:>4} | {:>5.0} | {:>14.2} | {:>13.2} {:>4.2} | {:>9.2} {:>5.2} | {:>9.2}",
+            o.sim_s, o.drift_deg, o.label_rms, o.label_max, o.mean, o.max, o.far_mean
         );
+        label_rms = label_rms.max(o.label_rms);
         acc = (acc.0 + o.mean, acc.1 + o.max, acc.2 + o.far_mean);
     }
     let n = SEEDS as f64;
@@ -138,12 +186,13 @@ fn experiment(label: &str, wheel: Option<f64>) -> (f64, f64, f64) {
         "average: mean {:.2} deg (paper 1.52), max {:.2} deg (paper 6.52), 4 cm mean {:.2}",
         out.0, out.1, out.2
     );
-    out
+    (out.0, out.1, out.2, label_rms)
 }
 
 #[test]
 fn the_robot_calibrates_itself_to_the_papers_accuracy() {
-    let (mean, max, far) = experiment("nominal wheels", None);
+    let (mean, max, far, label_rms) = experiment("nominal wheels", None);
+    assert!(label_rms < 0.5, "label error rms up to {label_rms} deg");
     assert!(mean <= 1.52 * 1.25, "mean {mean}");
     assert!(max <= 6.52 * 1.35, "max {max}");
     assert!(far > mean, "4 cm {far} vs 1 cm {mean}");
@@ -155,7 +204,8 @@ fn a_robot_whose_wheels_are_53_mm_apart_calibrates_as_well() {
     // odometry uses 52 mm: odometry over-reports every turn by 2.5 % (the light drifts about
     // -9 deg per turn through the odometry frame). The robot measures that drift and scales
     // its labels, so the paper's tolerances hold here too.
-    let (mean, max, _) = experiment("true wheel distance 53.3 mm", Some(0.0533));
+    let (mean, max, _, label_rms) = experiment("true wheel distance 53.3 mm", Some(0.0533));
+    assert!(label_rms < 2.0, "label error rms up to {label_rms} deg");
     assert!(mean <= 1.52 * 1.25, "mean {mean}");
     assert!(max <= 6.52 * 1.35, "max {max}");
 }
