@@ -276,7 +276,7 @@ pub struct WorldLimit {
 }
 
 impl WorldLimit {
-    /// The emulator's: 64 x 64 maze cells, 200,000 walls (about 100 MB of world).
+    /// The emulator's: 64 x 64 maze cells, 200,000 walls (a 58 MB world at most).
     pub const EMULATOR: WorldLimit = WorldLimit {
         max_maze_side: 64,
         max_walls: 200_000,
