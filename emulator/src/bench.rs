@@ -105,7 +105,7 @@ impl ArenaSource {
                 .map(|g| g.arena)
                 .map_err(|e| e.to_string()),
             ArenaSource::Named(n) => {
-                crate::builtin::load(n, &LoadOptions::default()).map_err(|e| e.to_string())
+                crate::builtin::load(n, &LoadOptions::for_simulation()).map_err(|e| e.to_string())
             }
         }
     }

@@ -391,8 +391,9 @@ impl WorldArgs {
         Ok(n)
     }
 
-    fn load_options(&self) -> crate::arena::LoadOptions {
-        let mut load = crate::arena::LoadOptions::default();
+    /// How `--arena` is loaded: for simulation (the emulator's world limit), with `--grid`.
+    pub fn load_options(&self) -> crate::arena::LoadOptions {
+        let mut load = crate::arena::LoadOptions::for_simulation();
         if let Some(g) = &self.grid {
             load.ciberrato_grid = crate::arena::GridFile::Path(g.clone());
         }

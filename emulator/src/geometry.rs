@@ -5,7 +5,7 @@
 //! Frame: x right, y up, metres. Points are nalgebra `Point2<f64>`, directions `Vector2<f64>`.
 //!
 //! Invariants: a [`SegmentSet`] is immutable once built; it keeps its walls as one flat `Vec`
-//! of segments with precomputed bounding boxes and, past [`INDEX_THRESHOLD`] segments, a
+//! of segments (bounding boxes computed when queried) and, past [`INDEX_THRESHOLD`] segments, a
 //! uniform bucket grid, so a ray visits only the cells it crosses (a 32x32 micromouse maze or
 //! the CiberRato 2005 lab has hundreds to ~1000 edges; 8 IR sensors at 12.5 Hz at 10,000x real
 //! time is a million rays per second). Queries with non-finite input return "no hit" / `false`
@@ -302,12 +302,13 @@ pub struct Nearest {
     pub point: Point,
 }
 
-/// Walls for queries: a flat list of segments with their bounding boxes and, when large, a
+/// Walls for queries: a flat list of segments and, when large, a
 /// uniform bucket grid over them.
 #[derive(Clone, Debug, Default)]
 pub struct SegmentSet {
+    // Bounding boxes are recomputed from the segments when queried (a few min/max): storing
+    // them doubled a large world's memory (32 bytes a segment) for no measurable speed.
     segments: Vec<Segment>,
-    boxes: Vec<Aabb>,
     index: Option<BucketGrid>,
 }
 
@@ -327,15 +328,16 @@ impl BucketGrid {
     // Largest side in buckets: keeps the grid's memory small whatever the arena's aspect.
     const MAX_SIDE: usize = 256;
 
-    fn build(boxes: &[Aabb]) -> Option<BucketGrid> {
-        let all = boxes.iter().copied().reduce(|a, b| a.union(&b))?;
+    fn build(segments: &[Segment]) -> Option<BucketGrid> {
+        let boxes = || segments.iter().map(Segment::aabb);
+        let all = boxes().reduce(|a, b| a.union(&b))?;
         let (w, h) = (all.width(), all.height());
         if !(w.is_finite() && h.is_finite()) {
             return None;
         }
         // About one bucket per segment; never thinner than 1/MAX_SIDE of the longer side.
         let longest = w.max(h).max(1e-9);
-        let cell = ((w * h) / boxes.len() as f64)
+        let cell = ((w * h) / segments.len() as f64)
             .sqrt()
             .max(longest / Self::MAX_SIDE as f64);
         // A margin of half a cell keeps segments on the outer edge strictly inside the grid.
@@ -353,7 +355,7 @@ impl BucketGrid {
         // Two passes (count, fill) so the buckets are one flat array. Boxes grow by a hair so a
         // segment lying exactly on a bucket edge is listed on both sides of it.
         let eps = cell * 1e-9;
-        for b in boxes {
+        for b in boxes() {
             let (x0, x1, y0, y1) = grid.span(&b.expanded(eps));
             for y in y0..=y1 {
                 for x in x0..=x1 {
@@ -366,7 +368,7 @@ impl BucketGrid {
         }
         let mut fill: Vec<u32> = grid.starts[..nx * ny].to_vec();
         grid.items = vec![0; grid.starts[nx * ny] as usize];
-        for (i, b) in boxes.iter().enumerate() {
+        for (i, b) in boxes().enumerate() {
             let (x0, x1, y0, y1) = grid.span(&b.expanded(eps));
             for y in y0..=y1 {
                 for x in x0..=x1 {
@@ -417,25 +419,18 @@ impl BucketGrid {
 impl SegmentSet {
     /// Builds the set; the bucket grid is made when there are [`INDEX_THRESHOLD`] or more.
     pub fn new(segments: Vec<Segment>) -> Self {
-        let boxes: Vec<Aabb> = segments.iter().map(Segment::aabb).collect();
         let index = if segments.len() >= INDEX_THRESHOLD {
-            BucketGrid::build(&boxes)
+            BucketGrid::build(&segments)
         } else {
             None
         };
-        SegmentSet {
-            segments,
-            boxes,
-            index,
-        }
+        SegmentSet { segments, index }
     }
 
     /// Builds the set without the bucket grid, whatever its size (benchmarks, tests).
     pub fn unindexed(segments: Vec<Segment>) -> Self {
-        let boxes: Vec<Aabb> = segments.iter().map(Segment::aabb).collect();
         SegmentSet {
             segments,
-            boxes,
             index: None,
         }
     }
@@ -555,7 +550,7 @@ impl SegmentSet {
                 for y in y0..=y1 {
                     for x in x0..=x1 {
                         for &i in g.bucket(x, y) {
-                            if self.boxes[i as usize].overlaps(&q) {
+                            if self.segments[i as usize].aabb().overlaps(&q) {
                                 f(i as usize);
                             }
                         }
@@ -564,7 +559,7 @@ impl SegmentSet {
             }
             Some(_) => {}
             None => (0..self.segments.len())
-                .filter(|&i| self.boxes[i].overlaps(&q))
+                .filter(|&i| self.segments[i].aabb().overlaps(&q))
                 .for_each(f),
         }
     }
@@ -588,7 +583,7 @@ impl SegmentSet {
             max: Point::new(x1, y1),
         };
         for i in ids {
-            if !self.boxes[i].overlaps(&ray_box) {
+            if !self.segments[i].aabb().overlaps(&ray_box) {
                 continue;
             }
             if let Some(t) = self.segments[i].ray_hit(o, d) {

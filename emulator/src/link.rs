@@ -440,7 +440,7 @@ impl EmulatorOptions {
     pub fn builtin_default() -> EmulatorOptions {
         EmulatorOptions {
             arena: crate::builtin::MICRO_RATO_99.to_string(),
-            load: crate::arena::LoadOptions::default(),
+            load: crate::arena::LoadOptions::for_simulation(),
             sim: crate::sim::SimConfig::new(&robot_firmware::MICRO_RATO),
             serve: ServeOptions::default(),
         }

@@ -107,7 +107,8 @@ fn run(args: &RunArgs) -> Result<(), String> {
         return odometry_laps(args);
     }
     let opts = args.options()?;
-    let arena = load_arena(&args.world.arena, &load_options(args)).map_err(|e| e.to_string())?;
+    let arena =
+        load_arena(&args.world.arena, &args.world.load_options()).map_err(|e| e.to_string())?;
     let report = emulator::scenario::run_scenario(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
         println!(
@@ -139,7 +140,7 @@ fn run(args: &RunArgs) -> Result<(), String> {
 
 fn forage(args: &RunArgs) -> Result<(), String> {
     let opts = args.options()?;
-    let arena = load_arena(args.arena(), &load_options(args)).map_err(|e| e.to_string())?;
+    let arena = load_arena(args.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
     let r = emulator::scenario::forage::run_forage(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
@@ -171,7 +172,8 @@ fn forage(args: &RunArgs) -> Result<(), String> {
 
 fn line_correct(args: &RunArgs) -> Result<(), String> {
     let opts = args.line_correct_options()?;
-    let arena = load_arena(&args.world.arena, &load_options(args)).map_err(|e| e.to_string())?;
+    let arena =
+        load_arena(&args.world.arena, &args.world.load_options()).map_err(|e| e.to_string())?;
     let r = emulator::line_correct::run_line_correct(arena, &opts).map_err(|e| e.to_string())?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
@@ -218,14 +220,6 @@ fn load_arena(
         eprintln!("robot-emulator: warning: {w}");
     }
     Ok(arena)
-}
-
-fn load_options(args: &RunArgs) -> emulator::arena::LoadOptions {
-    let mut load = emulator::arena::LoadOptions::default();
-    if let Some(g) = &args.world.grid {
-        load.ciberrato_grid = emulator::arena::GridFile::Path(g.clone());
-    }
-    load
 }
 
 /// `--task light-map`: seed 000 §6.1 without and with local correction, same seed.

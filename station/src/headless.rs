@@ -90,7 +90,14 @@ async fn interactive(
         Some(p) => {
             // Built-in names (`builtin:forage`) as well as files.
             let name = p.to_string_lossy();
-            let a = emulator::builtin::load(&name, &emulator::arena::LoadOptions::default())
+            // Without --port the built-in emulator simulates it: its world limit applies here
+            // too, so a world it would refuse is refused before the drawing's walls are built.
+            let load = if port.is_none() {
+                emulator::arena::LoadOptions::for_simulation()
+            } else {
+                emulator::arena::LoadOptions::default()
+            };
+            let a = emulator::builtin::load(&name, &load)
                 .with_context(|| format!("cannot load arena {}", p.display()))?;
             let overlay = ArenaOverlay::from_arena(&a);
             // Foraging does not plan, and a 0.3 m planning grid over a 1 m box is all walls.

@@ -32,7 +32,7 @@
 use std::path::Path;
 
 use super::error::{did_you_mean, excerpt, parse_finite, to_u32, ArenaError};
-use super::raster::{obstacle_walls, RasterMap};
+use super::raster::{obstacle_walls_within, RasterMap};
 use super::{Arena, ArenaFormat, Cell, LoadOptions, Pose, MAX_GRID_SIDE};
 use crate::geometry::{Aabb, Point};
 
@@ -177,7 +177,7 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<Arena, Arena
         format: ArenaFormat::AsciiGrid,
         bounds,
         enclosed: false,
-        walls: obstacle_walls(&raster),
+        walls: obstacle_walls_within(path, &raster, opts.world_limit)?,
         raster: Some(raster),
         beacons: Vec::new(),
         targets: Vec::new(),

@@ -29,7 +29,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
 use super::error::{excerpt, to_u32, ArenaError};
-use super::{Arena, ArenaFormat, GridLimit, LoadOptions, Pose, Wall, MAX_GRID_SIDE};
+use super::{Arena, ArenaFormat, GridLimit, LoadOptions, Pose, Wall, WorldLimit, MAX_GRID_SIDE};
 use crate::geometry::{Aabb, Point};
 
 /// A maze's wall layout, independent of its physical size. Row 0 is the south row.
@@ -111,7 +111,7 @@ pub fn looks_like_maze(text: &str) -> bool {
 
 /// Parses a maze text into an [`Arena`].
 pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<Arena, ArenaError> {
-    let maze = parse_maze(path, text)?;
+    let maze = parse_maze_within(path, text, opts.world_limit)?;
     let pitch = opts
         .maze_pitch_m
         .unwrap_or_else(|| default_pitch(maze.cols, maze.rows));
@@ -153,6 +153,16 @@ fn check_limit(path: &Path, maze: &Maze, pitch: f64, l: GridLimit) -> Result<(),
 
 /// Reads the maze layout from the text.
 pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
+    parse_maze_within(path, text, None)
+}
+
+/// [`parse_maze`], refusing a maze larger than `limit` takes from its size (the first line's
+/// posts and the number of lines), before its walls are read or built.
+pub fn parse_maze_within(
+    path: &Path,
+    text: &str,
+    limit: Option<WorldLimit>,
+) -> Result<Maze, ArenaError> {
     let err = |line: usize, col: usize, msg: String| {
         ArenaError::at_line(path, to_u32(line + 1), Some(to_u32(col + 1)), msg)
     };
@@ -228,6 +238,18 @@ pub fn parse_maze(path: &Path, text: &str) -> Result<Maze, ArenaError> {
             path,
             format!("maze {cols} x {rows} exceeds {MAX_GRID_SIDE} cells a side"),
         ));
+    }
+    if let Some(l) = limit {
+        let max = l.max_maze_side as usize;
+        if cols > max || rows > max {
+            return Err(ArenaError::at_file(
+                path,
+                format!(
+                    "a {cols} x {rows} maze: the emulator's world takes at most {max} x {max} \
+                     maze cells (refused before building its walls)"
+                ),
+            ));
+        }
     }
     let mut maze = Maze {
         cols: to_u32(cols),

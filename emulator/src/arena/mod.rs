@@ -256,6 +256,39 @@ pub struct LoadOptions {
     /// The grid the caller will build from the arena, if it has a limit (default none): a
     /// raster map beyond it is refused from its image header, before the pixels are read.
     pub grid_limit: Option<GridLimit>,
+    /// What a simulated world takes, if the caller simulates the arena (default none; see
+    /// [`LoadOptions::for_simulation`]): checked before any wall is built.
+    pub world_limit: Option<WorldLimit>,
+}
+
+/// The limit of the emulator's simulated world. Its robots live in worlds metres across:
+/// Khepera boxes and Micro-Rato labs, micromouse mazes of at most 32 x 32 cells, ROS maps of
+/// a lab. Every wall costs the simulation memory (its polygon, four segments with their boxes
+/// in the spatial index: a few hundred bytes) and its sensors' ray casts time, so a world far
+/// beyond these is refused before its walls are built, rather than simulated at gigabytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WorldLimit {
+    /// Most maze cells a side: twice the half-size contest's 32.
+    pub max_maze_side: u32,
+    /// Most walls a grid map (ROS map, ASCII grid) may become, its obstacle cells merged into
+    /// rectangles: a lab's map at 5 cm needs a few thousand, a noisy one tens of thousands.
+    pub max_walls: usize,
+}
+
+impl WorldLimit {
+    /// The emulator's: 64 x 64 maze cells, 200,000 walls (a 58 MB world at most).
+    pub const EMULATOR: WorldLimit = WorldLimit {
+        max_maze_side: 64,
+        max_walls: 200_000,
+    };
+
+    /// The words every refusal ends with.
+    pub fn describe(&self) -> String {
+        format!(
+            "the emulator's world takes at most {} x {} maze cells and {} walls from a grid map",
+            self.max_maze_side, self.max_maze_side, self.max_walls
+        )
+    }
 }
 
 /// A caller's limit on the grid it builds from an arena: it rasterises at `cell_m` (mazes at
@@ -282,11 +315,22 @@ impl Default for LoadOptions {
             maze_wall_height_m: 0.05,
             ascii_cell_m: 0.3,
             grid_limit: None,
+            world_limit: None,
         }
     }
 }
 
 impl LoadOptions {
+    /// The options of everything that simulates the arena (`robot-emulator run` and `serve`,
+    /// its benchmarks, the station's built-in emulator): the defaults plus
+    /// [`WorldLimit::EMULATOR`].
+    pub fn for_simulation() -> LoadOptions {
+        LoadOptions {
+            world_limit: Some(WorldLimit::EMULATOR),
+            ..LoadOptions::default()
+        }
+    }
+
     /// Checks every length is finite and positive (wall thickness: and below the pitch).
     pub fn validate(&self) -> Result<(), ArenaError> {
         let positive = |name: &'static str, v: f64| {
@@ -327,6 +371,26 @@ impl LoadOptions {
 /// else an ASCII grid; `.pgm` alone is refused with a pointer to its YAML. Other extensions are
 /// sniffed the same way.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Arena, ArenaError> {
+    let arena = load_unchecked(path, opts)?;
+    // Grid maps and mazes are refused before their walls are built; a lab XML lists its walls
+    // one by one (its cost is the file's), so it is only counted here, before a world is
+    // built from it.
+    if let Some(l) = opts.world_limit {
+        if arena.walls.len() > l.max_walls {
+            return Err(ArenaError::at_file(
+                path,
+                format!(
+                    "{} walls: the emulator's world takes at most {} walls",
+                    arena.walls.len(),
+                    l.max_walls
+                ),
+            ));
+        }
+    }
+    Ok(arena)
+}
+
+fn load_unchecked(path: &Path, opts: &LoadOptions) -> Result<Arena, ArenaError> {
     opts.validate()?;
     let ext = path
         .extension()
@@ -334,7 +398,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Arena, ArenaError> {
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("xml") => ciberrato::load(path, opts),
-        Some("yaml" | "yml") => rosmap::load_with(path, opts.grid_limit),
+        Some("yaml" | "yml") => rosmap::load_with(path, opts),
         Some("pgm") => Err(pgm_without_yaml(path)),
         _ => {
             let bytes = error::read_bytes(path)?;
@@ -356,7 +420,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Arena, ArenaError> {
                 micromouse::parse(path, &text, opts)
             } else if ext.as_deref() != Some("txt") && text.lines().any(|l| l.starts_with("image:"))
             {
-                rosmap::parse_with(path, &text, opts.grid_limit)
+                rosmap::parse_with(path, &text, opts)
             } else {
                 ascii::parse(path, &text, opts)
             }

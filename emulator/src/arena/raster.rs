@@ -21,8 +21,9 @@
 //! grid larger than [`MAX_GRID_SIDE`] a side ([`RasterError`]); never a panic.
 
 use std::collections::BTreeMap;
+use std::path::Path;
 
-use super::{Arena, Cell, Wall, MAX_GRID_SIDE};
+use super::{Arena, ArenaError, Cell, Wall, WorldLimit, MAX_GRID_SIDE};
 use crate::geometry::{point_in_polygon, Aabb, Point, Segment};
 
 /// A three-state occupancy grid in the map frame.
@@ -327,10 +328,60 @@ fn mark_unknown(map: &mut RasterMap, src: &RasterMap) {
 /// Obstacle cells merged into rectangles (runs along a row, then equal runs stacked over
 /// consecutive rows), as walls of unknown height.
 pub fn obstacle_walls(map: &RasterMap) -> Vec<Wall> {
+    let mut rects = Vec::new();
+    obstacle_rects(map, |r| {
+        rects.push(r);
+        true
+    });
+    rects.sort_by_key(|&(c0, r0, _, _)| (r0, c0));
+    rects
+        .into_iter()
+        .map(|(c0, r0, c1, r1)| {
+            let b = Aabb {
+                min: Point::new(map.line_x(c0), map.line_y(r0)),
+                max: Point::new(map.line_x(c1), map.line_y(r1)),
+            };
+            Wall::rectangle(b, None)
+        })
+        .collect()
+}
+
+/// [`obstacle_walls`] for a world with a limit: the rectangles are counted first (memory:
+/// one row's runs), and a map that would make more walls than `limit` takes is refused,
+/// naming `path` and the sizes, before any wall is built.
+pub fn obstacle_walls_within(
+    path: &Path,
+    map: &RasterMap,
+    limit: Option<WorldLimit>,
+) -> Result<Vec<Wall>, ArenaError> {
+    if let Some(l) = limit {
+        let mut n = 0usize;
+        obstacle_rects(map, |_| {
+            n += 1;
+            n <= l.max_walls
+        });
+        if n > l.max_walls {
+            return Err(ArenaError::at_file(
+                path,
+                format!(
+                    "a {} x {} grid map's obstacle cells, merged into rectangles, make more than \
+                     {} walls: the emulator's world takes at most {} walls (refused before \
+                     building them); use a coarser or cleaner map",
+                    map.width, map.height, l.max_walls, l.max_walls
+                ),
+            ));
+        }
+    }
+    Ok(obstacle_walls(map))
+}
+
+/// Calls `each` with every maximal rectangle `(c0, r0, c1, r1)` (cells `c0..c1` x `r0..r1`)
+/// of obstacle cells, in the order they close, until it returns false. Memory: the open
+/// rectangles, at most one row's runs.
+fn obstacle_rects(map: &RasterMap, mut each: impl FnMut((u32, u32, u32, u32)) -> bool) {
     let (w, h) = (map.width as usize, map.height as usize);
     // Open rectangles keyed by their column run, valued by the row they started on.
     let mut open: BTreeMap<(u32, u32), u32> = BTreeMap::new();
-    let mut rects = Vec::new();
     for row in 0..=h {
         let mut runs = Vec::new();
         if row < h {
@@ -355,20 +406,11 @@ pub fn obstacle_walls(map: &RasterMap) -> Vec<Wall> {
             next.insert(run, since);
         }
         for ((c0, c1), r0) in std::mem::replace(&mut open, next) {
-            rects.push((c0, r0, c1, row as u32));
+            if !each((c0, r0, c1, row as u32)) {
+                return;
+            }
         }
     }
-    rects.sort_by_key(|&(c0, r0, _, _)| (r0, c0));
-    rects
-        .into_iter()
-        .map(|(c0, r0, c1, r1)| {
-            let b = Aabb {
-                min: Point::new(map.line_x(c0), map.line_y(r0)),
-                max: Point::new(map.line_x(c1), map.line_y(r1)),
-            };
-            Wall::rectangle(b, None)
-        })
-        .collect()
 }
 
 #[cfg(test)]

@@ -25,8 +25,8 @@ use serde_yaml_ng::Value;
 use super::error::{
     excerpt, excerpt_n, read_bytes, read_head, read_text, to_u32, unknown_name, ArenaError, Text,
 };
-use super::raster::{obstacle_walls, RasterMap};
-use super::{pgm, Arena, ArenaFormat, Cell, GridLimit};
+use super::raster::{obstacle_walls_within, RasterMap};
+use super::{pgm, Arena, ArenaFormat, Cell, GridLimit, LoadOptions};
 use crate::geometry::{Aabb, Point};
 
 /// How pixel values map to occupancy (map_server's `mode`).
@@ -84,23 +84,25 @@ const KEYS: [&str; 7] = [
 
 /// Loads a map YAML and its image.
 pub fn load(path: &Path) -> Result<Arena, ArenaError> {
-    load_with(path, None)
+    load_with(path, &LoadOptions::default())
 }
 
 /// Loads a map YAML and its image, refusing from the image's header (before its pixels are
-/// read) a map larger than `limit`.
-pub fn load_with(path: &Path, limit: Option<GridLimit>) -> Result<Arena, ArenaError> {
+/// read) a map larger than `opts.grid_limit`, and before its walls are built one that would
+/// make more walls than `opts.world_limit` takes.
+pub fn load_with(path: &Path, opts: &LoadOptions) -> Result<Arena, ArenaError> {
     let text = read_text(path)?;
-    parse_with(path, &text, limit)
+    parse_with(path, &text, opts)
 }
 
 /// Parses a map YAML's text (the image is read from disk).
 pub fn parse(path: &Path, text: &str) -> Result<Arena, ArenaError> {
-    parse_with(path, text, None)
+    parse_with(path, text, &LoadOptions::default())
 }
 
-/// [`parse`] with a caller's grid limit (see [`load_with`]).
-pub fn parse_with(path: &Path, text: &str, limit: Option<GridLimit>) -> Result<Arena, ArenaError> {
+/// [`parse`] with a caller's limits (see [`load_with`]).
+pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions) -> Result<Arena, ArenaError> {
+    let limit = opts.grid_limit;
     let mut warnings = Vec::new();
     let meta = parse_meta(path, text, &mut warnings)?;
     // The header from the file's first bytes; if it does not fit in them, the full decode
@@ -142,7 +144,7 @@ pub fn parse_with(path: &Path, text: &str, limit: Option<GridLimit>) -> Result<A
         format: ArenaFormat::RosMap,
         bounds,
         enclosed: false,
-        walls: obstacle_walls(&raster),
+        walls: obstacle_walls_within(path, &raster, opts.world_limit)?,
         raster: Some(raster),
         beacons: Vec::new(),
         targets: Vec::new(),

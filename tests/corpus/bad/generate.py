@@ -185,6 +185,20 @@ def big(out, scale=1):
         rows.append("|" + "   |" * m)
         rows.append("o" + "---o" * m)
     write(os.path.join(g, "maze_128.txt"), ("\n".join(rows) + "\n").encode())
+    # A 65 x 65 maze: one cell a side past the 64 x 64 the emulator's world takes.
+    m = 65
+    rows = ["o" + "---o" * m]
+    for r in range(m):
+        rows.append("|" + "   |" * m)
+        rows.append("o" + "---o" * m)
+    write(os.path.join(g, "maze_65.txt"), ("\n".join(rows) + "\n").encode())
+    # A 640 x 640 checkerboard map (400 KB): every obstacle pixel its own wall, 204,800 of
+    # them, past the 200,000 walls the emulator's world takes.
+    n = 640
+    board = bytes(0 if (i // n + i % n) % 2 == 0 else 255 for i in range(n * n))
+    write(os.path.join(g, "checker.pgm"), b"P5 640 640 255\n" + board)
+    write(os.path.join(g, "checker.yaml"),
+          ("image: checker.pgm\n" + ROS_KEYS).encode())
     # An 8192 x 8192 map at 0.5 m (4 km a side): past the station's 2048-cell grid at any
     # --cell it accepts, so it must be refused from the PGM's header, before its 64 MiB of
     # pixels are read (the pixels are left out: a refusal must not need them).
