@@ -600,6 +600,7 @@ impl TransferEngine {
                 id: b.id,
                 next,
                 status,
+                sack: 0,
             };
             self.out.push(EngineOut::Frame(TransferOut::Ack(ack)));
             return;
