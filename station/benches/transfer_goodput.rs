@@ -168,6 +168,11 @@ fn condition(name: &str, drop_rate: f64, seeds: u64) -> serde_json::Value {
     let len = map_bytes(0).len() as f64;
     let runs: Vec<Run> = (1..=seeds).map(|s| run(s, drop_rate)).collect();
     let ok = runs.iter().filter(|r| r.ok).count();
+    let failed: Vec<u64> = (1..=seeds)
+        .zip(&runs)
+        .filter(|(_, r)| !r.ok)
+        .map(|(s, _)| s)
+        .collect();
     // A failed upload counts as zero goodput, so it can only pull the figures down.
     let mut pct: Vec<f64> = runs
         .iter()
@@ -189,6 +194,7 @@ fn condition(name: &str, drop_rate: f64, seeds: u64) -> serde_json::Value {
         "seeds": seeds,
         "object_bytes": len,
         "completed": ok,
+        "failed_seeds": failed,
         "goodput_pct_of_line_rate": {
             "median": quantile(&pct, 0.5), "p10": quantile(&pct, 0.1), "p90": quantile(&pct, 0.9),
         },

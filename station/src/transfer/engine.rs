@@ -119,6 +119,10 @@ struct Active {
     down_since: Option<u64>,
     /// The progress last reported.
     shown: (u32, u32),
+    /// An upload the robot answered `Receiving`: it did not hold the object when this job
+    /// began, so an `AlreadyHave` to a later attempt's Begin means this job installed it
+    /// (its `Complete` answers were lost and the attempt timed out).
+    robot_receiving: bool,
     phase: Phase,
 }
 
@@ -291,11 +295,16 @@ impl TransferEngine {
             }
             LinkEvent::Transfer(t) => {
                 match t {
-                    TransferIn::Ack(a) => {
-                        if let Some(Phase::Upload { sender, .. }) =
-                            self.active.as_mut().map(|a| &mut a.phase)
-                        {
-                            sender.on_ack(a, now_ms as u32);
+                    TransferIn::Ack(ack) => {
+                        if let Some(a) = self.active.as_mut() {
+                            if let Phase::Upload { sender, .. } = &mut a.phase {
+                                if ack.id == sender.begin().id
+                                    && ack.status == TransferStatus::Receiving
+                                {
+                                    a.robot_receiving = true;
+                                }
+                                sender.on_ack(ack, now_ms as u32);
+                            }
                         }
                     }
                     TransferIn::Begin(b) => self.on_begin(now_ms, b),
@@ -355,6 +364,7 @@ impl TransferEngine {
             attempts: 1,
             down_since: None,
             shown: (0, 0),
+            robot_receiving: false,
             phase,
         });
         self.events.push_back(TransferEvent::Started {
@@ -457,13 +467,20 @@ impl TransferEngine {
             poll(sender);
         }
         let outcome = sender.outcome();
-        let progress = sender.progress();
+        let mut progress = sender.progress();
         let attempts = a.attempts;
+        let robot_receiving = a.robot_receiving;
         match outcome {
             None => self.report_progress(progress),
             Some(o) => {
                 let outcome = match o {
                     Outcome::Complete => JobOutcome::Complete,
+                    // The robot took this job's bytes: the last chunk completed the object,
+                    // but every answer saying so was lost (the id is the bytes' CRC-32C).
+                    Outcome::AlreadyHave if robot_receiving => {
+                        progress = (progress.1, progress.1);
+                        JobOutcome::Complete
+                    }
                     Outcome::AlreadyHave => JobOutcome::AlreadyHave,
                     Outcome::Rejected => JobOutcome::Failed(TransferError::Rejected),
                     Outcome::CrcMismatch => JobOutcome::Failed(TransferError::CrcMismatch),
