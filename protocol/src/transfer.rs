@@ -553,7 +553,7 @@ impl Sender {
         if self.phase != Phase::Sending {
             return;
         }
-        let window = u32::from(TRANSFER_WINDOW) * u32::from(self.chunk_units);
+        let window = TRANSFER_WINDOW * u32::from(self.chunk_units);
         let chunk = u32::from(self.chunk_units);
         loop {
             let Some((start, end, resend)) = self.next_chunk(chunk) else {
@@ -860,6 +860,10 @@ mod tests {
         );
     }
 
+    /// A frame on its way to the receiver: when it arrives, and a chunk's offset and data
+    /// (`None`: the Begin).
+    type ToRx = (u32, Option<(u32, std::vec::Vec<u8>)>);
+
     /// Runs a sender against a receiver over a FIFO line that delivers in `delay_ms` and
     /// drops the chunks `drop` says (by transmission number); returns the time it completed.
     fn run_line(len: usize, delay_ms: u32, drop: impl Fn(usize, u32) -> bool) -> (u32, usize) {
@@ -867,8 +871,7 @@ mod tests {
         let mut s = Sender::for_object(ObjectKind::Map, &bytes).expect("small");
         let mut rx = Receiver::new();
         let mut staging = std::vec![0u8; len];
-        let mut to_rx: std::collections::VecDeque<(u32, Option<(u32, std::vec::Vec<u8>)>)> =
-            Default::default();
+        let mut to_rx: std::collections::VecDeque<ToRx> = Default::default();
         let mut to_tx: std::collections::VecDeque<(u32, TransferAck)> = Default::default();
         let mut n = 0;
         for now in 0..20_000u32 {
