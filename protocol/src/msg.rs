@@ -401,12 +401,15 @@ pub struct TransferChunk<'a> {
     pub data: &'a [u8],
 }
 
-/// Receiver -> sender: every byte before `next` of object `id` is held (cumulative ack).
+/// Receiver -> sender: every byte before `next` of object `id` is held (cumulative ack), and
+/// bit i of `sack` says the 32-byte unit `[next + 32 i, next + 32 i + 32)` past it is held too
+/// (selective ack, PROTOCOL.md §8; 0 in every answer but `Receiving`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
 pub struct TransferAck {
     pub id: u32,
     pub next: u32,
     pub status: TransferStatus,
+    pub sack: u32,
 }
 
 /// State of a transfer at the receiver.

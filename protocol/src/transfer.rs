@@ -6,17 +6,22 @@
 //! the frame; object bytes live in caller buffers (`[u8; N]` on the robot, `Vec<u8>` on the
 //! station), so nothing here allocates or owns storage.
 //!
-//! [`Receiver`] accepts a chunk only at `offset == next` (go-back-N), answers every chunk with
-//! a cumulative `TransferAck`, keeps a partial object for resuming when the same id and CRC
-//! begin again, and hands the staged bytes to the owner's `install` closure only when all of
-//! them are there and their CRC-32C matches. The owner installs atomically (validate, then
+//! Selective repeat over [`UNIT`]-byte units. [`Receiver`] takes a chunk at `next` and also
+//! one past it that starts on the unit grid within [`SACK_SPAN`] bytes, answers every chunk
+//! with a `TransferAck` whose `next` is cumulative and whose `sack` bitmap names the units
+//! past `next` it holds, keeps a partial object for resuming when the same id and CRC begin
+//! again, and hands the staged bytes to the owner's `install` closure only when all of them
+//! are there and their CRC-32C matches. The owner installs atomically (validate, then
 //! replace), so the old object stays in use until a verified new one replaces it.
 //!
-//! [`Sender`] sends `TransferBegin`, waits for the receiver's answer, then keeps up to
-//! `timing::TRANSFER_WINDOW` chunks unacknowledged. It rewinds to the last acknowledged offset
-//! once per stall on a duplicate ack (a lost chunk) and after `timing::TRANSFER_RETRY_MS` with
-//! no progress, halving its chunk size at each such timeout (down to [`MIN_CHUNK`]); after
-//! [`MAX_TIMEOUTS`] timeouts in a row it gives up.
+//! [`Sender`] sends `TransferBegin`, waits for the receiver's answer, then keeps at most
+//! `timing::TRANSFER_WINDOW` chunks' worth of unacknowledged units in flight. The line is a
+//! FIFO, so a unit missing below one the receiver holds that was sent after it is lost: those
+//! units go again at once (selective retransmission, one round per window of evidence, as in
+//! RFC 6675). A retransmission timer from measured round trips (RFC 6298: Karn's rule,
+//! Jacobson's mean and variance, backoff) covers a lost tail; each loss round halves the chunk
+//! size (down to [`MIN_CHUNK`]) and loss-free progress grows it back. With no progress for
+//! [`MAX_TIMEOUTS`] x `TRANSFER_RETRY_MS` it gives up.
 //!
 //! What can fail: every failure is an [`Outcome`] the sender reports (refused, CRC mismatch,
 //! unknown id, timed out, object changed under it); the receiver never fails, it answers a
@@ -30,14 +35,25 @@ use crate::msg::{
 };
 use crate::timing::{TRANSFER_RETRY_MS, TRANSFER_WINDOW};
 
-/// Timeouts in a row (no progress for `TRANSFER_RETRY_MS` each) before a sender gives up.
+/// No progress for `MAX_TIMEOUTS` x `TRANSFER_RETRY_MS` and a sender gives up.
 pub const MAX_TIMEOUTS: u8 = 5;
-/// The smallest chunk a sender falls back to after timeouts, bytes.
-pub const MIN_CHUNK: u32 = 32;
+/// The unit of selective acknowledgement, bytes: chunks past `next` start on this grid and
+/// are a whole number of units long (or end the object).
+pub const UNIT: u32 = 32;
+/// Bytes past `next` a `sack` bitmap covers (32 units): chunks past it are not taken.
+pub const SACK_SPAN: u32 = 32 * UNIT;
+/// The smallest chunk a sender falls back to on a lossy line, bytes.
+pub const MIN_CHUNK: u32 = UNIT;
 /// `UnknownId` answers a sender survives (it restarts with `TransferBegin` each time).
 pub const MAX_RESTARTS: u8 = 5;
-/// Bytes a sender keeps unacknowledged: the window in whole chunks.
-const WINDOW_BYTES: u32 = TRANSFER_WINDOW * MAX_CHUNK as u32;
+/// The retransmission timeout never goes below this, ms: the robot answers within its 1 ms
+/// cycle, so a shorter timer only fires on frames still on the wire.
+pub const MIN_RTO_MS: u32 = 20;
+/// Bytes a chunk frame carries besides its data (COBS, header, CRC, id, offset, length): the
+/// cost [`chunk_for_loss`] weighs against the loss of a longer frame.
+pub const CHUNK_OVERHEAD: u32 = 20;
+/// Chunks acknowledged with no loss before the chunk size grows by one unit.
+const GROW_AFTER: u8 = 8;
 
 /// Staged object bytes whose CRC matched, handed to the owner's `install`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,6 +62,29 @@ pub struct Verified<'a> {
     pub id: u32,
     pub crc: u32,
     pub bytes: &'a [u8],
+}
+
+/// The chunk size (a whole number of units, `MIN_CHUNK..=MAX_CHUNK`) that carries the most
+/// data per line byte when each byte is lost with probability `loss_ppm` / 1e6: a chunk of
+/// `c` bytes arrives with probability `(1 - p)^(c + CHUNK_OVERHEAD)`, and carries
+/// `c / (c + CHUNK_OVERHEAD)` of what it costs. A clean line gets `MAX_CHUNK`.
+pub fn chunk_for_loss(loss_ppm: u32) -> u32 {
+    let q = 1.0 - f64::from(loss_ppm.min(1_000_000)) / 1e6;
+    let mut best = (0.0, MIN_CHUNK);
+    let mut c = MIN_CHUNK;
+    while c <= MAX_CHUNK as u32 {
+        let frame = c + CHUNK_OVERHEAD;
+        let mut arrive = 1.0;
+        for _ in 0..frame {
+            arrive *= q;
+        }
+        let gain = arrive * f64::from(c) / f64::from(frame);
+        if gain > best.0 {
+            best = (gain, c);
+        }
+        c += UNIT;
+    }
+    best.1
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,6 +96,8 @@ enum RxState {
         len: u32,
         crc: u32,
         next: u32,
+        /// Units past `next` held (bit i: `[next + UNIT i, next + UNIT (i + 1))`).
+        sack: u32,
     },
     /// The last transfer ended; its answer is repeated to late or duplicated chunks.
     Finished {
@@ -79,7 +120,27 @@ impl Default for Receiver {
 }
 
 fn ack(id: u32, next: u32, status: TransferStatus) -> TransferAck {
-    TransferAck { id, next, status }
+    TransferAck {
+        id,
+        next,
+        status,
+        sack: 0,
+    }
+}
+
+/// Units `first..last` as a bitmap (bits past 31 dropped).
+fn units(first: u32, last: u32) -> u32 {
+    let ones = |n: u32| if n >= 32 { u32::MAX } else { (1u32 << n) - 1 };
+    ones(last) & !ones(first)
+}
+
+/// `map` with its units moved down by `bytes` (a multiple of `UNIT`; otherwise nothing of it
+/// is kept, which only costs resends).
+fn shift(map: u32, bytes: u32) -> u32 {
+    if bytes % UNIT != 0 {
+        return 0;
+    }
+    map.checked_shr(bytes / UNIT).unwrap_or(0)
 }
 
 impl Receiver {
@@ -107,11 +168,15 @@ impl Receiver {
             len,
             crc,
             next,
+            sack,
         } = self.state
         {
             if (object, id, len, crc) == (b.object, b.id, b.len, b.crc) {
                 // The same object again (a retry or a restarted sender): resume.
-                return ack(id, next, TransferStatus::Receiving);
+                return TransferAck {
+                    sack,
+                    ..ack(id, next, TransferStatus::Receiving)
+                };
             }
         }
         self.state = RxState::Receiving {
@@ -120,13 +185,15 @@ impl Receiver {
             len: b.len,
             crc: b.crc,
             next: 0,
+            sack: 0,
         };
         ack(b.id, 0, TransferStatus::Receiving)
     }
 
-    /// Answers a `TransferChunk`, writing its data to `staging` when it is the next one. When
-    /// the object is whole and its CRC matches, calls `install` with it: `true` means
-    /// installed (`Complete`), `false` refused as malformed (`Rejected`, old object kept).
+    /// Answers a `TransferChunk`, writing its data to `staging` when it is new and in the
+    /// span (at `next`, or past it on the unit grid). When the object is whole and its CRC
+    /// matches, calls `install` with it: `true` means installed (`Complete`), `false` refused
+    /// as malformed (`Rejected`, old object kept).
     pub fn on_chunk<F>(
         &mut self,
         c: &TransferChunk<'_>,
@@ -136,29 +203,55 @@ impl Receiver {
     where
         F: FnOnce(Verified<'_>) -> bool,
     {
-        let (object, id, len, crc, next) = match self.state {
+        let (object, id, len, crc, mut next, mut sack) = match self.state {
             RxState::Receiving {
                 object,
                 id,
                 len,
                 crc,
                 next,
-            } if id == c.id => (object, id, len, crc, next),
+                sack,
+            } if id == c.id => (object, id, len, crc, next, sack),
             RxState::Finished { id, next, status } if id == c.id => return ack(id, next, status),
             _ => return ack(c.id, 0, TransferStatus::UnknownId),
         };
-        let receiving = ack(id, next, TransferStatus::Receiving);
-        // Go-back-N: anything but the next chunk is dropped and answered with `next`.
-        let end = next as usize + c.data.len();
-        if c.offset != next || c.data.is_empty() || c.data.len() > MAX_CHUNK || end > len as usize {
-            return receiving;
+        let current = TransferAck {
+            sack,
+            ..ack(id, next, TransferStatus::Receiving)
+        };
+        let end = u64::from(c.offset) + c.data.len() as u64;
+        if c.data.is_empty() || c.data.len() > MAX_CHUNK || end > u64::from(len) {
+            return current;
         }
-        let Some(slot) = staging.get_mut(next as usize..end) else {
+        let end = end as u32;
+        if end <= next {
+            return current; // A duplicate of bytes held.
+        }
+        // Bytes before `next` are held already: only the rest of the chunk is new.
+        let start = c.offset.max(next);
+        let data = c.data.get((start - c.offset) as usize..).unwrap_or(&[]);
+        let ahead = start - next;
+        // Past `next`, only whole units on the grid inside the span can be named in `sack`.
+        let whole = data.len() as u32 % UNIT == 0 || end == len;
+        if ahead > 0 && (ahead % UNIT != 0 || !whole || end - next > SACK_SPAN) {
+            return current;
+        }
+        let Some(slot) = staging.get_mut(start as usize..end as usize) else {
             // The owner's buffer is smaller than the limit it allowed: refuse, never panic.
             return self.finish(id, 0, TransferStatus::Rejected);
         };
-        slot.copy_from_slice(c.data);
-        let next = end as u32;
+        slot.copy_from_slice(data);
+        if ahead > 0 {
+            sack |= units(ahead / UNIT, (end - next).div_ceil(UNIT));
+        } else {
+            sack = shift(sack, end - next);
+            next = end;
+        }
+        // Units held past the new `next` join it while they are contiguous.
+        while sack & 1 == 1 && next < len {
+            next = next.saturating_add(UNIT).min(len);
+            sack >>= 1;
+        }
         if next < len {
             self.state = RxState::Receiving {
                 object,
@@ -166,8 +259,12 @@ impl Receiver {
                 len,
                 crc,
                 next,
+                sack,
             };
-            return ack(id, next, TransferStatus::Receiving);
+            return TransferAck {
+                sack,
+                ..ack(id, next, TransferStatus::Receiving)
+            };
         }
         let bytes = staging.get(..len as usize).unwrap_or(&[]);
         if crc32c(bytes) != crc {
@@ -191,7 +288,7 @@ impl Receiver {
         ack(id, next, status)
     }
 
-    /// The transfer in progress: (object, id, bytes held, total bytes).
+    /// The transfer in progress: (object, id, bytes held in order, total bytes).
     pub fn progress(&self) -> Option<(ObjectKind, u32, u32, u32)> {
         match self.state {
             RxState::Receiving {
@@ -260,38 +357,60 @@ impl fmt::Display for Outcome {
 enum Phase {
     /// `TransferBegin` sent (or due); waiting for the receiver's first answer.
     Begin,
-    /// Sending chunks from `sent`, everything before `acked` confirmed.
+    /// Sending chunks; everything before `acked` confirmed.
     Sending,
     Done(Outcome),
 }
 
 /// The sending side of one transfer. Holds no bytes: `poll` borrows them each time.
+///
+/// Unit bitmaps (`sacked`, `lost`) count [`UNIT`]s from `acked`, like the receiver's `sack`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Sender {
     begin: TransferBegin,
     phase: Phase,
     /// Every byte before this is acknowledged.
     acked: u32,
-    /// The next byte to send.
+    /// Units past `acked` the receiver holds.
+    sacked: u32,
+    /// Units past `acked` known lost and not yet sent again.
+    lost: u32,
+    /// The next byte never sent.
     sent: u32,
+    /// `sent` when the last loss round began: a unit held at or past it was sent after that
+    /// round's resends, so (the line being a FIFO) every hole below it is lost again.
+    recover: u32,
+    /// The chunk whose round trip is timed: its end offset (0: none) and when it went out.
+    /// Only chunks sent once are timed (Karn).
+    timed_end: u32,
+    timed_at: u32,
+    /// Smoothed round trip and its mean deviation, ms (RFC 6298); 0: no sample yet.
+    srtt_ms: u16,
+    rttvar_ms: u16,
+    /// When the retransmission timer fires, and when the transfer last made progress.
+    deadline_ms: u32,
+    progress_ms: u32,
+    /// The clocks above are set (at the first `poll`).
+    started: bool,
     begin_due: bool,
-    /// The `acked` value at which the last duplicate-ack rewind happened.
-    rewound_at: Option<u32>,
-    /// When the current retry period ends; set at the first `poll`.
-    deadline_ms: Option<u32>,
+    /// Timer expiries in a row: the timeout doubles with each (backoff).
     timeouts: u8,
     restarts: u8,
-    /// Bytes per chunk: `MAX_CHUNK`, halved after each timeout (down to `MIN_CHUNK`), because
-    /// on a noisy line a long frame is the likeliest to be hit: with 1e-3 bit flips and 1 % of
-    /// bytes dropped a full chunk frame arrives intact about 1 time in 75, a 32-byte one about
-    /// 2 times in 5 (PROTOCOL.md §8).
-    chunk: u32,
+    /// Chunk size in units: on a noisy line a long frame is the likeliest to be hit (with 1 %
+    /// of bytes dropped a 224-byte chunk arrives about 1 time in 12, a 32-byte one about
+    /// 3 times in 5), so each loss round halves it and loss-free progress grows it back.
+    chunk_units: u8,
+    /// Chunks acknowledged since the last loss or growth.
+    clean: u8,
 }
 
 /// Whether wrapping time `now` has reached `deadline`.
 fn due(now: u32, deadline: u32) -> bool {
     now.wrapping_sub(deadline) < 0x8000_0000
 }
+
+/// Units a chunk of the largest size spans.
+const MAX_CHUNK_UNITS: u8 = (MAX_CHUNK as u32 / UNIT) as u8;
 
 impl Sender {
     /// A transfer of `len` bytes whose CRC-32C the caller states as `crc` (normally
@@ -306,13 +425,22 @@ impl Sender {
             },
             phase: Phase::Begin,
             acked: 0,
+            sacked: 0,
+            lost: 0,
             sent: 0,
+            recover: 0,
+            timed_end: 0,
+            timed_at: 0,
+            srtt_ms: 0,
+            rttvar_ms: 0,
+            deadline_ms: 0,
+            progress_ms: 0,
+            started: false,
             begin_due: true,
-            rewound_at: None,
-            deadline_ms: None,
             timeouts: 0,
             restarts: 0,
-            chunk: MAX_CHUNK as u32,
+            chunk_units: MAX_CHUNK_UNITS,
+            clean: 0,
         }
     }
 
@@ -322,6 +450,17 @@ impl Sender {
         let len = u32::try_from(bytes.len()).ok()?;
         let crc = crc32c(bytes);
         Some(Sender::new(object, crc, len, crc))
+    }
+
+    /// Starts with chunks of `bytes` (rounded down to whole units, `MIN_CHUNK..=MAX_CHUNK`)
+    /// instead of the largest: what the owner knows of the line, e.g. [`chunk_for_loss`].
+    pub fn set_chunk(&mut self, bytes: u32) {
+        self.chunk_units = (bytes / UNIT).clamp(1, u32::from(MAX_CHUNK_UNITS)) as u8;
+    }
+
+    /// The chunk size in use, bytes.
+    pub const fn chunk(&self) -> u32 {
+        self.chunk_units as u32 * UNIT
     }
 
     /// The `TransferBegin` this sender announces.
@@ -354,9 +493,33 @@ impl Sender {
         }
     }
 
+    /// The retransmission timeout, ms: RFC 6298's `SRTT + 4 RTTVAR` within
+    /// `MIN_RTO_MS..=TRANSFER_RETRY_MS`, doubled per expiry in a row (up to the same cap);
+    /// `TRANSFER_RETRY_MS` before the first sample.
+    fn rto(&self) -> u32 {
+        if self.srtt_ms == 0 {
+            return TRANSFER_RETRY_MS;
+        }
+        let base = u32::from(self.srtt_ms) + (4 * u32::from(self.rttvar_ms)).max(1);
+        let base = base.clamp(MIN_RTO_MS, TRANSFER_RETRY_MS);
+        base.checked_shl(u32::from(self.timeouts))
+            .unwrap_or(u32::MAX)
+            .min(TRANSFER_RETRY_MS)
+    }
+
+    /// Units from `acked` up to `sent`, as a bitmap.
+    fn outstanding(&self) -> u32 {
+        units(0, (self.sent - self.acked).div_ceil(UNIT))
+    }
+
+    /// Units sent and neither held nor known lost: what is on the line.
+    fn in_flight(&self) -> u32 {
+        (self.outstanding() & !self.sacked & !self.lost).count_ones()
+    }
+
     /// Sends what is due at `now_ms`: the `TransferBegin` (first time and after timeouts),
-    /// then chunks of `bytes` within the window. `send` returns whether it queued the frame;
-    /// a frame it could not take is offered again at the next poll.
+    /// then lost units again and new chunks of `bytes` within the window. `send` returns
+    /// whether it queued the frame; a frame it could not take is offered again later.
     pub fn poll<F>(&mut self, now_ms: u32, bytes: &[u8], mut send: F)
     where
         F: FnMut(&Message<'_>) -> bool,
@@ -368,11 +531,18 @@ impl Sender {
             self.phase = Phase::Done(Outcome::ObjectChanged);
             return;
         }
-        let deadline = *self
-            .deadline_ms
-            .get_or_insert(now_ms.wrapping_add(TRANSFER_RETRY_MS));
-        if due(now_ms, deadline) && !self.on_timeout(now_ms) {
+        if !self.started {
+            self.started = true;
+            self.deadline_ms = now_ms.wrapping_add(self.rto());
+            self.progress_ms = now_ms;
+        }
+        let give_up = u32::from(MAX_TIMEOUTS) * TRANSFER_RETRY_MS;
+        if due(now_ms, self.progress_ms.wrapping_add(give_up)) {
+            self.phase = Phase::Done(Outcome::TimedOut);
             return;
+        }
+        if due(now_ms, self.deadline_ms) {
+            self.on_timeout(now_ms);
         }
         if self.begin_due {
             if !send(&Message::TransferBegin(self.begin)) {
@@ -383,45 +553,117 @@ impl Sender {
         if self.phase != Phase::Sending {
             return;
         }
-        while self.sent < self.begin.len && self.sent.saturating_sub(self.acked) < WINDOW_BYTES {
-            let end = self.begin.len.min(self.sent.saturating_add(self.chunk));
-            let Some(data) = bytes.get(self.sent as usize..end as usize) else {
+        let window = TRANSFER_WINDOW * u32::from(self.chunk_units);
+        let chunk = u32::from(self.chunk_units);
+        loop {
+            let Some((start, end, resend)) = self.next_chunk(chunk) else {
                 return;
             };
-            let chunk = TransferChunk {
-                id: self.begin.id,
-                offset: self.sent,
-                data,
-            };
-            if !send(&Message::TransferChunk(chunk)) {
+            if self.in_flight() + (end - start).div_ceil(UNIT) > window {
                 return;
             }
-            self.sent = end;
+            let Some(data) = bytes.get(start as usize..end as usize) else {
+                return;
+            };
+            let frame = TransferChunk {
+                id: self.begin.id,
+                offset: start,
+                data,
+            };
+            if !send(&Message::TransferChunk(frame)) {
+                return;
+            }
+            let (first, last) = (
+                (start - self.acked) / UNIT,
+                (end - self.acked).div_ceil(UNIT),
+            );
+            if resend {
+                self.lost &= !units(first, last);
+            } else {
+                if self.timed_end == 0 {
+                    (self.timed_end, self.timed_at) = (end, now_ms);
+                }
+                self.sent = end;
+            }
         }
     }
 
-    /// A retry period passed without progress: rewind, or give up. Returns whether to go on.
-    fn on_timeout(&mut self, now_ms: u32) -> bool {
-        self.timeouts = self.timeouts.saturating_add(1);
-        self.chunk = (self.chunk / 2).max(MIN_CHUNK);
-        if self.timeouts >= MAX_TIMEOUTS {
-            self.phase = Phase::Done(Outcome::TimedOut);
-            return false;
+    /// The next chunk to send, `(start, end, is a resend)`: lost units first (a run of them,
+    /// at most `chunk` units), then new bytes from `sent` up to the first unit the receiver
+    /// already holds, inside the span its `sack` can name.
+    fn next_chunk(&mut self, chunk: u32) -> Option<(u32, u32, bool)> {
+        let len = self.begin.len;
+        if self.lost != 0 {
+            let first = self.lost.trailing_zeros();
+            let run = (self.lost >> first).trailing_ones().min(chunk);
+            let start = self.acked + first * UNIT;
+            let end = (start + run * UNIT).min(len);
+            return Some((start, end, false)).map(|(s, e, _)| (s, e, true));
         }
-        self.deadline_ms = Some(now_ms.wrapping_add(TRANSFER_RETRY_MS));
+        // Skip units the receiver holds already (a resumed transfer).
+        while self.sent < len && self.sacked & units(0, 32) != 0 {
+            let i = (self.sent - self.acked) / UNIT;
+            if i >= 32 || self.sacked & (1 << i) == 0 {
+                break;
+            }
+            self.sent = (self.sent + UNIT).min(len);
+        }
+        if self.sent >= len {
+            return None;
+        }
+        let i = (self.sent - self.acked) / UNIT;
+        // The first held unit past `sent` bounds the chunk.
+        let held = self.sacked.checked_shr(i).unwrap_or(0);
+        let room = if held == 0 {
+            chunk
+        } else {
+            held.trailing_zeros().min(chunk)
+        };
+        let end = len
+            .min(self.sent + room * UNIT)
+            .min(self.acked.saturating_add(SACK_SPAN));
+        (end > self.sent).then_some((self.sent, end, false))
+    }
+
+    /// The retransmission timer fired: the Begin again, or every unit not held again.
+    fn on_timeout(&mut self, now_ms: u32) {
+        self.timeouts = self.timeouts.saturating_add(1);
+        self.deadline_ms = now_ms.wrapping_add(self.rto());
         match self.phase {
             Phase::Begin => self.begin_due = true,
             _ => {
-                self.sent = self.acked;
-                self.rewound_at = None;
+                self.lost = self.outstanding() & !self.sacked;
+                self.loss_round();
             }
         }
-        true
+    }
+
+    /// Units were found lost: the next round starts at `sent`, the chunk shrinks, and the
+    /// timed chunk may be resent, so its round trip would be ambiguous (Karn).
+    fn loss_round(&mut self) {
+        self.recover = self.sent;
+        self.chunk_units = (self.chunk_units / 2).max(1);
+        self.clean = 0;
+        self.timed_end = 0;
     }
 
     fn progressed(&mut self, now_ms: u32) {
         self.timeouts = 0;
-        self.deadline_ms = Some(now_ms.wrapping_add(TRANSFER_RETRY_MS));
+        self.progress_ms = now_ms;
+        self.deadline_ms = now_ms.wrapping_add(self.rto());
+    }
+
+    /// A round-trip sample, ms (RFC 6298 §2).
+    fn sample(&mut self, rtt_ms: u32) {
+        let r = rtt_ms.clamp(1, u32::from(u16::MAX));
+        let (srtt, var) = (u32::from(self.srtt_ms), u32::from(self.rttvar_ms));
+        let (srtt, var) = if srtt == 0 {
+            (r, r / 2)
+        } else {
+            ((7 * srtt + r) / 8, (3 * var + srtt.abs_diff(r)) / 4)
+        };
+        self.srtt_ms = srtt.clamp(1, u32::from(u16::MAX)) as u16;
+        self.rttvar_ms = var.min(u32::from(u16::MAX)) as u16;
     }
 
     /// Takes the receiver's `TransferAck` into account (acks for other ids are ignored).
@@ -430,7 +672,7 @@ impl Sender {
             return;
         }
         let outcome = match a.status {
-            TransferStatus::Receiving => return self.on_receiving(a.next, now_ms),
+            TransferStatus::Receiving => return self.on_receiving(a.next, a.sack, now_ms),
             TransferStatus::Complete => Outcome::Complete,
             TransferStatus::AlreadyHave => Outcome::AlreadyHave,
             TransferStatus::CrcMismatch => Outcome::CrcMismatch,
@@ -442,6 +684,7 @@ impl Sender {
                 if self.restarts <= MAX_RESTARTS {
                     self.phase = Phase::Begin;
                     self.begin_due = true;
+                    self.timed_end = 0;
                     self.progressed(now_ms);
                     return;
                 }
@@ -454,32 +697,61 @@ impl Sender {
         self.phase = Phase::Done(outcome);
     }
 
-    fn on_receiving(&mut self, next: u32, now_ms: u32) {
+    fn on_receiving(&mut self, next: u32, sack: u32, now_ms: u32) {
         if next > self.begin.len {
             return; // Not an answer to this object: ignore rather than trust it.
         }
         if self.phase == Phase::Begin {
             self.phase = Phase::Sending;
-            self.acked = next;
-            self.sent = next;
-            self.rewound_at = None;
+            (self.acked, self.sent, self.recover) = (next, next, next);
+            (self.sacked, self.lost) = (sack, 0);
             self.progressed(now_ms);
-        } else if next > self.acked {
-            self.acked = next;
-            self.sent = self.sent.max(next);
-            self.rewound_at = None;
+            return;
+        }
+        if next < self.acked {
+            return; // An answer older than one already taken.
+        }
+        let moved = next - self.acked;
+        let sacked = shift(self.sacked, moved) | sack;
+        let progress = moved > 0 || sacked != shift(self.sacked, moved);
+        self.acked = next;
+        self.sent = self.sent.max(next);
+        self.sacked = sacked;
+        self.lost = shift(self.lost, moved) & !sacked & self.outstanding();
+        let timed = self.timed_end;
+        let held = |end: u32| {
+            end <= next || sacked.checked_shr((end - 1 - next) / UNIT).unwrap_or(0) & 1 == 1
+        };
+        if timed != 0 && held(timed) {
+            self.sample(now_ms.wrapping_sub(self.timed_at));
+            self.timed_end = 0;
+        }
+        // The highest unit held is evidence that every hole below it sent earlier is lost.
+        let top = 32 - sacked.leading_zeros();
+        let evidence = next.saturating_add(top * UNIT).min(self.begin.len);
+        let holes = units(0, top) & !sacked & !self.lost;
+        let loss = top > 0 && evidence > self.recover && holes != 0;
+        if loss {
+            self.lost |= holes;
+            self.loss_round();
+        }
+        if progress {
             self.progressed(now_ms);
-        } else if next == self.acked && self.sent > next && self.rewound_at != Some(next) {
-            // A duplicate ack: a chunk at `next` was lost (or overtaken). Go back once for
-            // this offset; the retry timer covers the rest.
-            self.sent = next;
-            self.rewound_at = Some(next);
+            if !loss {
+                self.clean = self.clean.saturating_add(1);
+                if self.clean >= GROW_AFTER && self.chunk_units < MAX_CHUNK_UNITS {
+                    self.chunk_units += 1;
+                    self.clean = 0;
+                }
+            }
         }
     }
 }
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
+
     use super::*;
 
     fn frames(s: &mut Sender, now: u32, bytes: &[u8]) -> (usize, [u32; 8]) {
@@ -529,7 +801,7 @@ mod tests {
     }
 
     #[test]
-    fn the_receiver_drops_out_of_order_chunks_and_repeats_its_final_answer() {
+    fn the_receiver_holds_chunks_past_a_gap_names_them_in_sack_and_repeats_its_final_answer() {
         let data = [3u8; 300];
         let crc = crc32c(&data);
         let mut rx = Receiver::new();
@@ -551,13 +823,30 @@ mod tests {
             data: d,
         };
         let never = |_: Verified<'_>| -> bool { panic!("not yet") };
+        // Past a gap: held, and named unit by unit (units 7, 8, 9; the last one partial).
         let a = rx.on_chunk(&chunk(224, &[3; 76]), &mut staging, never);
-        assert_eq!((a.next, a.status), (0, TransferStatus::Receiving));
-        let a = rx.on_chunk(&chunk(0, &[3; 224]), &mut staging, never);
-        assert_eq!(a.next, 224);
-        assert_eq!(rx.on_begin(&begin, 300, false).next, 224, "resume");
-        let a = rx.on_chunk(&chunk(224, &[3; 76]), &mut staging, |v| v.bytes == data);
-        assert_eq!((a.next, a.status), (300, TransferStatus::Complete));
+        assert_eq!(
+            (a.next, a.sack, a.status),
+            (0, 0b11_1000_0000, TransferStatus::Receiving)
+        );
+        // Off the unit grid, or not whole units short of the end: not taken.
+        let a = rx.on_chunk(&chunk(100, &[3; 32]), &mut staging, never);
+        assert_eq!((a.next, a.sack), (0, 0b11_1000_0000));
+        let a = rx.on_chunk(&chunk(64, &[3; 40]), &mut staging, never);
+        assert_eq!((a.next, a.sack), (0, 0b11_1000_0000));
+        let a = rx.on_chunk(&chunk(0, &[3; 64]), &mut staging, never);
+        assert_eq!((a.next, a.sack), (64, 0b1_1100_0000 >> 1));
+        assert_eq!(
+            rx.on_begin(&begin, 300, false).sack,
+            0b1110_0000,
+            "resume keeps sack"
+        );
+        // The gap filled: `next` runs on over the units held, and the object is whole.
+        let a = rx.on_chunk(&chunk(64, &[3; 160]), &mut staging, |v| v.bytes == data);
+        assert_eq!(
+            (a.next, a.sack, a.status),
+            (300, 0, TransferStatus::Complete)
+        );
         let a = rx.on_chunk(&chunk(224, &[3; 76]), &mut staging, never);
         assert_eq!(a.status, TransferStatus::Complete);
         let other = TransferChunk {
@@ -569,5 +858,104 @@ mod tests {
             rx.on_chunk(&other, &mut staging, never).status,
             TransferStatus::UnknownId
         );
+    }
+
+    /// A frame on its way to the receiver: when it arrives, and a chunk's offset and data
+    /// (`None`: the Begin).
+    type ToRx = (u32, Option<(u32, std::vec::Vec<u8>)>);
+
+    /// Runs a sender against a receiver over a FIFO line that delivers in `delay_ms` and
+    /// drops the chunks `drop` says (by transmission number); returns the time it completed.
+    fn run_line(len: usize, delay_ms: u32, drop: impl Fn(usize, u32) -> bool) -> (u32, usize) {
+        let bytes: std::vec::Vec<u8> = (0..len).map(|i| i as u8).collect();
+        let mut s = Sender::for_object(ObjectKind::Map, &bytes).expect("small");
+        let mut rx = Receiver::new();
+        let mut staging = std::vec![0u8; len];
+        let mut to_rx: std::collections::VecDeque<ToRx> = Default::default();
+        let mut to_tx: std::collections::VecDeque<(u32, TransferAck)> = Default::default();
+        let mut n = 0;
+        for now in 0..20_000u32 {
+            while to_tx.front().is_some_and(|(t, _)| *t <= now) {
+                let (_, a) = to_tx.pop_front().expect("front");
+                s.on_ack(&a, now);
+            }
+            if let Some(o) = s.outcome() {
+                assert_eq!(o, Outcome::Complete);
+                return (now, n);
+            }
+            s.poll(now, &bytes, |m| {
+                match m {
+                    Message::TransferBegin(_) => to_rx.push_back((now + delay_ms, None)),
+                    Message::TransferChunk(c) => {
+                        n += 1;
+                        if !drop(n, c.offset) {
+                            to_rx.push_back((now + delay_ms, Some((c.offset, c.data.to_vec()))));
+                        }
+                    }
+                    _ => {}
+                }
+                true
+            });
+            while to_rx.front().is_some_and(|(t, _)| *t <= now) {
+                let (_, f) = to_rx.pop_front().expect("front");
+                let a = match f {
+                    None => rx.on_begin(&s.begin(), len, false),
+                    Some((offset, data)) => {
+                        let c = TransferChunk {
+                            id: s.begin().id,
+                            offset,
+                            data: &data,
+                        };
+                        rx.on_chunk(&c, &mut staging, |v| v.bytes == &bytes[..])
+                    }
+                };
+                to_tx.push_back((now + delay_ms, a));
+            }
+        }
+        panic!("never completed");
+    }
+
+    #[test]
+    fn a_lost_chunk_and_its_lost_resend_go_again_on_the_evidence_of_later_chunks() {
+        let clean = run_line(3000, 5, |_, _| false);
+        // The chunk at 448 is lost, and so is its first resend (the 2nd time it is sent).
+        let sent = core::cell::Cell::new(0);
+        let lossy = run_line(3000, 5, |_, offset| {
+            if offset == 448 {
+                sent.set(sent.get() + 1);
+                return sent.get() <= 2;
+            }
+            false
+        });
+        assert_eq!(sent.get(), 3);
+        // Go-back-N with a 400 ms timer took one retry period for the lost resend.
+        assert!(
+            lossy.0 < clean.0 + 100,
+            "clean {clean:?}, one chunk and its resend lost {lossy:?}"
+        );
+    }
+
+    #[test]
+    fn a_lost_tail_goes_again_after_a_timeout_from_measured_round_trips() {
+        let clean = run_line(1000, 10, |_, _| false);
+        let last = core::cell::Cell::new(true);
+        let lossy = run_line(1000, 10, |_, offset| offset == 896 && last.replace(false));
+        // Round trips of 20 ms: the timer is far below the 400 ms it starts at.
+        assert!(
+            lossy.0 < clean.0 + 150,
+            "clean {clean:?}, the last chunk lost once {lossy:?}"
+        );
+    }
+
+    #[test]
+    fn the_chunk_size_for_a_line_follows_its_byte_loss() {
+        assert_eq!(chunk_for_loss(0), MAX_CHUNK as u32);
+        assert_eq!(
+            chunk_for_loss(10_000),
+            32,
+            "1 % of bytes lost: about 35 bytes is best"
+        );
+        assert_eq!(chunk_for_loss(1_000_000), MIN_CHUNK);
+        assert!(chunk_for_loss(1_000) > chunk_for_loss(3_000));
     }
 }

@@ -388,6 +388,7 @@ fn a_receiver_that_refuses_or_forgets_is_reported() {
                 id,
                 next: 0,
                 status,
+                sack: 0,
             },
             t,
         );

@@ -160,6 +160,16 @@ fn vectors() -> Vec<(&'static str, u16, Message<'static>)> {
             }),
         ),
         (
+            "transfer-ack",
+            46,
+            Message::TransferAck(TransferAck {
+                id: 0x1234_5678,
+                next: 64,
+                status: TransferStatus::Receiving,
+                sack: 0b1011,
+            }),
+        ),
+        (
             "log",
             11,
             Message::Log(Log {

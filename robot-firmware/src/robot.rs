@@ -351,6 +351,7 @@ impl Core {
                         id: b.id,
                         next: 0,
                         status,
+                        sack: 0,
                     },
                     None => self.objects.on_begin(b),
                 };
@@ -369,6 +370,7 @@ impl Core {
                     id: c.id,
                     next: 0,
                     status,
+                    sack: 0,
                 }))
             }
             Message::TransferChunk(c) => {

@@ -46,6 +46,8 @@ pub const MAP_OBJECT_MAX: usize = MAP_HEADER_LEN + GRID_BYTES;
 /// with its 258 waypoints (8 + 24 + 4 * 256 + 4 + 8 * 258). Regions objects (at most
 /// 12 + 6 * 511 = 3078 bytes) and maps fit too.
 pub const OBJECT_CAPACITY: usize = 3124;
+// `Objects::plan_len` is a `u16`.
+const _: () = assert!(OBJECT_CAPACITY <= u16::MAX as usize);
 
 /// The map the robot holds besides its cells: the id it is known by and its points.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,9 +74,11 @@ pub struct Objects {
     map: Option<MapInfo>,
     /// The grid was changed in place: `map`'s id and CRC are recomputed when next needed.
     map_dirty: bool,
-    /// The installed plan object; `plan_len == 0` means no plan.
+    /// The installed plan object; `plan_len == 0` means no plan. (`u16`, as the snapshot's
+    /// length is the download sender's own: the robot's state is at its 32 KB budget, and
+    /// these bytes pay for the selective-repeat state of `Receiver` and `Sender`.)
     plan: [u8; OBJECT_CAPACITY],
-    plan_len: usize,
+    plan_len: u16,
     plan_id: u32,
     plan_crc: u32,
     /// Uploads land here until verified (and stay, for resuming, if interrupted).
@@ -82,7 +86,6 @@ pub struct Objects {
     rx: Receiver,
     /// The snapshot a download sends.
     out: [u8; OBJECT_CAPACITY],
-    out_len: usize,
     tx: Option<Sender>,
     last_download: Option<Outcome>,
 }
@@ -107,7 +110,6 @@ impl Objects {
             staging: [0; OBJECT_CAPACITY],
             rx: Receiver::new(),
             out: [0; OBJECT_CAPACITY],
-            out_len: 0,
             tx: None,
             last_download: None,
         }
@@ -156,7 +158,10 @@ impl Objects {
 
     /// The installed plan: its id and a view of its object.
     pub fn plan(&self) -> Option<(u32, PlanView<'_>)> {
-        let bytes = self.plan.get(..self.plan_len).filter(|b| !b.is_empty())?;
+        let bytes = self
+            .plan
+            .get(..usize::from(self.plan_len))
+            .filter(|b| !b.is_empty())?;
         PlanView::parse(bytes).ok().map(|v| (self.plan_id, v))
     }
 
@@ -175,7 +180,7 @@ impl Objects {
 
     /// The installed plan's object bytes.
     pub fn plan_bytes(&self) -> &[u8] {
-        self.plan.get(..self.plan_len).unwrap_or(&[])
+        self.plan.get(..usize::from(self.plan_len)).unwrap_or(&[])
     }
 
     /// The upload in progress: (object, id, bytes held, total).
@@ -268,7 +273,7 @@ impl Objects {
         // Writes nothing unless it succeeds, so a refusal keeps the old plan intact.
         let n = encode_plan_object(&regions, &plan, self.nav.path(), map.id, &mut self.plan)
             .map_err(|_| NackReason::CapacityExceeded)?;
-        self.plan_len = n;
+        self.plan_len = n as u16; // At most OBJECT_CAPACITY.
         self.plan_crc = crc32c(self.plan.get(..n).unwrap_or(&[]));
         self.plan_id = self.plan_crc;
         Ok(self.plan_id)
@@ -321,7 +326,6 @@ impl Objects {
         };
         let crc = crc32c(self.out.get(..n).unwrap_or(&[]));
         let len = u32::try_from(n).map_err(|_| NackReason::CapacityExceeded)?;
-        self.out_len = n;
         self.tx = Some(Sender::new(object, id, len, crc));
         Ok(AckInfo::Object {
             object,
@@ -347,7 +351,7 @@ impl Objects {
                 let r = self.nav.regions().ok_or(NackReason::BadState)?;
                 Ok(protocol::object::REGIONS_HEADER_LEN + r.len() * protocol::object::SQUARE_LEN)
             }
-            ObjectKind::Plan if self.plan_len > 0 => Ok(self.plan_len),
+            ObjectKind::Plan if self.plan_len > 0 => Ok(usize::from(self.plan_len)),
             ObjectKind::Plan => Err(NackReason::NoPlan),
             // An untrained network is random numbers, not a calibration.
             ObjectKind::LightCalibration if light.trained => Ok(LIGHT_OBJECT_LEN),
@@ -412,7 +416,8 @@ impl Objects {
                     let slot = plan.get_mut(..v.bytes.len()).filter(|_| ok);
                     slot.map(|slot| {
                         slot.copy_from_slice(v.bytes);
-                        (*plan_len, *plan_id, *plan_crc) = (v.bytes.len(), v.id, v.crc);
+                        // The slot is at most OBJECT_CAPACITY bytes, so this fits.
+                        (*plan_len, *plan_id, *plan_crc) = (v.bytes.len() as u16, v.id, v.crc);
                         Installed::Plan { id: v.id }
                     })
                 }
@@ -437,7 +442,9 @@ impl Objects {
     /// Drives the download: offers `send` the frames due at `now_ms`.
     pub fn poll(&mut self, now_ms: u32, send: &mut dyn FnMut(&Message<'_>) -> bool) {
         let Some(tx) = self.tx.as_mut() else { return };
-        tx.poll(now_ms, self.out.get(..self.out_len).unwrap_or(&[]), send);
+        // The snapshot is the sender's announced length long (set together in start_download).
+        let len = tx.begin().len as usize;
+        tx.poll(now_ms, self.out.get(..len).unwrap_or(&[]), send);
         if let Some(outcome) = tx.outcome() {
             self.last_download = Some(outcome);
             self.tx = None;

@@ -173,7 +173,8 @@ fn chunks_with_an_unknown_id_are_answered_unknown_id() {
         Some(In::TAck(TransferAck {
             id: 0xdead_beef,
             next: 0,
-            status: TransferStatus::UnknownId
+            status: TransferStatus::UnknownId,
+            sack: 0,
         }))
     );
 }

@@ -254,6 +254,7 @@ fn keys_upload_plan_on_the_robot_and_execute_its_plan() {
         id,
         next: 0,
         status: protocol::TransferStatus::AlreadyHave,
+        sack: 0,
     };
     app.update(Action::Link(LinkEvent::Transfer(TransferIn::Ack(held))));
     now += 10;

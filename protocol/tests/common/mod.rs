@@ -361,9 +361,16 @@ pub fn any_message() -> impl Strategy<Value = OwnedMsg> {
             proptest::collection::vec(any::<u8>(), 0..=MAX_CHUNK)
         )
             .prop_map(|(id, offset, data)| OwnedMsg::Chunk { id, offset, data }),
-        (any::<u32>(), any::<u32>(), transfer_status()).prop_map(|(id, next, status)| {
-            OwnedMsg::Plain(Message::TransferAck(TransferAck { id, next, status }))
-        }),
+        (any::<u32>(), any::<u32>(), transfer_status(), any::<u32>()).prop_map(
+            |(id, next, status, sack)| {
+                OwnedMsg::Plain(Message::TransferAck(TransferAck {
+                    id,
+                    next,
+                    status,
+                    sack,
+                }))
+            }
+        ),
         (event_code(), any::<i32>())
             .prop_map(|(code, value)| OwnedMsg::Plain(Message::Event(Event { code, value }))),
         (

@@ -24,14 +24,14 @@
 use std::collections::VecDeque;
 
 use protocol::object::{kind_of, parse};
-use protocol::transfer::{Outcome, Receiver, Sender};
+use protocol::transfer::{chunk_for_loss, Outcome, Receiver, Sender};
 use protocol::{
     AckInfo, Command, Message, NackReason, ObjectKind, TransferAck, TransferBegin, TransferChunk,
     TransferStatus,
 };
 
 use super::{Direction, JobId, JobOutcome, JobReport, TransferError, TransferEvent};
-use crate::link::{CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent};
+use crate::link::{CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats};
 use crate::link::{TransferIn, TransferOut};
 
 /// First command id the engine uses; ids below are everyone else's.
@@ -119,6 +119,10 @@ struct Active {
     down_since: Option<u64>,
     /// The progress last reported.
     shown: (u32, u32),
+    /// An upload the robot answered `Receiving`: it did not hold the object when this job
+    /// began, so an `AlreadyHave` to a later attempt's Begin means this job installed it
+    /// (its `Complete` answers were lost and the attempt timed out).
+    robot_receiving: bool,
     phase: Phase,
 }
 
@@ -137,6 +141,9 @@ pub struct TransferEngine {
     last_download: Option<(u32, u32)>,
     out: Vec<EngineOut>,
     events: VecDeque<TransferEvent>,
+    /// Bytes in a million the line loses, estimated from the robot's frames (`Stats`): an
+    /// upload starts with the chunk size that carries most on such a line.
+    line_loss_ppm: Option<u32>,
 }
 
 impl Default for TransferEngine {
@@ -183,7 +190,17 @@ impl TransferEngine {
             last_download: None,
             out: Vec::new(),
             events: VecDeque::new(),
+            line_loss_ppm: None,
         }
+    }
+
+    /// A sender for `b`, starting with the chunk size the line's loss calls for.
+    fn sender(&self, b: TransferBegin) -> Sender {
+        let mut s = Sender::new(b.object, b.id, b.len, b.crc);
+        if let Some(ppm) = self.line_loss_ppm {
+            s.set_chunk(chunk_for_loss(ppm));
+        }
+        s
     }
 
     /// Tells the engine the link is (or is not) in a session, for an owner that consumed the
@@ -265,6 +282,12 @@ impl TransferEngine {
                 }
                 false
             }
+            LinkEvent::Stats(s) => {
+                if let Some(ppm) = byte_loss_ppm(s) {
+                    self.line_loss_ppm = Some(ppm);
+                }
+                false
+            }
             LinkEvent::CommandDone { id, outcome, .. } if is_engine_command(*id) => {
                 self.command_done(now_ms, *id, outcome);
                 self.poll(now_ms);
@@ -272,11 +295,16 @@ impl TransferEngine {
             }
             LinkEvent::Transfer(t) => {
                 match t {
-                    TransferIn::Ack(a) => {
-                        if let Some(Phase::Upload { sender, .. }) =
-                            self.active.as_mut().map(|a| &mut a.phase)
-                        {
-                            sender.on_ack(a, now_ms as u32);
+                    TransferIn::Ack(ack) => {
+                        if let Some(a) = self.active.as_mut() {
+                            if let Phase::Upload { sender, .. } = &mut a.phase {
+                                if ack.id == sender.begin().id
+                                    && ack.status == TransferStatus::Receiving
+                                {
+                                    a.robot_receiving = true;
+                                }
+                                sender.on_ack(ack, now_ms as u32);
+                            }
                         }
                     }
                     TransferIn::Begin(b) => self.on_begin(now_ms, b),
@@ -310,7 +338,10 @@ impl TransferEngine {
         }
         let phase = match spec {
             JobSpec::Upload { object, bytes } => match Sender::for_object(object, &bytes) {
-                Some(sender) => Phase::Upload { sender, bytes },
+                Some(sender) => Phase::Upload {
+                    sender: self.sender(sender.begin()),
+                    bytes,
+                },
                 None => {
                     let e = TransferError::TooLarge {
                         len: bytes.len() as u64,
@@ -333,6 +364,7 @@ impl TransferEngine {
             attempts: 1,
             down_since: None,
             shown: (0, 0),
+            robot_receiving: false,
             phase,
         });
         self.events.push_back(TransferEvent::Started {
@@ -408,6 +440,10 @@ impl TransferEngine {
     }
 
     fn drive_upload(&mut self, now_ms: u64) {
+        let fresh = self.active.as_ref().and_then(|a| match &a.phase {
+            Phase::Upload { sender, .. } => Some(self.sender(sender.begin())),
+            _ => None,
+        });
         let Some(a) = self.active.as_mut() else {
             return;
         };
@@ -424,19 +460,27 @@ impl TransferEngine {
         poll(sender);
         if sender.outcome() == Some(Outcome::TimedOut) && a.attempts < MAX_ATTEMPTS {
             // Begin again: the robot answers with the bytes it holds, so this resumes.
-            let b = sender.begin();
-            *sender = Sender::new(b.object, b.id, b.len, b.crc);
+            if let Some(fresh) = fresh {
+                *sender = fresh;
+            }
             a.attempts += 1;
             poll(sender);
         }
         let outcome = sender.outcome();
-        let progress = sender.progress();
+        let mut progress = sender.progress();
         let attempts = a.attempts;
+        let robot_receiving = a.robot_receiving;
         match outcome {
             None => self.report_progress(progress),
             Some(o) => {
                 let outcome = match o {
                     Outcome::Complete => JobOutcome::Complete,
+                    // The robot took this job's bytes: the last chunk completed the object,
+                    // but every answer saying so was lost (the id is the bytes' CRC-32C).
+                    Outcome::AlreadyHave if robot_receiving => {
+                        progress = (progress.1, progress.1);
+                        JobOutcome::Complete
+                    }
                     Outcome::AlreadyHave => JobOutcome::AlreadyHave,
                     Outcome::Rejected => JobOutcome::Failed(TransferError::Rejected),
                     Outcome::CrcMismatch => JobOutcome::Failed(TransferError::CrcMismatch),
@@ -469,14 +513,19 @@ impl TransferEngine {
 
     /// The link is back: an upload begins again (resuming), a download is asked for again.
     fn reconnected(&mut self, now_ms: u64) {
+        let fresh = self.active.as_ref().and_then(|a| match &a.phase {
+            Phase::Upload { sender, .. } => Some(self.sender(sender.begin())),
+            _ => None,
+        });
         let Some(a) = self.active.as_mut() else {
             return;
         };
         a.down_since = None;
         match &mut a.phase {
             Phase::Upload { sender, .. } => {
-                let b = sender.begin();
-                *sender = Sender::new(b.object, b.id, b.len, b.crc);
+                if let Some(fresh) = fresh {
+                    *sender = fresh;
+                }
             }
             Phase::Receiving { have, .. } => {
                 a.phase = Phase::Request {
@@ -600,6 +649,7 @@ impl TransferEngine {
                 id: b.id,
                 next,
                 status,
+                sack: 0,
             };
             self.out.push(EngineOut::Frame(TransferOut::Ack(ack)));
             return;
@@ -724,6 +774,32 @@ impl TransferEngine {
             bytes,
         }));
     }
+}
+
+/// Bytes in a million the line loses, from the share of the robot's frames that arrived
+/// damaged and their mean length: a frame of `m` bytes survives with `(1 - p)^m`. `None`
+/// until a few frames have been seen.
+fn byte_loss_ppm(s: &LinkStats) -> Option<u32> {
+    let d = &s.decoder;
+    let bad = [
+        d.crc_errors,
+        d.bad_cobs,
+        d.too_short,
+        d.oversize,
+        d.bad_version,
+        d.unknown_kind,
+        d.undecodable,
+    ]
+    .iter()
+    .map(|&n| f64::from(n))
+    .sum::<f64>();
+    let frames = f64::from(d.frames_ok) + bad;
+    if frames < 4.0 || s.bytes_in == 0 {
+        return None;
+    }
+    let mean_len = s.bytes_in as f64 / frames;
+    let p = 1.0 - (1.0 - bad / frames).powf(1.0 / mean_len.max(1.0));
+    Some((p * 1e6).round().clamp(0.0, 1e6) as u32)
 }
 
 fn describe(spec: &JobSpec) -> (Direction, ObjectKind) {

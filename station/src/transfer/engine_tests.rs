@@ -35,6 +35,8 @@ struct Robot {
     /// Frames (either way) still to lose.
     lose: Vec<bool>,
     silent: bool,
+    /// The robot's answers to uploads that are lost on the way back.
+    lose_answer: Option<fn(&protocol::TransferAck) -> bool>,
 }
 
 impl Robot {
@@ -88,7 +90,9 @@ impl Bench {
                     EngineOut::Frame(TransferOut::Begin(b)) => {
                         let have = self.robot.held.as_deref().map(crc32c) == Some(b.crc);
                         let a = self.robot.rx.on_begin(&b, 4096, have);
-                        to_engine.push(LinkEvent::Transfer(TransferIn::Ack(a)));
+                        if !self.robot.lose_answer.is_some_and(|f| f(&a)) {
+                            to_engine.push(LinkEvent::Transfer(TransferIn::Ack(a)));
+                        }
                     }
                     EngineOut::Frame(TransferOut::Chunk { id, offset, data }) => {
                         let c = protocol::TransferChunk {
@@ -104,7 +108,9 @@ impl Bench {
                         if got.is_some() {
                             self.robot.held = got;
                         }
-                        to_engine.push(LinkEvent::Transfer(TransferIn::Ack(a)));
+                        if !self.robot.lose_answer.is_some_and(|f| f(&a)) {
+                            to_engine.push(LinkEvent::Transfer(TransferIn::Ack(a)));
+                        }
                     }
                     EngineOut::Frame(TransferOut::Ack(a)) => {
                         if let Some((s, _)) = self.robot.tx.as_mut() {
@@ -202,6 +208,33 @@ fn an_upload_completes_then_is_already_held() {
     assert_eq!(r.outcome, JobOutcome::Complete);
     assert_eq!((r.len, r.id), (1000, Some(crc32c(&bytes))));
     assert_eq!(b.robot.held.as_deref(), Some(&bytes[..]));
+    let job = b.engine.submit(JobSpec::Upload {
+        object: ObjectKind::Map,
+        bytes,
+    });
+    assert_eq!(b.run(job, 5_000).outcome, JobOutcome::AlreadyHave);
+}
+
+/// Seeds 144 and 162 of the `transfer_goodput` bench at 1 % byte loss: the chunk that
+/// completed the object was answered `Complete`, but that answer and every answer to its
+/// resends were lost until the sender gave up; the next attempt's Begin was answered
+/// `AlreadyHave` (the robot holds the object now), and the job ended `AlreadyHave` as if
+/// nothing had been sent.
+#[test]
+fn an_upload_whose_complete_answers_are_all_lost_still_ends_complete() {
+    let mut b = Bench::new();
+    b.robot.lose_answer = Some(|a| a.status == protocol::TransferStatus::Complete);
+    let bytes = object(1000);
+    let job = b.engine.submit(JobSpec::Upload {
+        object: ObjectKind::Map,
+        bytes: bytes.clone(),
+    });
+    let r = b.run(job, 20_000);
+    assert_eq!(r.outcome, JobOutcome::Complete, "{r:?}");
+    assert_eq!(r.attempts, 2, "{r:?}");
+    assert_eq!(b.robot.held.as_deref(), Some(&bytes[..]));
+    // The same object again: the robot held it before this job began.
+    b.robot.lose_answer = None;
     let job = b.engine.submit(JobSpec::Upload {
         object: ObjectKind::Map,
         bytes,
