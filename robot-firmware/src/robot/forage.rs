@@ -155,6 +155,8 @@ pub struct Forage {
     unstick_cycles: u16,
     /// Believed heading when the grip closed (the source is ahead of it).
     grip_heading: f32,
+    /// This drop's delivery is counted (the object left the fingers).
+    drop_counted: bool,
 }
 
 impl Default for Forage {
@@ -177,6 +179,7 @@ impl Default for Forage {
             stalled_cycles: 0,
             unstick_cycles: 0,
             grip_heading: 0.0,
+            drop_counted: false,
         }
     }
 }
@@ -216,6 +219,9 @@ impl Forage {
             ForagePhase::Map | ForagePhase::Fix | ForagePhase::Locate
         )
         .then(|| LandmarkScan::new(heading));
+        if phase == ForagePhase::Drop(GripStep::Lower) {
+            self.drop_counted = false;
+        }
     }
 
     /// Whether the scan wants a camera line next cycle.
@@ -512,6 +518,17 @@ impl Core {
         }
     }
 
+    /// Counts this drop's delivery, once.
+    fn forage_count_drop(&mut self) {
+        if self.forage.drop_counted {
+            return;
+        }
+        self.forage.drop_counted = true;
+        self.forage.delivered = self.forage.delivered.saturating_add(1);
+        let n = i32::from(self.forage.delivered);
+        self.push_event(EventCode::ObjectDelivered, n);
+    }
+
     fn forage_drop(&mut self, step: GripStep, g: GripperState, timed_out: bool) {
         match step {
             GripStep::Lower => {
@@ -522,7 +539,15 @@ impl Core {
             }
             GripStep::Grip => {
                 self.gripper_cmd.closed = false;
-                if !g.closed || timed_out {
+                // Delivered when the object has left the fingers (the object-present sensor
+                // clears), not when the arm is back up a second later: a count taken then
+                // lags the object on the floor, and a run stopped in between (the scenario
+                // stops 0.5 s after the last object lands) reports one fewer.
+                let released = !g.closed && !g.object;
+                if released {
+                    self.forage_count_drop();
+                }
+                if released || timed_out {
                     self.forage_phase(ForagePhase::Drop(GripStep::Raise));
                 }
             }
@@ -533,10 +558,9 @@ impl Core {
                 }
                 // With the arm up the fingers are empty unless the object stuck: then the
                 // search phase sees it still held and comes back to try again.
+                // (A drop whose sensor did not clear while the grip opened is counted here.)
                 if !g.object {
-                    self.forage.delivered = self.forage.delivered.saturating_add(1);
-                    let n = i32::from(self.forage.delivered);
-                    self.push_event(EventCode::ObjectDelivered, n);
+                    self.forage_count_drop();
                 }
                 self.forage_phase(ForagePhase::Search);
             }
@@ -584,6 +608,57 @@ mod tests {
         assert_eq!(core.forage.phase, ForagePhase::Search);
         assert_eq!(core.forage.triple, None);
         assert_eq!(core.mode, Mode::Forage);
+    }
+
+    #[test]
+    fn a_drop_is_counted_when_the_object_leaves_the_fingers_not_once_the_arm_is_up() {
+        use crate::{Robot, RobotOptions, KHEPERA};
+
+        let mut robot = Robot::new(RobotOptions {
+            profile: &KHEPERA,
+            seed: 1,
+            start: Pose::new(0.5, 0.5, 0.0),
+            emulated: false,
+            firmware_version: "test",
+        });
+        let core = &mut robot.core;
+        let gripper = |arm, closed, object| {
+            Some(GripperState {
+                arm,
+                closed,
+                object,
+            })
+        };
+        core.forage
+            .set_phase(ForagePhase::Drop(GripStep::Lower), 0.0);
+        core.sensors.gripper = gripper(ARM_DOWN, true, true);
+        let _ = core.forage_command();
+        assert_eq!(core.forage.phase, ForagePhase::Drop(GripStep::Grip));
+        // The grip has started opening; the object is still between the fingers.
+        core.sensors.gripper = gripper(ARM_DOWN, false, true);
+        let _ = core.forage_command();
+        assert_eq!(core.forage.delivered, 0);
+        // It is on the floor: delivered now, with the arm still down (the emulated run ends
+        // 0.5 s after the last object lands; the arm takes 1 s to rise).
+        core.sensors.gripper = gripper(ARM_DOWN, false, false);
+        let _ = core.forage_command();
+        assert_eq!(core.forage.delivered, 1);
+        core.sensors.gripper = gripper(ARM_UP, false, false);
+        for _ in 0..3 {
+            if matches!(core.forage.phase, ForagePhase::Drop(_)) {
+                let _ = core.forage_command();
+            }
+        }
+        assert_eq!(core.forage.delivered, 1, "counted once");
+        assert_eq!(core.forage.phase, ForagePhase::Search);
+        // The next drop counts again.
+        core.forage
+            .set_phase(ForagePhase::Drop(GripStep::Lower), 0.0);
+        core.sensors.gripper = gripper(ARM_DOWN, true, true);
+        let _ = core.forage_command();
+        core.sensors.gripper = gripper(ARM_DOWN, false, false);
+        let _ = core.forage_command();
+        assert_eq!(core.forage.delivered, 2);
     }
 
     #[test]
