@@ -155,8 +155,6 @@ pub struct Forage {
     unstick_cycles: u16,
     /// Believed heading when the grip closed (the source is ahead of it).
     grip_heading: f32,
-    /// This drop's delivery is counted (the object left the fingers).
-    drop_counted: bool,
 }
 
 impl Default for Forage {
@@ -179,7 +177,6 @@ impl Default for Forage {
             stalled_cycles: 0,
             unstick_cycles: 0,
             grip_heading: 0.0,
-            drop_counted: false,
         }
     }
 }
@@ -219,9 +216,6 @@ impl Forage {
             ForagePhase::Map | ForagePhase::Fix | ForagePhase::Locate
         )
         .then(|| LandmarkScan::new(heading));
-        if phase == ForagePhase::Drop(GripStep::Lower) {
-            self.drop_counted = false;
-        }
     }
 
     /// Whether the scan wants a camera line next cycle.
@@ -518,17 +512,6 @@ impl Core {
         }
     }
 
-    /// Counts this drop's delivery, once.
-    fn forage_count_drop(&mut self) {
-        if self.forage.drop_counted {
-            return;
-        }
-        self.forage.drop_counted = true;
-        self.forage.delivered = self.forage.delivered.saturating_add(1);
-        let n = i32::from(self.forage.delivered);
-        self.push_event(EventCode::ObjectDelivered, n);
-    }
-
     fn forage_drop(&mut self, step: GripStep, g: GripperState, timed_out: bool) {
         match step {
             GripStep::Lower => {
@@ -542,12 +525,17 @@ impl Core {
                 // Delivered when the object has left the fingers (the object-present sensor
                 // clears), not when the arm is back up a second later: a count taken then
                 // lags the object on the floor, and a run stopped in between (the scenario
-                // stops 0.5 s after the last object lands) reports one fewer.
-                let released = !g.closed && !g.object;
-                if released {
-                    self.forage_count_drop();
+                // stops 0.5 s after the last object lands) reports one fewer. An object still
+                // sensed when the step times out with the grip open is on the
+                // floor between the open fingers: put down too. A grip that never opens
+                // delivers nothing; the search phase sees the object still held.
+                let open = !g.closed;
+                if open && (!g.object || timed_out) {
+                    self.forage.delivered = self.forage.delivered.saturating_add(1);
+                    let n = i32::from(self.forage.delivered);
+                    self.push_event(EventCode::ObjectDelivered, n);
                 }
-                if released || timed_out {
+                if (open && !g.object) || timed_out {
                     self.forage_phase(ForagePhase::Drop(GripStep::Raise));
                 }
             }
@@ -555,12 +543,6 @@ impl Core {
                 self.gripper_cmd.arm = ARM_UP;
                 if g.arm != ARM_UP && !timed_out {
                     return;
-                }
-                // With the arm up the fingers are empty unless the object stuck: then the
-                // search phase sees it still held and comes back to try again.
-                // (A drop whose sensor did not clear while the grip opened is counted here.)
-                if !g.object {
-                    self.forage_count_drop();
                 }
                 self.forage_phase(ForagePhase::Search);
             }
