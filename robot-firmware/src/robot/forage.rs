@@ -70,6 +70,30 @@ pub struct ForageParams {
     pub stall_cycles: u16,
     /// A stall is broken by wandering (avoidance alone) this long: 40 cycles (3.2 s).
     pub unstick_cycles: u16,
+    /// A released source is left (drive-to-light ignores light) until the robot is this far
+    /// from where it released it, metres: 0.3 (T1 detects a lamp from about 25 cm). §6.1's
+    /// own end of leaving, every front reading above T3 = 490 (about 45 cm from any lamp),
+    /// is met almost nowhere in an arena of 1 x 0.8 m with three lamps: after the first
+    /// emptied source the robot ignored every lamp for the rest of the run (measured:
+    /// passing 13 cm from the last full one for 10 minutes).
+    pub leave_m: f32,
+    /// Approach to a seen light (T1 < reading, until T2): forward speed with the light ahead
+    /// (S2 or S3 brightest), units: 3 (24 mm/s, half the wander speed).
+    pub approach_units: i16,
+    /// Largest steering correction per wheel while approaching, units: 2.
+    pub approach_steer_units: i16,
+    /// A front reading below this means the lamp is within about 2 cm of the body, counts:
+    /// 100 (T2 / 2). There the T2 average is reached only facing the lamp squarely (20 deg
+    /// off it stays above 200 and the next few millimetres take the lamp under the body, where
+    /// the sensors, facing away, lose it): the robot turns on the spot until both sides are
+    /// within `near_balance` of each other, and only then creeps forward at 1 unit.
+    pub near_reading: u16,
+    /// Largest left-right brightness imbalance, as a fraction of the total, that counts as
+    /// facing the lamp: 0.1.
+    pub near_balance: f32,
+    /// An approach that has not reached T2 in this many cycles with the light in view is
+    /// given up (the light is released, seed 000 §6.1, and the search goes on): 400 (32 s).
+    pub approach_cycles: u16,
 }
 
 impl Default for ForageParams {
@@ -85,6 +109,12 @@ impl Default for ForageParams {
             stall_m: 0.03,
             stall_cycles: 100,
             unstick_cycles: 40,
+            leave_m: 0.3,
+            approach_units: 3,
+            approach_steer_units: 2,
+            near_reading: 100,
+            near_balance: 0.1,
+            approach_cycles: 400,
         }
     }
 }
@@ -148,7 +178,8 @@ pub struct Forage {
     locates: u8,
     /// Global fixes applied so far.
     pub fixes: u16,
-    /// Where the way home last made progress, and the cycles since.
+    /// Where the way home last made progress (and the cycles since); in the search, where
+    /// the last source was released.
     anchor: Point,
     stalled_cycles: u16,
     /// Cycles left of a wander that breaks a stall.
@@ -260,7 +291,9 @@ impl Core {
     /// The arbiter's mode for the current phase.
     pub(super) fn forage_arbiter_mode(&self) -> behaviour::Mode {
         match (self.forage.phase, self.forage.home) {
-            (ForagePhase::Search, _) => behaviour::Mode::DriveToLight,
+            // Grasp keeps drive-to-light (stopped: the grasp drives the motors itself) so
+            // that the light is still `Arrived` when an empty source is released afterwards.
+            (ForagePhase::Search | ForagePhase::Grasp(_), _) => behaviour::Mode::DriveToLight,
             (ForagePhase::Return, Some(home)) => behaviour::Mode::GoTo(home),
             _ => behaviour::Mode::Idle,
         }
@@ -269,7 +302,12 @@ impl Core {
     fn forage_phase(&mut self, phase: ForagePhase) {
         self.forage.set_phase(phase, self.pose().heading);
         let mode = self.forage_arbiter_mode();
-        self.arbiter.set_mode(mode);
+        // Same mode: the behaviours keep their state. Setting it again reset drive-to-light
+        // to `Searching`, so releasing an empty source after the grasp did nothing and the
+        // robot gripped at the same lamp again at once, for the rest of the run.
+        if self.arbiter.mode() != mode {
+            self.arbiter.set_mode(mode);
+        }
     }
 
     /// This cycle's motor command in `Mode::Forage`.
@@ -434,18 +472,90 @@ impl Core {
             arm: ARM_UP,
             closed: false,
         };
+        if self.arbiter.state().light_phase == LightPhase::Leaving
+            && self.pose().point().distance_to(self.forage.anchor) > self.forage.params.leave_m
+        {
+            // Drive-to-light starts over, searching.
+            self.arbiter.set_mode(behaviour::Mode::DriveToLight);
+        }
         let cmd = self.behaviour_command();
-        if self.arbiter.state().light_phase != LightPhase::Arrived {
+        let st = *self.arbiter.state();
+        if st.light_phase == LightPhase::Approaching {
+            if let Some(approach) = self.forage_approach(&st) {
+                return approach;
+            }
+        } else {
+            // `step_cycles` counts the approach: zero while not approaching.
+            self.forage.step_cycles = 0;
+        }
+        if st.light_phase != LightPhase::Arrived {
             return cmd;
         }
-        if self.forage.known(self.source_ahead()) {
-            // An emptied source: leave it until its light fades (seed 000 §6.1, T3).
-            self.arbiter.release_light();
-            return MotorCommand::STOP;
-        }
+        // A source believed emptied is checked, not skipped: odometry drifts decimetres over
+        // a search (measured 0.3-1.2 m after 15 minutes), so a full source came to lie
+        // within `known_radius_m` of a remembered one and was left for good; with every
+        // source "emptied" the deliveries stopped. Lowering the arm and closing the grip
+        // takes about 2 s and the object-present sensor is the truth (seed 000 §7.4).
         self.forage.grasp_failed = false;
         self.forage_phase(ForagePhase::Grasp(GripStep::Lower));
         MotorCommand::STOP
+    }
+
+    /// The approach to a light in view, replacing drive-to-light's steering (`None`: the
+    /// arbiter's command stands: avoidance or turning is acting, or no light is in view).
+    ///
+    /// Measured with the arbiter's Braitenberg IIIa alone: the crossed excitation speeds up
+    /// both wheels and curves about 10 cm wide, while T2 (seed 000 §6.1) is reached only with
+    /// the lamp about 1.4 cm straight ahead of the body, so the robot drove past lamps a few
+    /// centimetres away, or circled them with a lamp under its edge, for minutes (seeds 11
+    /// and 19: no object gripped in 20 minutes), and every circle added odometry heading
+    /// error. Here, as drift does towards its target (§4.4): a light abeam (S0, S5) is
+    /// turned to by pivoting backwards about the far wheel (the lamp ends up ahead, not under
+    /// the body); one at 45 deg (S1, S4) by turning on the spot; one ahead (S2, S3) is
+    /// driven to slowly, steering by the balance of the two sides. An approach that does not
+    /// arrive in `approach_cycles` is given up.
+    fn forage_approach(&mut self, st: &behaviour::arbiter::BehaviourState) -> Option<MotorCommand> {
+        use behaviour::arbiter::BehaviourSet;
+        let p = self.forage.params;
+        let light = self.arbiter.params.light;
+        if st.active.contains(BehaviourSet::AVOID | BehaviourSet::TURN) {
+            return None;
+        }
+        let a = self.sensors.ambient;
+        let (brightest, v) = brightest_front(&a)?;
+        if v >= light.detect {
+            return None;
+        }
+        if self.forage.step_cycles > p.approach_cycles {
+            self.arbiter.release_light();
+            self.forage.anchor = self.pose().point();
+            return None;
+        }
+        let b = |k: usize| f32::from(light.dark.saturating_sub(a.get(k).copied().unwrap_or(0)));
+        let u = p.approach_units;
+        if v < p.near_reading {
+            let (left, right) = (b(0) + b(1) + b(2), b(3) + b(4) + b(5));
+            let balance = (left - right) / (left + right).max(1.0);
+            return Some(if balance > p.near_balance {
+                MotorCommand::new(-2, 2)
+            } else if balance < -p.near_balance {
+                MotorCommand::new(2, -2)
+            } else {
+                MotorCommand::new(1, 1)
+            });
+        }
+        Some(match brightest {
+            0 => MotorCommand::new(-u, 0),
+            5 => MotorCommand::new(0, -u),
+            1 => MotorCommand::new(-u, u),
+            4 => MotorCommand::new(u, -u),
+            _ => {
+                let (left, right) = (b(1) + b(2), b(3) + b(4));
+                let balance = (left - right) / (left + right).max(1.0);
+                let steer = behaviour::units(balance * f32::from(p.approach_steer_units));
+                MotorCommand::new(u - steer, u + steer)
+            }
+        })
     }
 
     /// Where the source is when the robot stops at the optimal distance facing it.
@@ -507,6 +617,7 @@ impl Core {
                     self.gripper_cmd.closed = false;
                     self.forage_phase(ForagePhase::Search);
                     self.arbiter.release_light();
+                    self.forage.anchor = self.pose().point();
                 }
             }
         }
@@ -548,6 +659,17 @@ impl Core {
             }
         }
     }
+}
+
+/// The brightest of the front ambient sensors S0..S5 (lowest reading, seed 000 §5.2): its
+/// index and reading.
+fn brightest_front(ambient: &[u16; 8]) -> Option<(usize, u16)> {
+    ambient
+        .iter()
+        .take(6)
+        .copied()
+        .enumerate()
+        .min_by_key(|&(_, v)| v)
 }
 
 #[cfg(test)]
