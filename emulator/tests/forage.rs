@@ -8,13 +8,16 @@ use emulator::scenario::{ScenarioOptions, Task};
 use robot_firmware::KHEPERA;
 
 /// Seeds run; each with the papers' noise (IR, light, wheel bias drawn from the seed).
-const SEEDS: [u64; 4] = [1, 2, 3, 4];
+const SEEDS: [u64; 10] = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10];
 /// Simulated time per run: 20 minutes (the paper's autonomy with both turrets is about a
 /// third of the Khepera's, some 20-30 minutes).
 const TIMEOUT_S: f64 = 1200.0;
-/// Objects that must be home, over all seeds (three per run; measured: 2, 2, 1, 1). The
-/// search (wandering until a lamp is seen from 25 cm) is what takes the time.
-const MIN_DELIVERED: usize = 5;
+/// Objects that must be home over the ten seeds (three per run). The paper's result is
+/// qualitative (seed 000 §7: one real run, two sources); the project's target (issue 14) is
+/// 90 %, 27 of 30, asserted as is. Measured: 29 of 30 (seed 5 brings 2), so the tolerance
+/// is two objects below the measurement; seeds 11-20 give 27 of 30. Before the approach and
+/// leaving fixes of issue 14: 17 of 30 (a delivery rate this test would fail).
+const MIN_DELIVERED: usize = 27;
 /// Largest true-versus-believed position error when an object is put down at home, metres
 /// (measured at most 27 mm): the landmark fix at home (seed 000 §6.2) bounds it, where plain
 /// odometry is tens of centimetres and tens of degrees off after a search.
