@@ -42,6 +42,39 @@ use crate::odometry::{wrap_angle, Point, Pose};
 /// Light sources the robot remembers as emptied (the paper keeps only such meaningful points).
 pub const MAX_SOURCES: usize = 6;
 
+// The approach to a lamp and the leaving of one (the paper gives none of these numbers;
+// constants, not `ForageParams`, to keep the robot's state within the 32 KB board).
+
+/// A released source is left (drive-to-light ignores light) until the robot is this far
+/// from where it released it, metres: 0.3 (T1 detects a lamp from about 25 cm). §6.1's
+/// own end of leaving, every front reading above T3 = 490 (about 45 cm from any lamp),
+/// is met almost nowhere in an arena of 1 x 0.8 m with three lamps: after the first
+/// emptied source the robot ignored every lamp for the rest of the run (measured:
+/// passing 13 cm from the last full one for 10 minutes).
+pub const LEAVE_M: f32 = 0.3;
+
+/// Approach to a seen light (T1 < reading, until T2): forward speed with the light ahead
+/// (S2 or S3 brightest), units: 3 (24 mm/s, half the wander speed).
+pub const APPROACH_UNITS: i16 = 3;
+
+/// Largest steering correction per wheel while approaching, units: 2.
+pub const APPROACH_STEER_UNITS: i16 = 2;
+
+/// An approach that has not reached T2 in this many cycles with the light in view is
+/// given up (the light is released, seed 000 §6.1, and the search goes on): 400 (32 s).
+pub const APPROACH_CYCLES: u16 = 400;
+
+/// A front reading below this means the lamp is within about 2 cm of the body, counts:
+/// 100 (T2 / 2). There the T2 average is reached only facing the lamp squarely (20 deg
+/// off it stays above 200 and the next few millimetres take the lamp under the body, where
+/// the sensors, facing away, lose it): the robot turns on the spot until both sides are
+/// within `NEAR_BALANCE` of each other, and only then creeps forward at 1 unit.
+pub const NEAR_READING: u16 = 100;
+
+/// Largest left-right brightness imbalance, as a fraction of the total, that counts as
+/// facing the lamp: 0.1.
+pub const NEAR_BALANCE: f32 = 0.1;
+
 /// Foraging parameters. The paper gives none of these numbers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ForageParams {
@@ -70,30 +103,6 @@ pub struct ForageParams {
     pub stall_cycles: u16,
     /// A stall is broken by wandering (avoidance alone) this long: 40 cycles (3.2 s).
     pub unstick_cycles: u16,
-    /// A released source is left (drive-to-light ignores light) until the robot is this far
-    /// from where it released it, metres: 0.3 (T1 detects a lamp from about 25 cm). §6.1's
-    /// own end of leaving, every front reading above T3 = 490 (about 45 cm from any lamp),
-    /// is met almost nowhere in an arena of 1 x 0.8 m with three lamps: after the first
-    /// emptied source the robot ignored every lamp for the rest of the run (measured:
-    /// passing 13 cm from the last full one for 10 minutes).
-    pub leave_m: f32,
-    /// Approach to a seen light (T1 < reading, until T2): forward speed with the light ahead
-    /// (S2 or S3 brightest), units: 3 (24 mm/s, half the wander speed).
-    pub approach_units: i16,
-    /// Largest steering correction per wheel while approaching, units: 2.
-    pub approach_steer_units: i16,
-    /// A front reading below this means the lamp is within about 2 cm of the body, counts:
-    /// 100 (T2 / 2). There the T2 average is reached only facing the lamp squarely (20 deg
-    /// off it stays above 200 and the next few millimetres take the lamp under the body, where
-    /// the sensors, facing away, lose it): the robot turns on the spot until both sides are
-    /// within `near_balance` of each other, and only then creeps forward at 1 unit.
-    pub near_reading: u16,
-    /// Largest left-right brightness imbalance, as a fraction of the total, that counts as
-    /// facing the lamp: 0.1.
-    pub near_balance: f32,
-    /// An approach that has not reached T2 in this many cycles with the light in view is
-    /// given up (the light is released, seed 000 §6.1, and the search goes on): 400 (32 s).
-    pub approach_cycles: u16,
 }
 
 impl Default for ForageParams {
@@ -109,12 +118,6 @@ impl Default for ForageParams {
             stall_m: 0.03,
             stall_cycles: 100,
             unstick_cycles: 40,
-            leave_m: 0.3,
-            approach_units: 3,
-            approach_steer_units: 2,
-            near_reading: 100,
-            near_balance: 0.1,
-            approach_cycles: 400,
         }
     }
 }
@@ -473,7 +476,7 @@ impl Core {
             closed: false,
         };
         if self.arbiter.state().light_phase == LightPhase::Leaving
-            && self.pose().point().distance_to(self.forage.anchor) > self.forage.params.leave_m
+            && self.pose().point().distance_to(self.forage.anchor) > LEAVE_M
         {
             // Drive-to-light starts over, searching.
             self.arbiter.set_mode(behaviour::Mode::DriveToLight);
@@ -513,10 +516,9 @@ impl Core {
     /// turned to by pivoting backwards about the far wheel (the lamp ends up ahead, not under
     /// the body); one at 45 deg (S1, S4) by turning on the spot; one ahead (S2, S3) is
     /// driven to slowly, steering by the balance of the two sides. An approach that does not
-    /// arrive in `approach_cycles` is given up.
+    /// arrive in `APPROACH_CYCLES` is given up.
     fn forage_approach(&mut self, st: &behaviour::arbiter::BehaviourState) -> Option<MotorCommand> {
         use behaviour::arbiter::BehaviourSet;
-        let p = self.forage.params;
         let light = self.arbiter.params.light;
         if st.active.contains(BehaviourSet::AVOID | BehaviourSet::TURN) {
             return None;
@@ -526,19 +528,19 @@ impl Core {
         if v >= light.detect {
             return None;
         }
-        if self.forage.step_cycles > p.approach_cycles {
+        if self.forage.step_cycles > APPROACH_CYCLES {
             self.arbiter.release_light();
             self.forage.anchor = self.pose().point();
             return None;
         }
         let b = |k: usize| f32::from(light.dark.saturating_sub(a.get(k).copied().unwrap_or(0)));
-        let u = p.approach_units;
-        if v < p.near_reading {
+        let u = APPROACH_UNITS;
+        if v < NEAR_READING {
             let (left, right) = (b(0) + b(1) + b(2), b(3) + b(4) + b(5));
             let balance = (left - right) / (left + right).max(1.0);
-            return Some(if balance > p.near_balance {
+            return Some(if balance > NEAR_BALANCE {
                 MotorCommand::new(-2, 2)
-            } else if balance < -p.near_balance {
+            } else if balance < -NEAR_BALANCE {
                 MotorCommand::new(2, -2)
             } else {
                 MotorCommand::new(1, 1)
@@ -552,7 +554,7 @@ impl Core {
             _ => {
                 let (left, right) = (b(1) + b(2), b(3) + b(4));
                 let balance = (left - right) / (left + right).max(1.0);
-                let steer = behaviour::units(balance * f32::from(p.approach_steer_units));
+                let steer = behaviour::units(balance * f32::from(APPROACH_STEER_UNITS));
                 MotorCommand::new(u - steer, u + steer)
             }
         })
