@@ -8,15 +8,18 @@
 //! the task, reduced to the part the robot can sense here:
 //!
 //! - Search: wander with obstacle avoidance until a light is detected (T1), approach it to
-//!   the optimal distance (T2). A source the robot already emptied (its believed position
-//!   within `ForageParams::known_radius_m` of one in the list) is left at once (§6.1: leave
-//!   until the reading rises above T3). §7.4: gripping is triggered by the light threshold,
-//!   not by the IR sensors, which the lamp disturbs.
+//!   the optimal distance (T2), turning to face it and creeping in (`forage_approach`).
+//!   Every source reached is tried with the gripper, one believed emptied too (odometry
+//!   drifts too far over a search to skip it by position); an empty one is released and left
+//!   until the robot is `LEAVE_M` from it (§6.1 leaves until every reading is above T3, which
+//!   a small arena with several lamps hardly allows). §7.4: gripping is triggered by the
+//!   light threshold, not by the IR sensors, which the lamp disturbs.
 //! - Grasp: stopped, arm down, close the grip, read the object-present sensor. Nothing there:
 //!   the source is recorded as empty (`SourceEmpty`), the robot leaves it. Something there:
 //!   raise the arm, `ObjectGrasped`, head home.
 //! - Return: drift to the home point by odometry.
-//! - Drop: arm down, open the grip, `ObjectDelivered`, arm up, search again.
+//! - Drop: arm down, open the grip, `ObjectDelivered` as the object leaves the fingers, arm
+//!   up, search again.
 //!
 //! Departure from the paper: the home base is where foraging starts (the paper finds it first
 //! by its dead-end IR pattern and a visual mark). The global pose updates from the three
