@@ -58,17 +58,26 @@ pub struct ForageSite {
 }
 
 impl ForageSite {
-    /// The site for `arena`: its lights and first target (the built-in forage arena has
-    /// both), else drawn from `seed`: home at `start`, [`DRAWN_SOURCES`] lamps at free spots
+    /// The site for `arena`: its lights and first target if `start` is inside it (the
+    /// built-in forage arena has both), else drawn from `seed`: home at `start`, [`DRAWN_SOURCES`] lamps at free spots
     /// at least 0.3 m from home and from each other. Landmarks: three towers 6 cm outside the
     /// arena's left edge, at 30 %, 55 % and 95 % of its height (the paper's towers share an x
     /// and are 20 and 30 cm apart in its 80 cm arena).
     pub fn for_arena(world: &World, start: Point, seed: u64) -> ForageSite {
         let arena = world.arena();
-        let home = arena.target().copied().unwrap_or(Target {
-            centre: start,
-            radius_m: HOME_RADIUS_M,
-        });
+        // The firmware takes the start as its home base (it does not look for one), so the
+        // arena's target is the home only when the robot starts inside it. A generated box's
+        // target is the go-to goal, metres away: home there had the firmware put every
+        // object down at its start, outside the "home" (bench: 0 of 54 delivered, the
+        // firmware's count differing in every run).
+        let home = arena
+            .target()
+            .copied()
+            .filter(|t| (start - t.centre).norm() <= t.radius_m)
+            .unwrap_or(Target {
+                centre: start,
+                radius_m: HOME_RADIUS_M,
+            });
         let (sources, sources_added) = if arena.lights.is_empty() {
             (draw_sources(world, home.centre, seed), true)
         } else {

@@ -8,13 +8,16 @@ use emulator::scenario::{ScenarioOptions, Task};
 use robot_firmware::KHEPERA;
 
 /// Seeds run; each with the papers' noise (IR, light, wheel bias drawn from the seed).
-const SEEDS: [u64; 4] = [1, 2, 3, 4];
+const SEEDS: [u64; 10] = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10];
 /// Simulated time per run: 20 minutes (the paper's autonomy with both turrets is about a
 /// third of the Khepera's, some 20-30 minutes).
 const TIMEOUT_S: f64 = 1200.0;
-/// Objects that must be home, over all seeds (three per run; measured: 2, 2, 1, 1). The
-/// search (wandering until a lamp is seen from 25 cm) is what takes the time.
-const MIN_DELIVERED: usize = 5;
+/// Objects that must be home over the ten seeds (three per run). The paper's result is
+/// qualitative (seed 000 §7: one real run, two sources); the project's target (issue 14) is
+/// 90 %, 27 of 30, asserted as is. Measured: 29 of 30 (seed 5 brings 2), so the tolerance
+/// is two objects below the measurement; seeds 11-20 give 27 of 30. Before the approach and
+/// leaving fixes of issue 14: 17 of 30 (a delivery rate this test would fail).
+const MIN_DELIVERED: usize = 27;
 /// Largest true-versus-believed position error when an object is put down at home, metres
 /// (measured at most 27 mm): the landmark fix at home (seed 000 §6.2) bounds it, where plain
 /// odometry is tens of centimetres and tens of degrees off after a search.
@@ -46,6 +49,15 @@ fn the_khepera_carries_the_objects_home_over_several_seeds() {
         assert!(
             usize::from(r.firmware_grasped) >= r.delivered,
             "seed {seed}: every object home was reported gripped"
+        );
+        // The firmware counts a delivery when the object leaves its fingers, so it never
+        // reports fewer than are home, even when the run stops right after the last one
+        // lands (it counted once the arm was back up, 1 s later: seed 6 reported 2 of 3).
+        assert!(
+            usize::from(r.firmware_delivered) >= r.delivered,
+            "seed {seed}: firmware counted {} delivered, {} are home",
+            r.firmware_delivered,
+            r.delivered
         );
         assert!(
             r.firmware_delivered >= 1,
@@ -83,4 +95,29 @@ fn a_robot_without_a_gripper_is_refused() {
     let o = ScenarioOptions::new(&robot_firmware::MICRO_RATO, Task::Forage);
     let e = run_forage(builtin::forage().unwrap(), o).unwrap_err();
     assert!(e.to_string().contains("refused"), "{e}");
+}
+
+#[test]
+fn on_an_arena_whose_target_is_elsewhere_the_home_base_is_the_start() {
+    // A generated box's target is the go-to goal, metres from the start; the firmware's home
+    // is where it starts. With the home at the target every object was put down outside it
+    // (bench, 20 boxes: 0 of 54 delivered).
+    let g = emulator::arena_gen::generate(emulator::arena_gen::Kind::Box, 1).unwrap();
+    let start = g.arena.starts[0];
+    let target = *g.arena.target().unwrap();
+    assert!(
+        ((start.x - target.centre.x).powi(2) + (start.y - target.centre.y).powi(2)).sqrt()
+            > target.radius_m,
+        "the test needs a start outside the target"
+    );
+    let mut o = ScenarioOptions::new(&KHEPERA, Task::Forage);
+    o.timeout_s = 1.0;
+    let r = run_forage(g.arena, o).unwrap();
+    assert!(
+        (r.home[0] - start.x).abs() < 1e-9 && (r.home[1] - start.y).abs() < 1e-9,
+        "home {:?}, start ({}, {})",
+        r.home,
+        start.x,
+        start.y
+    );
 }
