@@ -33,6 +33,12 @@ pub trait Device {
     fn cycles(&self) -> u32;
     /// The control-cycle period, microseconds.
     fn cycle_us(&self) -> u32;
+    /// Simulated time (µs) by which the serving loop must look again when no byte arrives
+    /// from the station: the next millisecond while bytes are on the wire, else the next thing
+    /// the robot does on its own (its control cycle) or `IDLE_LOOK` at the latest.
+    fn next_due_us(&self) -> u64 {
+        self.now_us() + 1000
+    }
     /// Gives the robot its link key (PROTOCOL.md §13); `serve` calls it before the first byte.
     fn set_link_key(&mut self, _key: Option<&[u8; protocol::sign::KEY_LEN]>) {}
 }
@@ -153,8 +159,12 @@ impl Jitter {
     }
 }
 
-/// Wall time between two pty polls in real-time mode.
+/// Wall time between two pty polls in real-time mode while bytes are on the wire.
 const TICK: Duration = Duration::from_millis(1);
+/// Longest simulated time between two looks while the wire is idle: the most a frame the
+/// robot sends unprompted (telemetry, an event) can leave late, about 46 byte times at
+/// 115 200 baud. Bytes from the station wake the loop at once whatever this is.
+pub const IDLE_LOOK_US: u64 = 4_000;
 /// Simulated milliseconds between pty polls at maximum speed.
 const MAX_SPEED_BATCH_MS: u32 = 20;
 /// Most simulated steps one tick may catch up, so a stalled host does not freeze the pty.
@@ -248,8 +258,16 @@ pub fn serve<D: Device>(
         let sent = pty.as_ref().map_or(0, |p| write_all_possible(p, &faulted));
         stats.bytes_unsent += (faulted.len() - sent) as u64;
 
-        if let Speed::Factor(_) = opts.speed {
-            std::thread::sleep(TICK);
+        if let Speed::Factor(f) = opts.speed {
+            // Driven by the next event (a byte due on the wire, the robot's next cycle, or
+            // bytes from the station, which wake the wait at once) instead of every 1 ms: an
+            // idle link costs a few wake-ups, and a command is read as it comes.
+            let due_us = dev.next_due_us().saturating_sub(dev.now_us());
+            let wait = Duration::from_secs_f64(due_us as f64 * 1e-6 / f).max(TICK / 4);
+            match &pty {
+                Some(p) => p.wait_input(wait),
+                None => std::thread::sleep(wait),
+            }
         }
     }
     stats.sim_s = (dev.now_us() - sim0) as f64 * 1e-6;
@@ -403,6 +421,15 @@ impl Device for crate::sim::Sim {
 
     fn cycle_us(&self) -> u32 {
         self.robot().core.profile.cycle_us
+    }
+
+    fn next_due_us(&self) -> u64 {
+        let now = self.now_us();
+        if !self.uart().idle() {
+            return now + 1000;
+        }
+        let cycle = self.robot().core.timing.next_cycle_us;
+        cycle.clamp(now + 1000, now + IDLE_LOOK_US)
     }
 
     fn set_link_key(&mut self, key: Option<&[u8; protocol::sign::KEY_LEN]>) {
