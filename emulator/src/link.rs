@@ -530,6 +530,50 @@ const KEY_FILE_MAX: u64 = 4096;
 mod tests {
     use super::*;
 
+    /// The serving loop used to wake every millisecond whatever happened; now an idle wire
+    /// lets it sleep until the robot's next cycle (at most `IDLE_LOOK_US`), and bytes on the
+    /// wire bring back the 1 ms steps that move them.
+    #[test]
+    fn an_idle_wire_lets_the_loop_sleep_and_bytes_on_it_bring_back_1_ms_steps() {
+        let arena = crate::builtin::micro_rato_99(&crate::arena::LoadOptions::default()).unwrap();
+        let cfg = crate::sim::SimConfig::new(&robot_firmware::MICRO_RATO);
+        let mut sim = crate::sim::Sim::new(arena, cfg).unwrap();
+        // No station: the robot sends nothing; between two cycles the wire is idle.
+        let mut idle_dues = 0;
+        for _ in 0..200 {
+            sim.step();
+            let due = sim.next_due_us() - sim.now_us();
+            assert!((1000..=IDLE_LOOK_US).contains(&due), "{due} us");
+            idle_dues += usize::from(due > 1000);
+        }
+        assert!(
+            idle_dues > 100,
+            "only {idle_dues} of 200 looks were later than 1 ms"
+        );
+        // A station's bytes on their way in: stepped every millisecond until delivered.
+        Device::push_inbound(&mut sim, &[0u8; 40]);
+        assert_eq!(sim.next_due_us() - sim.now_us(), 1000);
+    }
+
+    /// Bytes from the station end the loop's wait at once (it used to sleep its 1 ms out).
+    #[test]
+    fn bytes_from_the_station_end_the_wait() {
+        let pty = Pty::open(None).unwrap();
+        let slave = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(pty.slave_path())
+            .unwrap();
+        std::io::Write::write_all(&mut &slave, b"x").unwrap();
+        let t0 = Instant::now();
+        pty.wait_input(Duration::from_secs(20));
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "waited the timeout out"
+        );
+        drop(slave);
+    }
+
     #[test]
     fn key_files_are_read_whole_only_when_short() {
         let dir = std::env::temp_dir();
