@@ -287,9 +287,10 @@ impl Gripper {
         let was_closed = self.grip >= 1.0;
         let target = if self.cmd.closed { 1.0 } else { 0.0 };
         self.grip = approach(self.grip, target, dt_s / self.params.grip_s.max(1e-3));
-        let fingers = self.fingers(pose);
+        // Where the fingers are only matters when they close on something or carry it: an
+        // idle gripper (most of a run) does not pay a sin_cos every step.
         if !was_closed && self.grip >= 1.0 && self.carried.is_none() && self.arm_down() {
-            if let Some(i) = self.loose_at(fingers) {
+            if let Some(i) = self.loose_at(self.fingers(pose)) {
                 self.carried = Some(i);
                 if let Some(o) = self.objects.get_mut(i) {
                     o.state = ObjectState::Carried;
@@ -297,6 +298,7 @@ impl Gripper {
             }
         }
         if let Some(i) = self.carried {
+            let fingers = self.fingers(pose);
             let Some(o) = self.objects.get_mut(i) else {
                 return;
             };

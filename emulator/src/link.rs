@@ -38,6 +38,12 @@ pub trait Device {
     fn to_robot_dropped(&self) -> u64 {
         0
     }
+    /// Simulated time (µs) by which the serving loop must look again when no byte arrives
+    /// from the station: the next millisecond while bytes are on the wire, else the next thing
+    /// the robot does on its own (its control cycle) or `IDLE_LOOK` at the latest.
+    fn next_due_us(&self) -> u64 {
+        self.now_us() + 1000
+    }
     /// Gives the robot its link key (PROTOCOL.md §13); `serve` calls it before the first byte.
     fn set_link_key(&mut self, _key: Option<&[u8; protocol::sign::KEY_LEN]>) {}
 }
@@ -161,8 +167,12 @@ impl Jitter {
     }
 }
 
-/// Wall time between two pty polls in real-time mode.
+/// Wall time between two pty polls in real-time mode while bytes are on the wire.
 const TICK: Duration = Duration::from_millis(1);
+/// Longest simulated time between two looks while the wire is idle: the most a frame the
+/// robot sends unprompted (telemetry, an event) can leave late, about 46 byte times at
+/// 115 200 baud. Bytes from the station wake the loop at once whatever this is.
+pub const IDLE_LOOK_US: u64 = 4_000;
 /// Simulated milliseconds between pty polls at maximum speed.
 const MAX_SPEED_BATCH_MS: u32 = 20;
 /// Most simulated steps one tick may catch up, so a stalled host does not freeze the pty.
@@ -256,8 +266,16 @@ pub fn serve<D: Device>(
         let sent = pty.as_ref().map_or(0, |p| write_all_possible(p, &faulted));
         stats.bytes_unsent += (faulted.len() - sent) as u64;
 
-        if let Speed::Factor(_) = opts.speed {
-            std::thread::sleep(TICK);
+        if let Speed::Factor(f) = opts.speed {
+            // Driven by the next event (a byte due on the wire, the robot's next cycle, or
+            // bytes from the station, which wake the wait at once) instead of every 1 ms: an
+            // idle link costs a few wake-ups, and a command is read as it comes.
+            let due_us = dev.next_due_us().saturating_sub(dev.now_us());
+            let wait = Duration::from_secs_f64(due_us as f64 * 1e-6 / f).max(TICK / 4);
+            match &pty {
+                Some(p) => p.wait_input(wait),
+                None => std::thread::sleep(wait),
+            }
         }
     }
     stats.sim_s = (dev.now_us() - sim0) as f64 * 1e-6;
@@ -418,6 +436,15 @@ impl Device for crate::sim::Sim {
         self.robot().core.profile.cycle_us
     }
 
+    fn next_due_us(&self) -> u64 {
+        let now = self.now_us();
+        if !self.uart().idle() {
+            return now + 1000;
+        }
+        let cycle = self.robot().core.timing.next_cycle_us;
+        cycle.clamp(now + 1000, now + IDLE_LOOK_US)
+    }
+
     fn set_link_key(&mut self, key: Option<&[u8; protocol::sign::KEY_LEN]>) {
         self.robot_mut().link.set_key(key);
         self.uart_mut()
@@ -515,6 +542,50 @@ const KEY_FILE_MAX: u64 = 4096;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The serving loop used to wake every millisecond whatever happened; now an idle wire
+    /// lets it sleep until the robot's next cycle (at most `IDLE_LOOK_US`), and bytes on the
+    /// wire bring back the 1 ms steps that move them.
+    #[test]
+    fn an_idle_wire_lets_the_loop_sleep_and_bytes_on_it_bring_back_1_ms_steps() {
+        let arena = crate::builtin::micro_rato_99(&crate::arena::LoadOptions::default()).unwrap();
+        let cfg = crate::sim::SimConfig::new(&robot_firmware::MICRO_RATO);
+        let mut sim = crate::sim::Sim::new(arena, cfg).unwrap();
+        // No station: the robot sends nothing; between two cycles the wire is idle.
+        let mut idle_dues = 0;
+        for _ in 0..200 {
+            sim.step();
+            let due = sim.next_due_us() - sim.now_us();
+            assert!((1000..=IDLE_LOOK_US).contains(&due), "{due} us");
+            idle_dues += usize::from(due > 1000);
+        }
+        assert!(
+            idle_dues > 100,
+            "only {idle_dues} of 200 looks were later than 1 ms"
+        );
+        // A station's bytes on their way in: stepped every millisecond until delivered.
+        Device::push_inbound(&mut sim, &[0u8; 40]);
+        assert_eq!(sim.next_due_us() - sim.now_us(), 1000);
+    }
+
+    /// Bytes from the station end the loop's wait at once (it used to sleep its 1 ms out).
+    #[test]
+    fn bytes_from_the_station_end_the_wait() {
+        let pty = Pty::open(None).unwrap();
+        let slave = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(pty.slave_path())
+            .unwrap();
+        std::io::Write::write_all(&mut &slave, b"x").unwrap();
+        let t0 = Instant::now();
+        pty.wait_input(Duration::from_secs(20));
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "waited the timeout out"
+        );
+        drop(slave);
+    }
 
     #[test]
     fn key_files_are_read_whole_only_when_short() {

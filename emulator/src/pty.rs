@@ -100,6 +100,23 @@ impl Pty {
         }
     }
 
+    /// Waits up to `timeout` for the station to write something (returns at once if it has).
+    /// With no station attached the master reports a hang-up at once: then this just sleeps,
+    /// so the serving loop does not spin.
+    pub fn wait_input(&self, timeout: std::time::Duration) {
+        use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+        let ms = u16::try_from(timeout.as_millis()).unwrap_or(u16::MAX);
+        let mut fds = [PollFd::new(self.master.as_fd(), PollFlags::POLLIN)];
+        let ready = poll(&mut fds, PollTimeout::from(ms));
+        let hung_up = fds
+            .first()
+            .and_then(PollFd::revents)
+            .is_some_and(|r| r.intersects(PollFlags::POLLHUP | PollFlags::POLLERR));
+        if ready.is_err() || hung_up {
+            std::thread::sleep(timeout);
+        }
+    }
+
     /// Writes bytes for the station; returns how many the pty took (the rest are dropped by
     /// the caller, as a UART with a full buffer would).
     pub fn write(&self, bytes: &[u8]) -> usize {

@@ -257,6 +257,15 @@ impl Uart {
         self.outbound.len()
     }
 
+    /// Whether no byte is on its way in either direction (nothing to send, nothing arriving,
+    /// nothing received that the robot has not read): stepping then moves no byte.
+    pub fn idle(&self) -> bool {
+        self.tx_fifo.is_empty()
+            && self.truth_queue.is_empty()
+            && self.inbound.is_empty()
+            && self.rx_fifo.is_empty()
+    }
+
     // ---- the wire ----
 
     /// Bits the line can have carried by `now_us`.

@@ -79,6 +79,11 @@ pub enum Sub {
         #[arg(long, default_value_t = 5.0, value_parser = parse_seconds, global = true,
           allow_negative_numbers = true)]
         timeout: f64,
+        /// Send the command this many times, one after another, and report the round trips'
+        /// p50 / p99 (the README's round-trip figure).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000),
+          global = true)]
+        repeat: u32,
         #[command(subcommand)]
         command: SendCmd,
     },

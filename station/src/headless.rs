@@ -50,8 +50,9 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             port,
             json,
             timeout,
+            repeat,
             command,
-        }) => send(&port, json, timeout, &command).await,
+        }) => send(&port, json, timeout, repeat, &command).await,
         Some(Sub::Stats {
             port,
             seconds,
@@ -257,15 +258,85 @@ pub(crate) async fn connect(
     }
 }
 
+/// Longest wait for the robot's periodic frames to pass before a command goes out, ms (on
+/// top of one telemetry period).
+const QUIET_WAIT_MARGIN_MS: u64 = 50;
+
+/// Waits until the robot's next periodic burst (a telemetry frame, and the emulator's truth
+/// frame that follows it) has been received, so that the line towards us is quiet and the
+/// command's ack does not queue behind it in the robot's transmitter. Returns at once for a
+/// robot that sends no telemetry, and after one telemetry period at most.
+async fn after_periodic_burst(link: &mut RunningLink, peer: &PeerInfo) {
+    if peer.telemetry_hz == 0 {
+        return;
+    }
+    while link.events.try_recv().is_ok() {}
+    let period = 1000 / u64::from(peer.telemetry_hz);
+    let deadline = Instant::now() + Duration::from_millis(period + QUIET_WAIT_MARGIN_MS);
+    let truth_follows = peer.has(protocol::caps::EMULATED);
+    let mut seen_telemetry = false;
+    while let Ok(Some(ev)) = tokio::time::timeout_at(deadline, link.events.recv()).await {
+        match ev {
+            LinkEvent::Telemetry(_) if !truth_follows => return,
+            LinkEvent::Telemetry(_) => seen_telemetry = true,
+            LinkEvent::Truth(_) if seen_telemetry => return,
+            _ => {}
+        }
+    }
+}
+
+/// Round trips of a repeated `send`, microseconds (nearest rank).
+#[derive(Debug, serde::Serialize)]
+struct RoundTrips {
+    samples: usize,
+    p50_us: u64,
+    p99_us: u64,
+    max_us: u64,
+}
+
+impl RoundTrips {
+    fn of(mut us: Vec<u64>) -> Option<RoundTrips> {
+        us.sort_unstable();
+        let pick = |q: f64| {
+            let i = ((us.len() as f64 * q).ceil() as usize).clamp(1, us.len());
+            us.get(i - 1).copied().unwrap_or(0)
+        };
+        Some(RoundTrips {
+            samples: us.len(),
+            p50_us: pick(0.5),
+            p99_us: pick(0.99),
+            max_us: *us.last()?,
+        })
+    }
+}
+
 async fn send(
     port: &RequiredPort,
     json: bool,
     timeout: f64,
+    repeat: u32,
     cmd: &SendCmd,
 ) -> anyhow::Result<ExitCode> {
-    let (mut link, _peer) = connect(port, timeout).await?;
+    let (mut link, peer) = connect(port, timeout).await?;
     let command = cmd.to_command()?;
-    let outcome = link.handle.call(command).await;
+    // The robot starts its telemetry as the session starts: a command sent at once was
+    // answered behind the first telemetry and truth frames (p50 9 ms for 2.1 ms of bytes).
+    let mut round_trips = Vec::new();
+    let mut outcome = CommandOutcome::Failed(crate::link::CommandFailure::NotConnected);
+    for _ in 0..repeat {
+        after_periodic_burst(&mut link, &peer).await;
+        let sent = Instant::now();
+        outcome = link.handle.call(command).await;
+        if !outcome.is_ack() {
+            break;
+        }
+        round_trips.push(sent.elapsed().as_micros() as u64);
+    }
+    let round_trips = if repeat > 1 {
+        RoundTrips::of(round_trips)
+    } else {
+        None
+    };
     // A plan made on the robot is named by its PlanInstalled event: `execute` needs the id.
     let plan_id = match (command, outcome.is_ack()) {
         (protocol::Command::Plan { .. }, true) => {
@@ -320,12 +391,25 @@ async fn send(
             json!({"outcome": "failed", "command": what, "error": why.to_string()}),
         ),
     };
+    let mut value = value;
+    if let (Some(r), Some(obj)) = (&round_trips, value.as_object_mut()) {
+        obj.insert("round_trip".into(), serde_json::to_value(r)?);
+    }
     if json {
         println!("{}", serde_json::to_string_pretty(&value)?);
     } else if ok {
         println!("{}", crate::terminal_text::printable_text(&text));
     } else {
         eprintln!("{}", crate::terminal_text::printable_text(&text));
+    }
+    if let (Some(r), false) = (&round_trips, json) {
+        println!(
+            "round trip over {} sends: p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms",
+            r.samples,
+            r.p50_us as f64 / 1000.0,
+            r.p99_us as f64 / 1000.0,
+            r.max_us as f64 / 1000.0
+        );
     }
     Ok(if ok {
         ExitCode::SUCCESS

@@ -163,6 +163,12 @@ impl LinkMachine {
         matches!(self.state, State::Connected { .. })
     }
 
+    /// Whether an answer is awaited: a command unanswered, or a Hello (the port should then be
+    /// read as bytes come, not on a timer grid).
+    pub fn awaiting_reply(&self) -> bool {
+        self.commands.in_flight() > 0 || matches!(self.state, State::Handshaking { .. })
+    }
+
     /// Bytes to write to the port, in order; empties the buffer.
     pub fn take_output(&mut self) -> Vec<u8> {
         std::mem::take(&mut self.out)

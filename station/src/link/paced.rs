@@ -10,11 +10,18 @@
 //! a quiet link costs no wake-ups, a busy one one per slot. Writes are non-blocking; a full
 //! output buffer is retried every `WRITE_RETRY` (the link task's write timeout notices a
 //! wedged port). Flushing does not wait for the bytes to leave (`tcdrain` would block the
-//! thread). Costs up to one slot of latency on received bytes. What can fail: the port's I/O.
+//! thread). Costs up to one slot of latency on received bytes, except while a reply is awaited:
+//! then (`Prompt` set by the link task, while a command or a Hello is unanswered) the port is
+//! read as soon as bytes come, as an unpaced port is, so an ack never waits for the next slot
+//! (it used to: every round trip took a slot, p50 33 ms for 2.1-2.4 ms of bytes). The flag is
+//! looked at on every poll, and the link task polls the read afresh after each send. What can
+//! fail: the port's I/O.
 
 use std::future::Future;
 use std::io::{self, Read, Write};
 use std::pin::Pin;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::task::{ready, Context, Poll};
 use std::time::Duration;
 
@@ -28,9 +35,25 @@ use crate::pace;
 /// Wait before trying a write again when the port's output buffer is full.
 pub const WRITE_RETRY: Duration = Duration::from_millis(2);
 
+/// Set while a reply is awaited: the paced port then reads bytes as they come. Shared between
+/// the link task (which knows what is in flight) and the port (which reads).
+#[derive(Clone, Debug, Default)]
+pub struct Prompt(Arc<AtomicBool>);
+
+impl Prompt {
+    pub fn set(&self, on: bool) {
+        self.0.store(on, Ordering::Relaxed);
+    }
+
+    pub fn get(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
 /// A non-blocking serial port read on the pace grid while busy; see the module's note.
 pub struct PacedSerial {
     state: State,
+    prompt: Prompt,
     /// Armed while a write waits for room in the output buffer.
     write_retry: Option<Pin<Box<Sleep>>>,
 }
@@ -48,10 +71,12 @@ enum State {
 }
 
 impl PacedSerial {
-    /// Takes an open port (non-blocking, as `mio_serial` opens it). Needs a tokio runtime.
-    pub fn new(port: SerialStream) -> io::Result<PacedSerial> {
+    /// Takes an open port (non-blocking, as `mio_serial` opens it); reads it as bytes come
+    /// while `prompt` is set. Needs a tokio runtime.
+    pub fn new(port: SerialStream, prompt: Prompt) -> io::Result<PacedSerial> {
         Ok(PacedSerial {
             state: State::Watched(watch(port)?),
+            prompt,
             write_retry: None,
         })
     }
@@ -108,7 +133,8 @@ impl AsyncRead for PacedSerial {
                     };
                     match got {
                         Ok(Ok(Some(n))) => {
-                            if n > 0 {
+                            // A reply is awaited: stay watched, read each byte as it comes.
+                            if n > 0 && !this.prompt.get() {
                                 // Busy: stop watching; look again on the grid.
                                 if let State::Watched(fd) =
                                     std::mem::replace(&mut this.state, State::Broken)
@@ -126,7 +152,10 @@ impl AsyncRead for PacedSerial {
                     }
                 }
                 State::Paced { port, next } => {
-                    ready!(next.as_mut().poll(cx));
+                    // A reply is awaited: look now, not at the next slot.
+                    if !this.prompt.get() {
+                        ready!(next.as_mut().poll(cx));
+                    }
                     let room = buf.remaining();
                     match read_now(port, buf)? {
                         Some(n) => {

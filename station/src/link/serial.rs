@@ -8,7 +8,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::paced::PacedSerial;
+use super::paced::{PacedSerial, Prompt};
 use super::transport::{Connector, OpenError, Transport};
 
 /// Default baud rate (PROTOCOL.md §1).
@@ -20,6 +20,8 @@ pub struct SerialConnector {
     path: PathBuf,
     baud: u32,
     paced: bool,
+    /// Shared with the paced port it opens (`Connector::awaiting_reply`).
+    prompt: Prompt,
 }
 
 impl SerialConnector {
@@ -28,6 +30,7 @@ impl SerialConnector {
             path: path.into(),
             baud,
             paced: false,
+            prompt: Prompt::default(),
         }
     }
 
@@ -60,7 +63,7 @@ impl Connector for SerialConnector {
         let mut port =
             mio_serial::SerialStream::open(&builder).map_err(|e| classify(&self.path, &e))?;
         discard_pending_input(&mut port);
-        PacedSerial::new(port)
+        PacedSerial::new(port, self.prompt.clone())
             .map(|s| Box::new(s) as Box<dyn Transport>)
             .map_err(|e| OpenError::Other {
                 path: self.path.clone(),
@@ -71,6 +74,10 @@ impl Connector for SerialConnector {
     fn present(&self) -> bool {
         // Follows symlinks (the emulator's `--link`, udev's by-id names) to the device.
         self.path.exists()
+    }
+
+    fn awaiting_reply(&self, awaiting: bool) {
+        self.prompt.set(awaiting);
     }
 }
 

@@ -252,6 +252,8 @@ impl Task {
                 return Ended::Closed(reason);
             }
             self.forward();
+            // Set after every send and every answer, before the read is polled again.
+            connector.awaiting_reply(self.machine.awaiting_reply());
             let mut deadline = self.t0 + Duration::from_millis(self.machine.next_deadline());
             if self.opts.paced {
                 deadline = crate::pace::slot_at_or_after(deadline);

@@ -27,6 +27,9 @@ pub trait Connector: Send + Sync + 'static {
     fn present(&self) -> bool {
         true
     }
+    /// Whether a reply is awaited now (a command or a Hello unanswered): a port that delays
+    /// its reads to save wake-ups (`paced`) reads at once meanwhile. Others ignore it.
+    fn awaiting_reply(&self, _awaiting: bool) {}
 }
 
 /// Why a port could not be opened.
