@@ -42,43 +42,127 @@ fn the_reactive_search_reaches_the_goal_area_and_maps_on_the_way() {
     }
 }
 
+/// Seed 004 (Dom Dinis, Micro-Rato'99; /work/shared/design/seed-004-dom-dinis.md): the paper's
+/// figure is qualitative, "plans beat the reactive search": run 2, executing the plan made on
+/// the robot's own explored map from the start to where run 1 met the goal, is faster than
+/// run 1, the reactive beacon search that made the map.
+///
+/// The project's per-seed figures, seeds 1-10, 300 s timeout (issue 20; release build,
+/// `robot-emulator run --task explore-then-plan --seed N --timeout 300 --json`):
+///
+/// | seed | run 1 s | run 2 s | ratio | reached |
+/// |------|---------|---------|-------|---------|
+/// | 1    | 129.7   | 75.8    | 0.58  | yes     |
+/// | 2    | 127.3   | 84.7    | 0.67  | yes     |
+/// | 3    | 196.3   | 54.3    | 0.28  | yes     |
+/// | 4    | 123.1   | 47.8    | 0.39  | yes     |
+/// | 5    | 196.9   | 45.6    | 0.23  | yes     |
+/// | 6    | 121.4   | 80.4    | 0.66  | yes     |
+/// | 7    | 228.7   | 58.8    | 0.26  | yes     |
+/// | 8    | reached | -       | -     | no: plan refused (`Unreachable`) |
+/// | 9    | 125.8   | 51.6    | 0.41  | yes     |
+/// | 10   | 121.0   | 45.6    | 0.38  | yes     |
+///
+/// Paired means (the 9 seeds where both runs reached): run 1 152.2 s, run 2 60.5 s, 0.40.
+/// No reached run 2 is slower than its run 1 on these seeds (worst 0.67, seed 2); the 1.16x
+/// and 1.34x of the earlier measurement are not reproduced on seeds 1-10 at this firmware.
+///
+/// Why seed 8 fails: `Segment` segments known-FREE cells only (`Passable::Free`), so a plan
+/// never crosses unknown cells; on seed 8 the search's map does not join start and goal in
+/// free cells. The start's room (cells x 0-5) joins the corridor along y 2-3 (x 5-12), but
+/// the goal room (x 9-11, y 5-7) touches that corridor only through cell (9, 4), still
+/// unknown, and diagonally at (12, 4)-(11, 5), and the segmentation's regions join only
+/// across edges. A partial explored map, not a bad plan: the refusal counts as a failed
+/// run 2 here (it is neither faster nor reached).
+///
+/// Outside this set, for the record (not asserted): seeds 11-40 give 4 more refusals
+/// (11, 22, 28, 36), seed 34 times out in run 2 (plan of 10 regions, 300 s),
+/// and seed 21 is the one reached run 2 slower than run 1, 1.16x (139.4 s against 119.9 s,
+/// 11.8 m driven and 2 collisions against a typical 8-10 m and 0-1: contact and avoidance
+/// during plan execution, not a longer plan).
+///
+/// What is asserted, per seed and in sum (tolerances leave room for one seed like 21):
+/// - at least 9 of 10 run 2s reach the goal area (measured 9: seed 8 refused);
+/// - at least 8 of 10 seeds have run 2 faster than run 1 (measured 9); a refused or failed
+///   run 2 counts as not faster;
+/// - every reached run 2 takes at most 1.5x its own run 1 (measured worst 0.67x);
+/// - the paired mean of run 2 is under 0.75x that of run 1 (measured 0.40).
+///
+/// A broken planner fails it: one that refuses or plans through walls drops the reached
+/// count. Checked by mutation (issue 20, not committed): run 2 replaced by a second reactive
+/// search from the start (StartExploration instead of ExecutePlan) gives 6 of 10 faster,
+/// seed 6 at 1.78x and a paired mean of 0.94; the test fails on the 8-of-10 count, and the
+/// 1.5x bound and the 0.75 mean would fail too.
 #[test]
-fn over_ten_seeds_plans_on_the_explored_map_reach_the_goal_markedly_faster() {
-    let mut run1 = Vec::new();
-    let mut run2 = Vec::new();
-    let mut reached = 0;
-    for seed in 1..=10 {
+fn over_ten_seeds_plans_on_the_explored_map_reach_the_goal_faster_seed_by_seed() {
+    const SEEDS: std::ops::RangeInclusive<u64> = 1..=10;
+    const MIN_REACHED: usize = 9;
+    const MIN_FASTER: usize = 8;
+    const MAX_RATIO: f64 = 1.5;
+    const MAX_MEAN_RATIO: f64 = 0.75;
+    let mut paired = Vec::new();
+    let mut faster = 0;
+    let mut too_slow = Vec::new();
+    println!("seed  run 1 s  run 2 s  ratio  run 2");
+    for seed in SEEDS {
         let r = match try_run(Task::ExploreThenPlan, seed) {
-            Err(ScenarioError::Refused { what: "Plan", .. }) => continue,
+            Err(ScenarioError::Refused { what: "Plan", .. }) => {
+                println!("{seed:>4}        -        -      -  plan refused");
+                continue;
+            }
             other => other.unwrap(),
         };
         let explore = &r.runs[0];
         assert_eq!(explore.kind, "explore");
         assert!(explore.reached, "seed {seed}: exploration failed: {r:?}");
-        run1.push(explore.sim_s);
-        if let Some(execute) = r.runs.get(1) {
-            assert_eq!(execute.kind, "execute_plan");
-            assert!(
-                execute.plan_regions.unwrap_or(0) > 3,
-                "seed {seed}: {execute:?}"
-            );
-            if r.reached {
-                reached += 1;
-                run2.push(execute.sim_s);
+        let Some(execute) = r.runs.get(1) else {
+            println!("{seed:>4} {:>8.1}        -      -  no run 2", explore.sim_s);
+            continue;
+        };
+        assert_eq!(execute.kind, "execute_plan");
+        assert!(
+            execute.plan_regions.unwrap_or(0) > 3,
+            "seed {seed}: {execute:?}"
+        );
+        let ratio = execute.sim_s / explore.sim_s;
+        println!(
+            "{seed:>4} {:>8.1} {:>8.1} {ratio:>6.2}  {}",
+            explore.sim_s,
+            execute.sim_s,
+            if r.reached { "reached" } else { "NOT reached" }
+        );
+        if r.reached {
+            paired.push((explore.sim_s, execute.sim_s));
+            if ratio < 1.0 {
+                faster += 1;
+            }
+            if ratio > MAX_RATIO {
+                too_slow.push((seed, ratio));
             }
         }
     }
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-    let (m1, m2) = (mean(&run1), mean(&run2));
-    println!("10 seeds: {reached} reached; run 1 mean {m1:.1} s, run 2 mean {m2:.1} s");
-    // The 20-seed report (closing note of the exploration issue) had 20/20; allow one miss.
-    assert!(
-        reached >= 9,
-        "only {reached}/10 plan executions reached the goal area"
+    let n = paired.len();
+    let m1 = paired.iter().map(|p| p.0).sum::<f64>() / n.max(1) as f64;
+    let m2 = paired.iter().map(|p| p.1).sum::<f64>() / n.max(1) as f64;
+    println!(
+        "{n} of 10 reached, {faster} of 10 faster; paired means run 1 {m1:.1} s, run 2 {m2:.1} s ({:.2})",
+        m2 / m1
     );
     assert!(
-        m2 < 0.75 * m1,
-        "run 2 ({m2:.1} s) is not markedly faster than run 1 ({m1:.1} s)"
+        n >= MIN_REACHED,
+        "only {n}/10 plan executions reached the goal area"
+    );
+    assert!(
+        faster >= MIN_FASTER,
+        "run 2 faster than run 1 on only {faster} of 10 seeds (want >= {MIN_FASTER})"
+    );
+    assert!(
+        too_slow.is_empty(),
+        "run 2 over {MAX_RATIO}x run 1 (seed, ratio): {too_slow:?}"
+    );
+    assert!(
+        m2 < MAX_MEAN_RATIO * m1,
+        "run 2 ({m2:.1} s) is not markedly faster than run 1 ({m1:.1} s) on the paired mean"
     );
 }
 

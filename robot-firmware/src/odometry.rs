@@ -646,7 +646,7 @@ mod tests {
     ];
 
     #[test]
-    fn tables_1_and_2_are_reproduced_by_reintegrating_one_simulated_two_lap_run() {
+    fn tables_1_and_2_arithmetic_of_a_synthetic_two_lap_path() {
         // All 18 entries fit Δα = 719.7 - 738.0 (Δl/0.080)(52/d): the robot truly turned
         // 719.7° (0.3° short of two laps) while its encoders, read at d = 52, Δl = 0.080, said
         // 738.0°. The encoder-count difference ΣnR - ΣnL is a whole number of pulses: 738.0°
