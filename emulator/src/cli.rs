@@ -79,6 +79,9 @@ pub struct GenerateArgs {
     /// name for a maze.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
+    /// Replace existing files at `--out` (and its grid file); never a device, FIFO or directory.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `bench` options.

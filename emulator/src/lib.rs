@@ -11,6 +11,7 @@ pub mod forage;
 pub mod geometry;
 pub mod line_correct;
 pub mod link;
+pub mod output_file;
 pub mod physics;
 pub mod pty;
 pub mod rng;

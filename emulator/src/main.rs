@@ -32,7 +32,8 @@ fn arena(args: &emulator::cli::ArenaArgs) -> Result<(), String> {
             // Refuse a bad --out before generating anything.
             emulator::arena_gen::out_paths(g.kind, &g.out).map_err(|e| e.to_string())?;
             let arena = emulator::arena_gen::generate(g.kind, g.seed).map_err(|e| e.to_string())?;
-            let written = emulator::arena_gen::write(&arena, &g.out).map_err(|e| e.to_string())?;
+            let written =
+                emulator::arena_gen::write(&arena, &g.out, g.force).map_err(|e| e.to_string())?;
             for p in written {
                 println!("{}", p.display());
             }

@@ -121,7 +121,7 @@ fn a_robot_started_in_the_target_is_not_a_success() {
     let dir = std::env::temp_dir().join(format!("bench-inside-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let lab = dir.join("insideLab.xml");
-    emulator::arena_gen::write(&g, &lab).expect("writes");
+    emulator::arena_gen::write(&g, &lab, false).expect("writes");
     // Rewrite the grid file with the start on the goal.
     let unit = emulator::arena::CIBERRATO_UNIT_M;
     let grid = format!(

@@ -26,7 +26,8 @@ pub mod export;
 pub mod headless;
 pub mod input;
 pub mod link;
-pub mod output_file;
+/// Lives in the emulator crate so that `robot-emulator arena generate` writes the same way.
+pub use emulator::output_file;
 pub mod pace;
 pub mod plan;
 pub mod record;

@@ -121,6 +121,10 @@ pub enum GenError {
         /// The error.
         source: std::io::Error,
     },
+    /// The output helper refused or failed (an existing file without `--force`, a special
+    /// file, the directory).
+    #[error("{0}")]
+    Output(crate::output_file::OutputError),
     /// `--out` cannot name the grid file that goes with the lab.
     #[error("{0}")]
     OutPath(String),
@@ -292,9 +296,11 @@ pub fn out_paths(kind: Kind, out: &Path) -> Result<Vec<PathBuf>, GenError> {
 }
 
 /// Writes a generated arena to `out` (and its grid file beside it); returns the files written.
-/// Each file is written to a temporary name and renamed, so a failure leaves no half-written
-/// file and an existing file is only ever replaced whole.
-pub fn write(g: &Generated, out: &Path) -> Result<Vec<PathBuf>, GenError> {
+/// Every file goes through [`crate::output_file`] (an O_EXCL temporary with an unpredictable
+/// name, renamed into place; an existing file only with `force`, a special file never), so a
+/// failure leaves no half-written file.
+pub fn write(g: &Generated, out: &Path, force: bool) -> Result<Vec<PathBuf>, GenError> {
+    use std::io::Write as _;
     let paths = out_paths(g.kind, out)?;
     let texts: Vec<&str> = match &g.text {
         ArenaText::CiberRato { lab, grid } => vec![lab, grid],
@@ -302,54 +308,22 @@ pub fn write(g: &Generated, out: &Path) -> Result<Vec<PathBuf>, GenError> {
     };
     let mut staged = Vec::new();
     for (path, text) in paths.iter().zip(texts) {
-        match stage(path, text) {
-            Ok(tmp) => staged.push((tmp, path.clone())),
-            Err(e) => {
-                for (tmp, _) in &staged {
-                    let _ = std::fs::remove_file(tmp);
-                }
-                return Err(e);
-            }
-        }
+        let mut file =
+            crate::output_file::OutputFile::create(path, force).map_err(GenError::Output)?;
+        file.writer()
+            .write_all(text.as_bytes())
+            .map_err(|source| GenError::Io {
+                path: path.clone(),
+                source,
+            })?;
+        staged.push(file);
     }
-    // The grid first: a lab never appears without its start positions beside it.
-    for (tmp, path) in staged.iter().rev() {
-        std::fs::rename(tmp, path).map_err(|source| GenError::Io {
-            path: path.clone(),
-            source,
-        })?;
+    // The grid first: a lab never appears without its start positions beside it. Dropping the
+    // files not yet committed removes their temporaries.
+    for file in staged.into_iter().rev() {
+        file.commit().map_err(GenError::Output)?;
     }
     Ok(paths)
-}
-
-fn stage(path: &Path, text: &str) -> Result<PathBuf, GenError> {
-    use std::io::Write as _;
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| GenError::Io { path, source }
-    };
-    if path.is_dir() {
-        return Err(GenError::Io {
-            path: path.to_path_buf(),
-            source: std::io::Error::other("is a directory"),
-        });
-    }
-    let name = path
-        .file_name()
-        .map_or_else(|| "arena".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp).map_err(io(&tmp))?;
-        f.write_all(text.as_bytes()).map_err(io(&tmp))?;
-        f.sync_all().map_err(io(&tmp))
-    })();
-    match result {
-        Ok(()) => Ok(tmp),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
 }
 
 /// Uniform in `[lo, hi)`.
@@ -441,8 +415,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("arena-gen-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");
         let g = generate(Kind::Box, 2).expect("generates");
-        assert!(write(&g, &dir.join("box.xml")).is_err());
-        let written = write(&g, &dir.join("boxLab.xml")).expect("writes");
+        assert!(write(&g, &dir.join("box.xml"), false).is_err());
+        let written = write(&g, &dir.join("boxLab.xml"), false).expect("writes");
         assert_eq!(written[1], dir.join("boxGrid.xml"));
         let a = crate::arena::load(&written[0], &LoadOptions::default()).expect("loads");
         assert_eq!(a.walls, g.arena.walls);
