@@ -50,7 +50,7 @@ pub fn floor_grid() -> Arena {
             y: side / 2.0 + 0.04,
             heading: 0.4,
         }],
-        ..walled_box("Floor grid (seed 003)", FLOOR_GRID, side, side)
+        ..walled_box("Floor grid (line correction)", FLOOR_GRID, side, side)
     }
 }
 

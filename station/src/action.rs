@@ -69,8 +69,30 @@ pub enum Action {
     RateStep(i32),
     /// Show the next set of chart series.
     ChartNext,
-    /// Scroll the log by lines (positive: older).
+    /// Scroll the log by entries (positive: older); it stops with the oldest at the top.
     LogScroll(i32),
+    /// Follow the newest log entry again (End).
+    LogFollow,
+    /// Scroll the log to its oldest entry (Home).
+    LogTop,
+    /// Step the log's minimum severity: all, info, warn, error.
+    LogLevelCycle,
+    /// Start typing a text filter for the log (`/`).
+    LogFilterStart,
+    LogFilterInput(char),
+    LogFilterBackspace,
+    /// Apply the typed filter (empty: none).
+    LogFilterCommit,
+    /// Zoom the map by a factor about a point (fractions of the shown span from the centre).
+    MapZoom {
+        factor: f64,
+        at: (f64, f64),
+    },
+    /// Pan the map by steps of a quarter of what is shown (x right, y up).
+    MapPan {
+        dx: i8,
+        dy: i8,
+    },
     /// Show or hide a map layer by name.
     ToggleLayer(&'static str),
     /// Forget the drawn tracks.

@@ -27,8 +27,8 @@ use crate::link::{
     CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats, PeerInfo,
 };
 use arena::ArenaOverlay;
-use history::{EncoderUnwrap, History, Track, CHART_PRESETS};
-use log::{Level, LogBuffer, LogLine, Source};
+use history::{EncoderUnwrap, History, Track};
+use log::{Group, Level, LogBuffer, LogLine, Source};
 use params::ParamEditor;
 
 /// Teleop repeat period while driving (PROTOCOL.md §7: 10 Hz).
@@ -47,6 +47,24 @@ pub const W_MAX: i16 = 3000;
 pub const RATES: [u8; 7] = [0, 1, 2, 5, 10, 20, 50];
 /// Link statistics snapshots kept for the link panel's sparkline.
 const STATS_HISTORY: usize = 120;
+/// Telemetry older than this many periods is stale (the header and sensors say so).
+const STALE_PERIODS: u64 = 3;
+/// ... and at least this old, ms (a slow rate is not stale between two frames).
+const STALE_MIN_MS: u64 = 1000;
+
+/// Log groups: repeats of each are one line with a count (`app::log`).
+mod groups {
+    use super::Group;
+    pub const BEACON: Group = Group::new("beacon calibration");
+    pub const LIGHT_BEARING: Group = Group::new("light bearing");
+    pub const MAP_UPDATED: Group = Group::new("map updated");
+    pub const COLLISION: Group = Group::new("collision");
+    /// A line crossed and the pose correction it brings: one line per survey.
+    pub const FLOOR_LINES: Group = Group::new("floor lines");
+    /// `R` (and any burst of reads): one summary line.
+    pub const PARAM_READ: Group = Group::new("param read").summary("parameters read");
+    pub const SUPERSEDED: Group = Group::new("superseded");
+}
 
 /// The main area's content.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,13 +126,65 @@ pub struct MapState {
     pub hidden: Vec<&'static str>,
     /// Planning on the station: the map's grid and regions, the last plan.
     pub plan: crate::plan::PlanState,
+    /// See `zoom()`; 0 (the default) is 1.
+    zoom: f64,
+    /// See `pan()`.
+    pan: (f64, f64),
 }
 
 impl MapState {
     pub fn visible(&self, layer: &str) -> bool {
         !self.hidden.contains(&layer)
     }
+
+    /// Magnification over the whole arena (1: all of it).
+    pub fn zoom(&self) -> f64 {
+        self.zoom.clamp(1.0, MAX_ZOOM)
+    }
+
+    /// The view's centre, as fractions of the whole arena's span from its centre.
+    pub fn pan(&self) -> (f64, f64) {
+        self.pan
+    }
+
+    /// Zooms by `factor` keeping the point `at` where it is on screen (`at`: fractions of the
+    /// shown span from the view's centre, x right, y up; (0, 0) zooms about the centre).
+    /// Zooming out to the whole arena recentres it.
+    pub fn zoom_by(&mut self, factor: f64, at: (f64, f64)) {
+        let z = self.zoom();
+        let z2 = (z * factor).clamp(1.0, MAX_ZOOM);
+        if !z2.is_finite() || z2 <= 1.0 {
+            self.zoom = 1.0;
+            self.pan = (0.0, 0.0);
+            return;
+        }
+        // The point under `at` is centre + at / z (arena spans); it stays put at zoom z2.
+        let k = 1.0 / z - 1.0 / z2;
+        self.zoom = z2;
+        self.set_pan(self.pan.0 + at.0 * k, self.pan.1 + at.1 * k);
+    }
+
+    /// Moves the view by `dx`, `dy` steps of a quarter of what is shown (x right, y up).
+    pub fn pan_by(&mut self, dx: i8, dy: i8) {
+        let step = PAN_STEP / self.zoom();
+        self.set_pan(
+            self.pan.0 + f64::from(dx) * step,
+            self.pan.1 + f64::from(dy) * step,
+        );
+    }
+
+    fn set_pan(&mut self, x: f64, y: f64) {
+        // The centre stays over the arena: the view never wanders off into nothing.
+        self.pan = (x.clamp(-0.5, 0.5), y.clamp(-0.5, 0.5));
+    }
 }
+
+/// Largest map magnification.
+pub const MAX_ZOOM: f64 = 64.0;
+/// One pan step, as a fraction of the shown span.
+pub const PAN_STEP: f64 = 0.25;
+/// One zoom step (a key press or a wheel notch).
+pub const ZOOM_STEP: f64 = 1.5;
 
 /// How the app starts.
 #[derive(Clone, Debug, Default)]
@@ -139,6 +209,8 @@ pub struct App {
     pub connection: Connection,
     pub peer: Option<PeerInfo>,
     pub telemetry: Option<Telemetry>,
+    /// Station time the last telemetry arrived, ms.
+    pub telemetry_ms: Option<u64>,
     pub truth: Option<EmuTruth>,
     pub stats: Option<LinkStats>,
     /// Bytes/s received, one sample per statistics snapshot.
@@ -168,6 +240,8 @@ pub struct App {
     /// The last telemetry rate asked for and not yet answered: quick `+`/`-` presses step on
     /// from it, not from the rate the robot last acknowledged.
     rate_asked: Option<(CommandId, u8)>,
+    /// The last floor line the robot reported crossing (its count), for the correction after.
+    lines_crossed: Option<i32>,
     outbox: Vec<(CommandId, Command)>,
 }
 
@@ -198,6 +272,7 @@ impl App {
             },
             peer: None,
             telemetry: None,
+            telemetry_ms: None,
             truth: None,
             stats: None,
             rx_rate_history: Vec::new(),
@@ -221,6 +296,7 @@ impl App {
             next_id: 1,
             pending: HashMap::new(),
             rate_asked: None,
+            lines_crossed: None,
             outbox: Vec::new(),
         };
         // An importer's warning is never silent: the file may not be what the user thinks.
@@ -237,6 +313,16 @@ impl App {
 
     pub fn connected(&self) -> bool {
         matches!(self.connection, Connection::Connected(_))
+    }
+
+    /// The robot's capability bits, once it said them.
+    pub fn capabilities(&self) -> Option<u32> {
+        self.peer.as_ref().map(|p| p.capabilities)
+    }
+
+    /// The chart shown: the chosen one, or the next the robot has sensors for.
+    pub fn chart_shown(&self) -> usize {
+        history::offered_preset(self.chart, self.capabilities())
     }
 
     /// The robot's believed pose, metres and radians.
@@ -326,8 +412,41 @@ impl App {
             }
             Action::ParamCommit => self.commit_param(),
             Action::RateStep(d) => self.step_rate(d),
-            Action::ChartNext => self.chart = (self.chart + 1) % CHART_PRESETS.len(),
-            Action::LogScroll(d) => self.log.scroll_by(d),
+            Action::ChartNext => {
+                self.chart = history::offered_preset(self.chart_shown() + 1, self.capabilities());
+            }
+            Action::LogScroll(d) => {
+                let rows = self.log_rows();
+                self.log.scroll_by(d, rows);
+            }
+            Action::LogFollow => self.log.follow(),
+            Action::LogTop => {
+                let rows = self.log_rows();
+                self.log.to_top(rows);
+            }
+            Action::LogLevelCycle => self.log.cycle_level(),
+            Action::LogFilterStart => {
+                self.log.filter_input = Some(self.log.filter.text.clone());
+            }
+            Action::LogFilterInput(c) => {
+                if let Some(s) = &mut self.log.filter_input {
+                    if s.chars().count() < log::FILTER_MAX && !c.is_control() {
+                        s.push(c);
+                    }
+                }
+            }
+            Action::LogFilterBackspace => {
+                if let Some(s) = &mut self.log.filter_input {
+                    s.pop();
+                }
+            }
+            Action::LogFilterCommit => {
+                if let Some(s) = self.log.filter_input.take() {
+                    self.log.set_text_filter(s);
+                }
+            }
+            Action::MapZoom { factor, at } => self.map.zoom_by(factor, at),
+            Action::MapPan { dx, dy } => self.map.pan_by(dx, dy),
             Action::ToggleLayer(name) => {
                 if let Some(i) = self.map.hidden.iter().position(|h| *h == name) {
                     self.map.hidden.remove(i);
@@ -365,6 +484,10 @@ impl App {
             self.help = false;
         } else if self.params.input.is_some() {
             self.params.input = None;
+        } else if self.log.filter_input.is_some() {
+            // Esc while typing a filter drops the filter too: the way back to everything.
+            self.log.filter_input = None;
+            self.log.set_text_filter(String::new());
         } else if self.map.cursor_mode {
             self.map.cursor_mode = false;
         } else if self.view != View::Dashboard {
@@ -562,6 +685,7 @@ impl App {
         self.forage.on_telemetry(&t);
         self.history.push(self.now_ms as f64 / 1000.0, t);
         self.telemetry = Some(t);
+        self.telemetry_ms = Some(self.now_ms);
     }
 
     fn on_robot_event(&mut self, e: Event) {
@@ -572,6 +696,20 @@ impl App {
         let site = self.map.arena.as_ref().and_then(|a| a.forage.as_ref());
         self.forage.on_event(&e, at, site);
         let v = e.value;
+        // A correction in a survey completes the line crossing before it (floor-grid line
+        // correction); elsewhere (foraging's landmarks) it stands alone.
+        let surveying = self.telemetry.is_some_and(|t| t.mode == Mode::Survey);
+        let group = match e.code {
+            EventCode::BeaconCalibration => Some(groups::BEACON),
+            EventCode::LightBearing => Some(groups::LIGHT_BEARING),
+            EventCode::MapUpdated => Some(groups::MAP_UPDATED),
+            EventCode::Collision => Some(groups::COLLISION),
+            EventCode::LineCrossed => Some(groups::FLOOR_LINES),
+            EventCode::PoseCorrected if surveying && self.lines_crossed.is_some() => {
+                Some(groups::FLOOR_LINES.amends())
+            }
+            _ => None,
+        };
         let (level, text) = match e.code {
             EventCode::ModeChanged => {
                 (Level::Info, format!("mode changed to {}", mode_name_i32(v)))
@@ -582,8 +720,17 @@ impl App {
                 format!("failsafe stop after {v} ms of silence"),
             ),
             EventCode::Collision => (Level::Warn, "collision".into()),
-            EventCode::LineCrossed => (Level::Debug, format!("line crossed ({v} so far)")),
-            EventCode::PoseCorrected => (Level::Info, format!("pose corrected by {v} mm")),
+            EventCode::LineCrossed => {
+                self.lines_crossed = Some(v);
+                (Level::Debug, format!("floor line {v} crossed"))
+            }
+            EventCode::PoseCorrected => match self.lines_crossed.filter(|_| surveying) {
+                Some(n) => (
+                    Level::Info,
+                    format!("floor line {n} crossed, pose corrected by {v} mm"),
+                ),
+                None => (Level::Info, format!("pose corrected by {v} mm")),
+            },
             // Once a second while the robot sees the beacon standing still: detail, not news.
             EventCode::BeaconCalibration => (
                 Level::Debug,
@@ -646,7 +793,7 @@ impl App {
                 ),
             ),
         };
-        self.note(level, Source::Event, text);
+        self.note_grouped(level, Source::Event, text, group);
     }
 
     fn on_done(&mut self, id: CommandId, command: Command, outcome: CommandOutcome) {
@@ -670,10 +817,14 @@ impl App {
                         }
                         _ => String::new(),
                     };
-                    self.note(
+                    // A burst of reads (`R`) is one summary line.
+                    let group =
+                        matches!(command, Command::GetParam { .. }).then_some(groups::PARAM_READ);
+                    self.note_grouped(
                         Level::Info,
                         Source::Command,
                         format!("ok: {what}{detail} ({rtt_ms} ms)"),
+                        group,
                     );
                 }
             }
@@ -706,7 +857,13 @@ impl App {
                     ),
                 );
             }
-            CommandOutcome::Failed(CommandFailure::Superseded) => {}
+            // Normal for teleop (ten a second): logged, as every failure is, but as detail.
+            CommandOutcome::Failed(why @ CommandFailure::Superseded) => self.note_grouped(
+                Level::Debug,
+                Source::Command,
+                format!("not sent: {what}: {why}"),
+                Some(groups::SUPERSEDED),
+            ),
             CommandOutcome::Failed(why) => {
                 if let Command::SetParam { id, .. } | Command::GetParam { id } = command {
                     self.params.set_failed(id.0, why.to_string());
@@ -747,12 +904,42 @@ impl App {
     }
 
     fn note(&mut self, level: Level, source: Source, text: String) {
-        self.log.push(LogLine {
-            t_ms: self.now_ms,
-            level,
-            source,
-            text,
+        self.note_grouped(level, source, text, None);
+    }
+
+    /// Logs a line that joins the recent entry of its group, if any (`app::log`).
+    fn note_grouped(&mut self, level: Level, source: Source, text: String, group: Option<Group>) {
+        let line = LogLine::new(self.now_ms, level, source, text);
+        self.log.push(match group {
+            Some(g) => line.grouped(g),
+            None => line,
         });
+    }
+
+    /// How old the values on screen are, seconds, when they are stale: the link is down, or
+    /// no telemetry came for `STALE_PERIODS` periods (and `STALE_MIN_MS`). None while fresh
+    /// or before any telemetry.
+    pub fn stale_s(&self) -> Option<u64> {
+        let at = self.telemetry_ms?;
+        let age = self.now_ms.saturating_sub(at);
+        let period = match self.rate_hz {
+            Some(hz) if hz > 0 => 1000 / u64::from(hz),
+            _ => 0,
+        };
+        let limit = (STALE_PERIODS * period).max(STALE_MIN_MS);
+        (!self.connected() || age > limit).then_some(age / 1000)
+    }
+
+    /// Rows the log panel shows now (the Log view's when the panel is hidden): a page for
+    /// scrolling, so that scrolling stops with the oldest line at the top.
+    fn log_rows(&self) -> usize {
+        let screen = ratatui::layout::Rect::new(0, 0, self.size.0, self.size.1);
+        let rows = |app: &App| {
+            crate::ui::areas(screen, app)
+                .find(crate::ui::Panel::Log)
+                .map(|r| usize::from(r.height.saturating_sub(2)))
+        };
+        rows(self).unwrap_or_else(|| usize::from(self.size.1.saturating_sub(4)))
     }
 }
 
@@ -810,3 +997,7 @@ fn mode_name_i32(i: i32) -> String {
 #[cfg(test)]
 #[path = "app_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "app_log_tests.rs"]
+mod log_tests;

@@ -137,18 +137,27 @@ fn a_refused_parameter_write_shows_the_robots_reason_in_the_editor_and_the_log()
 }
 
 #[test]
-fn an_unanswered_command_is_logged_as_failed_but_superseded_teleops_are_not() {
+fn an_unanswered_command_is_logged_as_failed_and_superseded_teleops_as_one_detail_line() {
     let mut app = connected_app();
     let before = app.log.len();
-    app.update(Action::Link(LinkEvent::CommandDone {
-        id: 99,
-        command: Command::Teleop {
-            v_mm_s: 1,
-            w_mrad_s: 0,
-        },
-        outcome: CommandOutcome::Failed(CommandFailure::Superseded),
-    }));
-    assert_eq!(app.log.len(), before);
+    for id in 90..100 {
+        app.update(Action::Link(LinkEvent::CommandDone {
+            id,
+            command: Command::Teleop {
+                v_mm_s: 1,
+                w_mrad_s: 0,
+            },
+            outcome: CommandOutcome::Failed(CommandFailure::Superseded),
+        }));
+    }
+    assert_eq!(app.log.len(), before + 1, "ten supersessions, one line");
+    let l = app.log.window(1).next().unwrap();
+    assert_eq!((l.level, l.count), (Level::Debug, 10));
+    assert!(
+        l.text.contains("superseded by a newer teleop"),
+        "{}",
+        l.text
+    );
     app.update(Action::Link(LinkEvent::CommandDone {
         id: 100,
         command: Command::Stop,

@@ -87,7 +87,8 @@ pub enum Sub {
         #[command(subcommand)]
         command: SendCmd,
     },
-    /// Watch the link for a while and print its statistics.
+    /// Watch the link for a while and print its statistics, with the round trip of a harmless
+    /// probe (a parameter read) sent every 250 ms.
     Stats {
         #[command(flatten)]
         port: RequiredPort,
@@ -142,7 +143,7 @@ pub enum Sub {
     UploadPlan(crate::transfer::command::UploadPlanArgs),
     /// Plan a path on a map file with the robot's own planner; no robot needed
     ///
-    /// Seed 004: the map becomes a grid (0.3 m cells), its free cells squares, and A* finds
+    /// As the Dom Dinis robot plans: the map becomes a grid (0.3 m cells), its free cells squares, and A* finds
     /// the shortest chain of adjacent squares; the path runs through their centres. Points are
     /// metres in the map frame. Exit status 1, with the reason, when no plan can be made.
     ///
@@ -152,7 +153,7 @@ pub enum Sub {
     ///   station plan --map lab.xml --from 0.5,0.5 --to 3.2,2.6 --cell 0.1 --radius 0.12
     #[command(verbatim_doc_comment)]
     Plan(crate::plan::command::PlanArgs),
-    /// Segment a map into the free squares the planner searches (seed 004 §6, Fig. 6)
+    /// Segment a map into the free squares the planner searches (Dom Dinis segmentation)
     ///
     /// Squares are in cells: x, y of the corner with the smallest column and row (row 0 is
     /// the smallest y), and the side.
@@ -196,7 +197,7 @@ pub enum Sub {
     ///   station export run.rec --csv run.csv --mcap run.mcap
     #[command(verbatim_doc_comment)]
     Export(crate::export::ExportArgs),
-    /// Train the light -> angle map (seed 000 §5.3) from a recording of a calibrating robot
+    /// Train the light -> angle map (Khepera light calibration) from a recording of a calibrating robot
     ///
     /// Uses the telemetry recorded while a Khepera turned next to a light (mode
     /// calibrate-light): labels from each full turn (or from --light X,Y), the firmware's own
@@ -208,7 +209,7 @@ pub enum Sub {
     ///   station calibrate cal.rec --out som.bin --light 0.40,0.30 --json
     #[command(verbatim_doc_comment)]
     Calibrate(crate::calibrate::CalibrateArgs),
-    /// Upload a light -> angle calibration to the robot (seed 000 §5.3)
+    /// Upload a light -> angle calibration to the robot (Khepera light calibration)
     ///
     /// The file is what `station calibrate --out` or `station download-calibration --out`
     /// wrote (JSON or binary). The robot installs it and uses it at once (LightBearing
@@ -221,7 +222,7 @@ pub enum Sub {
     ///   station upload-calibration --port /dev/ttyUSB0 --calibration som.json
     #[command(verbatim_doc_comment)]
     UploadCalibration(crate::transfer::calibration::UploadCalibrationArgs),
-    /// Download the robot's light -> angle calibration to a file (seed 000 §5.3)
+    /// Download the robot's light -> angle calibration to a file (Khepera light calibration)
     ///
     /// The network the robot trained in mode calibrate-light (or was given), as JSON
     /// (FILE.json) or binary (any other name): keep it, study it, or upload it again after
@@ -302,10 +303,10 @@ pub enum SendCmd {
     },
     /// Start exploring: the robot searches for the goal and maps the arena as it goes
     ///
-    /// Mode Explore (seed 004 §5); needs a compass and a beacon sensor (micro-rato). Follow
+    /// Mode Explore (the Dom Dinis search); needs a compass and a beacon sensor (micro-rato). Follow
     /// the map it builds with `station download-map --ascii`.
     Explore,
-    /// Segment the robot's map into free squares (seed 004 §6).
+    /// Segment the robot's map into free squares (Dom Dinis segmentation).
     Segment,
     /// Plan on the robot; prints the new plan's id, which `execute` takes
     ///
@@ -361,9 +362,9 @@ pub enum ModeArg {
     Explore,
     ExecutePlan,
     Forage,
-    /// Seed 003: wander over the floor grid correcting odometry at every line.
+    /// Floor-grid line correction: wander over the floor grid correcting odometry at every line.
     Survey,
-    /// Seed 000 §5.3: turn next to a light and train the light -> angle map.
+    /// Khepera light calibration: turn next to a light and train the light -> angle map.
     CalibrateLight,
 }
 

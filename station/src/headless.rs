@@ -418,6 +418,13 @@ async fn send(
     })
 }
 
+/// The round-trip probe of `station stats`: reading a parameter, which changes nothing.
+const PROBE: protocol::Command = protocol::Command::GetParam {
+    id: protocol::ParamId(0),
+};
+/// Time between two probes, ms: a few a second, a small share of the link.
+const PROBE_PERIOD_MS: u64 = 250;
+
 async fn stats(
     port: &RequiredPort,
     seconds: f64,
@@ -427,18 +434,45 @@ async fn stats(
     let (mut link, peer) = connect(port, timeout).await?;
     let deadline = Instant::now() + Duration::from_secs_f64(seconds);
     let mut last: Option<LinkStats> = None;
-    while let Ok(Some(ev)) = tokio::time::timeout_at(deadline, link.events.recv()).await {
-        if let LinkEvent::Stats(s) = ev {
-            last = Some(*s);
+    // The round trip is measured, not waited for: a harmless probe (reading a parameter
+    // changes nothing on the robot) goes out every PROBE_PERIOD_MS while the link is watched,
+    // at whatever moment of the robot's telemetry cycle it falls (unlike `send --repeat`,
+    // which picks the quiet moment), so it is the round trip a command meets.
+    let mut probes: Vec<u64> = Vec::new();
+    let mut probe_failures: Vec<String> = Vec::new();
+    let mut next_probe = Instant::now();
+    loop {
+        let wake = next_probe.min(deadline);
+        match tokio::time::timeout_at(wake, link.events.recv()).await {
+            Ok(Some(LinkEvent::Stats(s))) => last = Some(*s),
+            Ok(Some(_)) => {}
+            Ok(None) => break,
+            Err(_) if Instant::now() >= deadline => break,
+            Err(_) => {
+                next_probe += Duration::from_millis(PROBE_PERIOD_MS);
+                let sent = Instant::now();
+                match link.handle.call(PROBE).await {
+                    CommandOutcome::Acked { .. } => probes.push(sent.elapsed().as_micros() as u64),
+                    other => probe_failures.push(match other {
+                        CommandOutcome::Nacked { reason, .. } => refusal_text(&PROBE, reason),
+                        CommandOutcome::Failed(why) => why.to_string(),
+                        CommandOutcome::Acked { .. } => String::new(),
+                    }),
+                }
+            }
         }
     }
+    let round_trip = RoundTrips::of(probes);
     link.handle.shutdown();
     let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;
     let Some(s) = last else {
         bail!("no statistics were published in {seconds} s");
     };
+    let probe = command_text(&PROBE);
     if json {
-        let v = json!({"port": port.port.display().to_string(), "peer": peer, "stats": s});
+        let v = json!({"port": port.port.display().to_string(), "peer": peer, "stats": s,
+                       "round_trip": round_trip, "probe": probe,
+                       "probe_failures": probe_failures});
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         println!("port        {}", port.port.display());
@@ -484,9 +518,27 @@ async fn stats(
                 a.unexpected_signature
             );
         }
-        match (s.rtt_ms.p50, s.rtt_ms.p99) {
-            (Some(a), Some(b)) => println!("rtt         p50 {a:.0} ms  p99 {b:.0} ms"),
-            _ => println!("rtt         no samples (no commands sent)"),
+        println!(
+            "commands    {} ok, {} refused, {} failed, {} superseded",
+            s.commands.acked, s.commands.nacked, s.commands.failed, s.commands.superseded
+        );
+        match &round_trip {
+            Some(r) => println!(
+                "round trip  p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms over {} probes ({probe}, \
+                 every {PROBE_PERIOD_MS} ms)",
+                r.p50_us as f64 / 1000.0,
+                r.p99_us as f64 / 1000.0,
+                r.max_us as f64 / 1000.0,
+                r.samples
+            ),
+            None => println!("round trip  no answer to any probe ({probe})"),
+        }
+        if let Some(why) = probe_failures.first() {
+            println!(
+                "probes      {} unanswered or refused: {}",
+                probe_failures.len(),
+                crate::terminal_text::printable_text(why)
+            );
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -2,9 +2,10 @@
 //!
 //! Layer: the first step of the one-way flow. It reads the app (which mode the keys are in,
 //! where the map is drawn) but changes nothing. Key bindings depend on the context, innermost
-//! first: help open, typing a path in the upload prompt, typing a parameter value, the go-to
-//! cursor, the parameter view, then the global keys. Key release events (kitty protocol
-//! terminals) are ignored.
+//! first: help open, typing a path in the upload prompt, typing a log filter, typing a
+//! parameter value, the go-to cursor, the parameter view, the map's zoom and pan keys (while
+//! the map is shown), then the global keys. Key release events (kitty protocol terminals) are
+//! ignored.
 
 use protocol::Mode;
 use ratatui::crossterm::event::{
@@ -14,7 +15,7 @@ use ratatui::layout::Rect;
 
 use crate::action::Action;
 use crate::app::transfers::TransferAction;
-use crate::app::{App, View, MODES, V_STEP, W_STEP};
+use crate::app::{App, View, MODES, V_STEP, W_STEP, ZOOM_STEP};
 use crate::ui::{self, localization, map_layers, Panel};
 
 /// Cursor step of one arrow press in go-to mode, metres (shift: 5x).
@@ -38,13 +39,42 @@ pub fn action_for(app: &App, ev: &Event) -> Option<Action> {
                     let (x_m, y_m) = ui::map::to_world(app, inner, m.column, m.row)?;
                     Some(Action::GoToPoint { x_m, y_m })
                 }
-                MouseEventKind::ScrollUp => Some(Action::LogScroll(3)),
-                MouseEventKind::ScrollDown => Some(Action::LogScroll(-3)),
+                MouseEventKind::ScrollUp | MouseEventKind::ScrollDown => {
+                    let up = matches!(m.kind, MouseEventKind::ScrollUp);
+                    // Over the map the wheel zooms about the pointer; elsewhere it scrolls
+                    // the log.
+                    let on_map = areas
+                        .find(Panel::Map)
+                        .map(|r| inner_of(ui::map::map_area(app, r)))
+                        .and_then(|inner| wheel_point(inner, m.column, m.row));
+                    Some(match on_map {
+                        Some(at) => Action::MapZoom {
+                            factor: if up { ZOOM_STEP } else { 1.0 / ZOOM_STEP },
+                            at,
+                        },
+                        None => Action::LogScroll(if up { 3 } else { -3 }),
+                    })
+                }
                 _ => None,
             }
         }
         _ => None,
     }
+}
+
+/// Where `col`, `row` is in `inner`, as fractions of its span from its centre (x right, y
+/// up), if inside.
+fn wheel_point(inner: Rect, col: u16, row: u16) -> Option<(f64, f64)> {
+    let inside = col >= inner.x
+        && col < inner.x + inner.width
+        && row >= inner.y
+        && row < inner.y + inner.height;
+    inside.then(|| {
+        (
+            (f64::from(col - inner.x) + 0.5) / f64::from(inner.width) - 0.5,
+            0.5 - (f64::from(row - inner.y) + 0.5) / f64::from(inner.height),
+        )
+    })
 }
 
 /// The area inside a panel's border.
@@ -74,6 +104,16 @@ fn key(app: &App, k: &KeyEvent) -> Option<Action> {
             KeyCode::Backspace => Some(Action::Transfer(TransferAction::PromptBackspace)),
             KeyCode::Enter => Some(Action::Transfer(TransferAction::PromptCommit)),
             KeyCode::Esc => Some(Action::Transfer(TransferAction::PromptCancel)),
+            _ => None,
+        };
+    }
+    if app.log.filter_input.is_some() {
+        return match k.code {
+            KeyCode::Char(_) if ctrl => None,
+            KeyCode::Char(c) => Some(Action::LogFilterInput(c)),
+            KeyCode::Backspace => Some(Action::LogFilterBackspace),
+            KeyCode::Enter => Some(Action::LogFilterCommit),
+            KeyCode::Esc => Some(Action::Back),
             _ => None,
         };
     }
@@ -116,6 +156,24 @@ fn key(app: &App, k: &KeyEvent) -> Option<Action> {
             KeyCode::Enter | KeyCode::Char('e') => return Some(Action::ParamEdit),
             // No driving from the table: arrows select there, so WASD would surprise.
             KeyCode::Char('w' | 'a' | 's' | 'd') | KeyCode::Left | KeyCode::Right => return None,
+            _ => {}
+        }
+    }
+    if matches!(app.view, View::Dashboard | View::Map) {
+        let pan = |dx: i8, dy: i8| Some(Action::MapPan { dx, dy });
+        let zoom = |factor: f64| {
+            Some(Action::MapZoom {
+                factor,
+                at: (0.0, 0.0),
+            })
+        };
+        match k.code {
+            KeyCode::Char('h') => return pan(-1, 0),
+            KeyCode::Char('l') => return pan(1, 0),
+            KeyCode::Char('k') => return pan(0, 1),
+            KeyCode::Char('j') => return pan(0, -1),
+            KeyCode::Char('z') => return zoom(ZOOM_STEP),
+            KeyCode::Char('Z') => return zoom(1.0 / ZOOM_STEP),
             _ => {}
         }
     }
@@ -168,6 +226,10 @@ fn global(k: &KeyEvent) -> Option<Action> {
         KeyCode::Char('S') => Some(Action::SetMode(Mode::Survey)),
         KeyCode::PageUp => Some(Action::LogScroll(5)),
         KeyCode::PageDown => Some(Action::LogScroll(-5)),
+        KeyCode::End => Some(Action::LogFollow),
+        KeyCode::Home => Some(Action::LogTop),
+        KeyCode::Char('L') => Some(Action::LogLevelCycle),
+        KeyCode::Char('/') => Some(Action::LogFilterStart),
         _ => None,
     }
 }

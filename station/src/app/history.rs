@@ -83,6 +83,24 @@ impl Series {
         }
     }
 
+    /// The capability bits a robot needs for this series to mean anything (0: every robot).
+    pub fn needs(&self) -> u32 {
+        use protocol::caps;
+        match self {
+            Series::Ir(_) => caps::IR_PROXIMITY,
+            Series::Light(_) => caps::AMBIENT_LIGHT,
+            Series::CompassDeg => caps::COMPASS,
+            Series::BatteryMv => caps::BATTERY,
+            Series::BeaconStrength | Series::BeaconBearingDeg => caps::BEACON,
+            _ => 0,
+        }
+    }
+
+    /// Whether a robot with `capabilities` has this sensor.
+    pub fn offered(&self, capabilities: u32) -> bool {
+        capabilities & self.needs() == self.needs()
+    }
+
     pub fn value(&self, t: &Telemetry) -> f64 {
         let at = |v: [u16; 8], i: usize| f64::from(v.get(i).copied().unwrap_or(0));
         match *self {
@@ -142,6 +160,30 @@ pub const CHART_PRESETS: &[(&str, &[Series])] = &[
         &[Series::CyclePeriodMs, Series::CycleBusyMs],
     ),
 ];
+
+/// The series of `preset` a robot with `capabilities` has (None: not yet known, all).
+pub fn offered_series(preset: usize, capabilities: Option<u32>) -> Vec<Series> {
+    CHART_PRESETS
+        .get(preset)
+        .map(|(_, series)| {
+            series
+                .iter()
+                .filter(|s| capabilities.is_none_or(|c| s.offered(c)))
+                .copied()
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// The first preset from `from` on (wrapping) with a series the robot has: charts of sensors
+/// it lacks are not offered.
+pub fn offered_preset(from: usize, capabilities: Option<u32>) -> usize {
+    let n = CHART_PRESETS.len();
+    (0..n)
+        .map(|i| (from + i) % n)
+        .find(|&i| !offered_series(i, capabilities).is_empty())
+        .unwrap_or(0)
+}
 
 /// A polyline of poses, metres.
 #[derive(Debug, Default)]
@@ -213,6 +255,36 @@ mod tests {
         e.push([65_530, 10]);
         e.push([4, 65_530]);
         assert_eq!(e.total, [65_540, -6]);
+    }
+
+    #[test]
+    fn charts_are_offered_only_for_sensors_the_robot_has() {
+        use protocol::caps;
+        // Dom Dinis: compass, IR, beacon; no ambient light, no battery sensor.
+        let dom = caps::COMPASS | caps::IR_PROXIMITY | caps::BEACON;
+        let names = |c: Option<u32>| -> Vec<&str> {
+            let mut seen = Vec::new();
+            let mut i = offered_preset(0, c);
+            for _ in 0..CHART_PRESETS.len() {
+                if !seen.contains(&CHART_PRESETS[i].0) {
+                    seen.push(CHART_PRESETS[i].0);
+                }
+                i = offered_preset(i + 1, c);
+            }
+            seen
+        };
+        let offered = names(Some(dom));
+        assert!(!offered.contains(&"Ambient light"), "{offered:?}");
+        assert!(!offered.contains(&"Battery"), "{offered:?}");
+        assert!(offered.contains(&"Beacon") && offered.contains(&"IR proximity"));
+        assert_eq!(
+            names(None).len(),
+            CHART_PRESETS.len(),
+            "before the handshake: all"
+        );
+        // A robot without a compass still charts its heading, without the compass series.
+        let heading = CHART_PRESETS.iter().position(|p| p.0 == "Heading").unwrap();
+        assert_eq!(offered_series(heading, Some(0)), [Series::HeadingDeg]);
     }
 
     #[test]

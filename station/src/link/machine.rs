@@ -672,6 +672,7 @@ impl LinkMachine {
         match outcome {
             CommandOutcome::Acked { .. } => c.acked += 1,
             CommandOutcome::Nacked { .. } => c.nacked += 1,
+            CommandOutcome::Failed(CommandFailure::Superseded) => c.superseded += 1,
             CommandOutcome::Failed(_) => c.failed += 1,
         }
         self.events.push_back(LinkEvent::CommandDone {

@@ -183,7 +183,10 @@ pub struct CommandCounts {
     pub submitted: u64,
     pub acked: u64,
     pub nacked: u64,
+    /// Unanswered: timed out, link lost, not connected (each logged with its reason).
     pub failed: u64,
+    /// Replaced by a newer teleop before an answer: normal at 10 Hz, so not a failure.
+    pub superseded: u64,
     /// Sends beyond the first (retries).
     pub resends: u64,
     pub in_flight: u32,

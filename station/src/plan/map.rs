@@ -200,7 +200,7 @@ impl NavMap {
                 grid.set(usize::from(c), usize::from(r), Cell::Obstacle)?;
                 beacon_cells.push((c, r));
                 notes.push(format!(
-                    "beacon at ({:.3}, {:.3}) marks cell ({c}, {r}) as an obstacle (seed 004 §6)",
+                    "beacon at ({:.3}, {:.3}) marks cell ({c}, {r}) as an obstacle (as Dom Dinis plans)",
                     b.position.x, b.position.y
                 ));
             }

@@ -213,12 +213,7 @@ fn view_action(app: &App, code: KeyCode) -> Option<Action> {
 /// The lines a replay's log starts with: what is replayed, and any damage.
 fn notes(app: &mut App, rec: &Recording, file: &str) {
     let mut note = |level, text: String| {
-        app.log.push(LogLine {
-            t_ms: 0,
-            level,
-            source: Source::Link,
-            text,
-        });
+        app.log.push(LogLine::new(0, level, Source::Link, text));
     };
     note(
         Level::Info,

@@ -10,7 +10,7 @@ use ratatui::text::Line;
 use ratatui::widgets::{Axis, Block, Chart, Dataset, GraphType, Paragraph, Sparkline};
 use ratatui::Frame;
 
-use crate::app::history::CHART_PRESETS;
+use crate::app::history::{offered_series, CHART_PRESETS};
 use crate::app::App;
 
 /// Seconds of history on the x axis.
@@ -18,10 +18,11 @@ pub const WINDOW_S: f64 = 30.0;
 const COLORS: [Color; 4] = [Color::Cyan, Color::Yellow, Color::Magenta, Color::Green];
 
 pub fn render(app: &App, frame: &mut Frame, area: Rect) {
-    let (name, series) = CHART_PRESETS
-        .get(app.chart)
-        .copied()
-        .unwrap_or(("none", &[]));
+    // Only the series of sensors the robot has (a robot without a battery sensor sends 0).
+    let shown = app.chart_shown();
+    let name = CHART_PRESETS.get(shown).map_or("none", |p| p.0);
+    let series = offered_series(shown, app.capabilities());
+    let series = series.as_slice();
     let block = Block::bordered().title(format!(" Charts — {name} (c: next) "));
     let Some((t_first, t_end)) = app.history.span() else {
         frame.render_widget(Paragraph::new("no telemetry yet").block(block), area);

@@ -73,12 +73,22 @@ fn header_line(app: &App, d: Detail) -> Line<'static> {
         )],
     };
     let sep = || Span::styled(" │ ", Style::new().fg(Color::DarkGray));
+    // Values from telemetry that stopped coming are the past, not the robot's state: greyed
+    // and marked with their age (colour alone would not carry it).
+    let stale = app.stale_s();
+    let grey = Style::new().fg(Color::DarkGray);
     if let Some(t) = &app.telemetry {
         spans.push(sep());
-        spans.push(Span::styled(
-            format!("mode {}", mode_name(t.mode)),
-            Style::new().fg(Color::Cyan),
-        ));
+        spans.push(match stale {
+            Some(age) => Span::styled(
+                format!("mode {} (stale {age} s)", mode_name(t.mode)),
+                grey.add_modifier(Modifier::CROSSED_OUT),
+            ),
+            None => Span::styled(
+                format!("mode {}", mode_name(t.mode)),
+                Style::new().fg(Color::Cyan),
+            ),
+        });
     }
     if app.teleop.driving {
         spans.push(sep());
@@ -105,7 +115,10 @@ fn header_line(app: &App, d: Detail) -> Line<'static> {
     }
     if let Some(hz) = app.rate_hz {
         spans.push(sep());
-        spans.push(Span::raw(format!("{hz} Hz")));
+        spans.push(match stale {
+            Some(_) => Span::styled(format!("{hz} Hz?"), grey),
+            None => Span::raw(format!("{hz} Hz")),
+        });
     }
     if d < Detail::NoPort {
         spans.push(sep());
@@ -125,6 +138,12 @@ pub fn render_footer(app: &App, frame: &mut Frame, area: Rect) {
             ("path", "map file or map/plan object"),
             ("Enter", "upload"),
             ("Esc", "cancel"),
+        ]
+    } else if app.log.filter_input.is_some() {
+        &[
+            ("text", "show lines containing it"),
+            ("Enter", "apply"),
+            ("Esc", "clear"),
         ]
     } else if app.params.input.is_some() {
         &[("0-9 . - e", "type"), ("Enter", "send"), ("Esc", "cancel")]

@@ -158,15 +158,27 @@ fn lines(app: &App) -> Vec<Line<'static>> {
         ]));
     }
     out.extend([
+        // Each count after its word, comma-separated: "53 ok 0 refused" read as "ok 0".
         Line::from(vec![
-            l("commands "),
-            Span::raw(format!(
-                "{} ok {} refused {} failed ",
-                s.commands.acked, s.commands.nacked, s.commands.failed
-            )),
-            l("resends "),
+            l("commands: "),
+            Span::raw(format!("{} ok, ", s.commands.acked)),
+            if s.commands.nacked > 0 {
+                Span::styled(
+                    format!("{} refused", s.commands.nacked),
+                    Style::new().fg(Color::Yellow),
+                )
+            } else {
+                Span::raw("0 refused")
+            },
+            Span::raw(", "),
+            bad(s.commands.failed),
+            Span::raw(" failed"),
+            Span::raw(format!(", {} superseded", s.commands.superseded)),
+        ]),
+        Line::from(vec![
+            l("resends: "),
             Span::raw(s.commands.resends.to_string()),
-            l(" in flight "),
+            l(", in flight: "),
             Span::raw(s.commands.in_flight.to_string()),
         ]),
         Line::from(vec![

@@ -119,21 +119,7 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             .unwrap_or_default()
             .right_aligned(),
         )
-        .title_bottom(TLine::from(vec![
-            " ● believed ".cyan(),
-            "○ true ".magenta(),
-            "× goal ".yellow(),
-            if app.map.cursor_mode {
-                "+ cursor ".green()
-            } else if app.replaying {
-                "".into()
-            } else if area.width < 44 {
-                // The whole legend in a 40-column panel (80 x 24).
-                "g: go-to ".dark_gray()
-            } else {
-                "g/click: go-to ".dark_gray()
-            },
-        ]));
+        .title_bottom(legend(app, area.width.saturating_sub(2)));
     let inner = block.inner(area);
     let (xb, yb) = view_bounds(app, inner);
     let view = MapView {
@@ -158,6 +144,46 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             }
         });
     frame.render_widget(canvas, area);
+}
+
+/// The legend in at most `room` columns: each mark with the glyph drawn on the map, so it
+/// reads without colour; then the keys that work, as far as they fit.
+fn legend(app: &App, room: u16) -> TLine<'static> {
+    let mut items: Vec<ratatui::text::Span<'static>> = vec![
+        " ● believed ".cyan(),
+        "○ true ".magenta(),
+        "× goal ".yellow(),
+    ];
+    if app
+        .map
+        .arena
+        .as_ref()
+        .is_some_and(|a| !a.beacons.is_empty())
+    {
+        items.push("B beacon ".yellow());
+    }
+    let zoom = app.map.zoom();
+    let extra: Vec<ratatui::text::Span<'static>> = if app.map.cursor_mode {
+        vec!["+ cursor ".green()]
+    } else {
+        let mut v = Vec::new();
+        if zoom > 1.0 {
+            v.push(format!("×{zoom:.1} ").white());
+        }
+        if !app.replaying {
+            v.push("g/click: go-to ".dark_gray());
+        }
+        v.push("z/Z/wheel: zoom hjkl: pan ".dark_gray());
+        v
+    };
+    let mut used: usize = items.iter().map(|s| s.width()).sum();
+    for e in extra {
+        if used + e.width() <= usize::from(room) {
+            used += e.width();
+            items.push(e);
+        }
+    }
+    TLine::from(items)
 }
 
 /// The map's own part of the map panel `area`: without the plan or line-correction panel.
@@ -216,6 +242,7 @@ pub fn view_bounds(app: &App, inner: Rect) -> ([f64; 2], [f64; 2]) {
         f64::from(inner.width.max(1)),
         f64::from(inner.height.max(1)),
     );
+    let (zoom, (px, py)) = (app.map.zoom(), app.map.pan());
     // A braille cell is 2 x 4 dots and about 1 x 2 in shape: world span per dot equal in x and y.
     let want = w / (2.0 * h); // x span / y span
     let (xs, ys) = (x1 - x0, y1 - y0);
@@ -228,7 +255,11 @@ pub fn view_bounds(app: &App, inner: Rect) -> ([f64; 2], [f64; 2]) {
         y0 -= grow;
         y1 += grow;
     }
-    ([x0, x1], [y0, y1])
+    // Zoomed: a 1/zoom part of that, centred where the operator panned to.
+    let (xs, ys) = (x1 - x0, y1 - y0);
+    let (cx, cy) = ((x0 + x1) / 2.0 + px * xs, (y0 + y1) / 2.0 + py * ys);
+    let (hx, hy) = (xs / (2.0 * zoom), ys / (2.0 * zoom));
+    ([cx - hx, cx + hx], [cy - hy, cy + hy])
 }
 
 /// The cell at `col`, `row` of the terminal as a world point, if it is inside the map.
@@ -300,7 +331,7 @@ impl MapLayer for ArenaLayer {
         app.map.arena.is_some()
     }
 
-    fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {
+    fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>) {
         let Some(a) = &app.map.arena else { return };
         let [x0, y0, x1, y1] = a.bounds;
         let edge = |ctx: &mut Context<'_>, (ax, ay): (f64, f64), (bx, by): (f64, f64)| {
@@ -331,8 +362,27 @@ impl MapLayer for ArenaLayer {
                 color: Color::Green,
             });
         }
+        // The beacon usually marks the goal: when the goal's letter would cover it, it goes
+        // one cell to the left, so both read.
+        let goal = app
+            .map
+            .plan
+            .result
+            .as_ref()
+            .map(|r| r.goal())
+            .or_else(|| app.map.plan.map().and_then(|m| m.goal.map(|g| g.centre)));
+        let cell = (
+            (view.x[1] - view.x[0]) / f64::from(view.cols.max(1)),
+            (view.y[1] - view.y[0]) / f64::from(view.rows.max(1)),
+        );
         for (x, y) in &a.beacons {
-            ctx.print(*x, *y, "B".yellow());
+            let covered = goal.is_some_and(|(gx, gy)| {
+                (gx - x).abs() < cell.0
+                    && (gy - y).abs() < cell.1
+                    && app.map.visible(map_layers::ENDS)
+            });
+            let x = if covered { x - cell.0 } else { *x };
+            ctx.print(x, *y, "B".yellow().bold());
         }
     }
 }
@@ -354,6 +404,7 @@ impl MapLayer for TruthLayer {
         });
         if let Some(p) = app.true_pose() {
             robot(ctx, view, p, Color::Magenta);
+            ctx.print(p.0, p.1, "○".magenta());
         }
     }
 }
@@ -375,6 +426,7 @@ impl MapLayer for BelievedLayer {
         });
         if let Some(p) = app.pose() {
             robot(ctx, view, p, Color::Cyan);
+            ctx.print(p.0, p.1, "●".cyan());
         }
     }
 }

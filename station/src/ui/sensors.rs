@@ -31,7 +31,18 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         Some(_) => format!(" Sensors — {} ", profile.name),
         None => " Sensors ".to_string(),
     };
-    let block = Block::bordered().title(title);
+    let stale = app.stale_s();
+    let mut block = Block::bordered().title(title);
+    if let Some(age) = stale {
+        // Old readings look like old readings: marked in words, and greyed below.
+        block = block.title_top(
+            Line::from(Span::styled(
+                format!(" stale {age} s: no telemetry "),
+                Style::new().fg(Color::Black).bg(Color::DarkGray),
+            ))
+            .right_aligned(),
+        );
+    }
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let beside = Layout::horizontal([Constraint::Percentage(40), Constraint::Percentage(60)]);
@@ -42,7 +53,14 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     } else {
         inner.width
     };
-    let lines = text_lines(app, profile, text_w);
+    let mut lines = text_lines(app, profile, text_w);
+    if stale.is_some() {
+        for line in &mut lines {
+            for span in &mut line.spans {
+                span.style = Style::new().fg(Color::DarkGray);
+            }
+        }
+    }
     let text_h = lines.len() as u16;
     let (glyph, text) = if wide {
         let [g, t] = beside.areas(inner);
