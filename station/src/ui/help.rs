@@ -25,12 +25,17 @@ pub const KEYS: &[(&str, &str)] = &[
     ),
     (
         "g ←↑↓→ Enter",
-        "go-to with a cursor on the map (shift: 5x step)",
+        "go-to with a cursor on the map (shift: 5x step), or click",
     ),
-    ("click on map", "go-to that point"),
+    (
+        "z Z hjkl wheel",
+        "map: zoom in / out (out to all recentres), pan",
+    ),
     ("p", "parameters: ↑↓ select, r read, R read all, Enter edit"),
-    ("+  -", "telemetry rate (0 1 2 5 10 20 50 Hz)"),
-    ("c", "next chart series"),
+    (
+        "+  -  c",
+        "telemetry rate (0 1 2 5 10 20 50 Hz) / next chart",
+    ),
     ("t  x", "show or hide the true pose / clear the tracks"),
     (
         "P",
@@ -52,7 +57,14 @@ pub const KEYS: &[(&str, &str)] = &[
         "E  O  X",
         "robot: explore (its map grows live) / plan on board / execute",
     ),
-    ("PgUp PgDn", "scroll the log"),
+    (
+        "PgUp PgDn End",
+        "log: scroll (stops at the top) / follow the newest",
+    ),
+    (
+        "L  /",
+        "log: minimum severity (all info warn error) / text filter",
+    ),
     ("R", "record the link to a file here; R again saves it"),
 ];
 
