@@ -69,7 +69,8 @@ pub enum ArenaCommand {
 /// `arena generate` options.
 #[derive(Debug, Clone, Args)]
 pub struct GenerateArgs {
-    /// Micro-Rato labyrinth (seed 004 §2), micromouse maze, or Khepera box (seed 000 §4).
+    /// Micro-Rato labyrinth (as Dom Dinis met), micromouse maze, or Khepera box (as in the
+    /// Khepera foraging paper).
     #[arg(long, value_enum)]
     pub kind: crate::arena_gen::Kind,
     /// The arena's seed.
@@ -160,7 +161,7 @@ impl BenchArgs {
         );
         if search && !profile.has(protocol::caps::COMPASS | protocol::caps::BEACON) {
             return Err(format!(
-                "--profile {}: the search tasks need compass and beacon sensor (seed 004); \
+                "--profile {}: the search tasks need compass and beacon sensor (the Dom Dinis search); \
                  use --profile micro-rato",
                 profile.name
             ));
@@ -230,7 +231,7 @@ pub struct WorldArgs {
     /// Wheel slip, relative sigma (0 = none).
     #[arg(long, default_value_t = 0.0, value_name = "SIGMA")]
     pub slip: f64,
-    /// Floor grid of black lines with this pitch in metres (seed 003 uses 0.10).
+    /// Floor grid of black lines with this pitch in metres (floor-grid line correction uses 0.10).
     #[arg(long, value_name = "M")]
     pub floor_grid: Option<f64>,
 }
@@ -332,23 +333,24 @@ pub struct RunArgs {
 pub enum TaskArg {
     /// Drive to --goal (default: the arena's target).
     GoTo,
-    /// Reactive goal search with mapping, start to goal area (seed 004 Fig. 4).
+    /// Reactive goal search with mapping, start to goal area (the Dom Dinis search).
     ReachBeacon,
-    /// Run 1 explores; the robot plans on its own map; run 2 executes the plan (seed 004).
+    /// Run 1 explores; the robot plans on its own map; run 2 executes the plan (Dom Dinis).
     ExploreThenPlan,
     /// Survey a floor grid for --distance metres; report line-corrected, plain-odometry and
-    /// nearest-line errors against the truth (seed 003; use --arena builtin:floor-grid).
+    /// nearest-line errors against the truth (floor-grid line correction; use --arena
+    /// builtin:floor-grid).
     LineCorrect,
-    /// Carry the objects at the lit sources to the home base (seed 000 §7). Runs the khepera
+    /// Carry the objects at the lit sources to the home base (Khepera foraging). Runs the khepera
     /// (the profile with a gripper) in `builtin:forage` unless --arena names another arena
     /// (which then gets three lamps with objects drawn from --seed, home at the start).
     Forage,
-    /// Seed 000 §6.1: calibrate the light sensors, then map one lamp in the paper's 75 x 60
+    /// Khepera light-source mapping: calibrate the light sensors, then map one lamp in the paper's 75 x 60
     /// cm box, once without and once with local correction; reports the recognitions of
     /// each (paper: 5 without, 24+ with). Its own arena and the khepera: --arena and
     /// --profile are ignored.
     LightMap,
-    /// Seed 000 §3.3 Tables 1-2: a Khepera with 53.3 mm wheels wall-follows two laps of the
+    /// Khepera odometry, the foraging paper's Tables 1-2: a Khepera with 53.3 mm wheels wall-follows two laps of the
     /// 75 x 60 cm box; the encoder counts it sends are re-integrated with the tables' swept
     /// wheel distance and pulse length. Its own arena and the khepera: --arena and --profile
     /// are ignored.
@@ -556,7 +558,7 @@ impl RunArgs {
         let sensors = protocol::caps::COMPASS | protocol::caps::BEACON;
         if search && !profile.has(sensors) {
             return Err(format!(
-                "--task {} searches for the beacon by compass and beacon sensor (seed 004), \
+                "--task {} searches for the beacon by compass and beacon sensor (the Dom Dinis search), \
                  which the {} profile lacks; use --profile micro-rato",
                 self.task
                     .to_possible_value()

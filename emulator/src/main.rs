@@ -244,7 +244,7 @@ fn light_map(args: &RunArgs) -> Result<(), String> {
                 r.distance_m
             );
         }
-        println!("paper (seed 000 §6.1): 5 without correction; stopped after 24 with it");
+        println!("paper (Khepera foraging, §6.1): 5 without correction; stopped after 24 with it");
     }
     Ok(())
 }

@@ -233,3 +233,74 @@ fn global(k: &KeyEvent) -> Option<Action> {
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::AppOptions;
+    use ratatui::crossterm::event::MouseEvent;
+
+    fn wheel(app: &App, up: bool, column: u16, row: u16) -> Option<Action> {
+        action_for(
+            app,
+            &Event::Mouse(MouseEvent {
+                kind: if up {
+                    MouseEventKind::ScrollUp
+                } else {
+                    MouseEventKind::ScrollDown
+                },
+                column,
+                row,
+                modifiers: KeyModifiers::NONE,
+            }),
+        )
+    }
+
+    #[test]
+    fn the_wheel_zooms_the_map_about_the_pointer_and_scrolls_the_log_elsewhere() {
+        let mut app = App::new(AppOptions::default());
+        app.update(Action::Resize {
+            width: 150,
+            height: 40,
+        });
+        let screen = Rect::new(0, 0, 150, 40);
+        let areas = ui::areas(screen, &app);
+        let map = inner_of(ui::map::map_area(&app, areas.find(Panel::Map).unwrap()));
+        let centre = (map.x + map.width / 2, map.y + map.height / 2);
+        match wheel(&app, true, centre.0, centre.1) {
+            Some(Action::MapZoom { factor, at }) => {
+                assert_eq!(factor, ZOOM_STEP);
+                assert!(at.0.abs() < 0.05 && at.1.abs() < 0.05, "{at:?}");
+            }
+            other => panic!("{other:?}"),
+        }
+        // The top-left corner of the map is left and up of its centre.
+        match wheel(&app, false, map.x, map.y) {
+            Some(Action::MapZoom { factor, at }) => {
+                assert!(factor < 1.0);
+                assert!(at.0 < -0.4 && at.1 > 0.4, "{at:?}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let log = areas.find(Panel::Log).unwrap();
+        assert_eq!(
+            wheel(&app, true, log.x + 2, log.y + 2),
+            Some(Action::LogScroll(3))
+        );
+    }
+
+    #[test]
+    fn while_a_log_filter_is_typed_letters_are_text_not_commands() {
+        let mut app = App::new(AppOptions::default());
+        app.update(Action::LogFilterStart);
+        let key = |c| Event::Key(KeyEvent::new(KeyCode::Char(c), KeyModifiers::NONE));
+        assert_eq!(
+            action_for(&app, &key('q')),
+            Some(Action::LogFilterInput('q'))
+        );
+        assert_eq!(
+            action_for(&app, &key('E')),
+            Some(Action::LogFilterInput('E'))
+        );
+    }
+}

@@ -129,6 +129,30 @@ fn stats_reports_the_link_as_json() {
     let hz = v["stats"]["telemetry_hz"].as_f64().unwrap();
     assert!((8.0..=12.0).contains(&hz), "{hz}");
     assert_eq!(v["stats"]["decoder"]["crc_errors"], 0);
+    // The round trip is measured with a harmless probe (a parameter read), a few a second:
+    // without it there was no round trip at all.
+    let rt = &v["round_trip"];
+    assert!(rt["samples"].as_u64().unwrap() >= 3, "{v}");
+    assert!(rt["p50_us"].as_u64().unwrap() > 0, "{v}");
+    assert!(rt["p99_us"].as_u64() >= rt["p50_us"].as_u64(), "{v}");
+    assert_eq!(v["probe"], "param get failsafe_ms", "{v}");
+    assert_eq!(v["probe_failures"].as_array().map(Vec::len), Some(0), "{v}");
+    // Harmless: reading changes no state; the robot is still idle.
+    assert_eq!(v["stats"]["commands"]["nacked"], 0, "{v}");
+}
+
+#[test]
+fn stats_prints_the_probed_round_trip() {
+    let (_emu, port) = robot("stats-text");
+    let o = station(&["stats", "--port", port.to_str().unwrap(), "--seconds", "1"]);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(
+        out.lines().any(|l| l.starts_with("round trip  p50 ")
+            && l.contains("probes (param get failsafe_ms, every 250 ms)")),
+        "{out}"
+    );
+    assert!(out.contains("commands    "), "{out}");
 }
 
 #[test]

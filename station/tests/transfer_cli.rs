@@ -88,6 +88,23 @@ fn a_map_goes_up_once_comes_back_identical_and_an_oversize_one_is_refused_first(
     assert_eq!(v["outcome"], "complete");
     assert_eq!(v["map"]["width"], 17);
     assert_eq!(std::fs::read(&out).unwrap(), m.bytes, "byte-identical");
+    // An existing file is kept unless --force, with a real robot answering too.
+    std::fs::write(&out, b"precious").unwrap();
+    let o = station(&["download-map", "--port", port, "--out", p(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("exists; pass --force to overwrite it"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), b"precious");
+    let o = station(&["download-map", "--port", port, "--out", p(&out), "--force"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        m.bytes,
+        "overwritten with --force"
+    );
     // The downloaded file is a map file too.
     let o = station(&["upload-map", "--port", port, "--map", p(&out), "--json"]);
     assert_eq!(json(&o)["outcome"], "already_have");

@@ -5,6 +5,8 @@
 //! so tests run in parallel and a failing test never touches the user's tmux. The session and
 //! its server end when the [`Tmux`] is dropped. Tests that need tmux call [`Tmux::available`]
 //! first and say so when it is missing, rather than fail on a machine without it.
+// A test helper: panicking, with the screen, is how it fails the test that uses it.
+#![allow(clippy::panic)]
 
 use std::path::Path;
 use std::process::{Command, Output};
