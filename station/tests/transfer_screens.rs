@@ -186,6 +186,8 @@ fn the_map_grows_on_screen_while_the_robot_explores() {
     now += 1_000;
     app.update(Action::Tick { now_ms: now });
     assert_eq!(serve_download(&mut app, &mut now, &map), 0, "already held");
+    // The robot kept reporting meanwhile (else the header rightly calls its mode stale).
+    telemetry(&mut app, Mode::Explore, pose);
     insta::assert_snapshot!(screen(&app, 100, 30));
 }
 

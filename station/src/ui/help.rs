@@ -28,8 +28,8 @@ pub const KEYS: &[(&str, &str)] = &[
         "go-to with a cursor on the map (shift: 5x step), or click",
     ),
     (
-        "z Z hjkl wheel",
-        "map: zoom in / out (out to all recentres), pan",
+        "z Z hjkl",
+        "map: zoom in / out (or the wheel; all of it recentres) / pan",
     ),
     ("p", "parameters: ↑↓ select, r read, R read all, Enter edit"),
     (
@@ -58,7 +58,7 @@ pub const KEYS: &[(&str, &str)] = &[
         "robot: explore (its map grows live) / plan on board / execute",
     ),
     (
-        "PgUp PgDn End",
+        "PgUp/Dn End",
         "log: scroll (stops at the top) / follow the newest",
     ),
     (

@@ -277,6 +277,15 @@ pub fn to_world(app: &App, inner: Rect, col: u16, row: u16) -> Option<(f64, f64)
     Some((x0 + fx * (x1 - x0), y1 - fy * (y1 - y0)))
 }
 
+/// The terminal cell (column, row) a label printed at `p` lands on, as the canvas places
+/// labels.
+fn label_cell(view: &MapView, (x, y): (f64, f64)) -> (i64, i64) {
+    let (w, h) = (view.x[1] - view.x[0], view.y[1] - view.y[0]);
+    let col = (x - view.x[0]) * f64::from(view.cols.saturating_sub(1)) / w.max(1e-12);
+    let row = (view.y[1] - y) * f64::from(view.rows.saturating_sub(1)) / h.max(1e-12);
+    (col.floor() as i64, row.floor() as i64)
+}
+
 fn content_bounds(app: &App) -> [f64; 4] {
     let mut pts: Vec<(f64, f64)> = app
         .believed
@@ -362,8 +371,8 @@ impl MapLayer for ArenaLayer {
                 color: Color::Green,
             });
         }
-        // The beacon usually marks the goal: when the goal's letter would cover it, it goes
-        // one cell to the left, so both read.
+        // The beacon usually marks the goal: when the goal's letter would cover it, it moves
+        // one cell away from the goal, so both read.
         let goal = app
             .map
             .plan
@@ -371,17 +380,18 @@ impl MapLayer for ArenaLayer {
             .as_ref()
             .map(|r| r.goal())
             .or_else(|| app.map.plan.map().and_then(|m| m.goal.map(|g| g.centre)));
-        let cell = (
-            (view.x[1] - view.x[0]) / f64::from(view.cols.max(1)),
-            (view.y[1] - view.y[0]) / f64::from(view.rows.max(1)),
-        );
         for (x, y) in &a.beacons {
-            let covered = goal.is_some_and(|(gx, gy)| {
-                (gx - x).abs() < cell.0
-                    && (gy - y).abs() < cell.1
+            let covered = goal.is_some_and(|g| {
+                label_cell(view, g) == label_cell(view, (*x, *y))
                     && app.map.visible(map_layers::ENDS)
             });
-            let x = if covered { x - cell.0 } else { *x };
+            // One cell towards the side the goal is not on.
+            let step = (view.x[1] - view.x[0]) / f64::from(view.cols.saturating_sub(1).max(1));
+            let x = match goal {
+                Some((gx, _)) if covered && gx > *x => x - step,
+                Some(_) if covered => x + step,
+                _ => *x,
+            };
             ctx.print(x, *y, "B".yellow().bold());
         }
     }
