@@ -42,14 +42,14 @@ use crate::sensors::Noise;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum BenchTask {
-    /// Seed 004 reactive goal search to the beacon's target circle.
+    /// The Dom Dinis reactive goal search to the beacon's target circle.
     ReachBeacon,
-    /// Seed 004 explore, plan on the robot's own map, execute (run 2).
+    /// Dom Dinis: explore, plan on the robot's own map, execute (run 2).
     ExploreThenPlan,
     /// Go to the arena's goal (the Khepera's drift behaviour on boxes and mazes).
     #[value(alias = "go-to")]
     Goto,
-    /// Seed 000 §7 foraging: objects from lamps to home.
+    /// Khepera foraging: objects from lamps to home.
     Forage,
 }
 
