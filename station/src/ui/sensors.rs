@@ -90,6 +90,9 @@ fn render_glyph(app: &App, profile: &'static Profile, frame: &mut Frame, area: R
     let half_x = half_y * f64::from(area.width) / (2.0 * f64::from(area.height));
     let t = app.telemetry;
     let has_light = app.peer.as_ref().is_none_or(|p| p.has(caps::AMBIENT_LIGHT));
+    // Old readings in grey, like the text beside them.
+    let stale = app.stale_s().is_some();
+    let tint = move |c: Color| if stale { Color::DarkGray } else { c };
     let canvas = Canvas::default()
         .marker(Marker::Braille)
         .x_bounds([-half_x, half_x])
@@ -119,7 +122,7 @@ fn render_glyph(app: &App, profile: &'static Profile, frame: &mut Frame, area: R
                     y1: dy * (BODY + 0.1),
                     x2: dx * (BODY + 0.1 + 0.05 + IR_LEN * frac),
                     y2: dy * (BODY + 0.1 + 0.05 + IR_LEN * frac),
-                    color: heat(frac),
+                    color: tint(heat(frac)),
                 });
             }
             if has_light {
@@ -132,7 +135,7 @@ fn render_glyph(app: &App, profile: &'static Profile, frame: &mut Frame, area: R
                         y1: dy * RING,
                         x2: dx * (RING - 0.05 - LIGHT_LEN * bright),
                         y2: dy * (RING - 0.05 - LIGHT_LEN * bright),
-                        color: Color::Yellow,
+                        color: tint(Color::Yellow),
                     });
                 }
             }
