@@ -186,23 +186,35 @@ fn at_80_by_24_page_up_stops_at_the_top_with_a_marker_and_end_follows_again() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// An emulator process, killed when dropped (also when the test fails before killing it).
+struct Emulator(Child);
+
+impl Drop for Emulator {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// `robot-emulator serve --link PATH`, once the link exists.
-fn emulator(link: &Path) -> Child {
+fn emulator(link: &Path) -> Emulator {
     let _ = std::fs::remove_file(link);
-    let child = Command::new(workspace_bin("robot-emulator"))
-        .args(["serve", "--seed", "3", "--link"])
-        .arg(link)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+    let emu = Emulator(
+        Command::new(workspace_bin("robot-emulator"))
+            .args(["serve", "--seed", "3", "--link"])
+            .arg(link)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap(),
+    );
     let end = Instant::now() + Duration::from_secs(10);
     while std::fs::metadata(link).is_err() {
         assert!(Instant::now() < end, "the emulator made no pty");
         std::thread::sleep(Duration::from_millis(5));
     }
-    child
+    emu
 }
 
 #[test]
@@ -223,8 +235,8 @@ fn after_link_loss_the_header_and_the_sensors_say_their_values_are_stale() {
     );
     let s = t.wait_text("mode Idle │ 10 Hz", WAIT);
     assert!(!s.join("\n").contains("stale"), "{}", s.join("\n"));
-    emu.kill().unwrap();
-    emu.wait().unwrap();
+    emu.0.kill().unwrap();
+    emu.0.wait().unwrap();
     let s = t.wait_for("stale values marked", WAIT, |s| {
         s.first()
             .is_some_and(|h| h.contains("mode Idle (stale") && h.contains("10 Hz?"))
