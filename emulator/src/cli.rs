@@ -988,4 +988,80 @@ mod tests {
         assert_eq!(o.seed, 9);
         assert_eq!(o.task, Task::GoTo(Some(GoalPoint { x_m: 0.4, y_m: 0.2 })));
     }
+
+    #[test]
+    fn robots_get_numbered_links_and_their_own_faults_and_seeds() {
+        let cli = parse(&[
+            "--robots",
+            "3",
+            "--link",
+            "/tmp/robot",
+            "--drop-rate",
+            "0.01",
+            "--drop-rate",
+            "2:0.5",
+            "--disconnect-after",
+            "2:5",
+            "--reconnect-after",
+            "2:1",
+        ])
+        .expect("valid");
+        let a = &cli.serve;
+        assert_eq!(a.robots().expect("valid").map(|r| r.len()), Some(3));
+        let l1 = a.link_options(1, 3).expect("valid");
+        let l2 = a.link_options(2, 3).expect("valid");
+        assert_eq!(
+            l1.link.as_deref(),
+            Some(std::path::Path::new("/tmp/robot1"))
+        );
+        assert_eq!(
+            l2.link.as_deref(),
+            Some(std::path::Path::new("/tmp/robot2"))
+        );
+        assert_eq!((l1.to_robot.drop_rate, l2.to_robot.drop_rate), (0.01, 0.5));
+        assert_eq!(
+            (l1.disconnect_after_s, l2.disconnect_after_s),
+            (None, Some(5.0))
+        );
+        assert_eq!(l2.reconnect_after_s, Some(1.0));
+        assert_eq!(l1.seed, 1, "robot 1 keeps the run's seed");
+        assert_ne!(l2.seed, l1.seed);
+        // One robot keeps today's path and faults.
+        let one = parse(&["--link", "/tmp/robot", "--drop-rate", "0.2"]).expect("valid");
+        assert!(one.serve.robots().expect("valid").is_none());
+        let o = one.serve.options().expect("valid");
+        assert_eq!(
+            o.serve.link.as_deref(),
+            Some(std::path::Path::new("/tmp/robot"))
+        );
+        assert_eq!(o.serve.to_robot.drop_rate, 0.2);
+    }
+
+    #[test]
+    fn robot_takes_a_profile_and_an_optional_pose_and_profiles_mix() {
+        let cli = parse(&[
+            "run",
+            "--task",
+            "reach-beacon",
+            "--robot",
+            "micro-rato@0.5,0.5,90",
+            "--robot",
+            "micro-rato",
+        ])
+        .expect("valid");
+        let Some(Command::Run(r)) = cli.command else {
+            panic!("run subcommand")
+        };
+        let c = r.contest_options().expect("valid").expect("a contest");
+        assert_eq!(c.robots.len(), 2);
+        let s = c.robots[0].start.expect("a pose");
+        assert!((s.heading - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        assert!(c.robots[1].start.is_none());
+        let mixed = parse(&["--robot", "khepera", "--robot", "micro-rato@1,1"]).expect("valid");
+        let specs = mixed.serve.robots().expect("valid").expect("a fleet");
+        assert_eq!(specs[0].profile.name, KHEPERA.name);
+        assert_eq!(specs[1].profile.name, MICRO_RATO.name);
+        assert!(parse(&["--robot", "roomba"]).is_err());
+        assert!(parse(&["--robots", "2", "--robot", "khepera"]).is_err());
+    }
 }
