@@ -284,12 +284,12 @@ fn robots_start_at_the_arenas_start_areas_and_beside_them_when_there_are_too_few
     let s0 = arena.starts[0];
     let t: Vec<Pose> = fleet.sims().iter().map(Sim::truth).collect();
     assert!((t[0].x - s0.x).abs() < 1e-9 && (t[0].y - s0.y).abs() < 1e-9);
-    for i in 0..3 {
+    for (i, ti) in t.iter().enumerate() {
         for j in 0..i {
             let gap = fleet.sims()[i].disc().gap(&fleet.sims()[j].disc());
             assert!(gap >= 0.1 - 1e-9, "robots {j} and {i}: {gap}");
         }
-        let d = (t[i].x - s0.x).hypot(t[i].y - s0.y);
+        let d = (ti.x - s0.x).hypot(ti.y - s0.y);
         assert!(d < 1.2, "robot {i} is {d} m from the start area");
     }
     // Two given poses that overlap are refused, naming both robots.

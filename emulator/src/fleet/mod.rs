@@ -32,7 +32,7 @@ use contact::{Neighbour, MAX_ROBOTS};
 
 /// Stream from which robots 2.. derive their seeds (beyond the per-component streams of
 /// `rng::stream`).
-const FLEET_SEED_STREAM: u64 = 0x466c_6565_74; // "Fleet"
+const FLEET_SEED_STREAM: u64 = 0x0046_6c65_6574; // "Fleet"
 
 /// The seed of robot `index` (0-based) in a run seeded with `seed`: robot 1 keeps `seed`;
 /// each other robot gets its own, drawn from a stream of `seed`, so its noise is independent
