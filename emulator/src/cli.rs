@@ -277,7 +277,8 @@ pub struct RobotArg {
 
 impl FleetArgs {
     /// The fleet asked for, or `None` for one robot as before (`--robots 1`, or nothing).
-    /// One `--robot` is one robot too: its profile and pose replace `--profile`/`--start`.
+    /// One `--robot` is a fleet of one (served as robot 1 of the fleet loop; `run` makes it a
+    /// contest of one), which behaves as the single robot with that profile and pose.
     pub fn specs(&self, world: &WorldArgs) -> Result<Option<Vec<RobotSpec>>, String> {
         let max = crate::fleet::contact::MAX_ROBOTS;
         let pose = |[x, y, deg]: [f64; 3]| crate::arena::Pose {
