@@ -99,7 +99,8 @@ impl ArenaSource {
         }
     }
 
-    fn load(&self) -> Result<Arena, String> {
+    /// The arena: generated, or loaded as `--arena` would.
+    pub fn load(&self) -> Result<Arena, String> {
         match self {
             ArenaSource::Generated(k, s) => arena_gen::generate(*k, *s)
                 .map(|g| g.arena)
@@ -199,6 +200,8 @@ pub struct BenchOptions {
     pub noise: Noise,
     /// Draw a progress bar on stderr (only when it is a terminal).
     pub progress: bool,
+    /// Robots per contest; above 1 the benchmark is `crate::fleet_bench`'s.
+    pub robots: usize,
 }
 
 /// Why a run failed.
@@ -328,6 +331,11 @@ pub struct Spread {
     pub p90: f64,
 }
 
+/// Median and 90th percentile of `v` (nearest rank).
+pub fn spread_of(v: Vec<f64>) -> Option<Spread> {
+    spread(v)
+}
+
 fn spread(mut v: Vec<f64>) -> Option<Spread> {
     if v.is_empty() {
         return None;
@@ -420,38 +428,11 @@ pub fn run(opts: &BenchOptions) -> BenchReport {
         .flat_map(|a| (1..=opts.seeds).map(move |s| (a, s)))
         .collect();
     let started = Instant::now();
-    let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
-    let rows: Mutex<Vec<Option<Row>>> = Mutex::new(vec![None; jobs.len()]);
     let workers = opts.jobs.clamp(1, jobs.len().max(1));
-    let bar = opts.progress && std::io::stderr().is_terminal();
-    std::thread::scope(|scope| {
-        for _ in 0..workers {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(&(a, seed)) = jobs.get(i) else { break };
-                let row = run_one(&opts.arenas[a], seed, opts);
-                if let Ok(mut r) = rows.lock() {
-                    r[i] = Some(row);
-                }
-                done.fetch_add(1, Ordering::Relaxed);
-            });
-        }
-        if bar {
-            while done.load(Ordering::Relaxed) < jobs.len() {
-                draw_bar(done.load(Ordering::Relaxed), jobs.len(), started.elapsed());
-                std::thread::sleep(Duration::from_millis(200));
-            }
-            draw_bar(jobs.len(), jobs.len(), started.elapsed());
-            eprintln!();
-        }
+    let rows = run_parallel(jobs.len(), workers, opts.progress, |i| {
+        let (a, seed) = jobs[i];
+        run_one(&opts.arenas[a], seed, opts)
     });
-    let rows: Vec<Row> = rows
-        .into_inner()
-        .unwrap_or_default()
-        .into_iter()
-        .flatten()
-        .collect();
     BenchReport {
         task: opts.task,
         profile: opts.profile.name,
@@ -463,6 +444,51 @@ pub fn run(opts: &BenchOptions) -> BenchReport {
         summary: summarise(opts.task, &rows),
         rows,
     }
+}
+
+/// Runs `job(0..n)` on `workers` threads and returns the results in index order, whatever
+/// order they finish in; with `progress`, a bar on stderr when it is a terminal.
+pub(crate) fn run_parallel<T: Send>(
+    n: usize,
+    workers: usize,
+    progress: bool,
+    job: impl Fn(usize) -> T + Sync,
+) -> Vec<T> {
+    let started = Instant::now();
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<T>>> = Mutex::new((0..n).map(|_| None).collect());
+    let workers = workers.clamp(1, n.max(1));
+    let bar = progress && std::io::stderr().is_terminal();
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                if i >= n {
+                    break;
+                }
+                let out = job(i);
+                if let Ok(mut r) = results.lock() {
+                    r[i] = Some(out);
+                }
+                done.fetch_add(1, Ordering::Relaxed);
+            });
+        }
+        if bar {
+            while done.load(Ordering::Relaxed) < n {
+                draw_bar(done.load(Ordering::Relaxed), n, started.elapsed());
+                std::thread::sleep(Duration::from_millis(200));
+            }
+            draw_bar(n, n, started.elapsed());
+            eprintln!();
+        }
+    });
+    results
+        .into_inner()
+        .unwrap_or_default()
+        .into_iter()
+        .flatten()
+        .collect()
 }
 
 fn draw_bar(done: usize, total: usize, elapsed: Duration) {

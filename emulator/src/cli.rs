@@ -10,6 +10,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use robot_firmware::{Profile, KHEPERA, MICRO_RATO};
 
 use crate::fault::{FaultConfig, Stall};
+use crate::fleet::RobotSpec;
 use crate::link::{EmulatorOptions, ServeOptions, Speed};
 use crate::scenario::{GoalPoint, ScenarioOptions, Task};
 use crate::sensors::Noise;
@@ -116,6 +117,11 @@ pub struct BenchArgs {
     /// Print the whole report, with one row per run, as one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Run each arena as a contest of N robots (reach-beacon only), and each robot alone
+    /// from the same start with the same seed: how often each arrives with the others
+    /// against alone, and the collisions between robots.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub robots: usize,
 }
 
 /// Most seeds per arena `bench --seeds` takes.
@@ -166,6 +172,16 @@ impl BenchArgs {
                 profile.name
             ));
         }
+        let max = crate::fleet::contact::MAX_ROBOTS;
+        if !(1..=max).contains(&self.robots) {
+            return Err(format!("--robots {}: must be 1..={max}", self.robots));
+        }
+        if self.robots > 1 && self.task != BenchTask::ReachBeacon {
+            return Err(format!(
+                "--robots {}: the contest is seed 004's reach-beacon; use --task reach-beacon",
+                self.robots
+            ));
+        }
         let kind = self.kind.unwrap_or_else(|| self.task.default_kind());
         let arenas = crate::bench::resolve_arenas(&self.arenas, kind)?;
         Ok(crate::bench::BenchOptions {
@@ -181,6 +197,7 @@ impl BenchArgs {
                 Noise::default()
             },
             progress: !self.json,
+            robots: self.robots,
         })
     }
 }
@@ -236,6 +253,154 @@ pub struct WorldArgs {
     pub floor_grid: Option<f64>,
 }
 
+/// Several robots in one arena (issue 17): `--robots N` of `--profile`, or `--robot` once per
+/// robot. Robot 1 starts at `--start` if given; the others at the arena's start areas.
+#[derive(Debug, Clone, Args)]
+pub struct FleetArgs {
+    /// Robots in the arena, each its own firmware, sensors and serial port (1..=16)
+    /// [default: 1].
+    #[arg(long, value_name = "N", conflicts_with = "robot")]
+    pub robots: Option<usize>,
+    /// One robot, `PROFILE[@X,Y,DEG]` (metres, degrees); repeat for each robot (profiles may
+    /// be mixed). Without a pose it starts at the arena's next start area.
+    #[arg(long, value_name = "PROFILE[@X,Y,DEG]", value_parser = parse_robot)]
+    pub robot: Vec<RobotArg>,
+}
+
+/// One `--robot` value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RobotArg {
+    /// Its profile.
+    pub profile: ProfileArg,
+    /// Its start, metres and degrees.
+    pub start: Option<[f64; 3]>,
+}
+
+impl FleetArgs {
+    /// The fleet asked for, or `None` for one robot as before (`--robots 1`, or nothing).
+    /// One `--robot` is a fleet of one (served as robot 1 of the fleet loop; `run` makes it a
+    /// contest of one), which behaves as the single robot with that profile and pose.
+    pub fn specs(&self, world: &WorldArgs) -> Result<Option<Vec<RobotSpec>>, String> {
+        let max = crate::fleet::contact::MAX_ROBOTS;
+        let pose = |[x, y, deg]: [f64; 3]| crate::arena::Pose {
+            x,
+            y,
+            heading: deg.to_radians(),
+        };
+        if !self.robot.is_empty() {
+            if self.robot.len() > max {
+                return Err(format!(
+                    "--robot given {} times: a fleet has at most {max} robots",
+                    self.robot.len()
+                ));
+            }
+            if world.start.is_some() {
+                return Err(
+                    "--start is for a single robot; give each robot's pose with \
+                            --robot PROFILE@X,Y,DEG"
+                        .to_string(),
+                );
+            }
+            return Ok(Some(
+                self.robot
+                    .iter()
+                    .map(|r| RobotSpec {
+                        profile: r.profile.profile(),
+                        start: r.start.map(pose),
+                    })
+                    .collect(),
+            ));
+        }
+        match self.robots {
+            None | Some(1) => Ok(None),
+            Some(n) if n == 0 || n > max => Err(format!("--robots {n}: must be 1..={max}")),
+            Some(n) => Ok(Some(
+                (0..n)
+                    .map(|i| RobotSpec {
+                        profile: world.profile.profile(),
+                        start: if i == 0 { world.start.map(pose) } else { None },
+                    })
+                    .collect(),
+            )),
+        }
+    }
+}
+
+/// A value for every robot (`VALUE`) or for one (`ROBOT:VALUE`, robots numbered from 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PerRobot<T> {
+    /// The robot, 1-based; `None` = every robot.
+    pub robot: Option<usize>,
+    /// The value.
+    pub value: T,
+}
+
+/// The value in force for `robot` (1-based): the last `ROBOT:VALUE` naming it, else the last
+/// plain `VALUE`.
+pub fn for_robot<T: Copy>(list: &[PerRobot<T>], robot: usize) -> Option<T> {
+    list.iter()
+        .rev()
+        .find(|p| p.robot == Some(robot))
+        .or_else(|| list.iter().rev().find(|p| p.robot.is_none()))
+        .map(|p| p.value)
+}
+
+/// Refuses a `ROBOT:` prefix naming a robot the run does not have.
+fn check_robots<T>(flag: &str, list: &[PerRobot<T>], robots: usize) -> Result<(), String> {
+    match list.iter().find_map(|p| p.robot.filter(|&r| r > robots)) {
+        Some(r) => Err(format!(
+            "{flag} {r}:...: robot {r} does not exist; this run has {robots} robot(s), \
+             numbered from 1"
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Splits `ROBOT:REST` (`ROBOT` a whole number from 1) from a per-robot value.
+fn split_robot(s: &str) -> Result<(Option<usize>, &str), String> {
+    match s.split_once(':') {
+        None => Ok((None, s)),
+        Some((r, rest)) => match r.trim().parse::<usize>() {
+            Ok(n) if n >= 1 => Ok((Some(n), rest)),
+            _ => Err(format!(
+                "`{r}` in `{s}` is not a robot number (1, 2, ...): expected [ROBOT:]VALUE"
+            )),
+        },
+    }
+}
+
+fn parse_per_robot_number(s: &str) -> Result<PerRobot<f64>, String> {
+    let (robot, rest) = split_robot(s)?;
+    let value = rest
+        .trim()
+        .parse::<f64>()
+        .map_err(|_| format!("`{rest}` in `{s}` is not a number"))?;
+    Ok(PerRobot { robot, value })
+}
+
+fn parse_per_robot_stall(s: &str) -> Result<PerRobot<Stall>, String> {
+    let (robot, rest) = split_robot(s)?;
+    Ok(PerRobot {
+        robot,
+        value: parse_stall(rest)?,
+    })
+}
+
+/// `PROFILE[@X,Y,DEG]` (`--robot`).
+fn parse_robot(s: &str) -> Result<RobotArg, String> {
+    let (name, pose) = match s.split_once('@') {
+        Some((n, p)) => (n, Some(parse_pose(p)?)),
+        None => (s, None),
+    };
+    let profile = ProfileArg::from_str(name.trim(), true).map_err(|_| {
+        format!("unknown profile `{name}` in `{s}`: expected khepera or micro-rato")
+    })?;
+    Ok(RobotArg {
+        profile,
+        start: pose,
+    })
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ProfileArg {
     Khepera,
@@ -256,7 +421,11 @@ impl ProfileArg {
 pub struct ServeArgs {
     #[command(flatten)]
     pub world: WorldArgs,
-    /// Also create this symlink to the pty (like socat's link=), replaced on restart.
+    #[command(flatten)]
+    pub fleet: FleetArgs,
+    /// Also create this symlink to the pty (like socat's link=), replaced on restart. With
+    /// several robots, robot K's is PATH followed by K (`/tmp/robot` gives `/tmp/robot1`,
+    /// `/tmp/robot2`, ...).
     #[arg(long, value_name = "PATH")]
     pub link: Option<PathBuf>,
     /// Serial line rate the robot's UART runs at (8N1).
@@ -265,37 +434,31 @@ pub struct ServeArgs {
     /// Simulation speed: a factor (1 = real time) or `max`.
     #[arg(long, default_value = "1", value_parser = parse_speed)]
     pub speed: Speed,
-    /// Probability of losing a byte, both directions.
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        value_name = "P",
-        allow_negative_numbers = true
-    )]
-    pub drop_rate: f64,
-    /// Probability of flipping a bit, both directions.
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        value_name = "P",
-        allow_negative_numbers = true
-    )]
-    pub flip_rate: f64,
+    /// Probability of losing a byte, both directions. `ROBOT:P` faults only that robot's link
+    /// (robots numbered from 1); repeat for several.
+    #[arg(long, value_name = "[ROBOT:]P", allow_negative_numbers = true, value_parser = parse_per_robot_number)]
+    pub drop_rate: Vec<PerRobot<f64>>,
+    /// Probability of flipping a bit, both directions (`ROBOT:P`: one robot's link).
+    #[arg(long, value_name = "[ROBOT:]P", allow_negative_numbers = true, value_parser = parse_per_robot_number)]
+    pub flip_rate: Vec<PerRobot<f64>>,
     /// Only fault the station-to-robot direction.
     #[arg(long, conflicts_with = "only_from_robot")]
     pub only_to_robot: bool,
     /// Only fault the robot-to-station direction.
     #[arg(long)]
     pub only_from_robot: bool,
-    /// Stall the link every PERIOD seconds for DURATION seconds: `PERIOD,DURATION`.
-    #[arg(long, value_name = "PERIOD,DURATION", value_parser = parse_stall)]
-    pub stall: Option<Stall>,
-    /// Unplug the port after this many simulated seconds.
-    #[arg(long, value_name = "S")]
-    pub disconnect_after: Option<f64>,
-    /// Plug it back in (a new pty; --link follows it) this many seconds after unplugging.
-    #[arg(long, value_name = "S", requires = "disconnect_after")]
-    pub reconnect_after: Option<f64>,
+    /// Stall the link every PERIOD seconds for DURATION seconds: `PERIOD,DURATION`
+    /// (`ROBOT:PERIOD,DURATION`: one robot's link).
+    #[arg(long, value_name = "PERIOD,DURATION", value_parser = parse_per_robot_stall)]
+    pub stall: Vec<PerRobot<Stall>>,
+    /// Unplug the port after this many simulated seconds (`ROBOT:S`: only that robot's,
+    /// while the others run on).
+    #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = parse_per_robot_number)]
+    pub disconnect_after: Vec<PerRobot<f64>>,
+    /// Plug it back in (a new pty; --link follows it) this many seconds after unplugging
+    /// (`ROBOT:S`: that robot's).
+    #[arg(long, value_name = "S", requires = "disconnect_after", allow_negative_numbers = true, value_parser = parse_per_robot_number)]
+    pub reconnect_after: Vec<PerRobot<f64>>,
     /// On exit, print what the run measured (bytes, faults, cycle jitter) as JSON.
     #[arg(long)]
     pub json: bool,
@@ -310,6 +473,8 @@ pub struct ServeArgs {
 pub struct RunArgs {
     #[command(flatten)]
     pub world: WorldArgs,
+    #[command(flatten)]
+    pub fleet: FleetArgs,
     /// What the robot does.
     #[arg(long, value_enum, default_value_t = TaskArg::GoTo)]
     pub task: TaskArg,
@@ -432,7 +597,8 @@ impl WorldArgs {
         })
     }
 
-    fn sim_config(&self, baud: u32) -> Result<SimConfig, String> {
+    /// The simulation these arguments describe (one robot; a fleet shares all but profile and start).
+    pub fn sim_config(&self, baud: u32) -> Result<SimConfig, String> {
         self.check()?;
         let mut cfg = SimConfig::new(self.profile.profile());
         cfg.seed = self.seed;
@@ -449,8 +615,26 @@ impl WorldArgs {
 }
 
 impl ServeArgs {
-    /// The emulator these arguments describe.
+    /// The emulator these arguments describe, for one robot (robot 1's link options).
     pub fn options(&self) -> Result<EmulatorOptions, String> {
+        let sim = self.world.sim_config(self.baud)?;
+        let serve = self.link_options(1, 1)?;
+        Ok(EmulatorOptions {
+            arena: self.world.arena.clone(),
+            load: self.world.load_options(),
+            sim,
+            serve,
+        })
+    }
+
+    /// The robots `--robots`/`--robot` ask for; `None` for today's single robot.
+    pub fn robots(&self) -> Result<Option<Vec<RobotSpec>>, String> {
+        self.fleet.specs(&self.world)
+    }
+
+    /// Robot `robot`'s (1-based, of `robots`) link: speed, its faults, its `--link` path
+    /// ([`crate::fleet::serve::link_for`]), its seed ([`crate::fleet::robot_seed`]), the key.
+    pub fn link_options(&self, robot: usize, robots: usize) -> Result<ServeOptions, String> {
         if self.baud == 0 || self.baud > 4_000_000 {
             return Err(format!("--baud {}: must be 1..=4000000", self.baud));
         }
@@ -459,15 +643,26 @@ impl ServeArgs {
                 return Err(format!("--speed {f}: must be a positive factor or `max`"));
             }
         }
+        for (name, list) in [
+            ("--drop-rate", &self.drop_rate),
+            ("--flip-rate", &self.flip_rate),
+            ("--disconnect-after", &self.disconnect_after),
+            ("--reconnect-after", &self.reconnect_after),
+        ] {
+            check_robots(name, list, robots)?;
+        }
+        check_robots("--stall", &self.stall, robots)?;
         let faults = FaultConfig {
-            drop_rate: self.drop_rate,
-            flip_rate: self.flip_rate,
-            stall: self.stall,
+            drop_rate: for_robot(&self.drop_rate, robot).unwrap_or(0.0),
+            flip_rate: for_robot(&self.flip_rate, robot).unwrap_or(0.0),
+            stall: for_robot(&self.stall, robot),
         };
         faults.validate("--drop-rate/--flip-rate/--stall")?;
+        let disconnect_after_s = for_robot(&self.disconnect_after, robot);
+        let reconnect_after_s = for_robot(&self.reconnect_after, robot);
         for (name, v) in [
-            ("--disconnect-after", self.disconnect_after),
-            ("--reconnect-after", self.reconnect_after),
+            ("--disconnect-after", disconnect_after_s),
+            ("--reconnect-after", reconnect_after_s),
         ] {
             if let Some(v) = v {
                 if !(v.is_finite() && v >= 0.0) {
@@ -475,23 +670,27 @@ impl ServeArgs {
                 }
             }
         }
+        if reconnect_after_s.is_some() && disconnect_after_s.is_none() {
+            return Err(format!(
+                "--reconnect-after: robot {robot} is plugged back in but never unplugged; \
+                 give it --disconnect-after {robot}:S"
+            ));
+        }
         let clean = FaultConfig::default();
-        Ok(EmulatorOptions {
-            arena: self.world.arena.clone(),
-            load: self.world.load_options(),
-            sim: self.world.sim_config(self.baud)?,
-            serve: ServeOptions {
-                speed: self.speed,
-                to_robot: if self.only_from_robot { clean } else { faults },
-                from_robot: if self.only_to_robot { clean } else { faults },
-                disconnect_after_s: self.disconnect_after,
-                reconnect_after_s: self.reconnect_after,
-                link: self.link.clone(),
-                seed: self.world.seed,
-                key: match &self.key_file {
-                    Some(p) => Some(crate::link::read_key_file(p)?),
-                    None => None,
-                },
+        Ok(ServeOptions {
+            speed: self.speed,
+            to_robot: if self.only_from_robot { clean } else { faults },
+            from_robot: if self.only_to_robot { clean } else { faults },
+            disconnect_after_s,
+            reconnect_after_s,
+            link: self
+                .link
+                .as_deref()
+                .map(|l| crate::fleet::serve::link_for(l, robot, robots)),
+            seed: crate::fleet::robot_seed(self.world.seed, robot - 1),
+            key: match &self.key_file {
+                Some(p) => Some(crate::link::read_key_file(p)?),
+                None => None,
             },
         })
     }
@@ -578,6 +777,34 @@ impl RunArgs {
 }
 
 impl RunArgs {
+    /// The contest `--robots N` / `--robot` ask for (`None`: one robot, `options`).
+    pub fn contest_options(
+        &self,
+    ) -> Result<Option<crate::scenario::contest::ContestOptions>, String> {
+        let Some(robots) = self.fleet.specs(&self.world)? else {
+            return Ok(None);
+        };
+        if self.task != TaskArg::ReachBeacon {
+            return Err(format!(
+                "--robots/--robot: several robots run the Micro-Rato contest, --task \
+                 reach-beacon (seed 004 §2), not --task {}",
+                self.task
+                    .to_possible_value()
+                    .map_or_else(String::new, |v| v.get_name().to_string())
+            ));
+        }
+        if self.goal.is_some() {
+            return Err("--goal is for --task go-to; the contest heads for the beacon".into());
+        }
+        self.world.check()?;
+        Ok(Some(crate::scenario::contest::ContestOptions {
+            robots,
+            seed: self.world.seed,
+            timeout_s: self.timeout_s(DEFAULT_TIMEOUT_S)?,
+            noise: self.world.noise()?,
+        }))
+    }
+
     /// The line-correction run these arguments describe (`--task line-correct`).
     pub fn line_correct_options(&self) -> Result<crate::line_correct::LineCorrectOptions, String> {
         self.world.check()?;
@@ -763,5 +990,81 @@ mod tests {
         let o = r.options().expect("valid");
         assert_eq!(o.seed, 9);
         assert_eq!(o.task, Task::GoTo(Some(GoalPoint { x_m: 0.4, y_m: 0.2 })));
+    }
+
+    #[test]
+    fn robots_get_numbered_links_and_their_own_faults_and_seeds() {
+        let cli = parse(&[
+            "--robots",
+            "3",
+            "--link",
+            "/tmp/robot",
+            "--drop-rate",
+            "0.01",
+            "--drop-rate",
+            "2:0.5",
+            "--disconnect-after",
+            "2:5",
+            "--reconnect-after",
+            "2:1",
+        ])
+        .expect("valid");
+        let a = &cli.serve;
+        assert_eq!(a.robots().expect("valid").map(|r| r.len()), Some(3));
+        let l1 = a.link_options(1, 3).expect("valid");
+        let l2 = a.link_options(2, 3).expect("valid");
+        assert_eq!(
+            l1.link.as_deref(),
+            Some(std::path::Path::new("/tmp/robot1"))
+        );
+        assert_eq!(
+            l2.link.as_deref(),
+            Some(std::path::Path::new("/tmp/robot2"))
+        );
+        assert_eq!((l1.to_robot.drop_rate, l2.to_robot.drop_rate), (0.01, 0.5));
+        assert_eq!(
+            (l1.disconnect_after_s, l2.disconnect_after_s),
+            (None, Some(5.0))
+        );
+        assert_eq!(l2.reconnect_after_s, Some(1.0));
+        assert_eq!(l1.seed, 1, "robot 1 keeps the run's seed");
+        assert_ne!(l2.seed, l1.seed);
+        // One robot keeps today's path and faults.
+        let one = parse(&["--link", "/tmp/robot", "--drop-rate", "0.2"]).expect("valid");
+        assert!(one.serve.robots().expect("valid").is_none());
+        let o = one.serve.options().expect("valid");
+        assert_eq!(
+            o.serve.link.as_deref(),
+            Some(std::path::Path::new("/tmp/robot"))
+        );
+        assert_eq!(o.serve.to_robot.drop_rate, 0.2);
+    }
+
+    #[test]
+    fn robot_takes_a_profile_and_an_optional_pose_and_profiles_mix() {
+        let cli = parse(&[
+            "run",
+            "--task",
+            "reach-beacon",
+            "--robot",
+            "micro-rato@0.5,0.5,90",
+            "--robot",
+            "micro-rato",
+        ])
+        .expect("valid");
+        let Some(Command::Run(r)) = cli.command else {
+            panic!("run subcommand")
+        };
+        let c = r.contest_options().expect("valid").expect("a contest");
+        assert_eq!(c.robots.len(), 2);
+        let s = c.robots[0].start.expect("a pose");
+        assert!((s.heading - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        assert!(c.robots[1].start.is_none());
+        let mixed = parse(&["--robot", "khepera", "--robot", "micro-rato@1,1"]).expect("valid");
+        let specs = mixed.serve.robots().expect("valid").expect("a fleet");
+        assert_eq!(specs[0].profile.name, KHEPERA.name);
+        assert_eq!(specs[1].profile.name, MICRO_RATO.name);
+        assert!(parse(&["--robot", "roomba"]).is_err());
+        assert!(parse(&["--robots", "2", "--robot", "khepera"]).is_err());
     }
 }

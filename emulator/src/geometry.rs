@@ -647,6 +647,46 @@ impl SegmentSet {
     }
 }
 
+/// A solid disc: another robot's round body, as sensors and the physics see it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Disc {
+    /// Centre, metres.
+    pub centre: Point,
+    /// Radius, metres.
+    pub radius: f64,
+}
+
+impl Disc {
+    /// Distance `t >= 0` along the ray `o + t d` (`d` a unit vector) to the disc's edge; 0 when
+    /// `o` is inside it (the same convention as a ray starting on a wall).
+    pub fn ray_hit(&self, o: Point, d: Vector) -> Option<f64> {
+        let oc = o - self.centre;
+        let c = oc.norm_squared() - self.radius * self.radius;
+        if !(c.is_finite() && d.x.is_finite() && d.y.is_finite()) {
+            return None;
+        }
+        if c <= 0.0 {
+            return Some(0.0);
+        }
+        let b = oc.dot(&d);
+        if b > 0.0 {
+            return None; // outside and heading away
+        }
+        let disc = b * b - c;
+        (disc >= 0.0).then(|| -b - disc.sqrt())
+    }
+
+    /// True when the disc touches or crosses the segment from `a` to `b` (a line of sight).
+    pub fn blocks(&self, a: Point, b: Point) -> bool {
+        Segment::new(a, b).distance_to_point(self.centre) <= self.radius
+    }
+
+    /// Distance between the edges of two discs (negative when they overlap).
+    pub fn gap(&self, o: &Disc) -> f64 {
+        (self.centre - o.centre).norm() - self.radius - o.radius
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

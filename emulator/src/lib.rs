@@ -7,6 +7,8 @@ pub mod bench;
 pub mod builtin;
 pub mod cli;
 pub mod fault;
+pub mod fleet;
+pub mod fleet_bench;
 pub mod forage;
 pub mod geometry;
 pub mod line_correct;

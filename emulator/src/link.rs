@@ -187,84 +187,24 @@ pub fn serve<D: Device>(
     on_ready: &mut dyn FnMut(&Path),
 ) -> Result<ServeStats, PtyError> {
     dev.set_link_key(opts.key.as_ref());
-    let mut pty = Some(Pty::open(opts.link.as_deref())?);
-    if let Some(p) = &pty {
-        on_ready(p.slave_path());
-    }
-    let mut to_robot = FaultInjector::new(opts.to_robot, opts.seed, 1);
-    let mut from_robot = FaultInjector::new(opts.from_robot, opts.seed, 2);
-    let mut stats = ServeStats::default();
+    let mut end = Endpoint::open(opts, on_ready)?;
     let wall0 = Instant::now();
     let sim0 = dev.now_us();
-    let mut unplugged_at: Option<f64> = None;
-    let mut buf = vec![0u8; 4096];
-    let mut inbound = Vec::with_capacity(4096);
-    let mut outbound = Vec::with_capacity(4096);
-    let mut faulted = Vec::with_capacity(4096);
-    let mut periods = Vec::new();
-    let mut last_cycle = (dev.cycles(), Instant::now());
+    let mut clock = CycleClock::new(dev.cycles());
 
     while !stop.load(Ordering::Relaxed) {
         // 1. Advance simulated time.
-        let steps = match opts.speed {
-            Speed::Max => MAX_SPEED_BATCH_MS,
-            Speed::Factor(f) => {
-                let target = sim0 + (wall0.elapsed().as_secs_f64() * f * 1e6) as u64;
-                let behind_ms = target.saturating_sub(dev.now_us()) / 1000;
-                u32::try_from(behind_ms)
-                    .unwrap_or(u32::MAX)
-                    .min(MAX_CATCH_UP_MS)
-            }
-        };
+        let steps = steps_due(opts.speed, wall0, sim0, dev.now_us());
         for _ in 0..steps {
             dev.step_ms();
-            if matches!(opts.speed, Speed::Factor(_)) && dev.cycles() != last_cycle.0 {
-                let now = Instant::now();
-                periods.push(now.duration_since(last_cycle.1).as_secs_f64() * 1e6);
-                last_cycle = (dev.cycles(), now);
+            if matches!(opts.speed, Speed::Factor(_)) {
+                clock.observe(dev.cycles());
             }
         }
         let t_s = (dev.now_us() - sim0) as f64 * 1e-6;
-
-        // 2. Unplug / replug.
-        if let (Some(after), None) = (opts.disconnect_after_s, unplugged_at) {
-            if t_s >= after && pty.is_some() {
-                pty = None;
-                unplugged_at = Some(t_s);
-                stats.disconnects += 1;
-            }
-        }
-        if let (Some(at), Some(re)) = (unplugged_at, opts.reconnect_after_s) {
-            if pty.is_none() && t_s >= at + re {
-                let p = Pty::open(opts.link.as_deref())?;
-                on_ready(p.slave_path());
-                pty = Some(p);
-            }
-        }
-
-        // 3. Station -> robot.
-        inbound.clear();
-        if let Some(p) = &pty {
-            while let ReadState::Data(n) = p.read(&mut buf) {
-                inbound.extend_from_slice(buf.get(..n).unwrap_or(&[]));
-            }
-        }
-        stats.bytes_to_robot += inbound.len() as u64;
-        // Called even with no new bytes, so bytes held by a stall that has ended go through.
-        faulted.clear();
-        to_robot.apply(&inbound, t_s, &mut faulted);
-        if !faulted.is_empty() {
-            dev.push_inbound(&faulted);
-        }
-
-        // 4. Robot -> station.
-        outbound.clear();
-        dev.take_outbound(&mut outbound);
-        faulted.clear();
-        from_robot.apply(&outbound, t_s, &mut faulted);
-        stats.bytes_from_robot += outbound.len() as u64;
-        let sent = pty.as_ref().map_or(0, |p| write_all_possible(p, &faulted));
-        stats.bytes_unsent += (faulted.len() - sent) as u64;
+        // 2. Unplug / replug; 3. station -> robot; 4. robot -> station.
+        end.plug(t_s, on_ready)?;
+        end.exchange(dev, t_s);
 
         if let Speed::Factor(f) = opts.speed {
             // Driven by the next event (a byte due on the wire, the robot's next cycle, or
@@ -272,21 +212,175 @@ pub fn serve<D: Device>(
             // idle link costs a few wake-ups, and a command is read as it comes.
             let due_us = dev.next_due_us().saturating_sub(dev.now_us());
             let wait = Duration::from_secs_f64(due_us as f64 * 1e-6 / f).max(TICK / 4);
-            match &pty {
+            match end.pty() {
                 Some(p) => p.wait_input(wait),
                 None => std::thread::sleep(wait),
             }
         }
     }
+    let mut stats = end.finish(dev);
     stats.sim_s = (dev.now_us() - sim0) as f64 * 1e-6;
     stats.wall_s = wall0.elapsed().as_secs_f64();
-    stats.bytes_to_robot_dropped = dev.to_robot_dropped();
-    stats.to_robot_faults = to_robot.stats().into();
-    stats.from_robot_faults = from_robot.stats().into();
-    // The first period after start-up includes the pty setup; drop it.
-    let periods = periods.into_iter().skip(1).collect();
-    stats.cycle_period_us = Jitter::from_periods(f64::from(dev.cycle_us()), periods);
+    stats.cycle_period_us = clock.jitter(dev.cycle_us());
     Ok(stats)
+}
+
+/// Simulated milliseconds to step now: as many as the wall clock is ahead (at most
+/// `MAX_CATCH_UP_MS`), or a batch at maximum speed.
+pub(crate) fn steps_due(speed: Speed, wall0: Instant, sim0: u64, now_us: u64) -> u32 {
+    match speed {
+        Speed::Max => MAX_SPEED_BATCH_MS,
+        Speed::Factor(f) => {
+            let target = sim0 + (wall0.elapsed().as_secs_f64() * f * 1e6) as u64;
+            let behind_ms = target.saturating_sub(now_us) / 1000;
+            u32::try_from(behind_ms)
+                .unwrap_or(u32::MAX)
+                .min(MAX_CATCH_UP_MS)
+        }
+    }
+}
+
+/// The wall-clock period of a robot's control cycles, for the real-time jitter figure.
+pub(crate) struct CycleClock {
+    last: (u32, Instant),
+    periods: Vec<f64>,
+}
+
+impl CycleClock {
+    pub(crate) fn new(cycles: u32) -> CycleClock {
+        CycleClock {
+            last: (cycles, Instant::now()),
+            periods: Vec::new(),
+        }
+    }
+
+    /// Called after each step with the robot's cycle count: a new cycle records its period.
+    pub(crate) fn observe(&mut self, cycles: u32) {
+        if cycles != self.last.0 {
+            let now = Instant::now();
+            self.periods
+                .push(now.duration_since(self.last.1).as_secs_f64() * 1e6);
+            self.last = (cycles, now);
+        }
+    }
+
+    /// The distribution, without the first period (it includes the pty setup).
+    pub(crate) fn jitter(self, cycle_us: u32) -> Jitter {
+        let periods = self.periods.into_iter().skip(1).collect();
+        Jitter::from_periods(f64::from(cycle_us), periods)
+    }
+}
+
+/// One robot's end of the link: its pty (absent while unplugged), its fault injectors and
+/// its byte counters. The single-robot loop has one; a fleet's has one per robot.
+pub(crate) struct Endpoint {
+    pty: Option<Pty>,
+    link: Option<PathBuf>,
+    disconnect_after_s: Option<f64>,
+    reconnect_after_s: Option<f64>,
+    unplugged_at: Option<f64>,
+    to_robot: FaultInjector,
+    from_robot: FaultInjector,
+    stats: ServeStats,
+    buf: Vec<u8>,
+    inbound: Vec<u8>,
+    outbound: Vec<u8>,
+    faulted: Vec<u8>,
+}
+
+impl Endpoint {
+    /// Opens the pty (and `opts.link`) and reports its path through `on_ready`.
+    pub(crate) fn open(
+        opts: &ServeOptions,
+        on_ready: &mut dyn FnMut(&Path),
+    ) -> Result<Endpoint, PtyError> {
+        let pty = Pty::open(opts.link.as_deref())?;
+        on_ready(pty.slave_path());
+        Ok(Endpoint {
+            pty: Some(pty),
+            link: opts.link.clone(),
+            disconnect_after_s: opts.disconnect_after_s,
+            reconnect_after_s: opts.reconnect_after_s,
+            unplugged_at: None,
+            to_robot: FaultInjector::new(opts.to_robot, opts.seed, 1),
+            from_robot: FaultInjector::new(opts.from_robot, opts.seed, 2),
+            stats: ServeStats::default(),
+            buf: vec![0u8; 4096],
+            inbound: Vec::with_capacity(4096),
+            outbound: Vec::with_capacity(4096),
+            faulted: Vec::with_capacity(4096),
+        })
+    }
+
+    /// The pty, while plugged in.
+    pub(crate) fn pty(&self) -> Option<&Pty> {
+        self.pty.as_ref()
+    }
+
+    /// Unplugs the port at `disconnect_after_s` and plugs a new one in `reconnect_after_s`
+    /// later (`t_s`: simulated seconds since serving began).
+    pub(crate) fn plug(
+        &mut self,
+        t_s: f64,
+        on_ready: &mut dyn FnMut(&Path),
+    ) -> Result<(), PtyError> {
+        if let (Some(after), None) = (self.disconnect_after_s, self.unplugged_at) {
+            if t_s >= after && self.pty.is_some() {
+                self.pty = None;
+                self.unplugged_at = Some(t_s);
+                self.stats.disconnects += 1;
+            }
+        }
+        if let (Some(at), Some(re)) = (self.unplugged_at, self.reconnect_after_s) {
+            if self.pty.is_none() && t_s >= at + re {
+                let p = Pty::open(self.link.as_deref())?;
+                on_ready(p.slave_path());
+                self.pty = Some(p);
+            }
+        }
+        Ok(())
+    }
+
+    /// Moves bytes both ways between the pty and `dev` through the fault injectors.
+    pub(crate) fn exchange<D: Device>(&mut self, dev: &mut D, t_s: f64) {
+        // Station -> robot.
+        self.inbound.clear();
+        if let Some(p) = &self.pty {
+            while let ReadState::Data(n) = p.read(&mut self.buf) {
+                self.inbound
+                    .extend_from_slice(self.buf.get(..n).unwrap_or(&[]));
+            }
+        }
+        self.stats.bytes_to_robot += self.inbound.len() as u64;
+        // Called even with no new bytes, so bytes held by a stall that has ended go through.
+        self.faulted.clear();
+        self.to_robot.apply(&self.inbound, t_s, &mut self.faulted);
+        if !self.faulted.is_empty() {
+            dev.push_inbound(&self.faulted);
+        }
+
+        // Robot -> station.
+        self.outbound.clear();
+        dev.take_outbound(&mut self.outbound);
+        self.faulted.clear();
+        self.from_robot
+            .apply(&self.outbound, t_s, &mut self.faulted);
+        self.stats.bytes_from_robot += self.outbound.len() as u64;
+        let sent = self
+            .pty
+            .as_ref()
+            .map_or(0, |p| write_all_possible(p, &self.faulted));
+        self.stats.bytes_unsent += (self.faulted.len() - sent) as u64;
+    }
+
+    /// The counters (times and jitter are the caller's).
+    pub(crate) fn finish<D: Device>(self, dev: &D) -> ServeStats {
+        let mut stats = self.stats;
+        stats.bytes_to_robot_dropped = dev.to_robot_dropped();
+        stats.to_robot_faults = self.to_robot.stats().into();
+        stats.from_robot_faults = self.from_robot.stats().into();
+        stats
+    }
 }
 
 fn write_all_possible(pty: &Pty, bytes: &[u8]) -> usize {

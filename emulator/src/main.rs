@@ -44,6 +44,18 @@ fn arena(args: &emulator::cli::ArenaArgs) -> Result<(), String> {
 
 fn bench(args: &emulator::cli::BenchArgs) -> Result<(), String> {
     let opts = args.options()?;
+    if opts.robots > 1 {
+        let report = emulator::fleet_bench::run(&opts);
+        if args.json {
+            println!(
+                "{}",
+                serde_json::to_string(&report).map_err(|e| e.to_string())?
+            );
+        } else {
+            print!("{}", emulator::fleet_bench::render(&report));
+        }
+        return Ok(());
+    }
     let report = emulator::bench::run(&opts);
     if args.json {
         println!(
@@ -57,6 +69,9 @@ fn bench(args: &emulator::cli::BenchArgs) -> Result<(), String> {
 }
 
 fn serve(args: &ServeArgs) -> Result<(), String> {
+    if let Some(robots) = args.robots()? {
+        return serve_fleet(args, &robots);
+    }
     let opts = args.options()?;
     let profile = opts.sim.profile.name;
     let arena_name = opts.arena.clone();
@@ -94,7 +109,63 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// Several robots, one pty each: prints each robot's pty path on its own line, in robot
+/// order (the lines a script waits for), then again after a replug.
+fn serve_fleet(args: &ServeArgs, robots: &[emulator::fleet::RobotSpec]) -> Result<(), String> {
+    let n = robots.len();
+    let links = (1..=n)
+        .map(|k| args.link_options(k, n))
+        .collect::<Result<Vec<_>, String>>()?;
+    let base = args.world.sim_config(args.baud)?;
+    let arena =
+        load_arena(&args.world.arena, &args.world.load_options()).map_err(|e| e.to_string())?;
+    let arena_name = args.world.arena.clone();
+    let mut fleet = emulator::fleet::Fleet::new(arena, &base, robots).map_err(|e| e.to_string())?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
+        .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
+    let names: Vec<&str> = robots.iter().map(|r| r.profile.name).collect();
+    let stats = emulator::fleet::serve::serve(&mut fleet, &links, &stop, &mut |i, path| {
+        println!("{}", path.display());
+        let link = links
+            .get(i)
+            .and_then(|l| l.link.as_ref())
+            .map(|l| format!(" (link {})", l.display()))
+            .unwrap_or_default();
+        eprintln!(
+            "robot-emulator: robot {} ({}) in {arena_name} on {}{link}",
+            i + 1,
+            names.get(i).copied().unwrap_or(""),
+            path.display()
+        );
+    })
+    .map_err(|e| e.to_string())?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string(&stats).map_err(|e| e.to_string())?
+        );
+    }
+    Ok(())
+}
+
 fn run(args: &RunArgs) -> Result<(), String> {
+    if let Some(opts) = args.contest_options()? {
+        let arena =
+            load_arena(&args.world.arena, &args.world.load_options()).map_err(|e| e.to_string())?;
+        let report =
+            emulator::scenario::contest::run_contest(arena, &opts).map_err(|e| e.to_string())?;
+        if args.json {
+            println!(
+                "{}",
+                serde_json::to_string(&report).map_err(|e| e.to_string())?
+            );
+        } else {
+            print!("{}", emulator::scenario::contest::render(&report));
+        }
+        return Ok(());
+    }
     if args.task == emulator::cli::TaskArg::LineCorrect {
         return line_correct(args);
     }

@@ -438,6 +438,27 @@ impl Body {
     }
 }
 
+/// Contact with other robots (the fleet's physics, `crate::fleet::contact`): the fleet moves
+/// a body out of another robot's way after its own step.
+impl Body {
+    /// Moves the centre to `p` (the heading and the wheels untouched: they keep turning, as
+    /// against a wall) and forgets the wall clearance, so the next step measures it again.
+    /// `step_from` is where the step that is being corrected began: the ground distance then
+    /// counts the step as from there to `p`. The caller has checked that `p` is free of walls.
+    pub fn displace_to(&mut self, p: Point, step_from: Point) {
+        if !(p.x.is_finite() && p.y.is_finite()) {
+            return;
+        }
+        let at = Point::new(self.pose.x, self.pose.y);
+        let counted = (at - step_from).norm();
+        self.distance_m = (self.distance_m - counted + (p - step_from).norm()).max(0.0);
+        self.pose.x = p.x;
+        self.pose.y = p.y;
+        self.clearance_m = 0.0;
+        self.moved_m = 0.0;
+    }
+}
+
 /// `(sin x, cos x)`; a Taylor polynomial for the small angles of one step (|x| < 0.05 rad:
 /// truncation error below 1e-17), the library otherwise.
 fn small_sin_cos(x: f64) -> (f64, f64) {

@@ -117,6 +117,37 @@ impl Pty {
         }
     }
 
+    /// Waits up to `timeout` for a station to write to any of `ptys` (a fleet's ports).
+    /// Ports with no station attached report a hang-up at once; they are left out of the
+    /// wait, and with none left this just sleeps, so the serving loop does not spin.
+    pub fn wait_any(ptys: &[&Pty], timeout: std::time::Duration) {
+        use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+        let ms = u16::try_from(timeout.as_millis()).unwrap_or(u16::MAX);
+        let mut fds: Vec<PollFd> = ptys
+            .iter()
+            .map(|p| PollFd::new(p.master.as_fd(), PollFlags::POLLIN))
+            .collect();
+        // A hung-up port answers at once: look once without waiting, then wait on the rest.
+        let _ = poll(&mut fds, PollTimeout::ZERO);
+        let input = |f: &PollFd| f.revents().is_some_and(|r| r.contains(PollFlags::POLLIN));
+        if fds.iter().any(input) {
+            return;
+        }
+        let hung = |f: &PollFd| {
+            f.revents()
+                .is_some_and(|r| r.intersects(PollFlags::POLLHUP | PollFlags::POLLERR))
+        };
+        let mut live: Vec<PollFd> = ptys
+            .iter()
+            .zip(&fds)
+            .filter(|(_, f)| !hung(f))
+            .map(|(p, _)| PollFd::new(p.master.as_fd(), PollFlags::POLLIN))
+            .collect();
+        if live.is_empty() || poll(&mut live, PollTimeout::from(ms)).is_err() {
+            std::thread::sleep(timeout);
+        }
+    }
+
     /// Writes bytes for the station; returns how many the pty took (the rest are dropped by
     /// the caller, as a UART with a full buffer would).
     pub fn write(&self, bytes: &[u8]) -> usize {

@@ -43,6 +43,7 @@ use crate::arena::{Arena, Pose};
 use crate::sensors::Noise;
 use crate::sim::{Sim, SimConfig, SimError};
 
+pub mod contest;
 pub mod forage;
 pub mod lightmap;
 pub mod odometry_laps;
@@ -517,7 +518,7 @@ fn plan_and_execute(
 }
 
 /// Tells the firmware its arrival radius: the option, else `min(default, tolerance / 2)`.
-fn set_arrival(
+pub(crate) fn set_arrival(
     sim: &mut Sim,
     arrival_m: Option<f64>,
     tolerance_m: f64,
@@ -539,7 +540,7 @@ fn set_arrival(
     apply(sim, cmd, "SetParam(arrival radius)")
 }
 
-fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), ScenarioError> {
+pub(crate) fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), ScenarioError> {
     let now_ms = (sim.now_us() / 1000) as u32;
     match sim.robot_mut().core.apply(cmd, now_ms) {
         Reply::Ack(_) => Ok(()),

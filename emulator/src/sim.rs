@@ -23,8 +23,9 @@ use robot_firmware::{BeaconReading, Hal, MotorCommand, Profile, Robot, RobotOpti
 use thiserror::Error;
 
 use crate::arena::{Arena, Light, Pose};
+use crate::fleet::contact::{Neighbour, RobotContacts};
 use crate::forage::{ForageSite, Gripper, LineCamera};
-use crate::geometry::Point;
+use crate::geometry::{Disc, Point};
 use crate::physics::{Body, PhysicsError, PhysicsParams};
 use crate::rng::{stream, SimRng};
 use crate::sensors::ir::IrArray;
@@ -154,6 +155,11 @@ pub struct SimHal {
     slip_rng: SimRng,
     gripper: Gripper,
     camera: LineCamera,
+    /// The other robots in the world now (a fleet's; empty alone), for the physics.
+    neighbours: Vec<Neighbour>,
+    /// Their bodies, for the sensors.
+    others: Vec<Disc>,
+    robot_contacts: RobotContacts,
 }
 
 impl Hal for SimHal {
@@ -170,7 +176,8 @@ impl Hal for SimHal {
     }
 
     fn ir(&mut self) -> [u16; 8] {
-        self.ir.read(self.world.walls(), self.body.pose())
+        self.ir
+            .read_among(self.world.walls(), &self.others, self.body.pose())
     }
 
     fn ambient(&mut self) -> [u16; 8] {
@@ -194,7 +201,8 @@ impl Hal for SimHal {
     }
 
     fn beacon(&mut self) -> Option<BeaconReading> {
-        self.beacon.read_any(self.world.beacons(), self.body.pose())
+        self.beacon
+            .read_any_among(self.world.beacons(), &self.others, self.body.pose())
     }
 
     fn battery_mv(&mut self) -> u16 {
@@ -226,12 +234,19 @@ impl SimHal {
     /// Advances the physical world by one step under the motor command in force.
     fn advance(&mut self) {
         let level = self.battery.level();
+        let before = self.body.pose();
         self.body.step(
             self.motor,
             level,
             self.world.walls(),
             STEP_S,
             &mut self.slip_rng,
+        );
+        self.robot_contacts.resolve(
+            &mut self.body,
+            Point::new(before.x, before.y),
+            &self.neighbours,
+            &self.world,
         );
         let max = f64::from(self.profile.motor_max.max(1));
         let effort = (f64::from(self.motor.left.unsigned_abs())
@@ -271,6 +286,22 @@ fn tell_the_arena(robot: &mut Robot, world: &World) {
         max: fw(b.max),
         ..dead.params.bounds
     });
+}
+
+/// The firmware instance of one simulated robot: the one place the emulator constructs a
+/// `Robot` (a single robot and every robot of a fleet alike), told its start and its arena.
+fn build_robot(profile: &'static Profile, seed: u64, start: Pose, world: &World) -> Robot {
+    let firmware_seed = SimRng::new(seed, stream::FIRMWARE).next_u64() as u32;
+    let mut robot = Robot::new(RobotOptions {
+        profile,
+        seed: firmware_seed,
+        // The robot is told where it starts (seed 004 §5: the start pose is known).
+        start: FwPose::new(start.x as f32, start.y as f32, start.heading as f32),
+        emulated: true,
+        firmware_version: env!("CARGO_PKG_VERSION"),
+    });
+    tell_the_arena(&mut robot, world);
+    robot
 }
 
 /// A running simulation.
@@ -385,17 +416,11 @@ impl Sim {
                 SimRng::new(seed, crate::forage::CAMERA_STREAM),
             ),
             world,
+            neighbours: Vec::new(),
+            others: Vec::new(),
+            robot_contacts: RobotContacts::default(),
         };
-        let firmware_seed = SimRng::new(seed, stream::FIRMWARE).next_u64() as u32;
-        let mut robot = Robot::new(RobotOptions {
-            profile,
-            seed: firmware_seed,
-            // The robot is told where it starts (seed 004 §5: the start pose is known).
-            start: FwPose::new(start.x as f32, start.y as f32, start.heading as f32),
-            emulated: true,
-            firmware_version: env!("CARGO_PKG_VERSION"),
-        });
-        tell_the_arena(&mut robot, &hal.world);
+        let robot = build_robot(profile, seed, start, &hal.world);
         let mut sim = Sim {
             robot,
             hal,
@@ -414,6 +439,30 @@ impl Sim {
         self.hal.advance();
         self.record_truth();
         self.hal.uart.tick(self.hal.now_us, &self.truth);
+    }
+
+    /// Tells this robot where the other robots of its world are now (a fleet does, before
+    /// each step): its sensors see them and its body cannot enter them. Alone: none.
+    pub fn set_neighbours(&mut self, neighbours: impl IntoIterator<Item = Neighbour>) {
+        let hal = &mut self.hal;
+        hal.neighbours.clear();
+        hal.neighbours.extend(neighbours);
+        hal.others.clear();
+        hal.others.extend(hal.neighbours.iter().map(|n| n.body));
+    }
+
+    /// This robot's body as the others see it.
+    pub fn disc(&self) -> Disc {
+        let p = self.hal.body.pose();
+        Disc {
+            centre: Point::new(p.x, p.y),
+            radius: self.hal.body.params().radius_m,
+        }
+    }
+
+    /// Contacts with other robots so far (counted apart from wall contacts).
+    pub fn robot_collisions(&self) -> u32 {
+        self.hal.robot_contacts.collisions()
     }
 
     /// Advances `ms` milliseconds.

@@ -15,6 +15,7 @@ fn options(task: BenchTask, arenas: Vec<ArenaSource>, seeds: u64) -> BenchOption
         timeout_s: 120.0,
         noise: Noise::default(),
         progress: false,
+        robots: 1,
     }
 }
 
@@ -140,4 +141,45 @@ fn a_robot_started_in_the_target_is_not_a_success() {
     );
     assert!(!r.rows[0].success);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `bench --robots 3`: one contest and three solo runs per arena; each robot alone is the same
+/// robot (start, seed) as in the contest, so robot 1 alone is exactly the one-robot bench's
+/// run, and the per-robot counts add up.
+#[test]
+fn a_small_contest_bench_compares_each_robot_with_itself_alone() {
+    let arenas: Vec<ArenaSource> = (1..=3)
+        .map(|s| ArenaSource::Generated(Kind::MicroRato, s))
+        .collect();
+    let mut o = options(BenchTask::ReachBeacon, arenas.clone(), 1);
+    o.robots = 3;
+    let fleet = emulator::fleet_bench::run(&o);
+    let single = bench::run(&options(BenchTask::ReachBeacon, arenas, 1));
+    assert_eq!((fleet.completed, fleet.errors), (3, 0));
+    assert_eq!(fleet.rows.len(), 3);
+    for (f, s) in fleet.rows.iter().zip(&single.rows) {
+        assert_eq!(f.robots.len(), 3);
+        let r1 = &f.robots[0];
+        assert_eq!(Some(r1.solo_reached), s.reached, "{}", f.arena);
+        if r1.solo_reached {
+            assert_eq!(r1.solo_s, s.sim_s, "{}", f.arena);
+        }
+        let mut ranks: Vec<usize> = f.robots.iter().map(|r| r.rank).collect();
+        ranks.sort_unstable();
+        assert_eq!(ranks, vec![1, 2, 3]);
+    }
+    let sum = |g: fn(&emulator::fleet_bench::RobotSummary) -> usize| -> usize {
+        fleet.per_robot.iter().map(g).sum()
+    };
+    assert_eq!(sum(|p| p.solo_reached), fleet.solo_reached);
+    assert_eq!(sum(|p| p.fleet_reached), fleet.fleet_reached);
+    let json = serde_json::to_value(&fleet).expect("serialises");
+    for key in [
+        "per_robot",
+        "solo_reached",
+        "fleet_reached",
+        "contests_with_robot_contact",
+    ] {
+        assert!(json.get(key).is_some(), "missing {key}");
+    }
 }

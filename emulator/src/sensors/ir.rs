@@ -27,8 +27,12 @@ use robot_firmware::{Profile, KHEPERA};
 
 use super::counts10;
 use crate::arena::Pose;
-use crate::geometry::{Point, SegmentSet, Vector};
+use crate::geometry::{Disc, Point, SegmentSet, Vector};
 use crate::rng::SimRng;
+
+/// Most other robots one reading looks at (those within reach, in the order given): a
+/// Micro-Rato contest has three robots, so two others.
+const MAX_SEEN: usize = 8;
 
 /// Full-scale reading of a 10-bit converter.
 pub const FULL_SCALE: f64 = 1023.0;
@@ -182,19 +186,47 @@ impl IrArray {
 
     /// One reading of every sensor at `pose`.
     pub fn read(&mut self, walls: &SegmentSet, pose: Pose) -> [u16; 8] {
+        self.read_among(walls, &[], pose)
+    }
+
+    /// One reading of every sensor at `pose` among walls and other robots' bodies (`others`;
+    /// their light-coloured shells reflect like the walls, seed 004 §2). Each ray sees the
+    /// nearer of the two. With no other robot in reach exactly [`IrArray::read`]'s reading,
+    /// and the same noise draws either way.
+    pub fn read_among(&mut self, walls: &SegmentSet, others: &[Disc], pose: Pose) -> [u16; 8] {
         let mut out = [0u16; 8];
         let centre = Point::new(pose.x, pose.y);
+        let reach = self.radius_m + self.curve.range_m;
         // One query: nothing within radius + range means every ray would miss.
-        let any_near = walls
-            .nearest(centre, self.radius_m + self.curve.range_m)
-            .is_some();
+        let any_near = walls.nearest(centre, reach).is_some();
+        let near = |d: &&Disc| (d.centre - centre).norm() - d.radius <= reach;
+        let mut bodies = [None::<Disc>; MAX_SEEN];
+        for (slot, d) in bodies.iter_mut().zip(others.iter().filter(near)) {
+            *slot = Some(*d);
+        }
+        let any_body = bodies[0].is_some();
         for (i, slot) in out.iter_mut().enumerate().take(self.count) {
             let mut signal: f64 = 0.0;
-            if any_near {
+            if any_near || any_body {
                 for &(offset, weight) in self.cone {
                     let (o, d) = self.ray(pose, self.angle_rad[i] + offset);
-                    if let Some(hit) = walls.ray_cast(o, d, self.curve.range_m) {
-                        signal = signal.max(weight * self.curve.signal(hit.distance));
+                    let wall = if any_near {
+                        walls.ray_cast(o, d, self.curve.range_m).map(|h| h.distance)
+                    } else {
+                        None
+                    };
+                    let body = bodies
+                        .iter()
+                        .flatten()
+                        .filter_map(|b| b.ray_hit(o, d))
+                        .filter(|&t| t <= self.curve.range_m)
+                        .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))));
+                    let nearest = match (wall, body) {
+                        (Some(w), Some(b)) => Some(w.min(b)),
+                        (w, b) => w.or(b),
+                    };
+                    if let Some(dist) = nearest {
+                        signal = signal.max(weight * self.curve.signal(dist));
                     }
                 }
             }

@@ -27,7 +27,7 @@ use robot_firmware::params::RobotConfig;
 use robot_firmware::Profile;
 
 use crate::arena::Pose;
-use crate::geometry::Point;
+use crate::geometry::{Disc, Point};
 use crate::physics::wrap_pi;
 use crate::rng::SimRng;
 use crate::world::WorldBeacon;
@@ -101,6 +101,18 @@ impl BeaconSensor {
 
     /// One reading; `None` on a robot without a beacon sensor.
     pub fn read(&mut self, beacon: Option<&WorldBeacon>, pose: Pose) -> Option<BeaconReading> {
+        self.read_among(beacon, &[], pose)
+    }
+
+    /// One reading with other robots' bodies (`others`) able to stand between the receiver
+    /// and the beacon: a robot in the line of sight hides it (the beacon is a 940 nm light at
+    /// the goal's centre, seed 004 §2, and the robots are as tall as their sensors).
+    pub fn read_among(
+        &mut self,
+        beacon: Option<&WorldBeacon>,
+        others: &[Disc],
+        pose: Pose,
+    ) -> Option<BeaconReading> {
         if !self.present {
             return None;
         }
@@ -109,7 +121,7 @@ impl BeaconSensor {
             strength: 0,
         };
         let Some(b) = beacon else { return Some(none) };
-        let Some((distance, bearing)) = self.sees(b, pose) else {
+        let Some((distance, bearing)) = self.sees(b, others, pose) else {
             return Some(none);
         };
         let nominal = f64::from(self.model.strength_at(distance as f32));
@@ -125,17 +137,28 @@ impl BeaconSensor {
     /// nearest beacon it sees (CiberRato gives a robot one sensor per beacon; this robot has
     /// one receiver). With one beacon, exactly [`BeaconSensor::read`].
     pub fn read_any(&mut self, beacons: &[WorldBeacon], pose: Pose) -> Option<BeaconReading> {
+        self.read_any_among(beacons, &[], pose)
+    }
+
+    /// [`BeaconSensor::read_any`] with other robots able to hide a beacon
+    /// ([`BeaconSensor::read_among`]).
+    pub fn read_any_among(
+        &mut self,
+        beacons: &[WorldBeacon],
+        others: &[Disc],
+        pose: Pose,
+    ) -> Option<BeaconReading> {
         let seen = beacons
             .iter()
-            .filter_map(|b| self.sees(b, pose).map(|(d, _)| (d, b)))
+            .filter_map(|b| self.sees(b, others, pose).map(|(d, _)| (d, b)))
             .min_by(|x, y| x.0.total_cmp(&y.0))
             .map(|(_, b)| b);
-        self.read(seen.or(beacons.first()), pose)
+        self.read_among(seen.or(beacons.first()), others, pose)
     }
 
     /// Distance and bearing (relative to the heading) of a beacon the receiver sees: inside
     /// its field of view and range, not hidden by a wall as tall as the beacon.
-    fn sees(&self, b: &WorldBeacon, pose: Pose) -> Option<(f64, f64)> {
+    fn sees(&self, b: &WorldBeacon, others: &[Disc], pose: Pose) -> Option<(f64, f64)> {
         let here = Point::new(pose.x, pose.y);
         let v = b.position - here;
         let distance = v.norm();
@@ -144,7 +167,8 @@ impl BeaconSensor {
         let seen = !distance.is_nan()
             && distance <= farthest
             && bearing.abs() <= BEACON_HALF_FOV_RAD
-            && b.visible_from(here);
+            && b.visible_from(here)
+            && !others.iter().any(|o| o.blocks(here, b.position));
         seen.then_some((distance, bearing))
     }
 }
