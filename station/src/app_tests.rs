@@ -127,7 +127,7 @@ fn a_refused_parameter_write_shows_the_robots_reason_in_the_editor_and_the_log()
         },
     }));
     assert_eq!(
-        params::status_text(&app.params.status[0]),
+        params::status_text(&app.params.params()[0], &app.params.status[0]),
         "300 (refused: value out of range)"
     );
     assert!(app
