@@ -52,22 +52,34 @@ fn list_set_save_load_and_diff_against_the_emulator() {
     assert_eq!(by("failsafe_ms")["value"], 300.0);
     assert!(by("odo_mm_per_pulse")["value"].is_null());
     assert_eq!(by("odo_mm_per_pulse")["min"], 0.001_f32 as f64);
-    assert!(by("light_t1")["description"].as_str().unwrap().contains("T1"));
+    assert!(by("light_t1")["description"]
+        .as_str()
+        .unwrap()
+        .contains("T1"));
 
     let o = params(&port, &["set", "failsafe_ms", "500"], &d);
     assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "failsafe_ms = 500 ms");
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        "failsafe_ms = 500 ms"
+    );
 
     let o = params(&port, &["save", "robot.parm"], &d);
     assert!(o.status.success(), "{}", text(&o));
     let saved = std::fs::read_to_string(d.join("robot.parm")).unwrap();
-    assert!(saved.contains("\nfailsafe_ms = 500  # ms, 50 .. 10000: "), "{saved}");
+    assert!(
+        saved.contains("\nfailsafe_ms = 500  # ms, 50 .. 10000: "),
+        "{saved}"
+    );
     assert!(!saved.contains("odo_mm_per_pulse ="), "{saved}");
     // An existing file is not replaced without --force.
     let o = params(&port, &["save", "robot.parm"], &d);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(text(&o).contains("pass --force"), "{}", text(&o));
-    assert_eq!(std::fs::read_to_string(d.join("robot.parm")).unwrap(), saved);
+    assert_eq!(
+        std::fs::read_to_string(d.join("robot.parm")).unwrap(),
+        saved
+    );
 
     // The robot and its own file agree.
     let o = params(&port, &["diff", "robot.parm"], &d);
@@ -95,20 +107,30 @@ fn list_set_save_load_and_diff_against_the_emulator() {
     );
     assert!(out.contains("1 changed, 1 unchanged, 2 refused"), "{out}");
     let o = params(&port, &["get", "failsafe_ms"], &d);
-    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "failsafe_ms = 700 ms");
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        "failsafe_ms = 700 ms"
+    );
 
     // Diff names what differs, with the file's line.
     let o = params(&port, &["diff", "robot.parm"], &d);
     let out = text(&o);
     assert_eq!(o.status.code(), Some(1), "{out}");
-    assert!(out.contains("failsafe_ms: file 500 (line 3), robot 700"), "{out}");
+    assert!(
+        out.contains("failsafe_ms: file 500 (line 3), robot 700"),
+        "{out}"
+    );
     assert!(out.contains("1 differ"), "{out}");
 }
 
 #[test]
 fn a_bad_file_is_refused_before_any_port_is_opened() {
     let d = dir("bad");
-    std::fs::write(d.join("bad.parm"), "failsafe_ms = 300\n  failsafe_ms = 1e\n").unwrap();
+    std::fs::write(
+        d.join("bad.parm"),
+        "failsafe_ms = 300\n  failsafe_ms = 1e\n",
+    )
+    .unwrap();
     for op in ["load", "diff"] {
         let o = params(Path::new("/nonexistent/port"), &[op, "bad.parm"], &d);
         assert_eq!(o.status.code(), Some(1), "{}", text(&o));
