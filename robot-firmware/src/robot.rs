@@ -468,8 +468,7 @@ impl Core {
                 return Ok(AckInfo::Param { id, value: v });
             }
             Command::GetParam { id } => {
-                self.check_param(id.0)?;
-                let value = self.tunables().get(id.0)?;
+                let value = self.param(id.0)?;
                 return Ok(AckInfo::Param { id, value });
             }
             Command::SetTelemetryRate { hz } => {
@@ -528,6 +527,12 @@ impl Core {
             dead_reckon: &mut self.dead.params,
             guided: &mut self.guided,
         }
+    }
+
+    /// The value of parameter `id` in force, as `GetParam` answers it.
+    pub fn param(&mut self, id: u16) -> Result<f32, NackReason> {
+        self.check_param(id)?;
+        self.tunables().get(id)
     }
 
     /// Refuses a parameter this robot lacks the hardware for (`ParamInfo::requires`).
