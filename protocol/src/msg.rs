@@ -303,10 +303,11 @@ pub enum Command {
     SetTelemetryRate {
         hz: u8,
     },
-    /// Ask the robot to send an object, starting at `offset` (non-zero to resume).
+    /// Ask the robot to send an object. Where its chunks start is the station's answer to
+    /// the robot's `TransferBegin` (a resume keeps the bytes held); the `offset` this command
+    /// once carried was checked but never used, and is gone (issue 16).
     Download {
         object: ObjectKind,
-        offset: u32,
     },
     /// Overwrite the pose estimate.
     SetPose {

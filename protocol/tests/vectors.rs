@@ -122,6 +122,14 @@ fn vectors() -> Vec<(&'static str, u16, Message<'static>)> {
             }),
         ),
         (
+            // Issue 16: object kind 3 is downloadable, and no `offset` follows it.
+            "download",
+            47,
+            Message::Command(Command::Download {
+                object: ObjectKind::LightCalibration,
+            }),
+        ),
+        (
             "ack-param",
             9,
             Message::Ack(Ack {

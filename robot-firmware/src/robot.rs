@@ -512,8 +512,8 @@ impl Core {
                 let id = self.objects.plan_route(from, to)?;
                 self.installed(Installed::Plan { id });
             }
-            Command::Download { object, offset } => {
-                return self.objects.start_download(object, offset, &self.light_cal);
+            Command::Download { object } => {
+                return self.objects.start_download(object, &self.light_cal);
             }
         }
         Ok(AckInfo::Done)

@@ -232,7 +232,7 @@ fn mcap_export_carries_the_scene_for_the_3d_panel() {
         t += 100_000;
     }
     // Sends `bytes` as `object` in 100-byte chunks, the second one lost and sent last.
-    let mut send = |s: &mut Synth, t: &mut u64, object, bytes: &[u8], from_robot: bool| {
+    let send = |s: &mut Synth, t: &mut u64, object, bytes: &[u8], from_robot: bool| {
         let id = protocol::crc32c(bytes);
         let begin = Message::TransferBegin(TransferBegin {
             object,
