@@ -692,7 +692,7 @@ impl App {
     fn on_done(&mut self, id: CommandId, command: Command, outcome: CommandOutcome) {
         let pending = self.pending.remove(&id);
         let before = pending.and_then(|p| p.before);
-        let quiet = pending.is_some_and(|p| p.quiet);
+        let quiet = pending.is_some_and(|p| p.quiet) && matches!(command, Command::GetParam { .. });
         if self.rate_asked.is_some_and(|(asked, _)| asked == id) {
             self.rate_asked = None;
         }
