@@ -3,6 +3,8 @@
 //!
 //! Each session has a name unique to the test process and is killed when dropped. tmux is a
 //! requirement of these tests, not an option: without it they fail, saying so.
+// A test helper's failure is the test's failure: it panics with the screen it saw.
+#![allow(clippy::panic)]
 
 use std::process::Command;
 use std::time::{Duration, Instant};

@@ -245,7 +245,7 @@ mod tests {
                 );
             }
         }
-        let mm = robot_firmware::params::by_name("odo_mm_per_pulse").map(|p| *p);
+        let mm = robot_firmware::params::by_name("odo_mm_per_pulse").copied();
         let mm = mm.unwrap_or(PARAMS[0]);
         assert_eq!(format_param(&mm, 0.08), "0.080");
         assert_eq!(range_text(&mm), "0.001 .. 10.000");
