@@ -76,6 +76,8 @@ pub enum EncodeError {
     PayloadTooLarge,
     /// The output slice is shorter than the encoded frame (use `MAX_FRAME`).
     OutputTooSmall,
+    /// A string is longer than its field allows (`Message::check_limits`).
+    FieldTooLong { field: &'static str, limit: usize },
 }
 
 impl fmt::Display for EncodeError {
@@ -85,6 +87,9 @@ impl fmt::Display for EncodeError {
                 write!(f, "payload larger than {MAX_PAYLOAD} bytes")
             }
             EncodeError::OutputTooSmall => write!(f, "output buffer smaller than the frame"),
+            EncodeError::FieldTooLong { field, limit } => {
+                write!(f, "{field} is longer than its limit of {limit} bytes")
+            }
         }
     }
 }
@@ -106,6 +111,8 @@ pub enum PayloadError {
     BadOption,
     /// Bytes left over after the message.
     TrailingBytes { count: u8 },
+    /// A string longer than its field allows (`Message::check_limits`).
+    FieldTooLong { field: &'static str, limit: usize },
     /// Any other postcard error.
     Other,
 }
@@ -272,6 +279,8 @@ pub fn retry_digest(seq: u16, msg: &Message<'_>) -> Result<u32, EncodeError> {
 }
 
 fn serialize_payload(msg: &Message<'_>, body: &mut [u8]) -> Result<usize, EncodeError> {
+    msg.check_limits()
+        .map_err(|(field, limit)| EncodeError::FieldTooLong { field, limit })?;
     fn ser<T: serde::Serialize>(v: &T, body: &mut [u8]) -> Result<usize, EncodeError> {
         postcard::to_slice(v, body)
             .map(|s| s.len())
@@ -307,7 +316,7 @@ pub fn decode_payload(kind: Kind, payload: &[u8]) -> Result<Message<'_>, Payload
             })
         }
     }
-    Ok(match kind {
+    let msg = match kind {
         Kind::Hello => Message::Hello(de::<Hello>(payload)?),
         Kind::HelloReply => Message::HelloReply(de::<HelloReply>(payload)?),
         Kind::Heartbeat => Message::Heartbeat(de::<Heartbeat>(payload)?),
@@ -322,7 +331,10 @@ pub fn decode_payload(kind: Kind, payload: &[u8]) -> Result<Message<'_>, Payload
         Kind::Log => Message::Log(de::<Log>(payload)?),
         Kind::EmuTruth => Message::EmuTruth(de::<EmuTruth>(payload)?),
         Kind::Localization => Message::Localization(de::<crate::msg::Localization>(payload)?),
-    })
+    };
+    msg.check_limits()
+        .map_err(|(field, limit)| PayloadError::FieldTooLong { field, limit })?;
+    Ok(msg)
 }
 
 /// Verifies and decodes one decoded (un-COBSed) frame.

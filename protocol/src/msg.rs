@@ -303,10 +303,11 @@ pub enum Command {
     SetTelemetryRate {
         hz: u8,
     },
-    /// Ask the robot to send an object, starting at `offset` (non-zero to resume).
+    /// Ask the robot to send an object. Where its chunks start is the station's answer to
+    /// the robot's `TransferBegin` (a resume keeps the bytes held); the `offset` this command
+    /// once carried was checked but never used, and is gone (issue 16).
     Download {
         object: ObjectKind,
-        offset: u32,
     },
     /// Overwrite the pose estimate.
     SetPose {
@@ -654,6 +655,27 @@ impl Kind {
 }
 
 impl Message<'_> {
+    /// Checks the string limits the layouts state (PROTOCOL.md §6: names at most `MAX_NAME`
+    /// bytes); the encoder refuses and the decoder reports a message that breaks one, so a
+    /// peer can size its buffers on them. Err: the field and its limit.
+    pub fn check_limits(&self) -> Result<(), (&'static str, usize)> {
+        let check = |field: &'static str, s: &str, limit: usize| {
+            if s.len() > limit {
+                Err((field, limit))
+            } else {
+                Ok(())
+            }
+        };
+        match self {
+            Message::Hello(h) => check("Hello.station", h.station, MAX_NAME),
+            Message::HelloReply(r) => {
+                check("HelloReply.firmware", r.firmware, MAX_NAME)?;
+                check("HelloReply.firmware_version", r.firmware_version, MAX_NAME)
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// The header kind byte for this message.
     pub fn kind(&self) -> Kind {
         match self {

@@ -156,6 +156,16 @@ impl Receiver {
     /// so a partial object of another transfer is kept for resuming.
     pub fn on_begin(&mut self, b: &TransferBegin, limit: usize, have: bool) -> TransferAck {
         if have {
+            // A late chunk of this id gets this same final answer again (PROTOCOL.md §8),
+            // not the `Complete` of an earlier transfer of it; a partial object of another
+            // transfer is kept for resuming, so then such a chunk gets `UnknownId`.
+            if !matches!(self.state, RxState::Receiving { .. }) {
+                self.state = RxState::Finished {
+                    id: b.id,
+                    next: b.len,
+                    status: TransferStatus::AlreadyHave,
+                };
+            }
             return ack(b.id, b.len, TransferStatus::AlreadyHave);
         }
         let too_big = usize::try_from(b.len).map_or(true, |len| len > limit);
@@ -858,6 +868,61 @@ mod tests {
             rx.on_chunk(&other, &mut staging, never).status,
             TransferStatus::UnknownId
         );
+    }
+
+    /// PROTOCOL.md §8: a late chunk of a finished transfer gets the same final answer again.
+    /// After a Begin answered `AlreadyHave`, a chunk of that id was answered `Complete` (the
+    /// earlier transfer's answer), or `UnknownId` (issue 16).
+    #[test]
+    fn a_late_chunk_after_already_have_gets_already_have_again() {
+        let data = [5u8; 64];
+        let crc = crc32c(&data);
+        let begin = TransferBegin {
+            object: ObjectKind::Map,
+            id: 7,
+            len: 64,
+            crc,
+        };
+        let chunk = TransferChunk {
+            id: 7,
+            offset: 0,
+            data: &data,
+        };
+        let mut staging = [0u8; 64];
+        // Fresh, and after an earlier transfer of the same object completed.
+        let mut fresh = Receiver::new();
+        let mut again = Receiver::new();
+        again.on_begin(&begin, 64, false);
+        let a = again.on_chunk(&chunk, &mut staging, |_| true);
+        assert_eq!(a.status, TransferStatus::Complete);
+        for rx in [&mut fresh, &mut again] {
+            assert_eq!(
+                rx.on_begin(&begin, 64, true).status,
+                TransferStatus::AlreadyHave
+            );
+            let a = rx.on_chunk(&chunk, &mut staging, |_| panic!("nothing to install"));
+            assert_eq!((a.next, a.status), (64, TransferStatus::AlreadyHave));
+        }
+        // A partial object of another transfer is kept for resuming, as §8 says.
+        let mut rx = Receiver::new();
+        let other = TransferBegin {
+            id: 8,
+            len: 128,
+            ..begin
+        };
+        rx.on_begin(&other, 128, false);
+        let half = TransferChunk {
+            id: 8,
+            offset: 0,
+            data: &data,
+        };
+        let mut big = [0u8; 128];
+        assert_eq!(rx.on_chunk(&half, &mut big, |_| true).next, 64);
+        assert_eq!(
+            rx.on_begin(&begin, 64, true).status,
+            TransferStatus::AlreadyHave
+        );
+        assert_eq!(rx.on_begin(&other, 128, false).next, 64, "resumes");
     }
 
     /// A frame on its way to the receiver: when it arrives, and a chunk's offset and data

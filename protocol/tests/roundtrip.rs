@@ -165,3 +165,45 @@ fn an_oversized_payload_is_refused_by_the_encoder() {
         Err(EncodeError::OutputTooSmall)
     );
 }
+
+/// PROTOCOL.md §6: `Hello.station` and the HelloReply's names are at most 32 bytes. The
+/// limit was stated but not enforced: a 33-byte name was encoded, sent and accepted (issue 16).
+#[test]
+fn names_over_32_bytes_are_refused_both_ways() {
+    let long = "s".repeat(MAX_NAME + 1);
+    let hello = |station| {
+        Message::Hello(Hello {
+            fingerprint: FINGERPRINT,
+            protocol: PROTOCOL_VERSION,
+            session: 1,
+            station,
+        })
+    };
+    let mut buf = [0u8; MAX_FRAME];
+    assert!(encode(0, &hello(&long[..MAX_NAME]), &mut buf).is_ok());
+    assert_eq!(
+        encode(0, &hello(&long), &mut buf),
+        Err(EncodeError::FieldTooLong {
+            field: "Hello.station",
+            limit: MAX_NAME
+        })
+    );
+    // What another implementation might send: the same payload with the long name.
+    let mut payload = FINGERPRINT.to_vec();
+    payload.extend([PROTOCOL_VERSION, 1, (MAX_NAME + 1) as u8]);
+    payload.extend(long.as_bytes());
+    let n = encode_raw(PROTOCOL_VERSION, Kind::Hello as u8, 0, &payload, &mut buf).unwrap();
+    match FrameDecoder::new().feed(&buf[..n]) {
+        Feed::Error { error, .. } => assert_eq!(
+            error,
+            FrameError::Undecodable {
+                kind: Kind::Hello,
+                reason: PayloadError::FieldTooLong {
+                    field: "Hello.station",
+                    limit: MAX_NAME
+                }
+            }
+        ),
+        other => panic!("a 33-byte station name was accepted: {other:?}"),
+    }
+}

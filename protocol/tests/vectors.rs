@@ -122,6 +122,14 @@ fn vectors() -> Vec<(&'static str, u16, Message<'static>)> {
             }),
         ),
         (
+            // Issue 16: object kind 3 is downloadable, and no `offset` follows it.
+            "download",
+            47,
+            Message::Command(Command::Download {
+                object: ObjectKind::LightCalibration,
+            }),
+        ),
+        (
             "ack-param",
             9,
             Message::Ack(Ack {
@@ -205,17 +213,28 @@ fn protocol_md_vectors_match_the_encoder_and_decoder_byte_for_byte() {
         let mut buf = [0u8; MAX_FRAME];
         let n = encode(seq, &msg, &mut buf).expect("fits");
         let wire = &buf[..n];
+        let mut payload = [0u8; MAX_FRAME];
+        let raw = cobs::decode(&wire[..n - 1], &mut payload)
+            .expect("cobs")
+            .frame_size();
+        let block = format!(
+            "vector `{name}`: seq {seq}, `{msg:?}`\n\n    payload: {}\n    raw:     {}\n    \
+             wire:    {}\n",
+            hex(&payload[4..raw - 4]),
+            hex(&payload[..raw]),
+            hex(wire)
+        );
         if print {
-            let mut payload = [0u8; MAX_FRAME];
-            let raw = cobs::decode(&wire[..n - 1], &mut payload)
-                .expect("cobs")
-                .frame_size();
-            println!("vector `{name}`: seq {seq}, `{msg:?}`\n");
-            println!("    payload: {}", hex(&payload[4..raw - 4]));
-            println!("    raw:     {}", hex(&payload[..raw]));
-            println!("    wire:    {}\n", hex(wire));
+            println!("{block}");
             continue;
         }
+        // The whole block, not only the wire line: the message text, the payload and the raw
+        // frame are what a client written from the document reads (issue 16: the text once
+        // gave other fingerprint bytes than the vector).
+        assert!(
+            doc.contains(&block),
+            "PROTOCOL.md's vector `{name}` differs from the encoder; it should read:\n{block}"
+        );
         let documented = documented_wire(&doc, name)
             .unwrap_or_else(|| panic!("PROTOCOL.md lacks vector `{name}` or its wire: line"));
         assert_eq!(
@@ -268,5 +287,56 @@ fn kind_numbers_follow_the_message_enum_order() {
     for (_, _, msg) in vectors() {
         let expected = format!("{msg:?}");
         assert!(expected.starts_with(&format!("{:?}", msg.kind())));
+    }
+}
+
+/// PROTOCOL.md §2: a decoded frame of the full 254 bytes with no zero byte is one block of
+/// code 255: 255 bytes, then the delimiter, 256 on the wire. COBS libraries that append a
+/// final code byte after it (0x01) make 256 bytes before the delimiter, which a receiver of
+/// this protocol drops as oversize: the document says so, and this pins both.
+#[test]
+fn a_254_byte_frame_without_zeros_is_255_cobs_bytes_and_no_more() {
+    // Any 246-byte payload whose frame has no zero byte (the seq is chosen to keep the CRC
+    // free of zeros).
+    let payload = [0x55u8; MAX_PAYLOAD];
+    let mut buf = [0u8; MAX_FRAME];
+    let (seq, n) = (1u16..)
+        .find_map(|seq| {
+            let n = encode_raw(PROTOCOL_VERSION, Kind::Log as u8, seq, &payload, &mut buf).ok()?;
+            (buf[..n - 1].iter().all(|&b| b != 0) && buf[0] == 0xFF && seq & 0xFF != 0)
+                .then_some((seq, n))
+        })
+        .unwrap();
+    assert_eq!(
+        n, MAX_FRAME,
+        "256 bytes on the wire, the delimiter included"
+    );
+    assert_eq!(buf[0], 0xFF, "one block of code 255");
+    assert_eq!(buf[n - 1], 0);
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/PROTOCOL.md"))
+        .expect("PROTOCOL.md beside the crate");
+    assert!(
+        doc.contains("a decoded frame of 254 bytes without a zero is 255 COBS bytes"),
+        "PROTOCOL.md §2 states the 254-byte case"
+    );
+    // The frame arrives whole (its payload is no Log: the framing is what is checked).
+    let mut dec = FrameDecoder::new();
+    match dec.feed(&buf[..n]) {
+        Feed::Error {
+            error: FrameError::Undecodable { .. },
+            ..
+        } => {}
+        other => panic!("the 256-byte frame did not pass the framing: {other:?} (seq {seq})"),
+    }
+    // With the extra final code byte some libraries add: oversize, dropped.
+    let mut long = buf[..n - 1].to_vec();
+    long.extend([0x01, 0x00]);
+    let mut dec = FrameDecoder::new();
+    match dec.feed(&long) {
+        Feed::Error {
+            error: FrameError::Oversize { .. },
+            ..
+        } => {}
+        other => panic!("a 256-byte COBS body was not refused as oversize: {other:?}"),
     }
 }

@@ -39,7 +39,8 @@ impl Default for RobotConfig {
     }
 }
 
-/// One parameter's description.
+/// One parameter's description: the one table the robot checks values against, the
+/// station's editor and `station params` show, and PROTOCOL.md §16 is generated from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ParamInfo {
     pub id: u16,
@@ -49,9 +50,22 @@ pub struct ParamInfo {
     pub max: f32,
     /// Only whole numbers are accepted.
     pub integer: bool,
+    /// Capability bits (`protocol::caps`) the robot needs for this parameter to mean
+    /// anything; a robot without them answers `Unsupported` to a get or set (a robot without
+    /// encoders has no pulse length to show, not a length of 0).
+    pub requires: u32,
+    /// One line for the operator: what the parameter does, where its default comes from.
+    pub desc: &'static str,
 }
 
-const fn p(id: u16, name: &'static str, unit: &'static str, min: f32, max: f32) -> ParamInfo {
+const fn p(
+    id: u16,
+    name: &'static str,
+    unit: &'static str,
+    min: f32,
+    max: f32,
+    desc: &'static str,
+) -> ParamInfo {
     ParamInfo {
         id,
         name,
@@ -59,59 +73,321 @@ const fn p(id: u16, name: &'static str, unit: &'static str, min: f32, max: f32) 
         min,
         max,
         integer: false,
+        requires: 0,
+        desc,
     }
 }
 
-const fn pi(id: u16, name: &'static str, unit: &'static str, min: f32, max: f32) -> ParamInfo {
+const fn pi(
+    id: u16,
+    name: &'static str,
+    unit: &'static str,
+    min: f32,
+    max: f32,
+    desc: &'static str,
+) -> ParamInfo {
     ParamInfo {
-        id,
-        name,
-        unit,
-        min,
-        max,
         integer: true,
+        ..p(id, name, unit, min, max, desc)
     }
 }
+
+/// `info` that only a robot with `caps` has.
+const fn needs(caps: u32, info: ParamInfo) -> ParamInfo {
+    ParamInfo {
+        requires: caps,
+        ..info
+    }
+}
+
+use protocol::caps::ENCODERS;
 
 /// Every parameter, by id.
 pub const PARAMS: [ParamInfo; 31] = [
-    pi(0, "failsafe_ms", "ms", 50.0, 10_000.0),
-    pi(1, "telemetry_hz", "Hz", 0.0, 50.0),
-    p(2, "teleop_max_mm_s", "mm/s", 0.0, 2000.0),
-    pi(3, "battery_empty_mv", "mV", 0.0, 20_000.0),
-    pi(4, "battery_full_mv", "mV", 0.0, 20_000.0),
-    p(5, "odo_wheel_distance_mm", "mm", 10.0, 500.0),
-    p(6, "odo_mm_per_pulse", "mm", 0.001, 10.0),
-    pi(7, "avoid_threshold", "counts", 0.0, 1023.0),
-    pi(8, "avoid_threshold_spread", "counts", 0.0, 200.0),
-    pi(9, "avoid_base_units", "units", 0.0, 127.0),
-    pi(10, "edge_noise_threshold", "counts", 1.0, 500.0),
-    pi(11, "edge_lost_threshold", "counts", 1.0, 1023.0),
-    pi(12, "edge_lost_max_cycles", "cycles", 1.0, 10_000.0),
-    p(13, "drift_approach_radius_m", "m", 0.01, 2.0),
-    p(14, "drift_arrival_radius_m", "m", 0.005, 1.0),
-    pi(15, "behaviour_max_units", "units", 1.0, 127.0),
-    pi(16, "light_t1", "counts", 0.0, 1023.0),
-    pi(17, "light_t2", "counts", 0.0, 1023.0),
-    pi(18, "light_t3", "counts", 0.0, 1023.0),
-    p(19, "xi_calibration_gain", "", 0.0, 1.0),
-    p(20, "xi_collision_loss", "", 0.0, 1.0),
-    p(21, "beacon_x_m", "m", -100.0, 100.0),
-    p(22, "beacon_y_m", "m", -100.0, 100.0),
-    p(23, "guided_top_speed", "nominal", 0.0, 100.0),
-    p(24, "guided_heading_gain", "nominal/rad", 0.0, 500.0),
-    pi(25, "guided_obstacle_ir", "counts", 0.0, 1023.0),
-    p(26, "guided_arrival_m", "m", 0.01, 2.0),
+    pi(
+        0,
+        "failsafe_ms",
+        "ms",
+        50.0,
+        10_000.0,
+        "manual mode: motors stop after this much silence from the station",
+    ),
+    pi(
+        1,
+        "telemetry_hz",
+        "Hz",
+        0.0,
+        50.0,
+        "telemetry frames a second, 0 = off (SetTelemetryRate sets it too)",
+    ),
+    p(
+        2,
+        "teleop_max_mm_s",
+        "mm/s",
+        0.0,
+        2000.0,
+        "fastest wheel speed in manual driving",
+    ),
+    pi(
+        3,
+        "battery_empty_mv",
+        "mV",
+        0.0,
+        20_000.0,
+        "battery voltage read as empty, for the speed table",
+    ),
+    pi(
+        4,
+        "battery_full_mv",
+        "mV",
+        0.0,
+        20_000.0,
+        "battery voltage read as full, for the speed table",
+    ),
+    needs(
+        ENCODERS,
+        p(
+            5,
+            "odo_wheel_distance_mm",
+            "mm",
+            10.0,
+            500.0,
+            "odometry: distance between the wheels (seed 000 §3.1: 52 mm)",
+        ),
+    ),
+    needs(
+        ENCODERS,
+        p(
+            6,
+            "odo_mm_per_pulse",
+            "mm",
+            0.001,
+            10.0,
+            "odometry: wheel travel per encoder pulse",
+        ),
+    ),
+    pi(
+        7,
+        "avoid_threshold",
+        "counts",
+        0.0,
+        1023.0,
+        "obstacle avoidance: IR activation threshold (seed 000 §4.2: 475)",
+    ),
+    pi(
+        8,
+        "avoid_threshold_spread",
+        "counts",
+        0.0,
+        200.0,
+        "obstacle avoidance: random spread of the threshold (seed 000 §4.2: 25)",
+    ),
+    pi(
+        9,
+        "avoid_base_units",
+        "units",
+        0.0,
+        127.0,
+        "obstacle avoidance: base propulsion of both wheels",
+    ),
+    pi(
+        10,
+        "edge_noise_threshold",
+        "counts",
+        1.0,
+        500.0,
+        "edge following: error below this is noise (seed 000 §4.3: 7)",
+    ),
+    pi(
+        11,
+        "edge_lost_threshold",
+        "counts",
+        1.0,
+        1023.0,
+        "edge following: error below minus this means the wall is lost (seed 000 §4.3: 100)",
+    ),
+    pi(
+        12,
+        "edge_lost_max_cycles",
+        "cycles",
+        1.0,
+        10_000.0,
+        "edge following: longest strong curve while the wall is lost (seed 000 §4.3: 120)",
+    ),
+    p(
+        13,
+        "drift_approach_radius_m",
+        "m",
+        0.01,
+        2.0,
+        "drift to target: turn to it and halve propulsion inside this (seed 000 §4.4: 0.15)",
+    ),
+    p(
+        14,
+        "drift_arrival_radius_m",
+        "m",
+        0.005,
+        1.0,
+        "drift to target: arrived inside this (seed 000 §4.4: 0.05)",
+    ),
+    pi(
+        15,
+        "behaviour_max_units",
+        "units",
+        1.0,
+        127.0,
+        "behaviours: largest wheel command the arbiter sends",
+    ),
+    pi(
+        16,
+        "light_t1",
+        "counts",
+        0.0,
+        1023.0,
+        "light: source detected below this front reading (seed 000 §6.1: T1 = 470)",
+    ),
+    pi(
+        17,
+        "light_t2",
+        "counts",
+        0.0,
+        1023.0,
+        "light: optimal distance below this average front reading (seed 000 §6.1: T2 = 200)",
+    ),
+    pi(
+        18,
+        "light_t3",
+        "counts",
+        0.0,
+        1023.0,
+        "light: source left when every front reading is above this (seed 000 §6.1: T3 = 490)",
+    ),
+    p(
+        19,
+        "xi_calibration_gain",
+        "",
+        0.0,
+        1.0,
+        "dead reckoning: confidence a beacon calibration adds (seed 004 §4)",
+    ),
+    p(
+        20,
+        "xi_collision_loss",
+        "",
+        0.0,
+        1.0,
+        "dead reckoning: confidence a collision removes (seed 004 §4)",
+    ),
+    p(
+        21,
+        "beacon_x_m",
+        "m",
+        -100.0,
+        100.0,
+        "beacon position x, map frame (exploration goal)",
+    ),
+    p(
+        22,
+        "beacon_y_m",
+        "m",
+        -100.0,
+        100.0,
+        "beacon position y, map frame (exploration goal)",
+    ),
+    p(
+        23,
+        "guided_top_speed",
+        "nominal",
+        0.0,
+        100.0,
+        "guided motion: nominal speed in free motion (seed 004 §4: 75)",
+    ),
+    p(
+        24,
+        "guided_heading_gain",
+        "nominal/rad",
+        0.0,
+        500.0,
+        "guided motion: wheel difference per radian of heading error",
+    ),
+    pi(
+        25,
+        "guided_obstacle_ir",
+        "counts",
+        0.0,
+        1023.0,
+        "guided motion: IR reading at which an obstacle counts as seen",
+    ),
+    p(
+        26,
+        "guided_arrival_m",
+        "m",
+        0.01,
+        2.0,
+        "guided motion: distance at which a point counts as reached",
+    ),
     // seed 004 §4: a position outside the labyrinth is replaced by the closest inside point.
-    p(27, "arena_min_x_m", "m", -100.0, 100.0),
-    p(28, "arena_min_y_m", "m", -100.0, 100.0),
-    p(29, "arena_max_x_m", "m", -100.0, 100.0),
-    p(30, "arena_max_y_m", "m", -100.0, 100.0),
+    p(
+        27,
+        "arena_min_x_m",
+        "m",
+        -100.0,
+        100.0,
+        "arena bounds: smallest x (seed 004 §4)",
+    ),
+    p(
+        28,
+        "arena_min_y_m",
+        "m",
+        -100.0,
+        100.0,
+        "arena bounds: smallest y (seed 004 §4)",
+    ),
+    p(
+        29,
+        "arena_max_x_m",
+        "m",
+        -100.0,
+        100.0,
+        "arena bounds: largest x (seed 004 §4)",
+    ),
+    p(
+        30,
+        "arena_max_y_m",
+        "m",
+        -100.0,
+        100.0,
+        "arena bounds: largest y (seed 004 §4)",
+    ),
 ];
+
+/// Decimals that show every value of `info` in its unit: none for an integer parameter, else
+/// enough for the smallest non-zero bound (0.001 mm needs 3) and at least 2, so a value in
+/// range never shows as 0.
+pub fn display_decimals(info: &ParamInfo) -> usize {
+    if info.integer {
+        return 0;
+    }
+    let mut d = 2;
+    for bound in [info.min, info.max] {
+        let mut b = libm::fabsf(bound);
+        if b == 0.0 {
+            continue;
+        }
+        let mut needed = 0;
+        while b < 1.0 && needed < 6 {
+            b *= 10.0;
+            needed += 1;
+        }
+        d = d.max(needed);
+    }
+    d
+}
 
 /// Ids of the parameters other crates set by name in code (the emulator's scenario runner
 /// briefs the robot as an operator would). A test checks each against `PARAMS`.
 pub mod id {
+    pub const TELEMETRY_HZ: u16 = 1;
     pub const DRIFT_ARRIVAL_RADIUS_M: u16 = 14;
     pub const BEACON_X_M: u16 = 21;
     pub const BEACON_Y_M: u16 = 22;
@@ -258,6 +534,7 @@ mod tests {
     #[test]
     fn named_ids_point_at_their_parameters() {
         for (i, name) in [
+            (id::TELEMETRY_HZ, "telemetry_hz"),
             (id::DRIFT_ARRIVAL_RADIUS_M, "drift_arrival_radius_m"),
             (id::BEACON_X_M, "beacon_x_m"),
             (id::BEACON_Y_M, "beacon_y_m"),

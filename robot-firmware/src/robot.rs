@@ -461,13 +461,14 @@ impl Core {
                 self.enter(Mode::GoTo);
             }
             Command::SetParam { id, value } => {
+                self.check_param(id.0)?;
                 let v = self.tunables().set(id.0, value)?;
                 self.after_param_change(id.0);
                 self.push_event(EventCode::ParamChanged, i32::from(id.0));
                 return Ok(AckInfo::Param { id, value: v });
             }
             Command::GetParam { id } => {
-                let value = self.tunables().get(id.0)?;
+                let value = self.param(id.0)?;
                 return Ok(AckInfo::Param { id, value });
             }
             Command::SetTelemetryRate { hz } => {
@@ -476,6 +477,12 @@ impl Core {
                 }
                 self.config.telemetry_hz = hz;
                 self.next_telemetry_ms = now_ms;
+                // The rate is parameter `telemetry_hz` too: say so, as a SetParam would, so a
+                // station's editor and header follow whichever way it was set.
+                self.push_event(
+                    EventCode::ParamChanged,
+                    i32::from(crate::params::id::TELEMETRY_HZ),
+                );
             }
             Command::SetPose { pose } => {
                 let p = point_from_mm(pose.x_mm, pose.y_mm)?;
@@ -505,8 +512,8 @@ impl Core {
                 let id = self.objects.plan_route(from, to)?;
                 self.installed(Installed::Plan { id });
             }
-            Command::Download { object, offset } => {
-                return self.objects.start_download(object, offset, &self.light_cal);
+            Command::Download { object } => {
+                return self.objects.start_download(object, &self.light_cal);
             }
         }
         Ok(AckInfo::Done)
@@ -519,6 +526,22 @@ impl Core {
             arbiter: &mut self.arbiter.params,
             dead_reckon: &mut self.dead.params,
             guided: &mut self.guided,
+        }
+    }
+
+    /// The value of parameter `id` in force, as `GetParam` answers it.
+    pub fn param(&mut self, id: u16) -> Result<f32, NackReason> {
+        self.check_param(id)?;
+        self.tunables().get(id)
+    }
+
+    /// Refuses a parameter this robot lacks the hardware for (`ParamInfo::requires`).
+    fn check_param(&self, id: u16) -> Result<(), NackReason> {
+        let info = crate::params::info(id).ok_or(NackReason::UnknownParam)?;
+        if self.profile.has(info.requires) {
+            Ok(())
+        } else {
+            Err(NackReason::Unsupported)
         }
     }
 

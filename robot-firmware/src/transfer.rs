@@ -285,14 +285,10 @@ impl Objects {
     pub fn start_download(
         &mut self,
         object: ObjectKind,
-        offset: u32,
         light: &LightCalibration,
     ) -> Result<AckInfo, NackReason> {
         self.map();
         let len = self.object_len(object, light)?;
-        if usize::try_from(offset).map_or(true, |o| o > len) {
-            return Err(NackReason::OutOfRange);
-        }
         let (id, n) = match object {
             ObjectKind::Map => {
                 let m = self.map.ok_or(NackReason::NoMap)?;

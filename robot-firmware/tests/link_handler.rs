@@ -683,3 +683,67 @@ mod seq_wrap {
         assert_eq!(b.robot.link.counters().retries_answered, 0);
     }
 }
+
+/// Every parameter a robot answers is within the range the table gives (the station shows the
+/// range beside it, and a value outside it could not even be set back); one the robot lacks
+/// the hardware for is refused `Unsupported`, not answered with a placeholder. The micro-rato
+/// has no encoders: it answered `odo_mm_per_pulse` = 0, outside 0.001..10 (issue 16).
+#[test]
+fn every_parameter_a_robot_answers_is_in_its_range_on_every_profile() {
+    for profile in [&KHEPERA, &MICRO_RATO] {
+        let mut b = Bench::new(profile);
+        b.handshake();
+        for info in robot_firmware::params::PARAMS.iter() {
+            let s = b.command(Command::GetParam {
+                id: ParamId(info.id),
+            });
+            let seen = b.run(60);
+            let got = replies(&seen);
+            if profile.has(info.requires) {
+                let [Seen::Ack {
+                    info: AckInfo::Param { value, .. },
+                    ..
+                }] = got.as_slice()
+                else {
+                    panic!("{}: {got:?}", info.name);
+                };
+                assert!(
+                    *value >= info.min && *value <= info.max,
+                    "{} on {}: {value} outside {}..{}",
+                    info.name,
+                    profile.name,
+                    info.min,
+                    info.max
+                );
+            } else {
+                assert_eq!(
+                    got,
+                    vec![Seen::Nack {
+                        cmd_seq: s,
+                        reason: NackReason::Unsupported
+                    }],
+                    "{} on {}",
+                    info.name,
+                    profile.name
+                );
+            }
+        }
+    }
+}
+
+/// `SetTelemetryRate` changes parameter `telemetry_hz`; the robot says so with the same
+/// `ParamChanged` event a `SetParam` gives, so a station's editor and header follow it.
+#[test]
+fn a_telemetry_rate_command_announces_the_parameter_change() {
+    let mut b = Bench::new(&MICRO_RATO);
+    b.handshake();
+    b.command(Command::SetTelemetryRate { hz: 20 });
+    let seen = b.run(60);
+    assert!(
+        seen.contains(&Seen::Event(Event {
+            code: EventCode::ParamChanged,
+            value: i32::from(robot_firmware::params::id::TELEMETRY_HZ),
+        })),
+        "{seen:?}"
+    );
+}

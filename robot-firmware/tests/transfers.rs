@@ -237,14 +237,13 @@ fn map_and_plan_commands_are_refused_precisely_and_change_nothing() {
         (ObjectKind::Plan, NackReason::NoPlan),
         (ObjectKind::Regions, NackReason::NoMap),
     ] {
-        let c = Command::Download { object, offset: 0 };
+        let c = Command::Download { object };
         assert_eq!(st.command(c), Err(reason));
     }
     let (_, map, start, _) = micro_rato_map();
     assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
     let regions = Command::Download {
         object: ObjectKind::Regions,
-        offset: 0,
     };
     assert_eq!(
         st.command(regions),
@@ -265,16 +264,10 @@ fn map_and_plan_commands_are_refused_precisely_and_change_nothing() {
     );
     assert_eq!(st.command(plan_to(4350, 4350)), Ok(AckInfo::Done));
     let id = st.plan_event_id();
-    let len = st.robot.core.objects.plan_bytes().len() as u32;
     assert_eq!(
         st.command(Command::ExecutePlan { plan_id: id ^ 1 }),
         Err(NackReason::PlanIdMismatch)
     );
-    let past = Command::Download {
-        object: ObjectKind::Plan,
-        offset: len + 1,
-    };
-    assert_eq!(st.command(past), Err(NackReason::OutOfRange));
     assert_eq!(
         st.command(Command::SetMode(Mode::ExecutePlan)),
         Err(NackReason::BadState)

@@ -250,6 +250,9 @@ pub struct App {
 struct Pending {
     /// The parameter's value before a `SetParam`, to show beside a refusal.
     before: Option<f32>,
+    /// Part of a parameter fetch (on connect, `R`, a `ParamChanged`): the editor shows the
+    /// outcome, and the log gets one line for the whole fetch, not one per parameter.
+    quiet: bool,
 }
 
 impl App {
@@ -387,11 +390,7 @@ impl App {
                     self.read_param(p.id);
                 }
             }
-            Action::ParamReadAll => {
-                for p in self.params.params() {
-                    self.read_param(p.id);
-                }
-            }
+            Action::ParamReadAll => self.fetch_params(),
             Action::ParamEdit => {
                 self.params.input = Some(String::new());
                 self.params.input_error = None;
@@ -563,6 +562,33 @@ impl App {
         });
     }
 
+    /// Reads a parameter without a log line of its own (see `Pending::quiet`).
+    fn read_param_quietly(&mut self, id: u16) {
+        self.params.set_pending(id);
+        let cid = self.send(Command::GetParam {
+            id: protocol::ParamId(id),
+        });
+        if let Some(p) = self.pending.get_mut(&cid) {
+            p.quiet = true;
+        }
+    }
+
+    /// Reads every parameter this robot has (on connect and on `R`); the ones its hardware
+    /// lacks (`ParamInfo::requires`) are marked as such without asking.
+    fn fetch_params(&mut self) {
+        let caps = self.peer.as_ref().map_or(u32::MAX, |p| p.capabilities);
+        let mut asked = 0;
+        for p in self.params.params() {
+            if caps & p.requires == p.requires {
+                self.read_param_quietly(p.id);
+                asked += 1;
+            } else {
+                self.params.set_absent(p.id);
+            }
+        }
+        self.params.start_fetch(asked);
+    }
+
     fn commit_param(&mut self) {
         match self.params.parse_input() {
             Ok((id, value)) => {
@@ -612,7 +638,13 @@ impl App {
     fn send(&mut self, command: Command) -> CommandId {
         let id = self.next_id;
         self.next_id += 1;
-        self.pending.insert(id, Pending { before: None });
+        self.pending.insert(
+            id,
+            Pending {
+                before: None,
+                quiet: false,
+            },
+        );
         self.outbox.push((id, command));
         id
     }
@@ -663,6 +695,7 @@ impl App {
             Connection::Refused { message } => (Level::Error, format!("refused: {message}")),
         };
         self.note(level, Source::Link, text);
+        let connected = matches!(c, Connection::Connected(_));
         if let Connection::Connected(p) = &c {
             self.rate_hz = Some(p.telemetry_hz);
             self.peer = Some(p.clone());
@@ -676,6 +709,11 @@ impl App {
             );
         }
         self.connection = c;
+        // A new session starts from the robot's values, not from "?" until `R` (issue 16);
+        // a replay has no robot to ask (its recorded replies fill the editor).
+        if connected && !self.replaying {
+            self.fetch_params();
+        }
     }
 
     fn on_telemetry(&mut self, t: Telemetry) {
@@ -785,19 +823,23 @@ impl App {
                 Level::Debug,
                 format!("light at {:+.1} deg", f64::from(v) / 10.0),
             ),
-            EventCode::ParamChanged => (
-                Level::Info,
-                format!(
-                    "parameter {} changed",
-                    param_name(u16::try_from(v).unwrap_or(u16::MAX))
-                ),
-            ),
+            EventCode::ParamChanged => {
+                let id = u16::try_from(v).unwrap_or(u16::MAX);
+                // Changed by whoever (this editor, the rate keys, another station): read the
+                // value in force so the editor and the header show it.
+                if !self.replaying && robot_firmware::params::info(id).is_some() {
+                    self.read_param_quietly(id);
+                }
+                (Level::Info, format!("parameter {} changed", param_name(id)))
+            }
         };
         self.note_grouped(level, Source::Event, text, group);
     }
 
     fn on_done(&mut self, id: CommandId, command: Command, outcome: CommandOutcome) {
-        let before = self.pending.remove(&id).and_then(|p| p.before);
+        let pending = self.pending.remove(&id);
+        let before = pending.and_then(|p| p.before);
+        let quiet = pending.is_some_and(|p| p.quiet) && matches!(command, Command::GetParam { .. });
         if self.rate_asked.is_some_and(|(asked, _)| asked == id) {
             self.rate_asked = None;
         }
@@ -805,15 +847,29 @@ impl App {
         match outcome {
             CommandOutcome::Acked { info, rtt_ms, .. } => {
                 match (command, info) {
-                    (_, AckInfo::Param { id, value }) => self.params.set_value(id.0, value),
-                    (Command::SetTelemetryRate { hz }, _) => self.rate_hz = Some(hz),
+                    (_, AckInfo::Param { id, value }) => {
+                        self.params.set_value(id.0, value);
+                        // One value, two places: the header's rate is this parameter.
+                        if id.0 == robot_firmware::params::id::TELEMETRY_HZ {
+                            self.rate_hz = Some(value as u8);
+                        }
+                    }
+                    (Command::SetTelemetryRate { hz }, _) => {
+                        self.rate_hz = Some(hz);
+                        self.params
+                            .set_value(robot_firmware::params::id::TELEMETRY_HZ, f32::from(hz));
+                    }
                     _ => {}
+                }
+                if quiet {
+                    self.fetch_done(true);
+                    return;
                 }
                 // Teleop is acked ten times a second: only its failures are news.
                 if !matches!(command, Command::Teleop { .. }) {
                     let detail = match info {
-                        AckInfo::Param { value, .. } => {
-                            format!(" = {}", params::format_value(value))
+                        AckInfo::Param { id, value } => {
+                            format!(" = {}", params::format_param_id(id.0, value))
                         }
                         _ => String::new(),
                     };
@@ -830,7 +886,15 @@ impl App {
             }
             CommandOutcome::Nacked { reason, .. } => {
                 if let Command::SetParam { id, .. } | Command::GetParam { id } = command {
-                    self.params.set_refused(id.0, reason, before);
+                    if reason == protocol::NackReason::Unsupported {
+                        self.params.set_absent(id.0);
+                    } else {
+                        self.params.set_refused(id.0, reason, before);
+                    }
+                }
+                if quiet {
+                    self.fetch_done(false);
+                    return;
                 }
                 if matches!(command, Command::Teleop { .. }) {
                     self.teleop = Teleop::default();
@@ -868,12 +932,31 @@ impl App {
                 if let Command::SetParam { id, .. } | Command::GetParam { id } = command {
                     self.params.set_failed(id.0, why.to_string());
                 }
+                if quiet {
+                    self.fetch_done(false);
+                    return;
+                }
                 self.note(
                     Level::Error,
                     Source::Command,
                     format!("failed: {what}: {why}"),
                 );
             }
+        }
+    }
+
+    /// One quiet parameter read ended; the last of a fetch logs the fetch's outcome.
+    fn fetch_done(&mut self, ok: bool) {
+        if let Some((read, missed)) = self.params.fetch_step(ok) {
+            let (level, text) = if missed == 0 {
+                (Level::Info, format!("parameters read: {read}"))
+            } else {
+                (
+                    Level::Warn,
+                    format!("parameters read: {read}, {missed} not (see the editor, p)"),
+                )
+            };
+            self.note(level, Source::Command, text);
         }
     }
 

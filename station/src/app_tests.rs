@@ -25,7 +25,72 @@ fn connected_app() -> App {
     app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
         peer(),
     ))));
+    // The parameter fetch every connection starts (issue 16); these tests are about what
+    // follows, and the fetch is checked by its own test.
+    let fetch = app.take_outbox();
+    assert!(fetch
+        .iter()
+        .all(|(_, c)| matches!(c, Command::GetParam { .. })));
     app
+}
+
+/// Issue 16: the editor showed `?` until `R`. A connection reads every parameter the robot
+/// has the hardware for, quietly (one log line for the whole fetch), and the rows the robot
+/// cannot have say so without asking.
+#[test]
+fn connecting_fetches_every_parameter_and_logs_the_fetch_once() {
+    let mut app = App::new(AppOptions::default());
+    let mut peer = peer();
+    peer.capabilities &= !protocol::caps::ENCODERS;
+    app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
+        peer,
+    ))));
+    let fetch = app.take_outbox();
+    let params = robot_firmware::params::PARAMS;
+    let wanted: Vec<u16> = params
+        .iter()
+        .filter(|p| p.requires & protocol::caps::ENCODERS == 0)
+        .map(|p| p.id)
+        .collect();
+    let asked: Vec<u16> = fetch
+        .iter()
+        .filter_map(|(_, c)| match c {
+            Command::GetParam { id } => Some(id.0),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(asked, wanted);
+    let lines = app.log.window(100).count();
+    for (id, c) in fetch {
+        let Command::GetParam { id: pid } = c else {
+            continue;
+        };
+        app.update(Action::Link(LinkEvent::CommandDone {
+            id,
+            command: c,
+            outcome: CommandOutcome::Acked {
+                info: AckInfo::Param {
+                    id: pid,
+                    value: if pid.0 == 1 { 20.0 } else { 1.0 },
+                },
+                sends: 1,
+                rtt_ms: 3,
+            },
+        }));
+    }
+    let log: Vec<String> = app.log.window(100).map(|l| l.text.clone()).collect();
+    assert_eq!(log.len(), lines + 1, "{log:?}");
+    assert_eq!(
+        log.last().map(String::as_str),
+        Some(format!("parameters read: {}", wanted.len()).as_str())
+    );
+    let i = app.params.index_of(6).unwrap_or(0);
+    assert_eq!(app.params.status[i], params::ParamStatus::Absent);
+    assert_eq!(
+        app.rate_hz,
+        Some(20),
+        "the header's rate is the parameter's"
+    );
 }
 
 fn teleops(out: &[(CommandId, Command)]) -> usize {
@@ -127,7 +192,7 @@ fn a_refused_parameter_write_shows_the_robots_reason_in_the_editor_and_the_log()
         },
     }));
     assert_eq!(
-        params::status_text(&app.params.status[0]),
+        params::status_text(&app.params.params()[0], &app.params.status[0]),
         "300 (refused: value out of range)"
     );
     assert!(app

@@ -104,6 +104,22 @@ pub enum Sub {
           allow_negative_numbers = true)]
         timeout: f64,
     },
+    /// Read, write, save, load and compare the robot's parameters
+    ///
+    /// Names and ids are the firmware's table (`list` shows each with its unit, range and
+    /// description). Files are `name = value` lines, `#` comments (README.md, "Parameter
+    /// files"); `load` sets each parameter the file names and reports each change and each
+    /// refusal (exit 1 if any was refused); `diff` exits 1 when the robot differs from the
+    /// file. A bad file is refused with FILE:LINE:COL before the port is opened.
+    ///
+    /// Examples:
+    ///   station params --port /dev/ttyUSB0 list
+    ///   station params --port /dev/ttyUSB0 set telemetry_hz 20
+    ///   station params --port /dev/ttyUSB0 save robot.parm
+    ///   station params --port /dev/ttyUSB0 load robot.parm
+    ///   station params --port /dev/ttyUSB0 diff robot.parm
+    #[command(verbatim_doc_comment)]
+    Params(crate::params::ParamsArgs),
     /// Upload a map to the robot: any map file `station plan` reads, or a Map object file
     ///
     /// The map is gridded as `station plan` grids it (--cell, --radius) and sent as a Map
@@ -452,7 +468,7 @@ fn parse_metres(s: &str) -> Result<f64, String> {
     }
 }
 
-fn parse_value(s: &str) -> Result<f32, String> {
+pub(crate) fn parse_value(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(v) if v.is_finite() => Ok(v),
         _ => Err(format!("{s:?} is not a finite number")),
@@ -460,7 +476,7 @@ fn parse_value(s: &str) -> Result<f32, String> {
 }
 
 /// A parameter by name or id.
-fn parse_param(s: &str) -> Result<u16, String> {
+pub(crate) fn parse_param(s: &str) -> Result<u16, String> {
     use robot_firmware::params::{by_name, info, PARAMS};
     if let Some(p) = by_name(s) {
         return Ok(p.id);

@@ -17,7 +17,7 @@ use serde_json::json;
 use tokio::time::Instant;
 
 use crate::app::arena::ArenaOverlay;
-use crate::app::params::format_value;
+use crate::app::params::format_param_id;
 use crate::app::{App, AppOptions};
 use crate::builtin::start_builtin_emulator_with;
 use crate::cli::{Cli, RequiredPort, SendCmd, Sub};
@@ -59,6 +59,7 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             json,
             timeout,
         }) => stats(&port, seconds, json, timeout).await,
+        Some(Sub::Params(args)) => crate::params::run(&args).await,
         Some(Sub::UploadMap(args)) => crate::transfer::command::upload_map(&args).await,
         Some(Sub::DownloadMap(args)) => crate::transfer::command::download_map(&args).await,
         Some(Sub::UploadPlan(args)) => crate::transfer::command::upload_plan(&args).await,
@@ -355,7 +356,11 @@ async fn send(
         } => {
             let (text, detail) = match info {
                 AckInfo::Param { id, value } => (
-                    format!("ack: {} = {}", param_name(id.0), format_value(value)),
+                    format!(
+                        "ack: {} = {}",
+                        param_name(id.0),
+                        format_param_id(id.0, value)
+                    ),
                     json!({"param": param_name(id.0), "id": id.0, "value": value}),
                 ),
                 AckInfo::Object {

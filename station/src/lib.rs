@@ -6,6 +6,7 @@
 //! - `link`: the port's owner: handshake, heartbeat, retries, reconnect, statistics.
 //! - `action`, `app`, `input`: the UI's state machine and what feeds it.
 //! - `ui`: drawing, pure.
+//! - `params`: `station params` and its parameter files.
 //! - `plan`: planning on the station with the robot's nav code (`station plan`, map layers).
 //! - `record`, `replay`, `export`: recordings of both directions of a link, the TUI driven by
 //!   one, and their export to MCAP and CSV.
@@ -29,6 +30,7 @@ pub mod link;
 /// Lives in the emulator crate so that `robot-emulator arena generate` writes the same way.
 pub use emulator::output_file;
 pub mod pace;
+pub mod params;
 pub mod plan;
 pub mod record;
 pub mod replay;

@@ -84,6 +84,8 @@ fn mcap_export_has_every_message_on_its_channel_at_its_recorded_time() {
         ("/replies", 1),
         // handshaking, hello, hello reply, connected
         ("/link", 4),
+        // map -> base_link per telemetry frame, map -> truth per truth frame
+        ("/tf", 2 * n),
     ]
     .into_iter()
     .map(|(k, v)| (k.to_string(), v))
@@ -178,5 +180,180 @@ fn a_corrupted_recording_is_refused_with_its_offset_and_nothing_is_written() {
         .count()
         - 1;
     assert!(rows > 0 && rows < (SECONDS * HZ) as usize, "{rows}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Issue 16: Foxglove's 3D panel shows robot, map and plan together. A session with a map
+/// uploaded and the robot's regions and plan downloaded (in chunks, one of them lost and sent
+/// again) is exported; the MCAP read back has each scene channel in Foxglove's schema, with a
+/// message that places things where the objects say; integer fields are typed integers, and
+/// the micro-rato's missing sensors are null.
+#[test]
+fn mcap_export_carries_the_scene_for_the_3d_panel() {
+    use protocol::{caps, Message, ObjectKind, ProfileId, TransferBegin, TransferChunk};
+    use station::plan::{MapOptions, NavMap, Planner};
+    use station::record::synth::{demo_peer, telemetry, Synth};
+    use station::record::Meta;
+    use station::transfer::objects::{map_object, plan_object};
+
+    let map = NavMap::load(emulator::builtin::MICRO_RATO_99, &MapOptions::default()).unwrap();
+    let m = map_object(&map).unwrap();
+    let planner = Planner::new(map).unwrap();
+    let r = planner.plan(Some((0.5, 0.5)), None, false).unwrap();
+    let plan = plan_object(&planner, &r, m.id).unwrap();
+    let regions = {
+        let mut out = vec![0u8; 16 * 1024];
+        let n = robot_firmware::transfer::encode_regions_object(
+            &planner.regions().unwrap(),
+            m.id,
+            &mut out,
+        )
+        .unwrap();
+        out.truncate(n);
+        out
+    };
+    let meta = Meta {
+        created_unix_ms: 1_700_000_000_000,
+        port: "memory".into(),
+        protocol: protocol::PROTOCOL_VERSION,
+        arena: emulator::builtin::MICRO_RATO_99.into(),
+        ..Meta::default()
+    };
+    let mut s = Synth::new(&meta);
+    let peer = station::link::PeerInfo {
+        profile: ProfileId::MicroRato,
+        capabilities: caps::IR_PROXIMITY | caps::COMPASS | caps::BEACON | caps::GROUND_SENSOR,
+        ..demo_peer()
+    };
+    s.handshake(peer);
+    let mut t = 10_000;
+    for i in 0..5 {
+        s.from_robot(t, &Message::Telemetry(telemetry(i, 10)));
+        t += 100_000;
+    }
+    // Sends `bytes` as `object` in 100-byte chunks, the second one lost and sent last.
+    let send = |s: &mut Synth, t: &mut u64, object, bytes: &[u8], from_robot: bool| {
+        let id = protocol::crc32c(bytes);
+        let begin = Message::TransferBegin(TransferBegin {
+            object,
+            id,
+            len: bytes.len() as u32,
+            crc: id,
+        });
+        let mut frames = vec![begin];
+        let chunks: Vec<(usize, &[u8])> = bytes.chunks(100).enumerate().collect();
+        let order = (0..chunks.len()).filter(|&i| i != 1).chain([1]);
+        for i in order {
+            frames.push(Message::TransferChunk(TransferChunk {
+                id,
+                offset: (chunks[i].0 * 100) as u32,
+                data: chunks[i].1,
+            }));
+        }
+        for f in &frames {
+            *t += 1_000;
+            if from_robot {
+                s.from_robot(*t, f);
+            } else {
+                s.to_robot(*t, f);
+            }
+        }
+    };
+    send(&mut s, &mut t, ObjectKind::Map, &m.bytes, false);
+    send(&mut s, &mut t, ObjectKind::Regions, &regions, true);
+    send(&mut s, &mut t, ObjectKind::Plan, &plan, true);
+    let d = dir("scene");
+    std::fs::write(d.join("scene.rec"), s.finish(t + 1_000, "done")).unwrap();
+    let o = station(&["export", "scene.rec", "--mcap", "scene.mcap"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(d.join("scene.mcap")).unwrap();
+
+    let mut first: BTreeMap<String, (String, serde_json::Value, serde_json::Value)> =
+        BTreeMap::new();
+    let mut count: BTreeMap<String, usize> = BTreeMap::new();
+    for msg in mcap::MessageStream::new(&bytes).unwrap() {
+        let msg = msg.unwrap();
+        let schema = msg.channel.schema.as_ref().unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&msg.data).unwrap();
+        let sch: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
+        *count.entry(msg.channel.topic.clone()).or_default() += 1;
+        first
+            .entry(msg.channel.topic.clone())
+            .or_insert((schema.name.clone(), v, sch));
+    }
+    for (topic, n) in [
+        ("/tf", 5),
+        ("/map", 1),
+        ("/regions", 1),
+        ("/plan", 1),
+        ("/arena", 1),
+    ] {
+        assert_eq!(count.get(topic), Some(&n), "{topic}: {count:?}");
+    }
+    let (name, tf, _) = &first["/tf"];
+    assert_eq!(name, "foxglove.FrameTransform");
+    assert_eq!(tf["parent_frame_id"], "map");
+    assert_eq!(tf["child_frame_id"], "base_link");
+    assert_eq!(tf["translation"]["x"], 1.5);
+    assert!(tf["timestamp"]["sec"].as_u64().unwrap() >= 1_700_000_000);
+
+    let (name, grid, sch) = &first["/map"];
+    assert_eq!(name, "foxglove.Grid");
+    assert_eq!(grid["frame_id"], "map");
+    assert_eq!(grid["column_count"], u64::from(m.width));
+    assert_eq!(grid["cell_size"]["x"], f64::from(m.cell_mm) / 1000.0);
+    assert_eq!(grid["fields"][0]["name"], "occupancy");
+    assert_eq!(sch["properties"]["column_count"]["type"], "integer");
+    let data = grid["data"].as_str().unwrap();
+    assert_eq!(
+        data.len(),
+        (usize::from(m.width) * usize::from(m.height)).div_ceil(3) * 4,
+        "one base64 byte per cell"
+    );
+
+    let (name, regions_msg, _) = &first["/regions"];
+    assert_eq!(name, "foxglove.SceneUpdate");
+    let squares = planner.squares().len();
+    let lines = &regions_msg["entities"][0]["lines"][0];
+    assert_eq!(lines["points"].as_array().unwrap().len(), squares * 8);
+    assert!(
+        regions_msg["entities"][0]["timestamp"]["sec"]
+            .as_u64()
+            .unwrap()
+            > 0
+    );
+
+    let (name, plan_msg, _) = &first["/plan"];
+    assert_eq!(name, "foxglove.SceneUpdate");
+    let points = plan_msg["entities"][0]["lines"][0]["points"]
+        .as_array()
+        .unwrap();
+    let want = station::transfer::objects::plan_waypoints(&plan).unwrap();
+    assert_eq!(points.len(), want.len());
+    assert_eq!(points[0]["x"], want[0].0);
+
+    let (_, arena, _) = &first["/arena"];
+    assert!(
+        arena["entities"][0]["lines"][0]["points"]
+            .as_array()
+            .unwrap()
+            .len()
+            >= 8,
+        "the walls"
+    );
+
+    let (_, tele, sch) = &first["/telemetry"];
+    for absent in ["enc_left", "light", "battery_v", "on_line"] {
+        assert!(tele[absent].is_null(), "{absent}: {}", tele[absent]);
+    }
+    assert!(tele["compass_deg"].is_number() && tele["ir"].is_array());
+    let props = &sch["properties"];
+    assert_eq!(props["flags"]["type"], "integer");
+    assert_eq!(props["cycle_overruns"]["type"], "integer");
+    assert_eq!(
+        props["enc_left"]["type"],
+        serde_json::json!(["integer", "null"])
+    );
+    assert_eq!(props["x_m"]["type"], "number");
     let _ = std::fs::remove_dir_all(&d);
 }

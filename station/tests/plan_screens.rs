@@ -30,6 +30,8 @@ fn connect(app: &mut App) {
     app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
         peer,
     ))));
+    // The parameter fetch every connection starts (issue 16); this test is about what follows.
+    app.take_outbox();
 }
 
 /// Telemetry putting the believed pose at (`x`, `y`) metres.

@@ -167,6 +167,8 @@ async fn the_replayed_app_ends_in_the_state_the_live_app_saw() {
 
     let rec = Recording::open(&path).unwrap();
     let mut app = App::new(AppOptions::default());
+    // As `ReplaySession` does: a replayed connection asks the robot nothing.
+    app.replaying = true;
     let mut feed = ReplayFeed::new(&rec.meta.port);
     let mut actions = Vec::new();
     feed.advance_to(&rec.records, rec.duration_us(), &mut actions);

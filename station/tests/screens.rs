@@ -131,6 +131,32 @@ fn story() -> App {
         &mut app,
         LinkEvent::Connection(Connection::Connected(peer())),
     );
+    // The parameter fetch the connection starts, answered as a Khepera starts.
+    let mut robot = robot_firmware::Robot::new(robot_firmware::RobotOptions {
+        profile: &robot_firmware::KHEPERA,
+        seed: 1,
+        start: robot_firmware::odometry::Pose::new(0.5, 0.5, 0.0),
+        emulated: false,
+        firmware_version: "0.1.0",
+    });
+    for (id, command) in app.take_outbox() {
+        let Command::GetParam { id: param } = command else {
+            continue;
+        };
+        let value = robot.core.param(param.0).unwrap_or(0.0);
+        link(
+            &mut app,
+            LinkEvent::CommandDone {
+                id,
+                command,
+                outcome: CommandOutcome::Acked {
+                    info: AckInfo::Param { id: param, value },
+                    sends: 1,
+                    rtt_ms: 5,
+                },
+            },
+        );
+    }
     for i in 0..40 {
         app.update(Action::Tick {
             now_ms: 400 + u64::from(i) * 100,
@@ -166,7 +192,7 @@ fn story() -> App {
     link(
         &mut app,
         LinkEvent::CommandDone {
-            id: 1,
+            id: 101,
             command: Command::SetMode(Mode::Explore),
             outcome: CommandOutcome::Nacked {
                 reason: NackReason::Unsupported,
@@ -177,7 +203,7 @@ fn story() -> App {
     link(
         &mut app,
         LinkEvent::CommandDone {
-            id: 2,
+            id: 102,
             command: Command::GetParam { id: ParamId(0) },
             outcome: CommandOutcome::Acked {
                 info: AckInfo::Param {

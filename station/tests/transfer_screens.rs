@@ -48,6 +48,8 @@ fn app() -> App {
     app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
         peer(),
     ))));
+    // The parameter fetch every connection starts (issue 16); this test is about what follows.
+    app.take_outbox();
     app.update(Action::ShowView(View::Map));
     app
 }

@@ -154,3 +154,8 @@ pub fn columns(row: &str, from: usize, to: usize) -> String {
         .take(to.saturating_sub(from))
         .collect()
 }
+
+/// The first row of `screen` (rows joined by newlines) that contains `needle`.
+pub fn row<'a>(screen: &'a str, needle: &str) -> Option<&'a str> {
+    screen.lines().find(|l| l.contains(needle))
+}

@@ -204,7 +204,7 @@ pub fn command() -> impl Strategy<Value = Command> {
         (proptest::option::of(point()), proptest::option::of(point()))
             .prop_map(|(from, to)| Command::Plan { from, to }),
         any::<u8>().prop_map(|hz| Command::SetTelemetryRate { hz }),
-        (object(), any::<u32>()).prop_map(|(object, offset)| Command::Download { object, offset }),
+        object().prop_map(|object| Command::Download { object }),
         pose().prop_map(|pose| Command::SetPose { pose }),
     ]
 }

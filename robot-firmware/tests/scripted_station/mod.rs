@@ -335,7 +335,7 @@ impl Station {
 
     /// Downloads an object; returns the Ack's info and the verified bytes.
     pub fn download(&mut self, object: ObjectKind) -> Result<(AckInfo, Vec<u8>), NackReason> {
-        let info = self.command(Command::Download { object, offset: 0 })?;
+        let info = self.command(Command::Download { object })?;
         let AckInfo::Object { len, .. } = info else {
             panic!("Download answered {info:?}");
         };

@@ -26,6 +26,8 @@ pub enum ParamStatus {
     },
     /// No answer (timeout, link lost).
     Failed(String),
+    /// This robot lacks the hardware the parameter is for (`ParamInfo::requires`).
+    Absent,
 }
 
 /// The editor.
@@ -37,6 +39,8 @@ pub struct ParamEditor {
     pub input: Option<String>,
     /// Why the typed text was not sent (shown on the edit line until the next key).
     pub input_error: Option<String>,
+    /// A fetch of every parameter in progress: reads left, values read, reads that failed.
+    fetch: Option<(usize, usize, usize)>,
 }
 
 impl Default for ParamEditor {
@@ -46,6 +50,7 @@ impl Default for ParamEditor {
             status: vec![ParamStatus::Unknown; PARAMS.len()],
             input: None,
             input_error: None,
+            fetch: None,
         }
     }
 }
@@ -103,6 +108,34 @@ impl ParamEditor {
         }
     }
 
+    pub fn set_absent(&mut self, id: u16) {
+        if let Some(s) = self.index_of(id).and_then(|i| self.status.get_mut(i)) {
+            *s = ParamStatus::Absent;
+        }
+    }
+
+    /// A fetch of `reads` parameters starts (a new one replaces any in progress).
+    pub fn start_fetch(&mut self, reads: usize) {
+        self.fetch = (reads > 0).then_some((reads, 0, 0));
+    }
+
+    /// One read of the fetch ended; at the last, the fetch's (read, not read) counts.
+    pub fn fetch_step(&mut self, ok: bool) -> Option<(usize, usize)> {
+        let (left, read, missed) = self.fetch.as_mut()?;
+        *left = left.saturating_sub(1);
+        if ok {
+            *read += 1;
+        } else {
+            *missed += 1;
+        }
+        if *left == 0 {
+            let done = (*read, *missed);
+            self.fetch = None;
+            return Some(done);
+        }
+        None
+    }
+
     pub fn set_failed(&mut self, id: u16, why: String) {
         if let Some(s) = self.index_of(id).and_then(|i| self.status.get_mut(i)) {
             *s = ParamStatus::Failed(why);
@@ -127,17 +160,42 @@ impl ParamEditor {
 }
 
 /// A short text for a parameter's status column.
-pub fn status_text(s: &ParamStatus) -> String {
+pub fn status_text(info: &ParamInfo, s: &ParamStatus) -> String {
     match s {
         ParamStatus::Unknown => "?".into(),
         ParamStatus::Pending => "…".into(),
-        ParamStatus::Value(v) => format_value(*v),
+        ParamStatus::Value(v) => format_param(info, *v),
         ParamStatus::Refused { reason, last } => match last {
-            Some(v) => format!("{} (refused: {})", format_value(*v), nack_text(*reason)),
+            Some(v) => format!(
+                "{} (refused: {})",
+                format_param(info, *v),
+                nack_text(*reason)
+            ),
             None => format!("refused: {}", nack_text(*reason)),
         },
         ParamStatus::Failed(why) => format!("failed: {why}"),
+        ParamStatus::Absent => "not on this robot".into(),
     }
+}
+
+/// A value of parameter `info` with the decimals its unit and range need
+/// (`robot_firmware::params::display_decimals`): 0.080 mm per pulse, not 0.
+pub fn format_param(info: &ParamInfo, v: f32) -> String {
+    format!("{v:.*}", robot_firmware::params::display_decimals(info))
+}
+
+/// A value of parameter `id` as `format_param` shows it (plain for an unknown id).
+pub fn format_param_id(id: u16, v: f32) -> String {
+    robot_firmware::params::info(id).map_or_else(|| format_value(v), |p| format_param(p, v))
+}
+
+/// `info`'s range in its unit, each bound with the parameter's decimals.
+pub fn range_text(info: &ParamInfo) -> String {
+    format!(
+        "{} .. {}",
+        format_param(info, info.min),
+        format_param(info, info.max)
+    )
 }
 
 /// A value without needless decimals.
@@ -159,7 +217,7 @@ mod tests {
         p.set_value(0, 300.0);
         p.set_pending(0);
         p.set_refused(0, NackReason::OutOfRange, Some(300.0));
-        let text = status_text(&p.status[0]);
+        let text = status_text(&PARAMS[0], &p.status[0]);
         assert_eq!(text, "300 (refused: value out of range)");
     }
 
@@ -170,5 +228,37 @@ mod tests {
         assert_eq!(p.selected, PARAMS.len() - 1);
         p.select(1);
         assert_eq!(p.selected, 0);
+    }
+
+    /// Issue 16: odo_mm_per_pulse (0.001..10 mm) showed as 0. Every value in a parameter's
+    /// range shows non-zero unless it is zero, and its bounds read back as themselves.
+    #[test]
+    fn display_precision_follows_the_parameters_range() {
+        for info in PARAMS.iter() {
+            for v in [info.min, info.max] {
+                let text = format_param(info, v);
+                let back: f32 = text.parse().unwrap_or(f32::NAN);
+                assert!(
+                    (back - v).abs() <= v.abs() * 1e-6,
+                    "{}: {v} shows as {text}",
+                    info.name
+                );
+            }
+        }
+        let mm = robot_firmware::params::by_name("odo_mm_per_pulse").copied();
+        let mm = mm.unwrap_or(PARAMS[0]);
+        assert_eq!(format_param(&mm, 0.08), "0.080");
+        assert_eq!(range_text(&mm), "0.001 .. 10.000");
+        assert_eq!(format_param(&PARAMS[0], 300.0), "300");
+    }
+
+    #[test]
+    fn a_fetch_reports_once_when_its_last_read_ends() {
+        let mut p = ParamEditor::default();
+        p.start_fetch(3);
+        assert_eq!(p.fetch_step(true), None);
+        assert_eq!(p.fetch_step(false), None);
+        assert_eq!(p.fetch_step(true), Some((2, 1)));
+        assert_eq!(p.fetch_step(true), None, "a stray answer after the fetch");
     }
 }

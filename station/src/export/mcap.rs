@@ -9,6 +9,7 @@
 //! - `/truth`: the emulator's `EmuTruth`;
 //! - `/events`: robot events; `/log`: robot log lines as `foxglove.Log` (the Log panel);
 //! - `/link`: connection changes, gap markers included;
+//! - `/tf`, `/map`, `/regions`, `/plan`, `/arena`: the scene for the 3D panel (`scene`);
 //! - `/commands`: the station's own commands (decoded from its recorded bytes), with their
 //!   sequence numbers; `/replies`: the robot's Acks and Nacks naming them.
 //!
@@ -47,17 +48,33 @@ fn channels() -> Vec<(&'static str, &'static str, Value)> {
     let mut telemetry = serde_json::Map::new();
     for c in super::csv::COLUMNS {
         if !c.starts_with("ir") && !c.starts_with("light") {
-            telemetry.insert((*c).to_string(), num());
+            // Counters and bit sets are integers; a sensor the robot lacks is null.
+            let kind = if INTEGER_COLUMNS.contains(c) {
+                "integer"
+            } else {
+                "number"
+            };
+            let t = if super::scene::nullable(c) {
+                json!({"type": [kind, "null"]})
+            } else {
+                json!({"type": kind})
+            };
+            telemetry.insert((*c).to_string(), t);
         }
     }
     telemetry.insert("mode".into(), string());
-    let readings = json!({"type": "array", "items": int(), "minItems": 8, "maxItems": 8});
+    let readings = json!({"type": ["array", "null"], "items": int(), "minItems": 8, "maxItems": 8});
     telemetry.insert("ir".into(), readings.clone());
     telemetry.insert("light".into(), readings);
     for b in ["on_goal", "on_line", "contact", "failsafe", "goal_reached"] {
-        telemetry.insert(b.into(), json!({"type": "boolean"}));
+        let t = if super::scene::nullable(b) {
+            json!({"type": ["boolean", "null"]})
+        } else {
+            json!({"type": "boolean"})
+        };
+        telemetry.insert(b.into(), t);
     }
-    vec![
+    let mut all = vec![
         (
             "/telemetry",
             "station.Telemetry",
@@ -100,8 +117,22 @@ fn channels() -> Vec<(&'static str, &'static str, Value)> {
             "station.Reply",
             obj(json!({"cmd_seq": int(), "outcome": string(), "detail": {}})),
         ),
-    ]
+    ];
+    all.extend(super::scene::channels());
+    all
 }
+
+/// `/telemetry` fields that are whole numbers (the rest are measurements in SI-ish units).
+const INTEGER_COLUMNS: &[&str] = &[
+    "enc_left",
+    "enc_right",
+    "flags",
+    "line_events",
+    "beacon_strength",
+    "behaviours",
+    "cycle_overruns",
+    "collisions",
+];
 
 /// Writes `rec` as MCAP to `w`; returns the number of messages.
 pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64, ExportError> {
@@ -142,11 +173,13 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
     let mut seq: BTreeMap<u16, u32> = BTreeMap::new();
     let mut count = 0u64;
     let mut failure = None;
+    let mut scene = super::scene::Scene::new(rec);
     walk(rec, |item| {
         if failure.is_some() {
             return;
         }
-        let (t_us, messages) = messages(&item);
+        let (t_us, mut messages) = messages(&item);
+        scene.extend(&item, &mut messages);
         let ns = base_ns.saturating_add(t_us.saturating_mul(1000));
         for (topic, mut value) in messages {
             let Some(&channel_id) = ids.get(topic) else {
@@ -178,8 +211,17 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
 
 /// Fills in `timestamp` fields (foxglove schemas) with the log time.
 fn stamp(v: &mut Value, ns: u64) {
+    let time = json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000});
     if let Some(t) = v.get_mut("timestamp") {
-        *t = json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000});
+        *t = time.clone();
+    }
+    // foxglove.SceneUpdate stamps each entity.
+    if let Some(Value::Array(entities)) = v.get_mut("entities") {
+        for e in entities {
+            if let Some(t) = e.get_mut("timestamp") {
+                *t = time.clone();
+            }
+        }
     }
 }
 

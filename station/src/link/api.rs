@@ -236,9 +236,8 @@ pub fn command_text(c: &Command) -> String {
         Command::Segment => "segment".into(),
         Command::Plan { .. } => "plan".into(),
         Command::SetTelemetryRate { hz } => format!("rate {hz} Hz"),
-        Command::Download { object, offset } => {
-            let o = crate::transfer::object_name(*object);
-            format!("download {o} from {offset}")
+        Command::Download { object } => {
+            format!("download {}", crate::transfer::object_name(*object))
         }
         Command::SetPose { pose } => format!(
             "set pose {:.3} {:.3} m {} mrad",

@@ -26,7 +26,7 @@ use std::collections::VecDeque;
 use protocol::object::{kind_of, parse};
 use protocol::transfer::{chunk_for_loss, Outcome, Receiver, Sender};
 use protocol::{
-    AckInfo, Command, Message, NackReason, ObjectKind, TransferAck, TransferBegin, TransferChunk,
+    AckInfo, Command, Message, ObjectKind, TransferAck, TransferBegin, TransferChunk,
     TransferStatus,
 };
 
@@ -96,11 +96,10 @@ enum Phase {
         have: Option<(u32, u32)>,
         not_before: u64,
     },
-    /// The `Download` command `cmd` is out, claiming `offset`.
+    /// The `Download` command `cmd` is out.
     Requested {
         cmd: CommandId,
         have: Option<(u32, u32)>,
-        offset: u32,
     },
     /// The robot said what it sends; chunks are expected.
     Receiving {
@@ -418,15 +417,10 @@ impl TransferEngine {
                 let have = *have;
                 let cmd = self.next_cmd;
                 self.next_cmd += 1;
-                let offset = match self.rx.progress() {
-                    Some((o, _, next, _)) if o == a.object => next,
-                    _ => 0,
-                };
-                let command = Command::Download {
-                    object: a.object,
-                    offset,
-                };
-                a.phase = Phase::Requested { cmd, have, offset };
+                // Bytes kept from an interrupted download are not claimed here: the
+                // receiver's answer to the robot's Begin resumes them (PROTOCOL.md §8).
+                let command = Command::Download { object: a.object };
+                a.phase = Phase::Requested { cmd, have };
                 self.out.push(EngineOut::Command { id: cmd, command });
             }
             Phase::Requested { .. } => {}
@@ -564,7 +558,7 @@ impl TransferEngine {
         let Some(a) = self.active.as_mut() else {
             return;
         };
-        let Phase::Requested { cmd, have, offset } = a.phase else {
+        let Phase::Requested { cmd, have } = a.phase else {
             return;
         };
         if cmd != id {
@@ -595,15 +589,6 @@ impl TransferEngine {
             CommandOutcome::Acked { info, .. } => {
                 let e = TransferError::Unexpected(format!("{info:?}"));
                 self.finish(now_ms, JobOutcome::Failed(e), None);
-            }
-            CommandOutcome::Nacked {
-                reason: NackReason::OutOfRange,
-                ..
-            } if offset > 0 => {
-                // The robot's object is shorter than the bytes kept: start from scratch.
-                self.rx.reset();
-                let e = TransferError::Refused(NackReason::OutOfRange);
-                self.retry_download(now_ms, e);
             }
             CommandOutcome::Nacked { reason, .. } => {
                 let e = TransferError::Refused(reason);

@@ -10,15 +10,19 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Cell, Paragraph, Row, Table, TableState};
 use ratatui::Frame;
 
-use crate::app::params::{format_value, status_text, ParamStatus};
+use crate::app::params::{range_text, status_text, ParamStatus};
 use crate::app::App;
 
 pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     let block = Block::bordered().title(" Parameters (r read, R read all, Enter edit) ");
     let inner = block.inner(area);
     frame.render_widget(block, area);
-    let [table_area, edit_area] =
-        Layout::vertical([Constraint::Fill(1), Constraint::Length(1)]).areas(inner);
+    let [table_area, desc_area, edit_area] = Layout::vertical([
+        Constraint::Fill(1),
+        Constraint::Length(1),
+        Constraint::Length(1),
+    ])
+    .areas(inner);
     let rows: Vec<Row> = app
         .params
         .params()
@@ -29,18 +33,14 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
                 ParamStatus::Refused { .. } | ParamStatus::Failed(_) => Color::Red,
                 ParamStatus::Pending => Color::Yellow,
                 ParamStatus::Value(_) => Color::Reset,
-                ParamStatus::Unknown => Color::DarkGray,
+                ParamStatus::Unknown | ParamStatus::Absent => Color::DarkGray,
             };
             Row::new(vec![
                 Cell::from(p.id.to_string()),
                 Cell::from(p.name),
-                Cell::from(Span::styled(status_text(s), Style::new().fg(color))),
+                Cell::from(Span::styled(status_text(p, s), Style::new().fg(color))),
                 Cell::from(p.unit),
-                Cell::from(format!(
-                    "{} .. {}",
-                    format_value(p.min),
-                    format_value(p.max)
-                )),
+                Cell::from(range_text(p)),
             ])
         })
         .collect();
@@ -51,7 +51,7 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             Constraint::Length(23),
             Constraint::Fill(1),
             Constraint::Length(11),
-            Constraint::Length(13),
+            Constraint::Length(18),
         ],
     )
     .header(
@@ -70,12 +70,7 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
                 // Where the eyes are: a typo is not news for the log alone.
                 Some(e) => Span::styled(format!("  {e}"), Style::new().fg(Color::Red)),
                 None => Span::styled(
-                    format!(
-                        "  ({} .. {} {})",
-                        format_value(p.min),
-                        format_value(p.max),
-                        p.unit
-                    ),
+                    format!("  ({} {})", range_text(p), p.unit),
                     Style::new().fg(Color::DarkGray),
                 ),
             },
@@ -86,4 +81,15 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         )),
     };
     frame.render_widget(Paragraph::new(edit), edit_area);
+    // The selected parameter's one-line description, where QGroundControl shows it.
+    if let Some(p) = app.params.selected_info() {
+        let desc = Line::from(vec![
+            Span::styled(
+                format!("{}: ", p.name),
+                Style::new().add_modifier(Modifier::BOLD),
+            ),
+            Span::raw(p.desc),
+        ]);
+        frame.render_widget(Paragraph::new(desc), desc_area);
+    }
 }
