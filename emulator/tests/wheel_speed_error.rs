@@ -52,6 +52,9 @@ fn drawn_wheel_bias_never_exceeds_the_measured_one_percent() {
         }
     }
     // Still a Gaussian of sigma 0.5 % inside the bound: about 4.6 % of 600 wheels clipped.
-    assert!((10..=50).contains(&at_bound), "{at_bound} wheels at the bound");
+    assert!(
+        (10..=50).contains(&at_bound),
+        "{at_bound} wheels at the bound"
+    );
     println!("widest bias {widest:.4}, {at_bound} of 600 wheels at the ±1 % bound");
 }
