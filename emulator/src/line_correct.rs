@@ -178,24 +178,16 @@ pub fn run_line_correct(
         });
     }
     let name = arena.name.clone();
-    let cfg = |bias| SimConfig {
+    // seed 003 §2.3.3: the speed error is at most ±1 % = two sigma; `Sim` draws it clipped.
+    let cfg = SimConfig {
         seed: opts.seed,
         noise: opts.noise,
         start: opts.start,
-        wheel_bias: bias,
+        wheel_bias: opts.wheel_bias,
         floor_grid_m: Some(pitch),
         ..SimConfig::new(opts.profile)
     };
-    let mut sim = Sim::new(arena.clone(), cfg(opts.wheel_bias))?;
-    if opts.wheel_bias.is_none() {
-        // seed 003 §2.3.3: the speed error is at most ±1 % = two sigma.
-        let limit = 2.0 * opts.noise.sanitised().motors;
-        let drawn = sim.wheel_bias();
-        let clipped = drawn.map(|b| b.clamp(-limit, limit));
-        if clipped != drawn {
-            sim = Sim::new(arena, cfg(Some(clipped)))?;
-        }
-    }
+    let mut sim = Sim::new(arena, cfg)?;
     let now_ms = (sim.now_us() / 1000) as u32;
     if let Reply::Nack(r) = sim
         .robot_mut()

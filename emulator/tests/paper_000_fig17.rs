@@ -7,10 +7,16 @@
 //! with a U 12 cm wide and 12 cm deep on the straight line from A to B, opening towards A, and
 //! behind it a second U 30 cm wide and 16 cm deep, also opening towards A; B lies behind both.
 //! Project (measured over seeds 1-10, 600 simulated s, default noise): the firmware arrives
-//! in 7 of 10 runs and its true position is within the 5 cm tolerance in 1 of 10; the other
-//! arrivals end 5-23 cm off, the odometry error of 2-8 minutes of turning (seed 000 §3: 8 cm
-//! in 1000 cycles). Before the drift's escalation counted 180° turns, 0 of 10 arrived: the
-//! robot stayed pressed against the first dead end's back wall for the whole run.
+//! in 10 of 10 runs and its true position is within the 5 cm tolerance in 2 of 10 (seeds 4
+//! and 5: 1.8 and 2.5 cm); the other arrivals end 5-27 cm off. Those are odometry errors, not
+//! navigation ones: each run's belief is off by about as much as its goal error, after 1.8-8.5
+//! m of driving (the longer runs go round the dead ends several times) with the seed's
+//! constant wheel speed error (seed 003 §2.3.3: up to ±1 % a wheel), and this box has no
+//! landmark or light to correct the pose with (seed 000 §6).
+//! History: before the drift's escalation counted 180° turns, 0 of 10 arrived (the robot
+//! stayed pressed against the first dead end's back wall); with it, 7 of 10 arrived and 1 of
+//! 10 was within 5 cm; since a pause ends once the edge has brought the robot nearer the goal
+//! than ever, 10 of 10 arrive and 2 of 10 are within 5 cm.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::path::PathBuf;
@@ -85,8 +91,16 @@ fn fig17_a_to_b_through_two_successive_dead_ends() {
         let r = run_scenario(two_dead_ends(), opts).unwrap();
         assert_eq!(r.tolerance_m, KHEPERA_TOLERANCE_M, "the paper's 5 cm");
         println!(
-            "seed {seed}: arrived {} reached {} error {:.3} m after {:.0} s, true end ({:.2}, {:.2})",
-            r.arrived, r.reached, r.goal_error_m, r.sim_s, r.final_true.x_m, r.final_true.y_m
+            "seed {seed}: arrived {} reached {} error {:.3} m after {:.0} s and {:.2} m, true end \
+             ({:.2}, {:.2}), belief off by {:.3} m",
+            r.arrived,
+            r.reached,
+            r.goal_error_m,
+            r.sim_s,
+            r.distance_m,
+            r.final_true.x_m,
+            r.final_true.y_m,
+            r.pose_error_m
         );
         arrived += u32::from(r.arrived);
         reached += u32::from(r.reached);
@@ -97,10 +111,10 @@ fn fig17_a_to_b_through_two_successive_dead_ends() {
         "fig17: paper 1 run, reached (dx 2 cm, dy 1 cm, tolerance 5 cm); project {reached}/{SEEDS} \
          reached within 5 cm, {arrived}/{SEEDS} arrived, {escaped}/{SEEDS} past the first dead end"
     );
-    assert!(arrived >= 5, "arrived in {arrived} of {SEEDS}");
-    assert!(reached >= 1, "reached in {reached} of {SEEDS}");
+    assert!(arrived >= 9, "arrived in {arrived} of {SEEDS}");
+    assert!(reached >= 2, "reached in {reached} of {SEEDS}");
     assert!(
-        escaped >= 7,
+        escaped >= 9,
         "past the first dead end in {escaped} of {SEEDS}"
     );
 }

@@ -5,7 +5,9 @@
 //! below it. To break cycles the nearest point reached is memorised: coming back to it (within
 //! 5 cm) the first time halves the drift; coming back again pauses navigation for a number of
 //! cycles that grows with each failure (the arbiter follows the obstacle's edge meanwhile,
-//! alternating sides between failures), after which navigation restarts from the new place.
+//! alternating sides between failures), after which navigation restarts from the new place;
+//! a pause also ends as soon as the edge has brought the robot nearer the target than its
+//! nearest point (the cycle is broken; following on would only lead away again).
 //! Within 15 cm the robot turns to the target again and halves its propulsion; within 5 cm the
 //! target is reached.
 //!
@@ -174,6 +176,11 @@ impl Drift {
         } else if let DriftPhase::Paused { remaining } = self.phase {
             self.phase = match remaining.checked_sub(1) {
                 Some(0) | None => self.restart(),
+                // Following the edge has brought the robot nearer the target than it ever was:
+                // the cycle the pause was meant to break is broken, so navigation restarts
+                // from here instead of following the edge on, away again (seed 000 §4.4: the
+                // pause is there to find a new starting point).
+                _ if self.progressed(dist, p) => self.restart(),
                 Some(r) => DriftPhase::Paused { remaining: r },
             };
         } else {
@@ -293,6 +300,12 @@ impl Drift {
         } else {
             first.other()
         }
+    }
+
+    /// Nearer the target than the memorised nearest point, by more than its tolerance.
+    fn progressed(&self, dist: f32, p: &DriftParams) -> bool {
+        self.nearest
+            .is_some_and(|(_, best)| dist < best - p.nearest_tolerance_m)
     }
 
     /// After a pause: navigation starts again from wherever the robot now is. The nearest
@@ -425,6 +438,26 @@ mod tests {
         assert!(d.cyclic(&p), "after a pause the next sign pauses again");
         assert_eq!(d.phase(), DriftPhase::Paused { remaining: 200 });
         assert_eq!(d.pause_side(Side::Left), Side::Right);
+    }
+
+    #[test]
+    fn a_pause_ends_as_soon_as_the_edge_brings_the_robot_nearer_than_ever() {
+        let p = DriftParams::default();
+        let mut d = Drift::new(Point::new(0.0, 1.0));
+        step_at(&mut d, 0.0, 0.0, FRAC_PI_2);
+        d.cyclic(&p);
+        assert!(d.cyclic(&p));
+        assert_eq!(d.phase(), DriftPhase::Paused { remaining: 100 });
+        // Following the edge sideways, no nearer than the nearest point (1 m): still paused.
+        for i in 0..10u8 {
+            let out = step_at(&mut d, 0.02 * f32::from(i), 0.0, 0.0);
+            assert!(matches!(out.phase, DriftPhase::Paused { .. }), "{out:?}");
+        }
+        // Round the obstacle's end, 0.1 m nearer than ever: navigation restarts at once,
+        // long before the 100 cycles are over.
+        let out = step_at(&mut d, 0.2, 0.2, FRAC_PI_2);
+        assert_eq!(out.phase, DriftPhase::Aligning);
+        assert_eq!(d.failures(), 1, "the failure count is kept");
     }
 
     #[test]
