@@ -6,8 +6,6 @@ pub mod tmux;
 
 use std::time::{Duration, Instant};
 
-pub mod tmux;
-
 use protocol::{
     encode, Command, Feed, FrameDecoder, Hello, Kind, Message, Telemetry, FINGERPRINT, MAX_FRAME,
     PROTOCOL_VERSION,

@@ -26,7 +26,8 @@ fn station(tag: &str, profile: &str) -> Tmux {
 
 /// Waits until `ok` holds for the whole screen as one string (rows joined by newlines).
 fn wait(t: &Tmux, what: &str, ok: impl Fn(&str) -> bool) -> String {
-    t.wait_for(what, WAIT, |rows| ok(&rows.join("\n"))).join("\n")
+    t.wait_for(what, WAIT, |rows| ok(&rows.join("\n")))
+        .join("\n")
 }
 
 /// The value column of parameter `name`'s row.
