@@ -24,6 +24,7 @@ use super::grid::{grid_bytes, Geometry, Grid, GridPoint, MAX_SIDE};
 use super::ids::{packed_bytes, PackedIds};
 use super::segment::{segment_with, Passable, Regions, SegmentError, Square};
 use super::smooth::{smooth, Smoothed};
+use super::wave::{wave_bytes, wave_plan, WavePlan, WaveRoute};
 
 /// Fixed-capacity navigation storage: a `W` x `H` grid (`GB` bytes), a `BITS`-bit region map
 /// (`MB` bytes), up to `R` regions, plans of up to `P` regions, smoothed plans of `S` points.
@@ -40,14 +41,43 @@ pub struct FixedNav<
     grid: Grid<[u8; GB]>,
     map: PackedIds<BITS, [u8; MB]>,
     squares: [Square; R],
-    /// Number of regions from the last segmentation; `None` when the grid changed since.
-    count: Option<u16>,
+    /// What the region map holds for the grid as it is (nothing once the grid changed).
+    held: Held,
     f: [u32; R],
     parent: [u16; R],
     heap: [u16; R],
     pos: [u16; R],
     path: [u16; P],
     smoothed: [GridPoint; S],
+}
+
+/// What the region map's bytes hold: a segmentation's region ids (and the number of regions),
+/// the grid planner's labels (made over these passable cells), or nothing valid. One field, so
+/// the fallback costs no state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Held {
+    Nothing,
+    Squares(u16),
+    Labels(Passable),
+}
+
+impl Held {
+    const fn squares(self) -> Option<u16> {
+        match self {
+            Held::Squares(n) => Some(n),
+            _ => None,
+        }
+    }
+}
+
+/// What [`FixedNav::route`] planned with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Route {
+    /// Seed 004 §6: squares and A*; the regions are in [`FixedNav::path`].
+    Squares(Plan),
+    /// The squares did not fit: the grid planner's plan (no regions; waypoints from
+    /// [`FixedNav::wave_route`]).
+    Grid(WavePlan),
 }
 
 /// Cells of the robot's map side.
@@ -95,6 +125,8 @@ impl<
         assert!(MB >= packed_bytes(BITS, W as usize * H as usize));
         // Ids 0 ..= R - 1 must stay below the map's and the u16 scratch's markers.
         assert!(R < (1usize << BITS) && R < u16::MAX as usize - 1);
+        // The grid planner runs in the region map's bytes.
+        assert!(MB >= wave_bytes(W as usize * H as usize));
     };
 
     /// Empty storage: a `W` x `H` grid of unknown cells, not yet segmented.
@@ -104,7 +136,7 @@ impl<
             grid: Grid::from_raw(W, H, geometry, [0; GB]),
             map: PackedIds::from_raw(W as usize * H as usize, [0; MB]),
             squares: [Square::EMPTY; R],
-            count: None,
+            held: Held::Nothing,
             f: [0; R],
             parent: [0; R],
             heap: [0; R],
@@ -122,7 +154,7 @@ impl<
     /// The occupancy grid for writing (e.g. `reshape` to a smaller map); forgets the
     /// segmentation, which must be redone before planning.
     pub fn grid_mut(&mut self) -> &mut Grid<[u8; GB]> {
-        self.count = None;
+        self.held = Held::Nothing;
         &mut self.grid
     }
 
@@ -133,7 +165,7 @@ impl<
 
     /// Segments the grid with `passable` cells; returns the number of regions.
     pub fn segment_with(&mut self, passable: Passable) -> Result<usize, SegmentError> {
-        self.count = None;
+        self.held = Held::Nothing;
         if !self.map.resize(self.grid.len()) {
             return Err(SegmentError::MapSizeMismatch {
                 expected: self.grid.len(),
@@ -142,20 +174,20 @@ impl<
         }
         let n = segment_with(&self.grid, &mut self.map, &mut self.squares, passable)?.len();
         // n <= R < u16::MAX (SIZES_OK), so this never saturates.
-        self.count = Some(u16::try_from(n).unwrap_or(u16::MAX));
+        self.held = Held::Squares(u16::try_from(n).unwrap_or(u16::MAX));
         Ok(n)
     }
 
     /// The last segmentation, if the grid has not changed since.
     pub fn regions(&self) -> Option<Regions<'_, PackedIds<BITS, [u8; MB]>>> {
-        let n = usize::from(self.count?);
+        let n = usize::from(self.held.squares()?);
         let squares = self.squares.get(..n)?;
         Some(Regions::from_parts(&self.grid, &self.map, squares))
     }
 
     /// Plans from `start` to `goal` (seed 004 §6); the regions are in [`path`](Self::path).
     pub fn plan(&mut self, start: GridPoint, goal: GridPoint) -> Result<Plan, PlanError> {
-        let n = usize::from(self.count.ok_or(PlanError::NotSegmented)?);
+        let n = usize::from(self.held.squares().ok_or(PlanError::NotSegmented)?);
         let squares = self.squares.get(..n).ok_or(PlanError::NotSegmented)?;
         let regions = Regions::from_parts(&self.grid, &self.map, squares);
         let mut scratch = SearchScratch::new(
@@ -171,7 +203,7 @@ impl<
     /// the points are in [`smoothed_points`](Self::smoothed_points), the raw plan stays in
     /// [`path`](Self::path).
     pub fn smooth(&mut self, plan: &Plan, margin: u32) -> Result<Smoothed, PlanError> {
-        let n = usize::from(self.count.ok_or(PlanError::NotSegmented)?);
+        let n = usize::from(self.held.squares().ok_or(PlanError::NotSegmented)?);
         let squares = self.squares.get(..n).ok_or(PlanError::NotSegmented)?;
         let regions = Regions::from_parts(&self.grid, &self.map, squares);
         smooth(&regions, plan, &self.path[..], margin, &mut self.smoothed)
@@ -180,7 +212,53 @@ impl<
     /// Forgets the segmentation (one made for a purpose of its own, which a later `Plan`
     /// command must not reuse).
     pub fn forget_segmentation(&mut self) {
-        self.count = None;
+        self.held = Held::Nothing;
+    }
+
+    /// Plans on every map the grid can hold: seed 004 §6's squares + A* when the segmentation
+    /// fits (segmenting first unless the last one is still valid), else the grid planner of
+    /// `wave.rs` in the region map's bytes (the segmentation is then gone). A grid plan's
+    /// waypoints come from [`wave_route`](Self::wave_route).
+    pub fn route(&mut self, start: GridPoint, goal: GridPoint) -> Result<Route, PlanError> {
+        self.route_with(Passable::Free, start, goal)
+    }
+
+    /// [`route`](Self::route) over `passable` cells.
+    pub fn route_with(
+        &mut self,
+        passable: Passable,
+        start: GridPoint,
+        goal: GridPoint,
+    ) -> Result<Route, PlanError> {
+        let fits = match self.held {
+            Held::Squares(_) => true,
+            _ => match self.segment_with(passable) {
+                Ok(_) => true,
+                Err(SegmentError::TooManyRegions { .. }) => false,
+                Err(SegmentError::MapSizeMismatch { .. }) => return Err(PlanError::NotSegmented),
+            },
+        };
+        if fits {
+            return self.plan(start, goal).map(Route::Squares);
+        }
+        self.held = Held::Nothing;
+        let plan = wave_plan(&self.grid, passable, start, goal, self.map.bytes_mut())?;
+        self.held = Held::Labels(passable);
+        Ok(Route::Grid(plan))
+    }
+
+    /// The waypoints of a grid plan the last [`route`](Self::route) made; `None` if the grid
+    /// or the region map changed since (the labels it replays from are gone).
+    pub fn wave_route(&self, plan: WavePlan) -> Option<WaveRoute<'_, [u8; GB]>> {
+        let Held::Labels(passable) = self.held else {
+            return None;
+        };
+        Some(WaveRoute::new(
+            &self.grid,
+            passable,
+            self.map.as_bytes(),
+            plan,
+        ))
     }
 
     /// Region store of the last raw plan.

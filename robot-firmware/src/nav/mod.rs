@@ -61,9 +61,10 @@ mod heap;
 pub mod ids;
 pub mod segment;
 pub mod smooth;
+pub mod wave;
 
 pub use astar::{find_path, Plan, PlanError, SearchScratch};
-pub use fixed::{FixedNav, Nav64, NAV64_BYTES};
+pub use fixed::{FixedNav, Nav64, Route, NAV64_BYTES};
 pub use graph::{Adjacency, Edge, GraphError, RegionGraph};
 pub use grid::{grid_bytes, Cell, Geometry, Grid, GridError, GridPoint, MAX_SIDE, UNITS_PER_CELL};
 pub use ids::{packed_bytes, IdStore, PackedIds};
@@ -71,6 +72,7 @@ pub use segment::{
     max_regions, segment, segment_with, Neighbours, Passable, Regions, SegmentError, Square,
 };
 pub use smooth::{line_of_sight, polyline_length, smooth, Smoothed};
+pub use wave::{wave_bytes, wave_plan, WavePlan, WaveRoute};
 
 #[cfg(test)]
 mod tests;
