@@ -417,13 +417,14 @@ mod tests {
         use crate::nav::{Cell, Square, WaveRoute};
         for (extra, seed) in [(0, 0), (30, 1), (30, 2), (60, 3)] {
             let g = grid64(extra, seed);
-            // Far more squares than the robot's 511 (the worst case has max_regions(64, 64)).
+            // More squares than the robot holds (the worst case has max_regions(64, 64)).
             let mut map = std::vec![0u32; g.len()];
             let mut squares = std::vec![Square::EMPTY; g.len()];
             let n = segment(&g, &mut map[..], &mut squares[..])
                 .expect("fits")
                 .len();
-            assert!(n > 511 && n <= max_regions(64, 64), "{n} squares");
+            assert!(n > crate::nav::fixed::NAV64_REGIONS, "{n} squares");
+            assert!(n <= max_regions(64, 64), "{n} squares");
             // The farthest free cell reachable from (0, 0) in the last rows.
             let mut scratch = std::vec![0u8; wave_bytes(g.len())];
             let start = GridPoint::cell_centre(0, 0);

@@ -44,7 +44,7 @@ const GRID_BYTES: usize = grid_bytes(MAP_CAPACITY, MAP_CAPACITY);
 pub const MAP_OBJECT_MAX: usize = MAP_HEADER_LEN + GRID_BYTES;
 /// Largest object the robot holds: a plan through all 256 regions a `Nav64` plan can have,
 /// with its 258 waypoints (8 + 24 + 4 * 256 + 4 + 8 * 258). Regions objects (at most
-/// 12 + 6 * 511 = 3078 bytes) and maps fit too.
+/// 12 + 6 * 255 = 1542 bytes) and maps fit too.
 pub const OBJECT_CAPACITY: usize = 3124;
 // `Objects::plan_len` is a `u16`.
 const _: () = assert!(OBJECT_CAPACITY <= u16::MAX as usize);
@@ -707,6 +707,7 @@ mod tests {
     use std::borrow::ToOwned;
 
     use super::*;
+    use crate::nav::fixed::NAV64_REGIONS;
     use crate::nav::{Cell, NAV64_BYTES};
 
     #[test]
@@ -716,7 +717,12 @@ mod tests {
             Some(OBJECT_CAPACITY),
             "nav::fixed::NAV64_PATH regions and their waypoints"
         );
-        const { assert!(12 + 6 * 511 <= OBJECT_CAPACITY, "NAV64_REGIONS squares") };
+        const {
+            assert!(
+                12 + 6 * NAV64_REGIONS <= OBJECT_CAPACITY,
+                "NAV64_REGIONS squares"
+            )
+        };
         const { assert!(NAV64_BYTES + 3 * OBJECT_CAPACITY < 25_000) };
     }
 
@@ -834,5 +840,55 @@ mod tests {
             (62 + 61) * 256,
             "a shortest path along the free rows and columns"
         );
+    }
+
+    #[test]
+    fn a_grid_plan_with_more_waypoints_than_the_plan_object_holds_is_refused_and_changes_nothing() {
+        // Diagonal 1-cell staircase corridors (x - y = 3k, 3k + 1) joined at alternate ends:
+        // every cell of a staircase is a bend (corner contact is no passage), so the path
+        // from one corner to the other needs about 2,700 waypoints, more than the 386 a Plan
+        // object of OBJECT_CAPACITY bytes holds (the search itself succeeds).
+        let mut g = Grid::new(64, 64, Geometry::SEED_004, [0u8; GRID_BYTES]).expect("fits");
+        for y in 0..64i32 {
+            for x in 0..64i32 {
+                let d = x - y;
+                let mut free = d.rem_euclid(3) != 2;
+                if !free {
+                    let k = (d - 2).div_euclid(3);
+                    let (top, bottom) = (d.max(0), (63 + d).min(63));
+                    free = x == if k % 2 == 0 { top } else { bottom };
+                }
+                let c = if free { Cell::Free } else { Cell::Obstacle };
+                g.set(x as usize, y as usize, c).expect("inside");
+            }
+        }
+        let mut o = Objects::new();
+        o.set_map(&g, None, None).expect("fits");
+        let mm = |c: i32| c * 300 + 150;
+        let near = PointMm {
+            x_mm: mm(1),
+            y_mm: mm(0),
+        };
+        let from = PointMm {
+            x_mm: mm(0),
+            y_mm: mm(0),
+        };
+        o.plan_route(from, Some(near)).expect("a short plan fits");
+        let before = o.plan_bytes().to_owned();
+        let (far_from, far_to) = (
+            PointMm {
+                x_mm: mm(0),
+                y_mm: mm(63),
+            },
+            PointMm {
+                x_mm: mm(63),
+                y_mm: mm(0),
+            },
+        );
+        assert_eq!(
+            o.plan_route(far_from, Some(far_to)),
+            Err(NackReason::CapacityExceeded)
+        );
+        assert_eq!(o.plan_bytes(), &before[..], "the old plan stays");
     }
 }

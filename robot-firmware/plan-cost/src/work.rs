@@ -74,7 +74,7 @@ pub const CASES: [Case; 8] = [
         },
     },
     Case {
-        name: "64x64 3.5 % obstacles (over 511 squares): segmentation try + grid planner",
+        name: "64x64 3.5 % obstacles (538 squares): segmentation try + grid planner",
         setup: |nav| random(nav, 35, 2),
         run: |nav| {
             nav.forget_segmentation();

@@ -6,15 +6,27 @@
 //! the memory is known before the robot runs (architecture: "every piece of state has a size
 //! fixed at compile time").
 //!
-//! [`Nav64`], the robot's instance, is 64 x 64 cells, up to 511 regions, 256-region plans and
-//! 128-point smoothed plans: [`NAV64_BYTES`] = 15 384 bytes on a 64-bit host (asserted below;
-//! a 32-bit MCU saves the upper half of a `usize`), within the seed 004 §3 robot's 32 KB.
-//! Where the bytes go: grid 1 040 (2 bits/cell + size and geometry), region map 4 624
-//! (9 bits/cell, ids 0 ..= 510), squares 3 066 (6 B each), search scratch 5 110 (`f` u32,
+//! [`Nav64`], the robot's instance, is 64 x 64 cells, up to 255 regions, 256-region plans and
+//! 128-point smoothed plans: [`NAV64_BYTES`] = 10 776 bytes on a 64-bit host (asserted
+//! below; a 32-bit MCU saves the upper half of a `usize`), within the seed 004 §3 robot's 32 KB.
+//! Where the bytes go: grid 1 040 (2 bits/cell + size and geometry), region map 4 107
+//! (8 bits/cell, ids 0 ..= 254), squares 1 530 (6 B each), search scratch 2 550 (`f` u32,
 //! parent/heap/pos u16; no h cache and no stored adjacency: the implicit graph costs nothing),
-//! raw plan 512 (u16 ids), smoothed plan 1 024 (8 B points), flag and padding 8.
-//! 511 regions hold a perfect 16 x 16 maze of 1-cell corridors (33 x 33 cells, 511 free
-//! cells); denser maps fail with `TooManyRegions`, never a panic.
+//! raw plan 512 (u16 ids), smoothed plan 1 024 (8 B points), what the region map holds
+//! (`Held`) and padding. On `thumbv7em-none-eabihf` it is 10 764 bytes
+//! (`robot-firmware/size-report.sh`; 15 372 with the 511 regions it held before).
+//!
+//! Every map the grid holds is planned. [`FixedNav::route`] uses the squares + A* (seed 004
+//! §6) whenever the segmentation fits, and otherwise the grid planner of `wave.rs`, whose 2 048
+//! bytes of labels and frontiers (64 x 64) live in the region map's bytes, which a failed
+//! segmentation leaves unused: the fallback costs no state. The worst 64 x 64 map has
+//! [`max_regions`](super::segment::max_regions)`(64, 64)` = 3072 squares, and A* storage for
+//! them alone would be 12 KB; so the square storage is sized for the maps the robot meets
+//! instead: 255 regions hold the Micro-Rato'99 arena (35 squares), a 27 x 14-cell CiberRato
+//! final (125) and random 64 x 64 maps up to about 1.5 % obstacles; 64 x 64 maps past that
+//! take the grid planner (they took a `CapacityExceeded` past 511 squares before, at 4.6 KB
+//! more state). [`FixedNav::segment`] alone still fails with `TooManyRegions` on such maps
+//! (there are no squares to report).
 //!
 //! What can fail: segmentation (too many regions) and planning errors, as in those modules;
 //! planning on a map changed since the last [`FixedNav::segment`] returns `NotSegmented`.
@@ -57,14 +69,14 @@ pub struct FixedNav<
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Held {
     Nothing,
-    Squares(u16),
+    Squares(u16, Passable),
     Labels(Passable),
 }
 
 impl Held {
     const fn squares(self) -> Option<u16> {
         match self {
-            Held::Squares(n) => Some(n),
+            Held::Squares(n, _) => Some(n),
             _ => None,
         }
     }
@@ -82,16 +94,16 @@ pub enum Route {
 
 /// Cells of the robot's map side.
 pub const NAV64_SIDE: u16 = 64;
-/// Bits per region id in the robot's map: ids 0 ..= 510, 511 means "no region".
-pub const NAV64_MAP_BITS: u32 = 9;
+/// Bits per region id in the robot's map: ids 0 ..= 254, 255 means "no region".
+pub const NAV64_MAP_BITS: u32 = 8;
 /// Regions the robot's instance holds.
-pub const NAV64_REGIONS: usize = 511;
+pub const NAV64_REGIONS: usize = 255;
 /// Regions a robot plan holds.
 pub const NAV64_PATH: usize = 256;
 /// Points a robot's smoothed plan holds (corners only, so far fewer than regions).
 pub const NAV64_SMOOTHED: usize = 128;
 
-/// The robot's instance: 64 x 64 cells, 511 regions, 256-region plans, 128-point smoothing.
+/// The robot's instance: 64 x 64 cells, 255 regions, 256-region plans, 128-point smoothing.
 pub type Nav64 = FixedNav<
     NAV64_SIDE,
     NAV64_SIDE,
@@ -174,7 +186,7 @@ impl<
         }
         let n = segment_with(&self.grid, &mut self.map, &mut self.squares, passable)?.len();
         // n <= R < u16::MAX (SIZES_OK), so this never saturates.
-        self.held = Held::Squares(u16::try_from(n).unwrap_or(u16::MAX));
+        self.held = Held::Squares(u16::try_from(n).unwrap_or(u16::MAX), passable);
         Ok(n)
     }
 
@@ -216,7 +228,8 @@ impl<
     }
 
     /// Plans on every map the grid can hold: seed 004 §6's squares + A* when the segmentation
-    /// fits (segmenting first unless the last one is still valid), else the grid planner of
+    /// fits (segmenting first unless the last one is still valid and of the same passable
+    /// cells), else the grid planner of
     /// `wave.rs` in the region map's bytes (the segmentation is then gone). A grid plan's
     /// waypoints come from [`wave_route`](Self::wave_route).
     pub fn route(&mut self, start: GridPoint, goal: GridPoint) -> Result<Route, PlanError> {
@@ -231,7 +244,7 @@ impl<
         goal: GridPoint,
     ) -> Result<Route, PlanError> {
         let fits = match self.held {
-            Held::Squares(_) => true,
+            Held::Squares(_, made) if made == passable => true,
             _ => match self.segment_with(passable) {
                 Ok(_) => true,
                 Err(SegmentError::TooManyRegions { .. }) => false,
@@ -277,9 +290,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_robot_instance_fits_well_under_20_kb() {
+    fn the_robot_instance_is_10_kb_and_the_grid_planner_fits_its_region_map() {
         #[cfg(target_pointer_width = "64")]
-        assert_eq!(NAV64_BYTES, 15_384);
-        const { assert!(NAV64_BYTES <= 15_384) };
+        assert_eq!(NAV64_BYTES, 10_776);
+        // 15 384 with 511 regions and no fallback; the fallback must not bring it back.
+        const { assert!(NAV64_BYTES <= 10_776) };
+        const { assert!(wave_bytes(64 * 64) <= packed_bytes(NAV64_MAP_BITS, 64 * 64)) };
     }
 }

@@ -7,7 +7,9 @@
 //! queries) -> [`find_path`] (A*, a raw [`Plan`] through region centres) -> optionally
 //! [`smooth`] (a shorter [`Smoothed`] path, reported beside the raw one).
 //! Positions inside the planner are integer [`GridPoint`]s (1/256 cell); [`Geometry`] converts
-//! to and from the map frame. [`Nav64`] is the firmware's fixed instance.
+//! to and from the map frame. [`Nav64`] is the firmware's fixed instance; its
+//! [`FixedNav::route`] falls back to the grid planner ([`wave_plan`], a wavefront over cells)
+//! when a map's squares do not fit its storage, so every map it holds can be planned.
 //!
 //! Panic contract: no function here panics on any input, and none allocates.
 //!

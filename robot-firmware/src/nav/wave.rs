@@ -3,7 +3,7 @@
 //!
 //! Why it exists: seed 004 §6's squares + A* need storage per square, and a 64 x 64 grid can
 //! make up to [`max_regions`](super::segment::max_regions)`(64, 64)` = 3072 squares; the
-//! robot's instance holds 511 (`fixed.rs`). A* storage for 3072 regions would be 12 KB more.
+//! robot's instance holds 255 (`fixed.rs`). A* storage for 3072 regions alone would be 12 KB.
 //! This planner's storage depends on the cell count only - 4 bits a cell, 2 KB for 64 x 64 -
 //! and it runs in the bytes of the region map the failed segmentation leaves unused, so the
 //! robot plans on every map it accepts with no memory beyond what it had. The squares stay

@@ -1,5 +1,5 @@
 //! The grid planner (`wave.rs`) and the robot's instance on 64 x 64 maps whose squares do not
-//! fit its 511 regions: the worst case of `max_regions` (3072 squares) and random maps.
+//! fit its `NAV64_REGIONS` (255): the worst case of `max_regions` (3072 squares) and random maps.
 
 extern crate std;
 
@@ -8,6 +8,7 @@ use std::vec;
 use std::vec::Vec;
 
 use super::util::{lattice, parse, Rng, Seg};
+use crate::nav::fixed::NAV64_REGIONS;
 use crate::nav::smooth::line_of_sight_by;
 use crate::nav::{
     max_regions, wave_bytes, wave_plan, Cell, Geometry, Grid, GridPoint, Nav64, Passable,
@@ -118,7 +119,9 @@ fn the_worst_case_64_by_64_map_plans_in_the_robot_instance_without_more_memory()
     load(&mut nav, &board);
     assert_eq!(
         nav.segment(),
-        Err(SegmentError::TooManyRegions { capacity: 511 })
+        Err(SegmentError::TooManyRegions {
+            capacity: NAV64_REGIONS
+        })
     );
     for (from, to) in [
         ((0, 0), (62, 62)),
@@ -136,9 +139,9 @@ fn the_worst_case_64_by_64_map_plans_in_the_robot_instance_without_more_memory()
         // Free rows and columns are even: the path is a few straight runs, not a staircase.
         assert!(pts.len() <= 5, "{from:?}->{to:?}: {pts:?}");
     }
-    // The state did not grow for it (the grid planner runs in the region map's bytes).
+    // No state of its own: the grid planner runs in the region map's bytes.
     #[cfg(target_pointer_width = "64")]
-    assert_eq!(NAV64_BYTES, 15_384);
+    assert_eq!(NAV64_BYTES, 10_776);
 }
 
 #[test]
@@ -146,7 +149,7 @@ fn random_64_by_64_maps_plan_whatever_their_square_count() {
     let mut rng = Rng(64);
     let (mut grid_plans, mut square_plans) = (0, 0);
     for k in 0..30 {
-        // Obstacle densities from 0.1 to 30 %: square counts from far below to far above 511.
+        // Obstacle densities from 0.1 to 30 %: square counts from far below to far above the robot's 255.
         let density = [1, 3, 5, 10, 20, 35, 50, 100, 200, 300][k % 10];
         let mut g = lattice(64, 64);
         for y in 0..64 {
@@ -181,12 +184,12 @@ fn random_64_by_64_maps_plan_whatever_their_square_count() {
             let what = std::format!("map {k} ({squares} squares) {from:?}->{to:?}");
             match (nav.route(s, t), reachable) {
                 (Ok(Route::Squares(_)), Some(_)) => {
-                    assert!(squares <= 511, "{what}");
+                    assert!(squares <= NAV64_REGIONS, "{what}");
                     square_plans += 1;
                 }
                 (Ok(Route::Grid(_)), Some(_)) => {
                     assert!(
-                        squares > 511,
+                        squares > NAV64_REGIONS,
                         "{what}: squares fit, yet the grid planner ran"
                     );
                     plan_on_nav64(&mut nav, from, to, &what);
