@@ -6,7 +6,7 @@
 # turns that into instruction counts (+-40). QEMU does not model cycles: a Cortex-M4 needs
 # about 1.2-1.5 cycles an instruction on such code, so the counts are a lower bound on cycles.
 # The host column is the same code's fastest of 31 runs on this machine. The checksum column
-# says whether both targets made the same plan.
+# says whether both targets made the same plan, the method column which planner made it.
 #
 # Needs qemu-system-arm (Debian: apt-get install qemu-system-arm). Usage: plan-cost.sh [--json]
 set -euo pipefail
@@ -36,22 +36,22 @@ def rows(path):
     out = {}
     for line in open(path):
         parts = line.rstrip("\n").split("\t")
-        if len(parts) == 3:
-            out[parts[0]] = (int(parts[1]), parts[2])
+        if len(parts) == 4:
+            out[parts[0]] = (int(parts[1]), parts[2], parts[3])
     return out
 m4, host, as_json = rows(sys.argv[1]), rows(sys.argv[2]), sys.argv[3] == "1"
 m4_check = next((v[0] for k, v in m4.items() if k.startswith("check:")), None)
 if not m4:
     sys.exit("error: the Cortex-M4 image printed no results")
 table = []
-for name, (insns, sum_m4) in m4.items():
+for name, (insns, sum_m4, method) in m4.items():
     if name.startswith("check:"):
         # The counter against a loop of known length (the timer's resolution is 40).
         if abs(insns - 1_000_001) > 200:
             sys.exit(f"error: instruction counter off: {insns:,} for a 1,000,001-instruction loop")
         continue
-    ns, sum_host = host.get(name, (None, None))
-    table.append({"case": name, "m4_instructions": insns,
+    ns, sum_host, _ = host.get(name, (None, None, None))
+    table.append({"case": name, "method": method, "m4_instructions": insns,
                   "m4_ms_at_168mhz_1_cycle_per_insn": round(insns / 168e3, 3),
                   "host_us": None if ns is None else round(ns / 1e3, 1),
                   "same_plan": sum_m4 == sum_host})
@@ -59,9 +59,9 @@ if as_json:
     print(json.dumps({"target": "thumbv7em-none-eabihf on qemu mps2-an386, -icount shift=0",
                       "cases": table}, indent=1))
 else:
-    print(f"{'case':<76} {'Cortex-M4 insns':>15} {'ms @168MHz':>10} {'host us':>8}  same")
+    print(f"{'case':<78} {'method':<10} {'Cortex-M4 insns':>15} {'ms @168MHz':>10} {'host us':>8}  same")
     for r in table:
-        print(f"{r['case']:<76} {r['m4_instructions']:>15,} "
+        print(f"{r['case']:<78} {r['method']:<10} {r['m4_instructions']:>15,} "
               f"{r['m4_ms_at_168mhz_1_cycle_per_insn']:>10.2f} {r['host_us']:>8}  "
               f"{'yes' if r['same_plan'] else 'NO'}")
     print("counter check: a 1,000,001-instruction loop read " + f"{m4_check:,}")

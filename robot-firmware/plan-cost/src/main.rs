@@ -153,16 +153,20 @@ mod m4 {
         let t1 = timer_value();
         let insns = u64::from(t0.wrapping_sub(t1)) * NS_PER_TICK;
         print(format_args!(
-            "check: a 1,000,001-instruction loop (not a case)\t{insns}\t-\n"
+            "check: a 1,000,001-instruction loop (not a case)\t{insns}\t-\t-\n"
         ));
         let mut nav = Nav64::new(Geometry::SEED_004);
         for case in CASES.iter() {
             (case.setup)(&mut nav);
             let t0 = timer_value();
-            let sum = core::hint::black_box((case.run)(core::hint::black_box(&mut nav)));
+            let (sum, method) = core::hint::black_box((case.run)(core::hint::black_box(&mut nav)));
             let t1 = timer_value();
             let insns = u64::from(t0.wrapping_sub(t1)) * NS_PER_TICK;
-            print(format_args!("{}\t{}\t{:08x}\n", case.name, insns, sum));
+            let m = method.name();
+            print(format_args!(
+                "{}\t{}\t{:08x}\t{}\n",
+                case.name, insns, sum, m
+            ));
         }
         exit(true)
     }
@@ -177,12 +181,12 @@ fn main() {
     for case in work::CASES.iter() {
         (case.setup)(&mut nav);
         let mut best = u128::MAX;
-        let mut sum = 0;
+        let mut out = (0, work::Method::Failed);
         for _ in 0..31 {
             let t = Instant::now();
-            sum = std::hint::black_box((case.run)(std::hint::black_box(&mut nav)));
+            out = std::hint::black_box((case.run)(std::hint::black_box(&mut nav)));
             best = best.min(t.elapsed().as_nanos());
         }
-        println!("{}\t{}\t{:08x}", case.name, best, sum);
+        println!("{}\t{}\t{:08x}\t{}", case.name, best, out.0, out.1.name());
     }
 }

@@ -10,20 +10,44 @@ use robot_firmware::nav::{
 const CELLS_17: usize = 17 * 17;
 
 /// One measured step: `setup` builds the map (not measured), `run` is what is measured; it
-/// returns a checksum of its result, so the two targets can be seen to compute the same plan.
+/// returns a checksum of its result, so the two targets can be seen to compute the same plan,
+/// and the method that made it.
 pub struct Case {
     pub name: &'static str,
     pub setup: fn(&mut Nav64),
-    pub run: fn(&mut Nav64) -> u32,
+    pub run: fn(&mut Nav64) -> (u32, Method),
 }
 
-pub const CASES: [Case; 8] = [
+/// Which planner a case ran.
+#[derive(Clone, Copy)]
+pub enum Method {
+    /// Segmentation or A* alone.
+    Part,
+    /// Seed 004 §6: squares + A*.
+    Squares,
+    /// The grid planner (the fallback, or run directly).
+    Grid,
+    Failed,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Part => "part",
+            Method::Squares => "squares+A*",
+            Method::Grid => "grid",
+            Method::Failed => "failed",
+        }
+    }
+}
+
+pub const CASES: [Case; 9] = [
     Case {
         name: "micro-rato-99 17x17: segmentation (Fig. 6)",
         setup: micro_rato_99,
         run: |nav| {
             nav.forget_segmentation();
-            nav.segment().map_or(u32::MAX, |n| n as u32)
+            (nav.segment().map_or(u32::MAX, |n| n as u32), Method::Part)
         },
     },
     Case {
@@ -32,7 +56,10 @@ pub const CASES: [Case; 8] = [
             micro_rato_99(nav);
             let _ = nav.segment();
         },
-        run: |nav| check(nav.plan(c(1, 1), c(9, 8)).map(|p| p.cost ^ p.len << 24)),
+        run: |nav| {
+            let plan = nav.plan(c(1, 1), c(9, 8));
+            (check(plan.map(|p| p.cost ^ p.len << 24)), Method::Part)
+        },
     },
     Case {
         name: "micro-rato-99 17x17: segmentation + A* (seed 004 §6)",
@@ -49,14 +76,23 @@ pub const CASES: [Case; 8] = [
             let mut scratch = [0u8; wave_bytes(CELLS_17)];
             let (s, g) = (c(1, 1), c(9, 8));
             let plan = wave_plan(nav.grid(), Passable::Free, s, g, &mut scratch);
-            check(plan.map(|p| {
+            let sum = check(plan.map(|p| {
                 let r = WaveRoute::new(nav.grid(), Passable::Free, &scratch, p);
                 r.waypoints().fold(p.cost, mix)
-            }))
+            }));
+            (sum, Method::Grid)
         },
     },
     Case {
-        name: "64x64 1 % obstacles (squares fit): segmentation + A*",
+        name: "64x64 0.5 % obstacles (squares fit): segmentation + A*",
+        setup: |nav| random(nav, 5, 1),
+        run: |nav| {
+            nav.forget_segmentation();
+            route(nav, c(0, 0), c(62, 62))
+        },
+    },
+    Case {
+        name: "64x64 1 % obstacles (just past 255 squares): segmentation try + grid planner",
         setup: |nav| random(nav, 10, 1),
         run: |nav| {
             nav.forget_segmentation();
@@ -111,14 +147,14 @@ fn check(r: Result<u32, PlanError>) -> u32 {
 }
 
 /// The robot's planner as `Objects::plan_route` runs it, waypoints included.
-fn route(nav: &mut Nav64, s: GridPoint, g: GridPoint) -> u32 {
+fn route(nav: &mut Nav64, s: GridPoint, g: GridPoint) -> (u32, Method) {
     match nav.route(s, g) {
-        Ok(Route::Squares(p)) => p.cost ^ p.len << 24,
+        Ok(Route::Squares(p)) => (p.cost ^ p.len << 24, Method::Squares),
         Ok(Route::Grid(p)) => match nav.wave_route(p) {
-            Some(r) => r.waypoints().fold(p.cost, mix) ^ 1 << 31,
-            None => u32::MAX - 1,
+            Some(r) => (r.waypoints().fold(p.cost, mix), Method::Grid),
+            None => (u32::MAX, Method::Failed),
         },
-        Err(_) => u32::MAX,
+        Err(_) => (u32::MAX, Method::Failed),
     }
 }
 
