@@ -287,12 +287,25 @@ fn lerp(a: Point, b: Point, t: f32) -> Point {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
+
     use super::*;
 
     const CLEAR: [(u16, f32); 3] = [(0, 1.047), (0, 0.0), (0, -1.047)];
 
     /// Drives a unicycle with the executor's commands (nominal unit = 3.07 mm/s, 0.2 m base).
-    fn simulate(exec: &mut Executor, mut pose: Pose, wps: &[Point], steps: u32) -> (Pose, u32) {
+    fn simulate(exec: &mut Executor, pose: Pose, wps: &[Point], steps: u32) -> (Pose, u32) {
+        simulate_with(exec, pose, wps, steps, |_| {})
+    }
+
+    /// [`simulate`], calling `visit` with every pose.
+    fn simulate_with(
+        exec: &mut Executor,
+        mut pose: Pose,
+        wps: &[Point],
+        steps: u32,
+        mut visit: impl FnMut(Pose),
+    ) -> (Pose, u32) {
         let g = GuidedParams::default();
         let mut passed = 0;
         for _ in 0..steps {
@@ -310,6 +323,7 @@ mod tests {
                 pose.y + v * dt * libm::sinf(pose.heading),
                 pose.heading + w * dt,
             );
+            visit(pose);
             if exec.phase() == ExecPhase::Finished {
                 break;
             }
@@ -373,5 +387,92 @@ mod tests {
         );
         assert_eq!(cmd, MotorCommand::STOP);
         assert_eq!(r.phase, ExecPhase::Finished);
+    }
+
+    /// A 64 x 64 map: the worst case of the square segmentation (cell (odd, odd) of every
+    /// 2 x 2 block blocked), with `extra` of every 1000 other cells blocked at random.
+    fn grid64(extra: u64, seed: u64) -> crate::nav::Grid<std::vec::Vec<u8>> {
+        use crate::nav::{grid_bytes, Cell, Geometry, Grid};
+        let mut g =
+            Grid::new(64, 64, Geometry::SEED_004, std::vec![0; grid_bytes(64, 64)]).expect("fits");
+        let mut s = seed;
+        for y in 0..64 {
+            for x in 0..64 {
+                s = s
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                let random = (s >> 33) % 1000 < extra;
+                let blocked = (x % 2 == 1 && y % 2 == 1) || random;
+                let c = if blocked { Cell::Obstacle } else { Cell::Free };
+                g.set(x, y, c).expect("inside");
+            }
+        }
+        g.set(0, 0, Cell::Free).expect("inside");
+        g
+    }
+
+    #[test]
+    fn it_follows_a_grid_planner_route_across_a_64_by_64_map_whose_squares_do_not_fit() {
+        use crate::nav::{max_regions, segment, wave_bytes, wave_plan, GridPoint, Passable};
+        use crate::nav::{Cell, Square, WaveRoute};
+        for (extra, seed) in [(0, 0), (30, 1), (30, 2), (60, 3)] {
+            let g = grid64(extra, seed);
+            // More squares than the robot holds (the worst case has max_regions(64, 64)).
+            let mut map = std::vec![0u32; g.len()];
+            let mut squares = std::vec![Square::EMPTY; g.len()];
+            let n = segment(&g, &mut map[..], &mut squares[..])
+                .expect("fits")
+                .len();
+            assert!(n > crate::nav::fixed::NAV64_REGIONS, "{n} squares");
+            assert!(n <= max_regions(64, 64), "{n} squares");
+            // The farthest free cell reachable from (0, 0) in the last rows.
+            let mut scratch = std::vec![0u8; wave_bytes(g.len())];
+            let start = GridPoint::cell_centre(0, 0);
+            let plan = (0..64u16)
+                .rev()
+                .flat_map(|y| (0..64u16).rev().map(move |x| (x, y)))
+                .filter(|&(x, y)| x + y >= 100)
+                .find_map(|(x, y)| {
+                    let goal = GridPoint::cell_centre(x, y);
+                    wave_plan(&g, Passable::Free, start, goal, &mut scratch).ok()
+                })
+                .expect("a far cell is reachable");
+            let geo = g.geometry();
+            let wps: std::vec::Vec<Point> = WaveRoute::new(&g, Passable::Free, &scratch, plan)
+                .waypoints()
+                .skip(1)
+                .map(|p| {
+                    let (x, y) = geo.grid_to_metres(p);
+                    Point::new(x, y)
+                })
+                .collect();
+            let begin = geo.grid_to_metres(start);
+            let mut e = Executor::new(ExecuteParams::default(), Point::new(begin.0, begin.1));
+            let pose = Pose::new(begin.0, begin.1, 0.0);
+            // The robot's centre never enters a blocked cell (corners are cut only within
+            // the free cells around a bend).
+            let mut worst = (0u32, Pose::new(0.0, 0.0, 0.0));
+            let (end, passed) = simulate_with(&mut e, pose, &wps, 100_000, |p| {
+                let (cx, cy) = geo.metres_to_grid(p.x, p.y).cell();
+                let free = g.contains(cx, cy) && g.get(cx as usize, cy as usize) == Cell::Free;
+                if !free {
+                    worst = (worst.0 + 1, p);
+                }
+            });
+            assert_eq!(
+                worst.0, 0,
+                "map {extra}/{seed}: in a blocked cell at {:?}",
+                worst.1
+            );
+            assert_eq!(e.phase(), ExecPhase::Finished, "map {extra}/{seed}");
+            assert_eq!(passed as usize, wps.len(), "map {extra}/{seed}");
+            let goal = wps[wps.len() - 1];
+            assert!(end.point().distance_to(goal) <= GuidedParams::default().arrival_m + 0.02);
+            assert_eq!(
+                e.escapes(),
+                0,
+                "map {extra}/{seed}: never 0.6 m off the route"
+            );
+        }
     }
 }

@@ -32,7 +32,7 @@ use protocol::{
 
 use crate::nav::{
     grid_bytes, Geometry, Grid, GridError, GridPoint, IdStore, Nav64, Plan, PlanError, Regions,
-    SegmentError, Smoothed,
+    Route, SegmentError, Smoothed, WaveRoute,
 };
 use crate::odometry::Point;
 use crate::robot::LightCalibration;
@@ -44,7 +44,7 @@ const GRID_BYTES: usize = grid_bytes(MAP_CAPACITY, MAP_CAPACITY);
 pub const MAP_OBJECT_MAX: usize = MAP_HEADER_LEN + GRID_BYTES;
 /// Largest object the robot holds: a plan through all 256 regions a `Nav64` plan can have,
 /// with its 258 waypoints (8 + 24 + 4 * 256 + 4 + 8 * 258). Regions objects (at most
-/// 12 + 6 * 511 = 3078 bytes) and maps fit too.
+/// 12 + 6 * 255 = 1542 bytes) and maps fit too.
 pub const OBJECT_CAPACITY: usize = 3124;
 // `Objects::plan_len` is a `u16`.
 const _: () = assert!(OBJECT_CAPACITY <= u16::MAX as usize);
@@ -262,17 +262,23 @@ impl Objects {
         let map = self.map().ok_or(NackReason::NoMap)?;
         // No goal given and none in the map: there is no point to plan to.
         let to = to.or(map.goal).ok_or(NackReason::BadPoint)?;
-        if self.nav.regions().is_none() {
-            self.nav.segment().map_err(segment_nack)?;
-        }
         let geo = self.nav.grid().geometry();
         let start = geo.to_grid(from.x_mm, from.y_mm);
         let goal = geo.to_grid(to.x_mm, to.y_mm);
-        let plan = self.nav.plan(start, goal).map_err(plan_nack)?;
-        let regions = self.nav.regions().ok_or(NackReason::BadState)?;
+        // Squares + A* (seed 004 §6) when the segmentation fits, else the grid planner; the
+        // object says which (a grid plan has no regions).
         // Writes nothing unless it succeeds, so a refusal keeps the old plan intact.
-        let n = encode_plan_object(&regions, &plan, self.nav.path(), map.id, &mut self.plan)
-            .map_err(|_| NackReason::CapacityExceeded)?;
+        let n = match self.nav.route(start, goal).map_err(plan_nack)? {
+            Route::Squares(plan) => {
+                let regions = self.nav.regions().ok_or(NackReason::BadState)?;
+                encode_plan_object(&regions, &plan, self.nav.path(), map.id, &mut self.plan)
+            }
+            Route::Grid(plan) => {
+                let route = self.nav.wave_route(plan).ok_or(NackReason::BadState)?;
+                encode_wave_plan_object(&route, map.id, &mut self.plan)
+            }
+        }
+        .map_err(|_| NackReason::CapacityExceeded)?;
         self.plan_len = n as u16; // At most OBJECT_CAPACITY.
         self.plan_crc = crc32c(self.plan.get(..n).unwrap_or(&[]));
         self.plan_id = self.plan_crc;
@@ -621,6 +627,37 @@ pub fn encode_smoothed_plan_object<P: IdStore + ?Sized>(
     write_plan(plan, path, meta, waypoints, out)
 }
 
+/// Encodes a plan of the grid planner (`nav::wave`, used when the squares do not fit) as a
+/// Plan object: a nav block with no regions and its cost, then the waypoints (start, cell
+/// centres, goal) in millimetres, flagged as not region centres. No regions is how a reader
+/// tells it from seed 004's plan.
+pub fn encode_wave_plan_object<S: AsRef<[u8]>>(
+    route: &WaveRoute<'_, S>,
+    map_id: u32,
+    out: &mut [u8],
+) -> Result<usize, ObjectError> {
+    let p = route.plan;
+    let plan = Plan {
+        start: p.start,
+        goal: p.goal,
+        len: 0,
+        cost: p.cost,
+    };
+    let meta = PlanMeta {
+        smoothed: true,
+        map_id,
+    };
+    let geo = route.geometry();
+    let no_regions: &[u16] = &[];
+    write_plan(
+        &plan,
+        no_regions,
+        meta,
+        route.waypoints().map(|q| mm(geo, q)),
+        out,
+    )
+}
+
 /// Checks sizes, then writes the nav block with [`Plan::encode`] and the rest with
 /// `finish_plan` (which cannot fail once the sizes are checked).
 fn write_plan<P, W>(
@@ -666,6 +703,7 @@ mod tests {
     use std::borrow::ToOwned;
 
     use super::*;
+    use crate::nav::fixed::NAV64_REGIONS;
     use crate::nav::{Cell, NAV64_BYTES};
 
     #[test]
@@ -675,7 +713,12 @@ mod tests {
             Some(OBJECT_CAPACITY),
             "nav::fixed::NAV64_PATH regions and their waypoints"
         );
-        const { assert!(12 + 6 * 511 <= OBJECT_CAPACITY, "NAV64_REGIONS squares") };
+        const {
+            assert!(
+                12 + 6 * NAV64_REGIONS <= OBJECT_CAPACITY,
+                "NAV64_REGIONS squares"
+            )
+        };
         const { assert!(NAV64_BYTES + 3 * OBJECT_CAPACITY < 25_000) };
     }
 
@@ -748,5 +791,100 @@ mod tests {
         };
         assert_eq!(o.plan_route(from, Some(outside)), Err(NackReason::BadPoint));
         assert_eq!(o.plan_bytes(), &before[..]);
+    }
+
+    #[test]
+    fn the_robot_plans_on_the_worst_case_64_by_64_map_and_the_plan_says_it_has_no_squares() {
+        // Cell (odd, odd) of every 2 x 2 block blocked: every free cell is a square of its own,
+        // 3072 squares (`nav::max_regions(64, 64)`), six times what `Nav64` holds.
+        let mut g = Grid::new(64, 64, Geometry::SEED_004, [0u8; GRID_BYTES]).expect("fits");
+        for y in 0..64 {
+            for x in 0..64 {
+                let c = if x % 2 == 1 && y % 2 == 1 {
+                    Cell::Obstacle
+                } else {
+                    Cell::Free
+                };
+                g.set(x, y, c).expect("inside");
+            }
+        }
+        let mut o = Objects::new();
+        o.set_map(&g, None, None).expect("fits");
+        // The Regions object cannot be held, and Segment says so.
+        assert_eq!(o.segment(), Err(NackReason::CapacityExceeded));
+        let mm = |c: i32| c * 300 + 150;
+        let from = PointMm {
+            x_mm: mm(0),
+            y_mm: mm(0),
+        };
+        let to = PointMm {
+            x_mm: mm(62),
+            y_mm: mm(61),
+        };
+        let id = o.plan_route(from, Some(to)).expect("plans");
+        let (got, view) = o.plan().expect("installed");
+        assert_eq!(got, id);
+        // No regions and flagged as not region centres: the grid planner made it.
+        assert_eq!((view.nav.regions, view.meta.smoothed), (0, true));
+        let pts: std::vec::Vec<PointMm> = view.waypoints().collect();
+        assert_eq!((pts[0], pts[pts.len() - 1]), (from, to));
+        // Along free row 0 or column 62, then down or across: one bend.
+        assert_eq!(pts.len(), 3, "{pts:?}");
+        let cost = view.nav.cost as usize;
+        assert_eq!(
+            cost,
+            (62 + 61) * 256,
+            "a shortest path along the free rows and columns"
+        );
+    }
+
+    #[test]
+    fn a_grid_plan_with_more_waypoints_than_the_plan_object_holds_is_refused_and_changes_nothing() {
+        // Diagonal 1-cell staircase corridors (x - y = 3k, 3k + 1) joined at alternate ends:
+        // every cell of a staircase is a bend (corner contact is no passage), so the path
+        // from one corner to the other needs about 2,700 waypoints, more than the 386 a Plan
+        // object of OBJECT_CAPACITY bytes holds (the search itself succeeds).
+        let mut g = Grid::new(64, 64, Geometry::SEED_004, [0u8; GRID_BYTES]).expect("fits");
+        for y in 0..64i32 {
+            for x in 0..64i32 {
+                let d = x - y;
+                let mut free = d.rem_euclid(3) != 2;
+                if !free {
+                    let k = (d - 2).div_euclid(3);
+                    let (top, bottom) = (d.max(0), (63 + d).min(63));
+                    free = x == if k % 2 == 0 { top } else { bottom };
+                }
+                let c = if free { Cell::Free } else { Cell::Obstacle };
+                g.set(x as usize, y as usize, c).expect("inside");
+            }
+        }
+        let mut o = Objects::new();
+        o.set_map(&g, None, None).expect("fits");
+        let mm = |c: i32| c * 300 + 150;
+        let near = PointMm {
+            x_mm: mm(1),
+            y_mm: mm(0),
+        };
+        let from = PointMm {
+            x_mm: mm(0),
+            y_mm: mm(0),
+        };
+        o.plan_route(from, Some(near)).expect("a short plan fits");
+        let before = o.plan_bytes().to_owned();
+        let (far_from, far_to) = (
+            PointMm {
+                x_mm: mm(0),
+                y_mm: mm(63),
+            },
+            PointMm {
+                x_mm: mm(63),
+                y_mm: mm(0),
+            },
+        );
+        assert_eq!(
+            o.plan_route(far_from, Some(far_to)),
+            Err(NackReason::CapacityExceeded)
+        );
+        assert_eq!(o.plan_bytes(), &before[..], "the old plan stays");
     }
 }

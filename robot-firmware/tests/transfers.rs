@@ -289,7 +289,9 @@ fn map_and_plan_commands_are_refused_precisely_and_change_nothing() {
     assert_eq!(st.command(across), Err(NackReason::Unreachable));
     assert_eq!(st.robot.core.objects.plan().unwrap().0, id);
 
-    // A 64 x 64 checkerboard has 2048 one-cell regions, more than the robot's 511.
+    // A 64 x 64 checkerboard has 2048 one-cell regions, more than the robot holds: Segment is
+    // refused, and the grid planner that plans instead finds no passage (free cells touch at
+    // corners only), so the plan is refused as unreachable, not for capacity.
     let mut board = Grid::new(64, 64, Geometry::SEED_004, vec![0; grid_bytes(64, 64)]).unwrap();
     for y in 0..64 {
         for x in 0..64 {
@@ -311,7 +313,37 @@ fn map_and_plan_commands_are_refused_precisely_and_change_nothing() {
         st.command(Command::Segment),
         Err(NackReason::CapacityExceeded)
     );
-    assert_eq!(st.command(across), Err(NackReason::CapacityExceeded));
+    assert_eq!(st.command(across), Err(NackReason::Unreachable));
+
+    // Cell (odd, odd) of every 2 x 2 block blocked: 3072 one-cell regions, the most a 64 x 64
+    // map can have (`nav::max_regions`); the robot plans on it all the same.
+    for y in 0..64 {
+        for x in 0..64 {
+            let c = if x % 2 == 1 && y % 2 == 1 {
+                Cell::Obstacle
+            } else {
+                Cell::Free
+            };
+            board.set(x, y, c).unwrap();
+        }
+    }
+    let n = encode_map_object(&board, None, None, &mut bytes).unwrap();
+    assert_eq!(
+        st.upload_object(ObjectKind::Map, &bytes[..n]),
+        Outcome::Complete
+    );
+    assert_eq!(
+        st.command(Command::Segment),
+        Err(NackReason::CapacityExceeded)
+    );
+    let corner = Command::Plan {
+        from: Some(mm(150, 150)),
+        to: Some(mm(62 * 300 + 150, 61 * 300 + 150)),
+    };
+    assert_eq!(st.command(corner), Ok(AckInfo::Done));
+    let (_, view) = st.robot.core.objects.plan().unwrap();
+    assert_eq!(view.nav.regions, 0, "made by the grid planner");
+    assert_eq!(view.waypoint_count(), 3, "along row 0, then down column 62");
 }
 
 /// Plans on the robot, starts it, and moves the believed pose onto each waypoint in turn.

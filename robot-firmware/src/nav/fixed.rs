@@ -6,15 +6,27 @@
 //! the memory is known before the robot runs (architecture: "every piece of state has a size
 //! fixed at compile time").
 //!
-//! [`Nav64`], the robot's instance, is 64 x 64 cells, up to 511 regions, 256-region plans and
-//! 128-point smoothed plans: [`NAV64_BYTES`] = 15 384 bytes on a 64-bit host (asserted below;
-//! a 32-bit MCU saves the upper half of a `usize`), within the seed 004 §3 robot's 32 KB.
-//! Where the bytes go: grid 1 040 (2 bits/cell + size and geometry), region map 4 624
-//! (9 bits/cell, ids 0 ..= 510), squares 3 066 (6 B each), search scratch 5 110 (`f` u32,
+//! [`Nav64`], the robot's instance, is 64 x 64 cells, up to 255 regions, 256-region plans and
+//! 128-point smoothed plans: [`NAV64_BYTES`] = 10 776 bytes on a 64-bit host (asserted
+//! below; a 32-bit MCU saves the upper half of a `usize`), within the seed 004 §3 robot's 32 KB.
+//! Where the bytes go: grid 1 040 (2 bits/cell + size and geometry), region map 4 107
+//! (8 bits/cell, ids 0 ..= 254), squares 1 530 (6 B each), search scratch 2 550 (`f` u32,
 //! parent/heap/pos u16; no h cache and no stored adjacency: the implicit graph costs nothing),
-//! raw plan 512 (u16 ids), smoothed plan 1 024 (8 B points), flag and padding 8.
-//! 511 regions hold a perfect 16 x 16 maze of 1-cell corridors (33 x 33 cells, 511 free
-//! cells); denser maps fail with `TooManyRegions`, never a panic.
+//! raw plan 512 (u16 ids), smoothed plan 1 024 (8 B points), what the region map holds
+//! (`Held`) and padding. On `thumbv7em-none-eabihf` it is 10 764 bytes
+//! (`robot-firmware/size-report.sh`; 15 372 with the 511 regions it held before).
+//!
+//! Every map the grid holds is planned. [`FixedNav::route`] uses the squares + A* (seed 004
+//! §6) whenever the segmentation fits, and otherwise the grid planner of `wave.rs`, whose 2 048
+//! bytes of labels and frontiers (64 x 64) live in the region map's bytes, which a failed
+//! segmentation leaves unused: the fallback costs no state. The worst 64 x 64 map has
+//! [`max_regions`](super::segment::max_regions)`(64, 64)` = 3072 squares, and A* storage for
+//! them alone would be 12 KB; so the square storage is sized for the maps the robot meets
+//! instead: 255 regions hold the Micro-Rato'99 arena (35 squares), a 27 x 14-cell CiberRato
+//! final (125) and random 64 x 64 maps up to about 1.5 % obstacles; 64 x 64 maps past that
+//! take the grid planner (they took a `CapacityExceeded` past 511 squares before, at 4.6 KB
+//! more state). [`FixedNav::segment`] alone still fails with `TooManyRegions` on such maps
+//! (there are no squares to report).
 //!
 //! What can fail: segmentation (too many regions) and planning errors, as in those modules;
 //! planning on a map changed since the last [`FixedNav::segment`] returns `NotSegmented`.
@@ -24,6 +36,7 @@ use super::grid::{grid_bytes, Geometry, Grid, GridPoint, MAX_SIDE};
 use super::ids::{packed_bytes, PackedIds};
 use super::segment::{segment_with, Passable, Regions, SegmentError, Square};
 use super::smooth::{smooth, Smoothed};
+use super::wave::{wave_bytes, wave_plan, WavePlan, WaveRoute};
 
 /// Fixed-capacity navigation storage: a `W` x `H` grid (`GB` bytes), a `BITS`-bit region map
 /// (`MB` bytes), up to `R` regions, plans of up to `P` regions, smoothed plans of `S` points.
@@ -40,8 +53,8 @@ pub struct FixedNav<
     grid: Grid<[u8; GB]>,
     map: PackedIds<BITS, [u8; MB]>,
     squares: [Square; R],
-    /// Number of regions from the last segmentation; `None` when the grid changed since.
-    count: Option<u16>,
+    /// What the region map holds for the grid as it is (nothing once the grid changed).
+    held: Held,
     f: [u32; R],
     parent: [u16; R],
     heap: [u16; R],
@@ -50,18 +63,47 @@ pub struct FixedNav<
     smoothed: [GridPoint; S],
 }
 
+/// What the region map's bytes hold: a segmentation's region ids (and the number of regions),
+/// the grid planner's labels (made over these passable cells), or nothing valid. One field, so
+/// the fallback costs no state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Held {
+    Nothing,
+    Squares(u16, Passable),
+    Labels(Passable),
+}
+
+impl Held {
+    const fn squares(self) -> Option<u16> {
+        match self {
+            Held::Squares(n, _) => Some(n),
+            _ => None,
+        }
+    }
+}
+
+/// What [`FixedNav::route`] planned with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Route {
+    /// Seed 004 §6: squares and A*; the regions are in [`FixedNav::path`].
+    Squares(Plan),
+    /// The squares did not fit: the grid planner's plan (no regions; waypoints from
+    /// [`FixedNav::wave_route`]).
+    Grid(WavePlan),
+}
+
 /// Cells of the robot's map side.
 pub const NAV64_SIDE: u16 = 64;
-/// Bits per region id in the robot's map: ids 0 ..= 510, 511 means "no region".
-pub const NAV64_MAP_BITS: u32 = 9;
+/// Bits per region id in the robot's map: ids 0 ..= 254, 255 means "no region".
+pub const NAV64_MAP_BITS: u32 = 8;
 /// Regions the robot's instance holds.
-pub const NAV64_REGIONS: usize = 511;
+pub const NAV64_REGIONS: usize = 255;
 /// Regions a robot plan holds.
 pub const NAV64_PATH: usize = 256;
 /// Points a robot's smoothed plan holds (corners only, so far fewer than regions).
 pub const NAV64_SMOOTHED: usize = 128;
 
-/// The robot's instance: 64 x 64 cells, 511 regions, 256-region plans, 128-point smoothing.
+/// The robot's instance: 64 x 64 cells, 255 regions, 256-region plans, 128-point smoothing.
 pub type Nav64 = FixedNav<
     NAV64_SIDE,
     NAV64_SIDE,
@@ -95,6 +137,8 @@ impl<
         assert!(MB >= packed_bytes(BITS, W as usize * H as usize));
         // Ids 0 ..= R - 1 must stay below the map's and the u16 scratch's markers.
         assert!(R < (1usize << BITS) && R < u16::MAX as usize - 1);
+        // The grid planner runs in the region map's bytes.
+        assert!(MB >= wave_bytes(W as usize * H as usize));
     };
 
     /// Empty storage: a `W` x `H` grid of unknown cells, not yet segmented.
@@ -104,7 +148,7 @@ impl<
             grid: Grid::from_raw(W, H, geometry, [0; GB]),
             map: PackedIds::from_raw(W as usize * H as usize, [0; MB]),
             squares: [Square::EMPTY; R],
-            count: None,
+            held: Held::Nothing,
             f: [0; R],
             parent: [0; R],
             heap: [0; R],
@@ -122,7 +166,7 @@ impl<
     /// The occupancy grid for writing (e.g. `reshape` to a smaller map); forgets the
     /// segmentation, which must be redone before planning.
     pub fn grid_mut(&mut self) -> &mut Grid<[u8; GB]> {
-        self.count = None;
+        self.held = Held::Nothing;
         &mut self.grid
     }
 
@@ -133,7 +177,7 @@ impl<
 
     /// Segments the grid with `passable` cells; returns the number of regions.
     pub fn segment_with(&mut self, passable: Passable) -> Result<usize, SegmentError> {
-        self.count = None;
+        self.held = Held::Nothing;
         if !self.map.resize(self.grid.len()) {
             return Err(SegmentError::MapSizeMismatch {
                 expected: self.grid.len(),
@@ -142,20 +186,20 @@ impl<
         }
         let n = segment_with(&self.grid, &mut self.map, &mut self.squares, passable)?.len();
         // n <= R < u16::MAX (SIZES_OK), so this never saturates.
-        self.count = Some(u16::try_from(n).unwrap_or(u16::MAX));
+        self.held = Held::Squares(u16::try_from(n).unwrap_or(u16::MAX), passable);
         Ok(n)
     }
 
     /// The last segmentation, if the grid has not changed since.
     pub fn regions(&self) -> Option<Regions<'_, PackedIds<BITS, [u8; MB]>>> {
-        let n = usize::from(self.count?);
+        let n = usize::from(self.held.squares()?);
         let squares = self.squares.get(..n)?;
         Some(Regions::from_parts(&self.grid, &self.map, squares))
     }
 
     /// Plans from `start` to `goal` (seed 004 §6); the regions are in [`path`](Self::path).
     pub fn plan(&mut self, start: GridPoint, goal: GridPoint) -> Result<Plan, PlanError> {
-        let n = usize::from(self.count.ok_or(PlanError::NotSegmented)?);
+        let n = usize::from(self.held.squares().ok_or(PlanError::NotSegmented)?);
         let squares = self.squares.get(..n).ok_or(PlanError::NotSegmented)?;
         let regions = Regions::from_parts(&self.grid, &self.map, squares);
         let mut scratch = SearchScratch::new(
@@ -171,7 +215,7 @@ impl<
     /// the points are in [`smoothed_points`](Self::smoothed_points), the raw plan stays in
     /// [`path`](Self::path).
     pub fn smooth(&mut self, plan: &Plan, margin: u32) -> Result<Smoothed, PlanError> {
-        let n = usize::from(self.count.ok_or(PlanError::NotSegmented)?);
+        let n = usize::from(self.held.squares().ok_or(PlanError::NotSegmented)?);
         let squares = self.squares.get(..n).ok_or(PlanError::NotSegmented)?;
         let regions = Regions::from_parts(&self.grid, &self.map, squares);
         smooth(&regions, plan, &self.path[..], margin, &mut self.smoothed)
@@ -180,7 +224,54 @@ impl<
     /// Forgets the segmentation (one made for a purpose of its own, which a later `Plan`
     /// command must not reuse).
     pub fn forget_segmentation(&mut self) {
-        self.count = None;
+        self.held = Held::Nothing;
+    }
+
+    /// Plans on every map the grid can hold: seed 004 §6's squares + A* when the segmentation
+    /// fits (segmenting first unless the last one is still valid and of the same passable
+    /// cells), else the grid planner of
+    /// `wave.rs` in the region map's bytes (the segmentation is then gone). A grid plan's
+    /// waypoints come from [`wave_route`](Self::wave_route).
+    pub fn route(&mut self, start: GridPoint, goal: GridPoint) -> Result<Route, PlanError> {
+        self.route_with(Passable::Free, start, goal)
+    }
+
+    /// [`route`](Self::route) over `passable` cells.
+    pub fn route_with(
+        &mut self,
+        passable: Passable,
+        start: GridPoint,
+        goal: GridPoint,
+    ) -> Result<Route, PlanError> {
+        let fits = match self.held {
+            Held::Squares(_, made) if made == passable => true,
+            _ => match self.segment_with(passable) {
+                Ok(_) => true,
+                Err(SegmentError::TooManyRegions { .. }) => false,
+                Err(SegmentError::MapSizeMismatch { .. }) => return Err(PlanError::NotSegmented),
+            },
+        };
+        if fits {
+            return self.plan(start, goal).map(Route::Squares);
+        }
+        self.held = Held::Nothing;
+        let plan = wave_plan(&self.grid, passable, start, goal, self.map.bytes_mut())?;
+        self.held = Held::Labels(passable);
+        Ok(Route::Grid(plan))
+    }
+
+    /// The waypoints of a grid plan the last [`route`](Self::route) made; `None` if the grid
+    /// or the region map changed since (the labels it replays from are gone).
+    pub fn wave_route(&self, plan: WavePlan) -> Option<WaveRoute<'_, [u8; GB]>> {
+        let Held::Labels(passable) = self.held else {
+            return None;
+        };
+        Some(WaveRoute::new(
+            &self.grid,
+            passable,
+            self.map.as_bytes(),
+            plan,
+        ))
     }
 
     /// Region store of the last raw plan.
@@ -199,9 +290,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_robot_instance_fits_well_under_20_kb() {
+    fn the_robot_instance_is_10_kb_and_the_grid_planner_fits_its_region_map() {
         #[cfg(target_pointer_width = "64")]
-        assert_eq!(NAV64_BYTES, 15_384);
-        const { assert!(NAV64_BYTES <= 15_384) };
+        assert_eq!(NAV64_BYTES, 10_776);
+        // 15 384 with 511 regions and no fallback; the fallback must not bring it back.
+        const { assert!(NAV64_BYTES <= 10_776) };
+        const { assert!(wave_bytes(64 * 64) <= packed_bytes(NAV64_MAP_BITS, 64 * 64)) };
     }
 }

@@ -131,6 +131,14 @@ impl<const BITS: u32, S: AsRef<[u8]>> PackedIds<BITS, S> {
     }
 }
 
+impl<const BITS: u32, S: AsMut<[u8]>> PackedIds<BITS, S> {
+    /// The bytes as scratch for another use (the grid planner's labels when the squares did
+    /// not fit, `fixed.rs`); the ids read afterwards are meaningless until the next segmentation.
+    pub(crate) fn bytes_mut(&mut self) -> &mut [u8] {
+        self.bytes.as_mut()
+    }
+}
+
 impl<const BITS: u32, S: AsRef<[u8]> + AsMut<[u8]>> IdStore for PackedIds<BITS, S> {
     const NONE: u32 = Self::MASK;
 

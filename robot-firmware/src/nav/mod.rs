@@ -7,7 +7,9 @@
 //! queries) -> [`find_path`] (A*, a raw [`Plan`] through region centres) -> optionally
 //! [`smooth`] (a shorter [`Smoothed`] path, reported beside the raw one).
 //! Positions inside the planner are integer [`GridPoint`]s (1/256 cell); [`Geometry`] converts
-//! to and from the map frame. [`Nav64`] is the firmware's fixed instance.
+//! to and from the map frame. [`Nav64`] is the firmware's fixed instance; its
+//! [`FixedNav::route`] falls back to the grid planner ([`wave_plan`], a wavefront over cells)
+//! when a map's squares do not fit its storage, so every map it holds can be planned.
 //!
 //! Panic contract: no function here panics on any input, and none allocates.
 //!
@@ -61,9 +63,10 @@ mod heap;
 pub mod ids;
 pub mod segment;
 pub mod smooth;
+pub mod wave;
 
 pub use astar::{find_path, Plan, PlanError, SearchScratch};
-pub use fixed::{FixedNav, Nav64, NAV64_BYTES};
+pub use fixed::{FixedNav, Nav64, Route, NAV64_BYTES};
 pub use graph::{Adjacency, Edge, GraphError, RegionGraph};
 pub use grid::{grid_bytes, Cell, Geometry, Grid, GridError, GridPoint, MAX_SIDE, UNITS_PER_CELL};
 pub use ids::{packed_bytes, IdStore, PackedIds};
@@ -71,6 +74,7 @@ pub use segment::{
     max_regions, segment, segment_with, Neighbours, Passable, Regions, SegmentError, Square,
 };
 pub use smooth::{line_of_sight, polyline_length, smooth, Smoothed};
+pub use wave::{wave_bytes, wave_plan, WavePlan, WaveRoute};
 
 #[cfg(test)]
 mod tests;

@@ -111,7 +111,7 @@ pub enum Passable {
 }
 
 impl Passable {
-    fn admits(self, cell: Cell) -> bool {
+    pub(crate) fn admits(self, cell: Cell) -> bool {
         match self {
             Passable::Free => cell == Cell::Free,
             Passable::FreeOrUnknown => cell != Cell::Obstacle,

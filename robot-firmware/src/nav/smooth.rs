@@ -338,14 +338,24 @@ pub fn line_of_sight<M: IdStore + ?Sized>(
     a: GridPoint,
     b: GridPoint,
 ) -> bool {
+    let free = |cx: i32, cy: i32| regions.region_at(cx, cy).is_some();
+    line_of_sight_by(regions.width(), regions.height(), free, a, b)
+}
+
+/// [`line_of_sight`] over any `width` x `height` cell test `free(x, y)` (the grid planner's,
+/// `wave.rs`, whose cells are in no square).
+pub(crate) fn line_of_sight_by(
+    width: u16,
+    height: u16,
+    free: impl Fn(i32, i32) -> bool,
+    a: GridPoint,
+    b: GridPoint,
+) -> bool {
     let (a, b) = if a.x <= b.x { (a, b) } else { (b, a) };
     let u = i64::from(UNITS_PER_CELL);
     // An endpoint off the map is in no free cell; this also bounds every product below by
     // (2048 * 256)^2 * 2 < 2^40.
-    let (w, h) = (
-        i64::from(regions.width()) * u,
-        i64::from(regions.height()) * u,
-    );
+    let (w, h) = (i64::from(width) * u, i64::from(height) * u);
     let inside =
         |p: GridPoint| (0..w).contains(&i64::from(p.x)) && (0..h).contains(&i64::from(p.y));
     if !inside(a) || !inside(b) {
@@ -357,7 +367,7 @@ pub fn line_of_sight<M: IdStore + ?Sized>(
     (c_lo..=c_hi).all(|c| {
         let (r_lo, r_hi) = rows_in_column(a, b, c);
         (r_lo..=r_hi).all(|r| match (i32::try_from(c), i32::try_from(r)) {
-            (Ok(cx), Ok(cy)) => regions.region_at(cx, cy).is_some(),
+            (Ok(cx), Ok(cy)) => free(cx, cy),
             _ => false,
         })
     })

@@ -19,7 +19,7 @@ use super::Core;
 use crate::deadreckon::DegradeEvent;
 use crate::explore::{ExploreInput, ExplorePhase, ExploreStats, MapMarker};
 use crate::hal::MotorCommand;
-use crate::nav::{grid_bytes, Cell, Geometry, Grid, Passable};
+use crate::nav::{grid_bytes, Cell, Geometry, Grid, Passable, Route};
 use crate::odometry::Point;
 use crate::transfer::Objects;
 use crate::MAP_CAPACITY;
@@ -154,23 +154,28 @@ impl MapMarker for ExploreMap<'_> {
     }
 
     /// Seed 004 §6 on the incomplete map with unknown cells free; the first point of the
-    /// smoothed plan (a corner in line of sight), or its first region centre. The segmentation
-    /// is forgotten afterwards: a `Plan` command must segment with unknown as obstacle.
+    /// smoothed plan (a corner in line of sight), or its first region centre; on a map whose
+    /// squares do not fit, the grid planner's first waypoint. The segmentation is forgotten
+    /// afterwards: a `Plan` command must segment with unknown as obstacle.
     fn plan_towards(&mut self, from: Point, to: Point) -> Option<Point> {
         let nav = self.0.nav_mut();
         let point = (|| {
-            nav.segment_with(Passable::FreeOrUnknown).ok()?;
             let geo = nav.grid().geometry();
             let start = geo.metres_to_grid(from.x, from.y);
             let goal = geo.metres_to_grid(to.x, to.y);
-            let plan = nav.plan(start, goal).ok()?;
-            // A quarter cell from square corners, as the station smooths.
-            let next = match nav.smooth(&plan, crate::nav::UNITS_PER_CELL as u32 / 4) {
-                Ok(sm) => sm.waypoint(nav.smoothed_points(), 1),
-                Err(_) => {
-                    let regions = nav.regions()?;
-                    plan.waypoint(&regions, nav.path(), 2.min(plan.waypoint_count() - 1))
+            let next = match nav.route_with(Passable::FreeOrUnknown, start, goal).ok()? {
+                // A quarter cell from square corners, as the station smooths.
+                Route::Squares(plan) => {
+                    match nav.smooth(&plan, crate::nav::UNITS_PER_CELL as u32 / 4) {
+                        Ok(sm) => sm.waypoint(nav.smoothed_points(), 1),
+                        Err(_) => {
+                            let regions = nav.regions()?;
+                            let i = 2.min(plan.waypoint_count() - 1);
+                            plan.waypoint(&regions, nav.path(), i)
+                        }
+                    }
                 }
+                Route::Grid(plan) => nav.wave_route(plan)?.waypoints().nth(1),
             }?;
             let (x, y) = geo.grid_to_metres(next);
             Some(Point::new(x, y))

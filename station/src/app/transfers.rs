@@ -469,11 +469,20 @@ impl App {
             Ok(points) => {
                 let id = id.unwrap_or_else(|| protocol::crc32c(bytes));
                 let length: f64 = crate::plan::solve::length(&points);
+                // A plan with no regions comes from the robot's grid planner, which it uses
+                // when the map has more squares than it holds (robot-firmware nav::fixed).
+                let grid =
+                    protocol::object::PlanView::parse(bytes).is_ok_and(|v| v.nav.regions == 0);
+                let how = if grid {
+                    " by the grid planner (more squares than the robot holds)"
+                } else {
+                    ""
+                };
                 self.note(
                     Level::Info,
                     Source::Command,
                     format!(
-                        "robot plan {id:#010x}: {} waypoints, {length:.2} m; X executes it",
+                        "robot plan {id:#010x}{how}: {} waypoints, {length:.2} m; X executes it",
                         points.len()
                     ),
                 );

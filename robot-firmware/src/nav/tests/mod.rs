@@ -14,3 +14,4 @@ mod reference;
 mod search;
 mod segmentation;
 mod util;
+mod wave;

@@ -8,7 +8,7 @@ use std::vec;
 use std::vec::Vec;
 
 use super::reference;
-use super::util::{parse, tuples, Seg};
+use super::util::{lattice, parse, tuples, Seg};
 use crate::nav::{segment, IdStore, PackedIds, SegmentError, Square};
 
 #[test]
@@ -226,27 +226,6 @@ fn neighbour_walk_matches_the_quadratic_pairwise_check_on_generated_grids() {
         });
         assert_eq!(walk, reference::edges(&seg.squares));
     }
-}
-
-/// A grid with cell (odd, odd) of every aligned 2 x 2 block an obstacle, the rest free: the
-/// worst case of `max_regions` (every free cell is a square of its own).
-fn lattice(w: usize, h: usize) -> crate::nav::Grid<Vec<u8>> {
-    use crate::nav::{grid_bytes, Cell, Geometry, Grid};
-    let mut g = Grid::new(
-        w as u16,
-        h as u16,
-        Geometry::SEED_004,
-        vec![0; grid_bytes(w, h)],
-    )
-    .expect("valid size");
-    for y in 0..h {
-        for x in 0..w {
-            let blocked = x % 2 == 1 && y % 2 == 1;
-            let c = if blocked { Cell::Obstacle } else { Cell::Free };
-            g.set(x, y, c).expect("inside");
-        }
-    }
-    g
 }
 
 #[test]

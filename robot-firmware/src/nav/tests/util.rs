@@ -174,3 +174,24 @@ impl Rng {
         self.next() % n.max(1)
     }
 }
+
+/// A grid with cell (odd, odd) of every aligned 2 x 2 block an obstacle, the rest free: the
+/// worst case of `max_regions` (every free cell is a square of its own).
+pub fn lattice(w: usize, h: usize) -> crate::nav::Grid<Vec<u8>> {
+    use crate::nav::{grid_bytes, Cell, Geometry, Grid};
+    let mut g = Grid::new(
+        w as u16,
+        h as u16,
+        Geometry::SEED_004,
+        vec![0; grid_bytes(w, h)],
+    )
+    .expect("valid size");
+    for y in 0..h {
+        for x in 0..w {
+            let blocked = x % 2 == 1 && y % 2 == 1;
+            let c = if blocked { Cell::Obstacle } else { Cell::Free };
+            g.set(x, y, c).expect("inside");
+        }
+    }
+    g
+}
