@@ -12,6 +12,7 @@ use crate::behaviour::ArbiterParams;
 use crate::deadreckon::DeadReckonParams;
 use crate::guided::GuidedParams;
 use crate::odometry::OdometryParams;
+use crate::robot::ProgressParams;
 
 /// Robot-level settings that belong to no algorithm.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,7 +75,7 @@ const fn pi(id: u16, name: &'static str, unit: &'static str, min: f32, max: f32)
 }
 
 /// Every parameter, by id.
-pub const PARAMS: [ParamInfo; 31] = [
+pub const PARAMS: [ParamInfo; 33] = [
     pi(0, "failsafe_ms", "ms", 50.0, 10_000.0),
     pi(1, "telemetry_hz", "Hz", 0.0, 50.0),
     p(2, "teleop_max_mm_s", "mm/s", 0.0, 2000.0),
@@ -107,6 +108,9 @@ pub const PARAMS: [ParamInfo; 31] = [
     p(28, "arena_min_y_m", "m", -100.0, 100.0),
     p(29, "arena_max_x_m", "m", -100.0, 100.0),
     p(30, "arena_max_y_m", "m", -100.0, 100.0),
+    // GoTo and ExecutePlan give up after this long without getting nearer (robot::progress).
+    p(31, "stuck_limit_s", "s", 5.0, 3600.0),
+    p(32, "stuck_progress_m", "m", 0.01, 2.0),
 ];
 
 /// Ids of the parameters other crates set by name in code (the emulator's scenario runner
@@ -139,6 +143,7 @@ pub struct Tunables<'a> {
     pub arbiter: &'a mut ArbiterParams,
     pub dead_reckon: &'a mut DeadReckonParams,
     pub guided: &'a mut GuidedParams,
+    pub progress: &'a mut ProgressParams,
 }
 
 enum Slot<'a> {
@@ -183,6 +188,8 @@ impl Tunables<'_> {
             28 => Slot::F32(&mut self.dead_reckon.bounds.min.y),
             29 => Slot::F32(&mut self.dead_reckon.bounds.max.x),
             30 => Slot::F32(&mut self.dead_reckon.bounds.max.y),
+            31 => Slot::F32(&mut self.progress.stuck_limit_s),
+            32 => Slot::F32(&mut self.progress.stuck_progress_m),
             _ => return None,
         })
     }
@@ -228,7 +235,9 @@ mod tests {
         let mut arbiter = ArbiterParams::default();
         let mut dead_reckon = DeadReckonParams::default();
         let mut guided = GuidedParams::default();
+        let mut progress = ProgressParams::default();
         f(&mut Tunables {
+            progress: &mut progress,
             robot: &mut robot,
             odometry: &mut odometry,
             arbiter: &mut arbiter,

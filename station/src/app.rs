@@ -14,6 +14,7 @@ pub mod history;
 pub mod localization;
 pub mod log;
 pub mod params;
+pub mod plan_target;
 pub mod transfers;
 
 use std::collections::HashMap;
@@ -102,8 +103,11 @@ pub struct MapState {
     /// The go-to cursor, metres; shown while `cursor_mode`.
     pub cursor: (f64, f64),
     pub cursor_mode: bool,
-    /// The last go-to goal sent.
+    /// The last go-to goal sent (drawn `×`; `Esc` clears it).
     pub goal: Option<(f64, f64)>,
+    /// The target the operator chose for plans (`O`/`P` with the cursor shown); `None`: the
+    /// map's goal (`app::plan_target`).
+    pub plan_target: Option<(f64, f64)>,
     /// Names of hidden layers.
     pub hidden: Vec<&'static str>,
     /// Planning on the station: the map's grid and regions, the last plan.
@@ -163,6 +167,8 @@ pub struct App {
     pub localization: localization::LocalizationState,
     /// Foraging (seed 000 §7): objects gripped and delivered, which were taken.
     pub forage: forage::ForageProgress,
+    /// The robot's last `Progress` report: what its mode is doing.
+    pub progress: Option<protocol::Progress>,
     next_id: CommandId,
     pending: HashMap<CommandId, Pending>,
     /// The last telemetry rate asked for and not yet answered: quick `+`/`-` presses step on
@@ -218,6 +224,7 @@ impl App {
             transfers: transfers::Transfers::default(),
             localization: localization::LocalizationState::default(),
             forage: forage::ForageProgress::default(),
+            progress: None,
             next_id: 1,
             pending: HashMap::new(),
             rate_asked: None,
@@ -341,6 +348,12 @@ impl App {
                 self.localization.clear();
             }
             Action::PlanLocal => self.plan_locally(),
+            Action::PlanTargetReset => {
+                if !self.reset_plan_target() {
+                    let to = self.plan_target().describe();
+                    self.note(Level::Info, Source::Command, format!("plans go to {to}"));
+                }
+            }
             // Done by the TUI loop, which owns the file; it reports with `Recording`.
             Action::ToggleRecording => {}
             Action::Recording(note) => self.on_recording(note),
@@ -367,6 +380,8 @@ impl App {
             self.params.input = None;
         } else if self.map.cursor_mode {
             self.map.cursor_mode = false;
+        } else if self.reset_plan_target() {
+            // A clicked target and a chosen plan target go first, then the view.
         } else if self.view != View::Dashboard {
             self.view = View::Dashboard;
         }
@@ -404,14 +419,14 @@ impl App {
         self.send(Command::Stop);
     }
 
-    /// Plans on the station from the believed pose (else the map's start) to the cursor while
-    /// it is shown, else the last go-to goal, else the map's goal.
+    /// Plans on the station from the believed pose (else the map's start) to the plan's
+    /// target (`app::plan_target`: the cursor while shown, else the chosen target, else the
+    /// map's goal).
     fn plan_locally(&mut self) {
         let from = self.pose().map(|(x, y, _)| (x, y));
-        let to = if self.map.cursor_mode {
-            Some(self.map.cursor)
-        } else {
-            self.map.goal
+        let to = match self.take_plan_target() {
+            plan_target::PlanTarget::Chosen(p) => Some(p),
+            plan_target::PlanTarget::MapGoal(_) => None,
         };
         let (level, text) = match self.map.plan.plan(from, to) {
             Ok(line) => (Level::Info, line),
@@ -433,7 +448,7 @@ impl App {
         self.send(Command::GoTo(goal));
     }
 
-    fn read_param(&mut self, id: u16) {
+    pub(super) fn read_param(&mut self, id: u16) {
         self.params.set_pending(id);
         self.send(Command::GetParam {
             id: protocol::ParamId(id),
@@ -508,6 +523,7 @@ impl App {
                 self.truth = Some(t);
             }
             LinkEvent::Localization(l) => self.localization.on_message(*l),
+            LinkEvent::Progress(p) => self.on_progress(p),
             LinkEvent::Robot(e) => self.on_robot_event(e),
             LinkEvent::Log { level, text } => self.note(level.into(), Source::Robot, text),
             LinkEvent::CommandDone {
@@ -540,6 +556,8 @@ impl App {
             Connection::Refused { message } => (Level::Error, format!("refused: {message}")),
         };
         self.note(level, Source::Link, text);
+        // A report from another session (or a lost one) says nothing about now.
+        self.progress = None;
         if let Connection::Connected(p) = &c {
             self.rate_hz = Some(p.telemetry_hz);
             self.peer = Some(p.clone());
@@ -594,7 +612,11 @@ impl App {
             ),
             EventCode::MapUpdated => (Level::Debug, "map updated".into()),
             EventCode::PlanInstalled => (Level::Info, "plan installed".into()),
-            EventCode::PlanFinished => (Level::Info, "plan finished".into()),
+            EventCode::PlanFinished => (
+                Level::Info,
+                format!("plan finished: all {v} waypoints done, the robot stopped"),
+            ),
+            EventCode::NoProgress => (Level::Warn, self.no_progress_text(v)),
             EventCode::PlanAborted => (Level::Warn, format!("plan aborted at waypoint {v}")),
             // Negative: the robot could not authenticate our Hello (PROTOCOL.md §13).
             EventCode::HandshakeRefused if v < 0 => (
@@ -687,6 +709,14 @@ impl App {
                 let detail = match command {
                     Command::Plan { from, to } if reason == protocol::NackReason::BadPoint => {
                         self.plan_refusal_detail(from, to)
+                    }
+                    Command::Segment | Command::Plan { .. }
+                        if reason == protocol::NackReason::CapacityExceeded =>
+                    {
+                        self.squares_detail()
+                    }
+                    Command::GoTo(_) if reason == protocol::NackReason::BadPoint => {
+                        self.arena_bounds_detail()
                     }
                     // These modes need a target the mode key cannot give: say which key can.
                     Command::SetMode(Mode::GoTo) => {

@@ -27,14 +27,18 @@ pub const KEYS: &[(&str, &str)] = &[
         "g ←↑↓→ Enter",
         "go-to with a cursor on the map (shift: 5x step)",
     ),
-    ("click on map", "go-to that point"),
+    ("click on map", "go-to that point (Esc clears the marker)"),
     ("p", "parameters: ↑↓ select, r read, R read all, Enter edit"),
     ("+  -", "telemetry rate (0 1 2 5 10 20 50 Hz)"),
     ("c", "next chart series"),
     ("t  x", "show or hide the true pose / clear the tracks"),
     (
         "P",
-        "plan on the station: robot (or map start) to cursor / goal",
+        "plan on the station: robot (or map start) to the plan's target ◎",
+    ),
+    (
+        "g … O/P  G",
+        "plan to the cursor (it becomes the target) / back to the map's goal",
     ),
     (
         "o r n m e",

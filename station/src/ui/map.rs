@@ -122,7 +122,8 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         .title_bottom(TLine::from(vec![
             " ● believed ".cyan(),
             "○ true ".magenta(),
-            "× goal ".yellow(),
+            "× go-to ".yellow(),
+            "◎ plan target ".light_red(),
             if app.map.cursor_mode {
                 "+ cursor ".green()
             } else if app.replaying {
@@ -255,6 +256,7 @@ fn content_bounds(app: &App) -> [f64; 4] {
         .collect();
     pts.extend(app.pose().map(|(x, y, _)| (x, y)));
     pts.extend(app.map.goal);
+    pts.extend(app.map.plan_target);
     if app.map.cursor_mode {
         pts.push(app.map.cursor);
     }
@@ -391,6 +393,10 @@ impl MapLayer for GoalLayer {
     fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {
         if let Some((x, y)) = app.map.goal {
             ctx.print(x, y, "×".yellow());
+        }
+        // Where O and P plan to: the chosen target, else the map's goal.
+        if let Some((x, y)) = app.plan_target().point() {
+            ctx.print(x, y, "◎".light_red().bold());
         }
         if app.map.cursor_mode {
             let (x, y) = app.map.cursor;
