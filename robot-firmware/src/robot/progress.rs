@@ -306,6 +306,22 @@ mod tests {
     }
 
     #[test]
+    fn the_widest_report_is_the_size_protocol_md_states() {
+        let widest = Progress {
+            mode: Mode::CalibrateLight,
+            waypoint: u16::MAX,
+            waypoints: u16::MAX,
+            distance_left_mm: Some(u32::MAX),
+            elapsed_ms: u32::MAX,
+            stuck_ms: u32::MAX,
+            give_up_ms: u32::MAX,
+        };
+        let mut buf = [0u8; protocol::MAX_FRAME];
+        let n = protocol::encode(0xFFFF, &protocol::Message::Progress(widest), &mut buf).unwrap();
+        assert_eq!(n, 38);
+    }
+
+    #[test]
     fn reports_come_once_a_period_and_not_in_idle() {
         let mut p = MotionProgress::default();
         p.restart(0);
