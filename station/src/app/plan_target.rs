@@ -183,3 +183,7 @@ impl App {
         (!parts.is_empty()).then(|| parts.join(", "))
     }
 }
+
+#[cfg(test)]
+#[path = "plan_target_tests.rs"]
+mod tests;
