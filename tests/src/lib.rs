@@ -4,6 +4,8 @@
 
 use std::time::{Duration, Instant};
 
+pub mod tmux;
+
 use protocol::{
     encode, Command, Feed, FrameDecoder, Hello, Kind, Message, Telemetry, FINGERPRINT, MAX_FRAME,
     PROTOCOL_VERSION,
