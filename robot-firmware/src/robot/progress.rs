@@ -50,7 +50,7 @@ impl Default for ProgressParams {
 }
 
 /// Progress through the mode in force.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MotionProgress {
     pub params: ProgressParams,
     /// When the mode was entered, ms.
@@ -62,19 +62,6 @@ pub struct MotionProgress {
     /// The last distance left measured, metres.
     left_m: Option<f32>,
     next_report_ms: u32,
-}
-
-impl Default for MotionProgress {
-    fn default() -> Self {
-        MotionProgress {
-            params: ProgressParams::default(),
-            since_ms: 0,
-            best_m: None,
-            progress_ms: 0,
-            left_m: None,
-            next_report_ms: 0,
-        }
-    }
 }
 
 impl MotionProgress {
