@@ -75,9 +75,11 @@ impl Core {
     /// Outside exploration, the robot still maps with its sensors whatever moves it (go-to,
     /// teleop, a plan), so that a plan can start where go-to left it. Only unknown cells are
     /// filled in: a map the operator uploaded, or one exploration made, is never contradicted
-    /// by a passing reading. Robots without IR sensors, or without a map, mark nothing.
+    /// by a passing reading. Idle, nothing is marked: a map just uploaded stays byte for byte
+    /// what was sent until the robot moves. Robots without IR sensors, or without a map,
+    /// mark nothing.
     pub(super) fn map_as_it_moves(&mut self) {
-        if self.mode == Mode::Explore || !self.objects.has_map() {
+        if matches!(self.mode, Mode::Explore | Mode::Idle) || !self.objects.has_map() {
             return;
         }
         let (ir, n) = self.ir_rays();
@@ -284,6 +286,26 @@ mod tests {
     }
 
     #[test]
+    fn an_idle_robot_leaves_its_map_as_uploaded() {
+        let mut robot = Robot::new(RobotOptions {
+            profile: &MICRO_RATO,
+            seed: 1,
+            start: Pose::new(0.5, 0.5, 0.0),
+            emulated: false,
+            firmware_version: "test",
+        });
+        let core = &mut robot.core;
+        assert!(matches!(
+            core.apply(Command::StartExploration, 0),
+            Reply::Ack(_)
+        ));
+        assert!(matches!(core.apply(Command::Stop, 0), Reply::Ack(_)));
+        let before = core.objects.map().map(|m| m.id);
+        core.map_as_it_moves();
+        assert_eq!(core.objects.map().map(|m| m.id), before);
+    }
+
+    #[test]
     fn passing_readings_never_overwrite_what_the_map_knows() {
         let mut robot = Robot::new(RobotOptions {
             profile: &MICRO_RATO,
@@ -302,7 +324,15 @@ mod tests {
         if let Some(g) = core.objects.grid_mut() {
             g.mark(here, Cell::Obstacle);
         }
+        let teleop = Command::Teleop {
+            v_mm_s: 0,
+            w_mrad_s: 0,
+        };
+        assert!(matches!(core.apply(teleop, 0), Reply::Ack(_)));
+        let before = core.objects.map().map(|m| m.id);
         core.map_as_it_moves();
+        // The cell stays; the cells the rays cross are filled in (the map changed).
+        assert_ne!(core.objects.map().map(|m| m.id), before);
         assert_eq!(
             MapMarker::cell_at(core.objects.nav().grid(), here),
             Some(Cell::Obstacle)

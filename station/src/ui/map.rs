@@ -122,15 +122,24 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         .title_bottom(TLine::from(vec![
             " ● believed ".cyan(),
             "○ true ".magenta(),
-            "× go-to ".yellow(),
-            "◎ plan target ".light_red(),
+            // A replay sends nothing: no go-to marker to explain.
+            if app.replaying {
+                "".into()
+            } else {
+                "× go-to ".yellow()
+            },
+            if area.width < 60 {
+                "◎ plan ".light_red()
+            } else {
+                "◎ plan target ".light_red()
+            },
             if app.map.cursor_mode {
                 "+ cursor ".green()
             } else if app.replaying {
                 "".into()
-            } else if area.width < 44 {
-                // The whole legend in a 40-column panel (80 x 24).
-                "g: go-to ".dark_gray()
+            } else if area.width < 50 {
+                // The whole legend in a 40-column panel (80 x 24); the footer has `g`.
+                "".into()
             } else {
                 "g/click: go-to ".dark_gray()
             },
