@@ -215,7 +215,7 @@ impl Robot {
                 gripper_cmd: GripperCommand::default(),
                 linecorr: LineCorr::new(odometry_params, opts.start, opts.seed ^ 0x5EED_0003),
                 light_cal: LightCalibration::new(opts.seed ^ 0x5EED_0005),
-                progress: MotionProgress::default(),
+                progress: MotionProgress::new(ProgressParams::for_profile(profile)),
             },
         }
     }

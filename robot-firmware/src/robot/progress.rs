@@ -15,11 +15,15 @@
 //! kind 14) carries the waypoint k of n, distance left, time in mode and time without
 //! progress; telemetry stays small.
 //!
-//! Defaults, from the robot's speed and the arena (settable: `stuck_limit_s`,
-//! `stuck_progress_m`): going round a wall end of the seed 004 labyrinth (walls on a 1.25 m
-//! grid) at the avoidance speed (nominal 25, 0.07 m/s at average battery, seed 004 §4's table)
-//! can take 2 x 1.25 m / 0.07 m/s = 36 s without getting nearer, so 40 s; 0.1 m of progress is
-//! more than dead-reckoning jitter from cycle to cycle and less than a waypoint's pass radius.
+//! Defaults, from the robot's speed and its way of moving (settable: `stuck_limit_s`,
+//! `stuck_progress_m`). Guided motion (compass robots, seed 004): going round a wall end of the
+//! labyrinth (walls on a 1.25 m grid) at the avoidance speed (nominal 25, 0.07 m/s at average
+//! battery, seed 004 §4's table) can take 2 x 1.25 m / 0.07 m/s = 36 s without getting nearer,
+//! so 40 s. The drift behaviour (encoder robots, seed 000 §4.4-4.5) escapes a dead end by
+//! turning away from the goal, with 180° turns that escalate: in Fig. 17's two successive dead
+//! ends the project's Khepera arrives after 2-8 minutes (`emulator/tests/paper_000_fig17.rs`),
+//! so 600 s. 0.1 m of progress is more than dead-reckoning jitter from cycle to cycle and less
+//! than a waypoint's pass radius.
 //! Cannot fail or panic.
 
 use protocol::{EventCode, Mode, Progress};
@@ -27,6 +31,7 @@ use protocol::{EventCode, Mode, Progress};
 use super::Core;
 use crate::hal::MotorCommand;
 use crate::odometry::Point;
+use crate::profile::Profile;
 
 /// Period of `Progress` messages, ms.
 pub const REPORT_PERIOD_MS: u32 = 1000;
@@ -43,8 +48,27 @@ pub struct ProgressParams {
 impl Default for ProgressParams {
     fn default() -> Self {
         ProgressParams {
-            stuck_limit_s: 40.0,
+            stuck_limit_s: GUIDED_STUCK_LIMIT_S,
             stuck_progress_m: 0.1,
+        }
+    }
+}
+
+/// Default limits for guided motion (compass robots) and the drift behaviour (encoders).
+const GUIDED_STUCK_LIMIT_S: f32 = 40.0;
+const DRIFT_STUCK_LIMIT_S: f32 = 600.0;
+
+impl ProgressParams {
+    /// The defaults for `profile`'s way of reaching a point (see the module's words).
+    pub fn for_profile(profile: &Profile) -> Self {
+        let drift = profile.has(protocol::caps::ENCODERS);
+        ProgressParams {
+            stuck_limit_s: if drift {
+                DRIFT_STUCK_LIMIT_S
+            } else {
+                GUIDED_STUCK_LIMIT_S
+            },
+            ..ProgressParams::default()
         }
     }
 }
@@ -65,6 +89,13 @@ pub struct MotionProgress {
 }
 
 impl MotionProgress {
+    pub fn new(params: ProgressParams) -> Self {
+        MotionProgress {
+            params,
+            ..MotionProgress::default()
+        }
+    }
+
     /// A mode (re)starts at `now_ms`: time and progress count from here; the first report
     /// goes at once.
     pub fn restart(&mut self, now_ms: u32) {
@@ -306,6 +337,13 @@ mod tests {
         let mut buf = [0u8; protocol::MAX_FRAME];
         let n = protocol::encode(0xFFFF, &protocol::Message::Progress(widest), &mut buf).unwrap();
         assert_eq!(n, 38);
+    }
+
+    #[test]
+    fn a_khepera_waits_longer_its_drift_behaviour_turns_away_to_leave_dead_ends() {
+        let k = ProgressParams::for_profile(&crate::KHEPERA);
+        let m = ProgressParams::for_profile(&crate::MICRO_RATO);
+        assert_eq!((k.stuck_limit_s, m.stuck_limit_s), (600.0, 40.0));
     }
 
     #[test]
