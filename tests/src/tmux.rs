@@ -1,19 +1,24 @@
-//! Driving a terminal program as a person does: in a private tmux server (its own socket, so
-//! no user's session is touched), keys go in with `send-keys` and the screen comes out with
-//! `capture-pane`. For tour tests of the station's TUI: what is asserted is what an operator
-//! would read on the screen.
+//! Driving a TUI as a person does: in a tmux session of a fixed size, keys sent with
+//! `send-keys`, the screen read back with `capture-pane`.
+//!
+//! Each session has its own tmux server (`-L`, a socket named after the test and process),
+//! so tests run in parallel and a failing test never touches the user's tmux. The session and
+//! its server end when the [`Tmux`] is dropped. Tests that need tmux call [`Tmux::available`]
+//! first and say so when it is missing, rather than fail on a machine without it.
+// A test helper: panicking, with the screen, is how it fails the test that uses it.
+#![allow(clippy::panic)]
 
 use std::path::Path;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-/// A program running in a detached tmux session; the server is killed on drop.
+/// A program running in a detached tmux session.
 pub struct Tmux {
     socket: String,
 }
 
 impl Tmux {
-    /// Whether tmux is installed (tests skip, saying so, without it).
+    /// Whether a `tmux` binary can be run.
     pub fn available() -> bool {
         Command::new("tmux")
             .arg("-V")
@@ -21,92 +26,109 @@ impl Tmux {
             .is_ok_and(|o| o.status.success())
     }
 
-    /// Starts `program args` in a `cols` x `rows` window. `name` makes the socket unique per
-    /// test (with the process id).
+    /// Starts `program args` in a `cols` x `rows` session named after `name` (unique per
+    /// test), in `dir`.
     pub fn start(
         name: &str,
         cols: u16,
         rows: u16,
+        dir: &Path,
         program: &Path,
         args: &[&str],
-    ) -> std::io::Result<Tmux> {
-        let t = Tmux {
-            socket: format!("e2e-{name}-{}", std::process::id()),
-        };
-        let (c, r) = (cols.to_string(), rows.to_string());
-        let program = program.to_string_lossy().into_owned();
-        // remain-on-exit keeps a crashed program's last screen for the failure message.
-        let mut argv = vec![
-            "start-server",
-            ";",
-            "set-option",
-            "-g",
-            "remain-on-exit",
-            "on",
-            ";",
+    ) -> Tmux {
+        let socket = format!("e2e-{}-{name}", std::process::id());
+        let t = Tmux { socket };
+        let mut cmd = vec![program.display().to_string()];
+        cmd.extend(args.iter().map(|a| a.to_string()));
+        let o = t.tmux(&[
             "new-session",
             "-d",
+            "-s",
+            "main",
             "-x",
-            &c,
+            &cols.to_string(),
             "-y",
-            &r,
-            "--",
-            &program,
-        ];
-        argv.extend_from_slice(args);
-        let out = t.tmux(&argv)?;
-        if !out.status.success() {
-            return Err(std::io::Error::other(format!(
-                "tmux new-session: {}",
-                String::from_utf8_lossy(&out.stderr)
-            )));
-        }
-        Ok(t)
+            &rows.to_string(),
+            "-c",
+            &dir.display().to_string(),
+            // Keep the pane after the program exits, so its last screen can be read.
+            &format!("{} ; sleep 30", shell_words(&cmd)),
+        ]);
+        assert!(
+            o.status.success(),
+            "tmux new-session: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        t
     }
 
-    fn tmux(&self, args: &[&str]) -> std::io::Result<Output> {
+    fn tmux(&self, args: &[&str]) -> Output {
         Command::new("tmux")
             .args(["-L", &self.socket, "-f", "/dev/null"])
             .args(args)
             .output()
+            .unwrap_or_else(|e| panic!("tmux: {e}"))
     }
 
-    /// Presses keys, by tmux's names: "g", "O", "Right", "Enter", "Escape", "Space".
+    /// Sends keys as tmux names them (`"p"`, `"Escape"`, `"PageUp"`, `"End"`, `"C-c"`); each
+    /// is one key press.
     pub fn keys(&self, keys: &[&str]) {
-        let mut argv = vec!["send-keys"];
-        argv.extend_from_slice(keys);
-        let _ = self.tmux(&argv);
+        for k in keys {
+            let o = self.tmux(&["send-keys", "-t", "main", k]);
+            assert!(
+                o.status.success(),
+                "send-keys {k}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+            // A person does not type faster than the TUI's tick.
+            std::thread::sleep(Duration::from_millis(60));
+        }
     }
 
-    /// The screen as text, one line per row.
-    pub fn screen(&self) -> String {
-        self.tmux(&["capture-pane", "-p"])
-            .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
-            .unwrap_or_default()
+    /// Types `text` literally.
+    pub fn type_text(&self, text: &str) {
+        let o = self.tmux(&["send-keys", "-t", "main", "-l", text]);
+        assert!(o.status.success());
+        std::thread::sleep(Duration::from_millis(60));
     }
 
-    /// Waits until the screen shows `what`; returns that screen, or the last one seen.
-    pub fn wait_for(&self, what: &str, within: Duration) -> Result<String, String> {
-        self.wait_until(|s| s.contains(what), within)
+    /// The screen now, one string per row.
+    pub fn screen(&self) -> Vec<String> {
+        let o = self.tmux(&["capture-pane", "-p", "-t", "main"]);
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .map(str::to_string)
+            .collect()
     }
 
-    /// Waits until `ok(screen)`; returns that screen, or the last one seen.
-    pub fn wait_until(
+    /// Waits until `ok(screen)` holds; the screen then, or a panic with the last screen.
+    pub fn wait_for(
         &self,
-        ok: impl Fn(&str) -> bool,
-        within: Duration,
-    ) -> Result<String, String> {
-        let end = Instant::now() + within;
+        what: &str,
+        timeout: Duration,
+        ok: impl Fn(&[String]) -> bool,
+    ) -> Vec<String> {
+        let end = Instant::now() + timeout;
         loop {
             let s = self.screen();
             if ok(&s) {
-                return Ok(s);
+                return s;
             }
             if Instant::now() >= end {
-                return Err(s);
+                panic!(
+                    "waited {timeout:?} for {what}; the screen:\n{}",
+                    s.join("\n")
+                );
             }
             std::thread::sleep(Duration::from_millis(100));
         }
+    }
+
+    /// Waits until `text` is on the screen.
+    pub fn wait_text(&self, text: &str, timeout: Duration) -> Vec<String> {
+        self.wait_for(&format!("{text:?}"), timeout, |s| {
+            s.iter().any(|l| l.contains(text))
+        })
     }
 }
 
@@ -114,4 +136,26 @@ impl Drop for Tmux {
     fn drop(&mut self) {
         let _ = self.tmux(&["kill-server"]);
     }
+}
+
+/// `words` as one `sh` command line, each single-quoted.
+fn shell_words(words: &[String]) -> String {
+    words
+        .iter()
+        .map(|w| format!("'{}'", w.replace('\'', r"'\''")))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Columns `from..to` (characters, not bytes) of a screen row: one panel of a layout.
+pub fn columns(row: &str, from: usize, to: usize) -> String {
+    row.chars()
+        .skip(from)
+        .take(to.saturating_sub(from))
+        .collect()
+}
+
+/// The first row of `screen` (rows joined by newlines) that contains `needle`.
+pub fn row<'a>(screen: &'a str, needle: &str) -> Option<&'a str> {
+    screen.lines().find(|l| l.contains(needle))
 }

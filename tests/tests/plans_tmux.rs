@@ -62,10 +62,9 @@ fn log_shows(t: &Tmux, what: &str, secs: u64) -> String {
     see(t, what, secs)
 }
 
-/// Fails with the screen as the operator saw it.
+/// Waits for `what` on the screen; fails with the screen as the operator saw it.
 fn see(t: &Tmux, what: &str, secs: u64) -> String {
-    t.wait_for(what, Duration::from_secs(secs))
-        .unwrap_or_else(|screen| panic!("never saw {what:?}; the screen:\n{screen}"))
+    t.wait_text(what, Duration::from_secs(secs)).join("\n")
 }
 
 #[test]
@@ -74,7 +73,15 @@ fn the_plan_goes_to_the_maps_goal_after_a_go_to_and_the_target_is_explicit() {
         println!("skipped: tmux is not installed");
         return;
     }
-    let t = Tmux::start("plans", 160, 48, &e2e_tests::workspace_bin("station"), &[]).unwrap();
+    let d = dir("tour");
+    let t = Tmux::start(
+        "plans",
+        160,
+        48,
+        &d,
+        &e2e_tests::workspace_bin("station"),
+        &[],
+    );
     see(&t, "connected: robot-firmware", 30);
     // The footer names where a plan would go; the map marks it.
     let s = see(&t, "plan to goal", 5);
@@ -101,15 +108,10 @@ fn the_plan_goes_to_the_maps_goal_after_a_go_to_and_the_target_is_explicit() {
 
     // `X`: the header says which waypoint; nothing says finished while it drives.
     t.keys(&["X"]);
-    let s = t
-        .wait_until(
-            |s| s.contains("mode ExecutePlan: waypoint"),
-            Duration::from_secs(10),
-        )
-        .unwrap_or_else(|s| panic!("no waypoint in the header:\n{s}"));
+    let s = see(&t, "mode ExecutePlan: waypoint", 10);
     assert!(s.contains(" of "), "{s}");
     std::thread::sleep(Duration::from_secs(2));
-    let s = t.screen();
+    let s = t.screen().join("\n");
     if s.contains("mode ExecutePlan") {
         assert!(!s.contains("plan finished"), "finished while driving:\n{s}");
     }
@@ -125,4 +127,5 @@ fn the_plan_goes_to_the_maps_goal_after_a_go_to_and_the_target_is_explicit() {
     log_shows(&t, "plans go to the map's goal (", 5);
     see(&t, "plan to goal", 5);
     t.keys(&["q"]);
+    let _ = std::fs::remove_dir_all(&d);
 }
