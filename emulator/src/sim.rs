@@ -273,19 +273,18 @@ impl SimHal {
     }
 }
 
-/// What a robot with a beacon sensor is told about the arena it is put in, as it is told its
+/// What a robot is told about the arena it is put in, as it is told its
 /// start: the goal light's position (seed 004 §5: known from the start) and the arena's
 /// bounds (§4: the dead reckoning's validation rectangle). Without this the firmware keeps
 /// its defaults, the seed 004 arena (a 5 x 5 m square, the beacon at its centre): in
 /// Micro-Rato'99 the beacon is at (3.0, 2.571), so exploration headed for (2.5, 2.5) and every
-/// beacon calibration pulled the believed position towards the wrong point.
+/// beacon calibration pulled the believed position towards the wrong point. Every robot, with
+/// a beacon sensor or not, is told the bounds: they also limit where go-to may send it.
 fn tell_the_arena(robot: &mut Robot, world: &World) {
-    if !robot.core.profile.has(protocol::caps::BEACON) {
-        return;
-    }
     let fw = |p: Point| robot_firmware::odometry::Point::new(p.x as f32, p.y as f32);
+    let beacon = robot.core.profile.has(protocol::caps::BEACON);
     let dead = &mut robot.core.dead;
-    if let Some(b) = world.beacon() {
+    if let (Some(b), true) = (world.beacon(), beacon) {
         dead.params.beacon = fw(b.position);
     }
     let b = world.arena().bounds;

@@ -479,6 +479,10 @@ pub enum EventCode {
     LightBearing,
     /// A light calibration arrived by upload and replaced the robot's; value = its id.
     CalibrationInstalled,
+    /// A motion mode with a target (GoTo, ExecutePlan) gave up: the distance left did not
+    /// shrink by `stuck_progress_m` for `stuck_limit_s`; the motors stopped and the mode is
+    /// Idle. Value = milliseconds without progress.
+    NoProgress,
 }
 
 /// Log severity.
@@ -586,6 +590,29 @@ pub struct Localization {
     pub samples: [PpdSample; PPD_SAMPLES_SENT],
 }
 
+/// Robot -> station about once a second while a mode other than Idle runs: what the mode is
+/// doing, for a status line (PROTOCOL.md §6 kind 14). Telemetry stays small; this is the
+/// slow, descriptive half.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct Progress {
+    /// The mode this describes.
+    pub mode: Mode,
+    /// ExecutePlan: the waypoint being driven to, 1-based (`waypoints + 1` on the final
+    /// approach to the goal light); 0 otherwise.
+    pub waypoint: u16,
+    /// ExecutePlan: the plan's waypoint count; 0 otherwise.
+    pub waypoints: u16,
+    /// Distance left to the target (GoTo: the point; ExecutePlan: along the remaining
+    /// waypoints; Explore: to the goal light), millimetres; `None` for a mode without one.
+    pub distance_left_mm: Option<u32>,
+    /// Time since the mode was entered, milliseconds.
+    pub elapsed_ms: u32,
+    /// Time since the distance left last shrank by `stuck_progress_m`, milliseconds.
+    pub stuck_ms: u32,
+    /// The mode gives up at this `stuck_ms` (`stuck_limit_s`); 0: it does not give up.
+    pub give_up_ms: u32,
+}
+
 /// Every message, in kind order: variant index == the header's kind byte.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Schema)]
 pub enum Message<'a> {
@@ -607,6 +634,7 @@ pub enum Message<'a> {
     Log(Log<'a>),
     EmuTruth(EmuTruth),
     Localization(Localization),
+    Progress(Progress),
 }
 
 /// The header's kind byte for each message.
@@ -627,11 +655,12 @@ pub enum Kind {
     Log = 11,
     EmuTruth = 12,
     Localization = 13,
+    Progress = 14,
 }
 
 impl Kind {
     /// Every kind, in numeric order.
-    pub const ALL: [Kind; 14] = [
+    pub const ALL: [Kind; 15] = [
         Kind::Hello,
         Kind::HelloReply,
         Kind::Heartbeat,
@@ -646,6 +675,7 @@ impl Kind {
         Kind::Log,
         Kind::EmuTruth,
         Kind::Localization,
+        Kind::Progress,
     ];
 
     /// The kind for a header byte, or `None` for an unknown kind.
@@ -693,6 +723,7 @@ impl Message<'_> {
             Message::Log(_) => Kind::Log,
             Message::EmuTruth(_) => Kind::EmuTruth,
             Message::Localization(_) => Kind::Localization,
+            Message::Progress(_) => Kind::Progress,
         }
     }
 }

@@ -178,6 +178,27 @@ fn vectors() -> Vec<(&'static str, u16, Message<'static>)> {
             }),
         ),
         (
+            "progress",
+            12,
+            Message::Progress(Progress {
+                mode: Mode::ExecutePlan,
+                waypoint: 3,
+                waypoints: 9,
+                distance_left_mm: Some(2140),
+                elapsed_ms: 41_000,
+                stuck_ms: 12_000,
+                give_up_ms: 40_000,
+            }),
+        ),
+        (
+            "event-no-progress",
+            13,
+            Message::Event(Event {
+                code: EventCode::NoProgress,
+                value: 40_050,
+            }),
+        ),
+        (
             "log",
             11,
             Message::Log(Log {

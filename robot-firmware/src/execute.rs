@@ -15,6 +15,23 @@ use crate::behaviour::{units, MotorCommand};
 use crate::guided::{guided_step, GuidedParams, GuidedPhase};
 use crate::odometry::{wrap_angle, Point, Pose};
 
+/// The waypoints being followed, metres: a slice, or read straight out of the robot's plan
+/// object (no copy of up to 258 points in RAM).
+pub trait Waypoints {
+    fn count(&self) -> usize;
+    fn point(&self, i: usize) -> Option<Point>;
+}
+
+impl Waypoints for [Point] {
+    fn count(&self) -> usize {
+        self.len()
+    }
+
+    fn point(&self, i: usize) -> Option<Point> {
+        self.get(i).copied()
+    }
+}
+
 /// Execution parameters (seed 004 §7 gives 0.6 m; the rest are documented defaults).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExecuteParams {
@@ -103,7 +120,7 @@ impl Executor {
         &mut self,
         pose: Pose,
         ir: &[(u16, f32)],
-        waypoints: &[Point],
+        waypoints: &(impl Waypoints + ?Sized),
         guided: &GuidedParams,
     ) -> (MotorCommand, ExecReport) {
         let mut report = ExecReport {
@@ -132,13 +149,13 @@ impl Executor {
         &mut self,
         pose: Pose,
         ir: &[(u16, f32)],
-        waypoints: &[Point],
+        waypoints: &(impl Waypoints + ?Sized),
         guided: &GuidedParams,
         index: usize,
         sub: u16,
         report: &mut ExecReport,
     ) -> MotorCommand {
-        let Some(&end) = waypoints.get(index) else {
+        let Some(end) = waypoints.point(index) else {
             self.phase = ExecPhase::Finished;
             return MotorCommand::STOP;
         };
@@ -173,7 +190,7 @@ impl Executor {
         } else {
             lerp(self.seg_from, end, (f32::from(sub) + 1.0) / subs as f32)
         };
-        let is_last_waypoint = index + 1 >= waypoints.len();
+        let is_last_waypoint = index + 1 >= waypoints.count();
         let is_end = target == end;
         let mut g = *guided;
         if !(is_end && is_last_waypoint) {
@@ -352,7 +369,7 @@ mod tests {
         let mut e = Executor::new(ExecuteParams::default(), Point::new(0.0, 0.0));
         let g = GuidedParams::default();
         // Standing at the first sub-point (0.5 m of 2 m in 4 pieces) moves on to the next.
-        e.step(Pose::new(0.5, 0.0, 0.0), &CLEAR, &wps, &g);
+        e.step(Pose::new(0.5, 0.0, 0.0), &CLEAR, &wps[..], &g);
         assert_eq!(e.phase(), ExecPhase::Driving { index: 0, sub: 1 });
     }
 
@@ -361,7 +378,7 @@ mod tests {
         let wps = [Point::new(3.0, 0.0)];
         let mut e = Executor::new(ExecuteParams::default(), Point::new(0.0, 0.0));
         let g = GuidedParams::default();
-        let (_, r) = e.step(Pose::new(1.0, 0.7, 0.0), &CLEAR, &wps, &g);
+        let (_, r) = e.step(Pose::new(1.0, 0.7, 0.0), &CLEAR, &wps[..], &g);
         assert!(r.escaped);
         match e.phase() {
             ExecPhase::Escaping { heading, .. } => {
@@ -382,7 +399,7 @@ mod tests {
         let (cmd, r) = e.step(
             Pose::new(0.0, 0.0, 0.0),
             &CLEAR,
-            &[],
+            &[][..],
             &GuidedParams::default(),
         );
         assert_eq!(cmd, MotorCommand::STOP);

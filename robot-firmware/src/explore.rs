@@ -672,7 +672,7 @@ fn cell_u8(cell: Option<(i32, i32)>) -> Option<(u8, u8)> {
 
 /// Marks the cell under the robot free, unknown cells along each IR ray free, and the cell
 /// where a ray sees something an obstacle (never the robot's own cell).
-fn mark_map(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) {
+pub fn mark_map(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) {
     let here = inp.pose.point();
     map.mark(here, Cell::Free);
     for &(reading, angle) in inp.ir {

@@ -12,6 +12,7 @@ use crate::behaviour::ArbiterParams;
 use crate::deadreckon::DeadReckonParams;
 use crate::guided::GuidedParams;
 use crate::odometry::OdometryParams;
+use crate::robot::ProgressParams;
 
 /// Robot-level settings that belong to no algorithm.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -103,7 +104,7 @@ const fn needs(caps: u32, info: ParamInfo) -> ParamInfo {
 use protocol::caps::ENCODERS;
 
 /// Every parameter, by id.
-pub const PARAMS: [ParamInfo; 31] = [
+pub const PARAMS: [ParamInfo; 33] = [
     pi(
         0,
         "failsafe_ms",
@@ -359,6 +360,23 @@ pub const PARAMS: [ParamInfo; 31] = [
         100.0,
         "arena bounds: largest y (seed 004 §4)",
     ),
+    // GoTo and ExecutePlan give up after this long without getting nearer (robot::progress).
+    p(
+        31,
+        "stuck_limit_s",
+        "s",
+        5.0,
+        3600.0,
+        "go-to and plan execution: give up after this long without getting nearer",
+    ),
+    p(
+        32,
+        "stuck_progress_m",
+        "m",
+        0.01,
+        2.0,
+        "go-to and plan execution: getting this much nearer counts as progress",
+    ),
 ];
 
 /// Decimals that show every value of `info` in its unit: none for an integer parameter, else
@@ -415,6 +433,7 @@ pub struct Tunables<'a> {
     pub arbiter: &'a mut ArbiterParams,
     pub dead_reckon: &'a mut DeadReckonParams,
     pub guided: &'a mut GuidedParams,
+    pub progress: &'a mut ProgressParams,
 }
 
 enum Slot<'a> {
@@ -459,6 +478,8 @@ impl Tunables<'_> {
             28 => Slot::F32(&mut self.dead_reckon.bounds.min.y),
             29 => Slot::F32(&mut self.dead_reckon.bounds.max.x),
             30 => Slot::F32(&mut self.dead_reckon.bounds.max.y),
+            31 => Slot::F32(&mut self.progress.stuck_limit_s),
+            32 => Slot::F32(&mut self.progress.stuck_progress_m),
             _ => return None,
         })
     }
@@ -504,7 +525,9 @@ mod tests {
         let mut arbiter = ArbiterParams::default();
         let mut dead_reckon = DeadReckonParams::default();
         let mut guided = GuidedParams::default();
+        let mut progress = ProgressParams::default();
         f(&mut Tunables {
+            progress: &mut progress,
             robot: &mut robot,
             odometry: &mut odometry,
             arbiter: &mut arbiter,

@@ -36,12 +36,14 @@ mod explore;
 mod follow;
 mod forage;
 mod linecorr;
+mod progress;
 mod scan;
 
 pub use calibrate::{CalPhase, LightCalibration, T1 as LIGHT_NEAR_T1};
 pub use follow::Execution;
 pub use forage::{Forage, ForageParams, ForagePhase, GripStep};
 pub use linecorr::{LineCorr, REPORT_PERIOD_MS as LOCALIZATION_PERIOD_MS};
+pub use progress::{MotionProgress, ProgressParams, REPORT_PERIOD_MS as PROGRESS_PERIOD_MS};
 pub use scan::{LandmarkScan, ScanParams, Sighting};
 
 /// Events waiting to be sent; a burst larger than this loses its oldest.
@@ -135,9 +137,6 @@ pub struct Core {
     pub exec: Option<Execution>,
     /// Seed 004 §7 heuristics for guided plan legs.
     pub executor: Executor,
-    /// The executing plan's waypoints, metres (copied from the plan object at start).
-    plan_points: [Point; MAX_PLAN_POINTS],
-    plan_points_len: usize,
     /// Seed 004 §5 reactive search with mapping.
     pub explorer: Explorer,
     /// Time of the current control cycle, ms.
@@ -150,10 +149,9 @@ pub struct Core {
     pub linecorr: LineCorr,
     /// Seed 000 §5.3 light -> angle calibration (`Mode::CalibrateLight`).
     pub light_cal: LightCalibration,
+    /// What the mode in force is doing; giving up when it makes no progress.
+    pub progress: MotionProgress,
 }
-
-/// Waypoints the robot keeps for execution: start, 256 region centres, goal.
-pub const MAX_PLAN_POINTS: usize = 258;
 
 /// The whole robot.
 pub struct Robot {
@@ -211,14 +209,13 @@ impl Robot {
                 objects: Objects::new(),
                 exec: None,
                 executor: Executor::new(ExecuteParams::default(), opts.start.point()),
-                plan_points: [Point::new(0.0, 0.0); MAX_PLAN_POINTS],
-                plan_points_len: 0,
                 explorer: Explorer::new(ExploreParams::default(), opts.seed ^ 0x5EED_0004),
                 cycle_ms: 0,
                 forage: Forage::default(),
                 gripper_cmd: GripperCommand::default(),
                 linecorr: LineCorr::new(odometry_params, opts.start, opts.seed ^ 0x5EED_0003),
                 light_cal: LightCalibration::new(opts.seed ^ 0x5EED_0005),
+                progress: MotionProgress::new(ProgressParams::for_profile(profile)),
             },
         }
     }
@@ -292,6 +289,10 @@ impl Robot {
             } else {
                 next
             };
+        }
+        let plan = self.core.plan_position();
+        if let Some(p) = self.core.progress.report_due(self.core.mode, now_ms, plan) {
+            self.link.send_low_priority(&Message::Progress(p), now_ms);
         }
         if self.core.linecorr.report_due(now_ms) {
             let m = self.core.linecorr.report(now_ms);
@@ -457,6 +458,10 @@ impl Core {
             Command::GoTo(p) => {
                 let target = point_from_mm(p.x_mm, p.y_mm)?;
                 self.check_mode(Mode::GoTo)?;
+                // A point outside the arena (parameters arena_*_m) cannot be reached.
+                if !self.in_arena(target) {
+                    return Err(NackReason::BadPoint);
+                }
                 self.goal = Some(target);
                 self.enter(Mode::GoTo);
             }
@@ -519,8 +524,15 @@ impl Core {
         Ok(AckInfo::Done)
     }
 
+    /// Whether `p` lies inside the arena bounds (parameters `arena_min_x_m` .. `arena_max_y_m`).
+    fn in_arena(&self, p: Point) -> bool {
+        let b = self.dead.params.bounds;
+        (b.min.x..=b.max.x).contains(&p.x) && (b.min.y..=b.max.y).contains(&p.y)
+    }
+
     fn tunables(&mut self) -> Tunables<'_> {
         Tunables {
+            progress: &mut self.progress.params,
             robot: &mut self.config,
             odometry: &mut self.odometry.params,
             arbiter: &mut self.arbiter.params,
@@ -645,6 +657,7 @@ impl Core {
             self.mode = mode;
             self.push_event(EventCode::ModeChanged, mode as i32);
         }
+        self.progress.restart(self.cycle_ms);
     }
 
     fn push_event(&mut self, code: EventCode, value: i32) {
@@ -698,7 +711,11 @@ impl Core {
         self.read_sensors(hal);
         self.estimate(now_ms);
         self.report_light_bearing(now_ms);
-        let cmd = self.decide();
+        self.map_as_it_moves();
+        let cmd = match self.track_progress() {
+            Some(stop) => stop,
+            None => self.decide(),
+        };
         let max = self.profile.motor_max;
         let cmd = cmd.clamped(max);
         self.motor = cmd;

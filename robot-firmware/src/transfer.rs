@@ -148,6 +148,11 @@ impl Objects {
         Some(self.nav.grid_mut())
     }
 
+    /// The map's goal point, if the robot holds a map with one.
+    pub fn map_goal(&self) -> Option<PointMm> {
+        self.map.and_then(|m| m.goal)
+    }
+
     pub fn has_map(&self) -> bool {
         self.map.is_some()
     }

@@ -97,8 +97,10 @@ pub enum Action {
     ToggleLayer(&'static str),
     /// Forget the drawn tracks.
     ClearTracks,
-    /// Plan on the station from the believed pose to the go-to cursor (or goal) and show it.
+    /// Plan on the station from the believed pose to the plan's target and show it.
     PlanLocal,
+    /// `G`: plans go to the map's goal again (forget the chosen target).
+    PlanTargetReset,
     /// Start or stop recording the link to a file (the TUI loop does the I/O, then reports
     /// back with `Recording`).
     ToggleRecording,

@@ -14,6 +14,7 @@ pub mod history;
 pub mod localization;
 pub mod log;
 pub mod params;
+pub mod plan_target;
 pub mod transfers;
 
 use std::collections::HashMap;
@@ -120,8 +121,11 @@ pub struct MapState {
     /// The go-to cursor, metres; shown while `cursor_mode`.
     pub cursor: (f64, f64),
     pub cursor_mode: bool,
-    /// The last go-to goal sent.
+    /// The last go-to goal sent (drawn `×`; `Esc` clears it).
     pub goal: Option<(f64, f64)>,
+    /// The target the operator chose for plans (`O`/`P` with the cursor shown); `None`: the
+    /// map's goal (`app::plan_target`).
+    pub plan_target: Option<(f64, f64)>,
     /// Names of hidden layers.
     pub hidden: Vec<&'static str>,
     /// Planning on the station: the map's grid and regions, the last plan.
@@ -235,6 +239,8 @@ pub struct App {
     pub localization: localization::LocalizationState,
     /// Foraging (seed 000 §7): objects gripped and delivered, which were taken.
     pub forage: forage::ForageProgress,
+    /// The robot's last `Progress` report: what its mode is doing.
+    pub progress: Option<protocol::Progress>,
     next_id: CommandId,
     pending: HashMap<CommandId, Pending>,
     /// The last telemetry rate asked for and not yet answered: quick `+`/`-` presses step on
@@ -296,6 +302,7 @@ impl App {
             transfers: transfers::Transfers::default(),
             localization: localization::LocalizationState::default(),
             forage: forage::ForageProgress::default(),
+            progress: None,
             next_id: 1,
             pending: HashMap::new(),
             rate_asked: None,
@@ -459,6 +466,12 @@ impl App {
                 self.localization.clear();
             }
             Action::PlanLocal => self.plan_locally(),
+            Action::PlanTargetReset => {
+                if !self.reset_plan_target() {
+                    let to = self.plan_target().describe();
+                    self.note(Level::Info, Source::Command, format!("plans go to {to}"));
+                }
+            }
             // Done by the TUI loop, which owns the file; it reports with `Recording`.
             Action::ToggleRecording => {}
             Action::Recording(note) => self.on_recording(note),
@@ -489,6 +502,8 @@ impl App {
             self.log.set_text_filter(String::new());
         } else if self.map.cursor_mode {
             self.map.cursor_mode = false;
+        } else if self.reset_plan_target() {
+            // A clicked target and a chosen plan target go first, then the view.
         } else if self.view != View::Dashboard {
             self.view = View::Dashboard;
         }
@@ -526,14 +541,14 @@ impl App {
         self.send(Command::Stop);
     }
 
-    /// Plans on the station from the believed pose (else the map's start) to the cursor while
-    /// it is shown, else the last go-to goal, else the map's goal.
+    /// Plans on the station from the believed pose (else the map's start) to the plan's
+    /// target (`app::plan_target`: the cursor while shown, else the chosen target, else the
+    /// map's goal).
     fn plan_locally(&mut self) {
         let from = self.pose().map(|(x, y, _)| (x, y));
-        let to = if self.map.cursor_mode {
-            Some(self.map.cursor)
-        } else {
-            self.map.goal
+        let to = match self.take_plan_target() {
+            plan_target::PlanTarget::Chosen(p) => Some(p),
+            plan_target::PlanTarget::MapGoal(_) => None,
         };
         let (level, text) = match self.map.plan.plan(from, to) {
             Ok(line) => (Level::Info, line),
@@ -555,7 +570,7 @@ impl App {
         self.send(Command::GoTo(goal));
     }
 
-    fn read_param(&mut self, id: u16) {
+    pub(super) fn read_param(&mut self, id: u16) {
         self.params.set_pending(id);
         self.send(Command::GetParam {
             id: protocol::ParamId(id),
@@ -663,6 +678,7 @@ impl App {
                 self.truth = Some(t);
             }
             LinkEvent::Localization(l) => self.localization.on_message(*l),
+            LinkEvent::Progress(p) => self.on_progress(p),
             LinkEvent::Robot(e) => self.on_robot_event(e),
             LinkEvent::Log { level, text } => self.note(level.into(), Source::Robot, text),
             LinkEvent::CommandDone {
@@ -696,6 +712,8 @@ impl App {
         };
         self.note(level, Source::Link, text);
         let connected = matches!(c, Connection::Connected(_));
+        // A report from another session (or a lost one) says nothing about now.
+        self.progress = None;
         if let Connection::Connected(p) = &c {
             self.rate_hz = Some(p.telemetry_hz);
             self.peer = Some(p.clone());
@@ -779,7 +797,11 @@ impl App {
             ),
             EventCode::MapUpdated => (Level::Debug, "map updated".into()),
             EventCode::PlanInstalled => (Level::Info, "plan installed".into()),
-            EventCode::PlanFinished => (Level::Info, "plan finished".into()),
+            EventCode::PlanFinished => (
+                Level::Info,
+                format!("plan finished: all {v} waypoints done, the robot stopped"),
+            ),
+            EventCode::NoProgress => (Level::Warn, self.no_progress_text(v)),
             EventCode::PlanAborted => (Level::Warn, format!("plan aborted at waypoint {v}")),
             // Negative: the robot could not authenticate our Hello (PROTOCOL.md §13).
             EventCode::HandshakeRefused if v < 0 => (
@@ -902,6 +924,14 @@ impl App {
                 let detail = match command {
                     Command::Plan { from, to } if reason == protocol::NackReason::BadPoint => {
                         self.plan_refusal_detail(from, to)
+                    }
+                    Command::Segment | Command::Plan { .. }
+                        if reason == protocol::NackReason::CapacityExceeded =>
+                    {
+                        self.squares_detail()
+                    }
+                    Command::GoTo(_) if reason == protocol::NackReason::BadPoint => {
+                        self.arena_bounds_detail()
                     }
                     // These modes need a target the mode key cannot give: say which key can.
                     Command::SetMode(Mode::GoTo) => {

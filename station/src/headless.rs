@@ -286,6 +286,32 @@ async fn after_periodic_burst(link: &mut RunningLink, peer: &PeerInfo) {
     }
 }
 
+/// The robot's arena bounds (parameters `arena_min_x_m`, `arena_max_x_m`, `arena_min_y_m`,
+/// `arena_max_y_m`), or `None` if it does not answer all four.
+async fn arena_bounds(link: &crate::link::LinkHandle) -> Option<[f32; 4]> {
+    use robot_firmware::params::id;
+    let mut out = [0.0f32; 4];
+    let ids = [
+        id::ARENA_MIN_X_M,
+        id::ARENA_MAX_X_M,
+        id::ARENA_MIN_Y_M,
+        id::ARENA_MAX_Y_M,
+    ];
+    for (slot, i) in out.iter_mut().zip(ids) {
+        let get = protocol::Command::GetParam {
+            id: protocol::ParamId(i),
+        };
+        match link.call(get).await {
+            CommandOutcome::Acked {
+                info: AckInfo::Param { value, .. },
+                ..
+            } => *slot = value,
+            _ => return None,
+        }
+    }
+    Some(out)
+}
+
 /// Round trips of a repeated `send`, microseconds (nearest rank).
 #[derive(Debug, serde::Serialize)]
 struct RoundTrips {
@@ -345,6 +371,17 @@ async fn send(
         }
         _ => None,
     };
+    // A go-to refused as outside the arena: name the robot's bounds, read from it.
+    let bounds = match (command, &outcome) {
+        (
+            protocol::Command::GoTo(_),
+            CommandOutcome::Nacked {
+                reason: protocol::NackReason::BadPoint,
+                ..
+            },
+        ) => arena_bounds(&link.handle).await,
+        _ => None,
+    };
     link.handle.shutdown();
     let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;
     let what = command_text(&command);
@@ -384,12 +421,23 @@ async fn send(
                            "info": detail});
             (true, format!("{text} ({rtt_ms} ms)"), v)
         }
-        CommandOutcome::Nacked { reason, sends } => (
-            false,
-            format!("nack: {what}: {}", refusal_text(&command, reason)),
-            json!({"outcome": "nack", "command": what, "sends": sends,
-                   "reason": format!("{reason:?}"), "reason_text": refusal_text(&command, reason)}),
-        ),
+        CommandOutcome::Nacked { reason, sends } => {
+            let mut why = refusal_text(&command, reason);
+            if let Some([x0, x1, y0, y1]) = bounds {
+                why.push_str(&format!(
+                    " (the robot's arena: x {x0:.2} .. {x1:.2} m, y {y0:.2} .. {y1:.2} m)"
+                ));
+            }
+            let mut v = json!({"outcome": "nack", "command": what, "sends": sends,
+                   "reason": format!("{reason:?}"), "reason_text": why});
+            if let (Some(b), Some(obj)) = (bounds, v.as_object_mut()) {
+                obj.insert(
+                    "arena".into(),
+                    json!({"min_x_m": b[0], "max_x_m": b[1], "min_y_m": b[2], "max_y_m": b[3]}),
+                );
+            }
+            (false, format!("nack: {what}: {why}"), v)
+        }
         CommandOutcome::Failed(why) => (
             false,
             format!("failed: {what}: {why}"),

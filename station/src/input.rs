@@ -208,6 +208,7 @@ fn global(k: &KeyEvent) -> Option<Action> {
         KeyCode::Char('t') => Some(Action::ToggleLayer("truth")),
         KeyCode::Char('x') => Some(Action::ClearTracks),
         KeyCode::Char('P') => Some(Action::PlanLocal),
+        KeyCode::Char('G') => Some(Action::PlanTargetReset),
         KeyCode::Char('R') => Some(Action::ToggleRecording),
         KeyCode::Char('u') => Some(Action::Transfer(TransferAction::OpenPrompt)),
         KeyCode::Char('M') => Some(Action::Transfer(TransferAction::DownloadMap)),

@@ -72,6 +72,32 @@ impl Core {
         Ok(())
     }
 
+    /// Outside exploration, the robot still maps with its sensors whatever moves it (go-to,
+    /// teleop, a plan), so that a plan can start where go-to left it. Only unknown cells are
+    /// filled in: a map the operator uploaded, or one exploration made, is never contradicted
+    /// by a passing reading. Idle, nothing is marked: a map just uploaded stays byte for byte
+    /// what was sent until the robot moves. Robots without IR sensors, or without a map,
+    /// mark nothing.
+    pub(super) fn map_as_it_moves(&mut self) {
+        if matches!(self.mode, Mode::Explore | Mode::Idle) || !self.objects.has_map() {
+            return;
+        }
+        let (ir, n) = self.ir_rays();
+        if n == 0 {
+            return;
+        }
+        let input = ExploreInput {
+            now_ms: self.cycle_ms,
+            pose: self.pose(),
+            ir: &ir[..n],
+            goal: self.dead.params.beacon,
+            ground: None,
+            arrival_m: self.guided.arrival_m,
+        };
+        let params = self.explorer.params;
+        crate::explore::mark_map(&input, &params, &mut UnknownOnly(&mut self.objects));
+    }
+
     /// This cycle's motor command in `Mode::Explore`.
     pub(super) fn explore_command(&mut self) -> MotorCommand {
         let (ir, n) = self.ir_rays();
@@ -132,6 +158,27 @@ impl Core {
     }
 }
 
+/// The robot's map as the other modes mark it: unknown cells only.
+struct UnknownOnly<'a>(&'a mut Objects);
+
+impl MapMarker for UnknownOnly<'_> {
+    fn index(&self, p: Point) -> Option<(i32, i32)> {
+        MapMarker::index(self.0.nav().grid(), p)
+    }
+
+    fn cell_at(&self, p: Point) -> Option<Cell> {
+        MapMarker::cell_at(self.0.nav().grid(), p)
+    }
+
+    fn mark(&mut self, p: Point, cell: Cell) {
+        if cell != Cell::Unknown && self.cell_at(p) == Some(Cell::Unknown) {
+            if let Some(grid) = self.0.grid_mut() {
+                grid.mark(p, cell);
+            }
+        }
+    }
+}
+
 /// The robot's map as exploration sees it: the grid to mark, and the planner over it.
 struct ExploreMap<'a>(&'a mut Objects);
 
@@ -182,5 +229,118 @@ impl MapMarker for ExploreMap<'_> {
         })();
         nav.forget_segmentation();
         point
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::Reply;
+    use crate::robot::follow::tests::run;
+    use crate::scripted::ScriptedHal;
+    use crate::{odometry::Pose, Robot, RobotOptions, MICRO_RATO};
+    use protocol::Command;
+
+    #[test]
+    fn after_a_go_to_the_robot_can_plan_from_where_it_stopped() {
+        // Issue 16: after reaching a spot by go-to, `O` answered "start is in an unknown cell":
+        // only exploration marked the map. A robot with an explored (here: all-unknown) map
+        // drives by go-to, then plans back from where it stopped.
+        let mut robot = Robot::new(RobotOptions {
+            profile: &MICRO_RATO,
+            seed: 1,
+            start: Pose::new(0.5, 0.5, 0.0),
+            emulated: false,
+            firmware_version: "test",
+        });
+        let mut hal = ScriptedHal {
+            compass: Some(0.0),
+            ..ScriptedHal::default()
+        };
+        let core = &mut robot.core;
+        assert!(matches!(
+            core.apply(Command::StartExploration, 0),
+            Reply::Ack(_)
+        ));
+        assert!(matches!(core.apply(Command::Stop, 0), Reply::Ack(_)));
+        let to = PointMm {
+            x_mm: 2000,
+            y_mm: 500,
+        };
+        assert!(matches!(core.apply(Command::GoTo(to), 0), Reply::Ack(_)));
+        run(&mut robot, &mut hal, 400);
+        let core = &mut robot.core;
+        assert!(core.arrived, "{:?}", core.pose());
+        let here = core.pose().point();
+        assert_eq!(
+            MapMarker::cell_at(core.objects.nav().grid(), here),
+            Some(Cell::Free)
+        );
+        let back = PointMm {
+            x_mm: 500,
+            y_mm: 500,
+        };
+        let reply = core.apply(
+            Command::Plan {
+                from: None,
+                to: Some(back),
+            },
+            0,
+        );
+        assert!(matches!(reply, Reply::Ack(_)), "{reply:?}");
+    }
+
+    #[test]
+    fn an_idle_robot_leaves_its_map_as_uploaded() {
+        let mut robot = Robot::new(RobotOptions {
+            profile: &MICRO_RATO,
+            seed: 1,
+            start: Pose::new(0.5, 0.5, 0.0),
+            emulated: false,
+            firmware_version: "test",
+        });
+        let core = &mut robot.core;
+        assert!(matches!(
+            core.apply(Command::StartExploration, 0),
+            Reply::Ack(_)
+        ));
+        assert!(matches!(core.apply(Command::Stop, 0), Reply::Ack(_)));
+        let before = core.objects.map().map(|m| m.id);
+        core.map_as_it_moves();
+        assert_eq!(core.objects.map().map(|m| m.id), before);
+    }
+
+    #[test]
+    fn passing_readings_never_overwrite_what_the_map_knows() {
+        let mut robot = Robot::new(RobotOptions {
+            profile: &MICRO_RATO,
+            seed: 1,
+            start: Pose::new(0.5, 0.5, 0.0),
+            emulated: false,
+            firmware_version: "test",
+        });
+        let core = &mut robot.core;
+        assert!(matches!(
+            core.apply(Command::StartExploration, 0),
+            Reply::Ack(_)
+        ));
+        assert!(matches!(core.apply(Command::Stop, 0), Reply::Ack(_)));
+        let here = core.pose().point();
+        if let Some(g) = core.objects.grid_mut() {
+            g.mark(here, Cell::Obstacle);
+        }
+        let teleop = Command::Teleop {
+            v_mm_s: 0,
+            w_mrad_s: 0,
+        };
+        assert!(matches!(core.apply(teleop, 0), Reply::Ack(_)));
+        let before = core.objects.map().map(|m| m.id);
+        core.map_as_it_moves();
+        // The cell stays; the cells the rays cross are filled in (the map changed).
+        assert_ne!(core.objects.map().map(|m| m.id), before);
+        assert_eq!(
+            MapMarker::cell_at(core.objects.nav().grid(), here),
+            Some(Cell::Obstacle)
+        );
     }
 }

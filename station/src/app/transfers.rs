@@ -9,7 +9,7 @@
 //! Map or Plan object file; prefilled with the last one, or the arena shown) and uploads it
 //! with a progress bar; `M` downloads the robot's map and shows it (the station's planner and
 //! the grid layer then use it); `E` sends `StartExploration`; `O` sends `Segment` and `Plan`
-//! (to the go-to cursor or goal if set, else the map's goal); `X` sends `ExecutePlan` with
+//! (to the plan's target, `app::plan_target`); `X` sends `ExecutePlan` with
 //! the installed plan's id.
 //!
 //! Live map: while telemetry says the robot is in Explore mode, the map is downloaded every
@@ -27,6 +27,7 @@ use protocol::units::point_mm;
 use protocol::{Command, EventCode, Mode, ObjectKind, PointMm};
 
 use super::log::{Level, Source};
+use super::plan_target::PlanTarget;
 use super::App;
 use crate::link::{CommandOutcome, LinkEvent, TransferOut};
 use crate::plan::{End, MapOptions};
@@ -249,14 +250,21 @@ impl App {
             .submit(spec, Purpose::Upload(path.to_string(), bytes));
     }
 
-    /// `Segment`, then `Plan` to the cursor (while shown), else the last go-to goal, else the
-    /// map's goal; the plan is downloaded when the robot announces it.
+    /// `Segment`, then `Plan` to the plan's target (`app::plan_target`: the cursor while
+    /// shown, else the chosen target, else the robot's map's goal), saying which; the plan is
+    /// downloaded when the robot announces it.
     fn plan_on_robot(&mut self) {
-        let to = if self.map.cursor_mode {
-            Some(self.map.cursor)
-        } else {
-            self.map.goal
+        let target = self.take_plan_target();
+        let to = match target {
+            PlanTarget::Chosen(p) => Some(p),
+            // The robot plans to its own map's goal when given none.
+            PlanTarget::MapGoal(_) => None,
         };
+        self.note(
+            Level::Info,
+            Source::Command,
+            format!("planning on the robot to {}", target.describe()),
+        );
         let to = match to.map(|p| point_mm(["goal x", "goal y"], p)).transpose() {
             Ok(to) => to,
             Err(e) => {

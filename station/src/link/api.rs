@@ -6,7 +6,9 @@
 //! and is answered by exactly one `LinkEvent::CommandDone` with that id (and, when asked, on a
 //! oneshot channel too), whatever happens to the link in between.
 
-use protocol::{AckInfo, Command, EmuTruth, Event, LogLevel, MapCapacity, NackReason, ProfileId};
+use protocol::{
+    AckInfo, Command, EmuTruth, Event, LogLevel, MapCapacity, Mode, NackReason, ProfileId,
+};
 use protocol::{Telemetry, TransferAck, TransferBegin};
 use serde::Serialize;
 use tokio::sync::oneshot;
@@ -59,6 +61,8 @@ pub enum LinkEvent {
     Truth(EmuTruth),
     /// Floor-grid line correction state (seed 003), boxed: it is the largest message.
     Localization(Box<protocol::Localization>),
+    /// What the robot's mode is doing (waypoint k of n, distance left, time, stuck time).
+    Progress(protocol::Progress),
     /// An `Event` frame from the robot.
     Robot(Event),
     /// A `Log` line from the robot.
@@ -184,9 +188,13 @@ impl std::fmt::Display for CommandFailure {
 }
 
 /// A refusal of `command` in words: [`nack_text`], and for a parameter out of range the range
-/// the firmware's table gives (`value out of range: 0 to 2000 mm/s`).
+/// the firmware's table gives (`value out of range: 0 to 2000 mm/s`); for plans, maps and
+/// go-to, the limit that refused it and the way forward ([`way_forward`]).
 pub fn refusal_text(command: &protocol::Command, reason: NackReason) -> String {
     let base = nack_text(reason);
+    if let Some(way) = way_forward(command, reason) {
+        return format!("{base}: {way}");
+    }
     match (command, reason) {
         (protocol::Command::SetParam { id, .. }, NackReason::OutOfRange) => {
             match robot_firmware::params::info(id.0) {
@@ -202,6 +210,88 @@ pub fn refusal_text(command: &protocol::Command, reason: NackReason) -> String {
         }
         _ => base.to_string(),
     }
+}
+
+/// For a refusal of a plan, map or motion command: which limit refused it and what to do
+/// instead. Only what holds for every robot of this firmware; the TUI adds what it knows of
+/// the robot's map (how many squares it has, which end is not free).
+pub fn way_forward(command: &Command, reason: NackReason) -> Option<String> {
+    use robot_firmware::nav::fixed::{NAV64_PATH, NAV64_REGIONS, NAV64_SIDE};
+    let plan_elsewhere = "plan on the station instead (P in the TUI, or `station plan --map \
+                          FILE --out-object plan.obj`) and upload the plan (u, or `station \
+                          upload-plan --plan plan.obj`)";
+    Some(match (command, reason) {
+        // The robot plans on any map it holds (squares + A*, else its grid planner); only
+        // its square list and its plan object have fixed sizes.
+        (Command::Segment, NackReason::CapacityExceeded) => format!(
+            "the robot segments a map into at most {NAV64_REGIONS} squares; it still plans on \
+             this map with its grid planner (O); to see the squares, segment on the station \
+             (P in the TUI, or `station segment --map FILE`)"
+        ),
+        (Command::Plan { .. }, NackReason::CapacityExceeded) => format!(
+            "the path needs more waypoints than the robot's plan object ({} bytes, regions \
+             up to {NAV64_PATH}) holds; {plan_elsewhere}",
+            robot_firmware::transfer::OBJECT_CAPACITY
+        ),
+        (Command::Segment | Command::Plan { .. }, NackReason::NoMap) => {
+            "upload a map first (u, or `station upload-map`), or explore (E) to make one".into()
+        }
+        (Command::Plan { .. }, NackReason::BadPoint) => {
+            "the start or the goal is off the map or not a known free cell: drive the robot \
+             onto known ground, or choose another target (g, move, O)"
+                .into()
+        }
+        (Command::Plan { .. }, NackReason::Unreachable) => {
+            "no way through known free cells: explore further (E), or choose another target \
+             (g, move, O)"
+                .into()
+        }
+        (Command::ExecutePlan { .. }, NackReason::NoPlan)
+        | (Command::SetMode(Mode::ExecutePlan), NackReason::NoPlan) => {
+            "plan on the robot first (O, or `station send plan`), or upload a plan (u)".into()
+        }
+        (Command::ExecutePlan { .. }, NackReason::PlanIdMismatch) => {
+            "the robot holds another plan now: plan again (O) or execute the id its last \
+             PlanInstalled named"
+                .into()
+        }
+        (Command::ExecutePlan { .. }, NackReason::Unsupported) => {
+            "plan execution needs wheel encoders or a compass".into()
+        }
+        (Command::GoTo(_), NackReason::BadPoint) => {
+            "the point is outside the robot's arena (parameters arena_min_x_m .. \
+             arena_max_y_m): choose a point inside it"
+                .into()
+        }
+        (Command::GoTo(_), NackReason::Unsupported) => {
+            "go-to needs wheel encoders or a compass".into()
+        }
+        (Command::StartExploration, NackReason::Unsupported)
+        | (Command::SetMode(Mode::Explore), NackReason::Unsupported) => {
+            "exploration needs a compass and a beacon sensor (the micro-rato profile)".into()
+        }
+        (Command::StartExploration, NackReason::CapacityExceeded) => format!(
+            "the arena (parameters arena_min_x_m .. arena_max_y_m) needs more than the \
+             robot's {NAV64_SIDE} x {NAV64_SIDE} map cells of 0.3 m: set smaller bounds"
+        ),
+        (Command::Download { .. }, NackReason::NoMap) => {
+            "the robot holds no map: upload one (u) or explore (E)".into()
+        }
+        (Command::Download { .. }, NackReason::NoPlan) => {
+            "the robot holds no plan: plan on it (O) or upload one (u)".into()
+        }
+        (_, NackReason::Busy) if is_object_command(command) => {
+            "another transfer is in progress: wait for it to end".into()
+        }
+        _ => return None,
+    })
+}
+
+fn is_object_command(c: &Command) -> bool {
+    matches!(
+        c,
+        Command::Segment | Command::Plan { .. } | Command::Download { .. }
+    )
 }
 
 /// A human description of a Nack reason (PROTOCOL.md §6 kind 6).

@@ -15,7 +15,7 @@ use tokio::time::Instant;
 
 use super::engine::{EngineOut, JobSpec, TransferEngine};
 use super::{JobOutcome, JobReport, TransferError, TransferEvent};
-use crate::link::api::{command_text, nack_text};
+use crate::link::api::{command_text, refusal_text};
 use crate::link::{CommandOutcome, LinkEvent, RunningLink};
 
 /// How often the engine is polled while a job runs.
@@ -34,10 +34,12 @@ pub struct TransferClient {
 /// Why an on-robot plan did not arrive.
 #[derive(Debug, thiserror::Error)]
 pub enum RobotPlanError {
-    #[error("{what} refused: {}", nack_text(*reason))]
+    #[error("{what} refused: {text}")]
     Refused {
         what: String,
         reason: protocol::NackReason,
+        /// The refusal in words, with the limit and the way forward (`refusal_text`).
+        text: String,
     },
     #[error("{what} failed: {why}")]
     Failed { what: String, why: String },
@@ -223,7 +225,8 @@ impl TransferClient {
                     return Err(RobotPlanError::Failed { what, why });
                 }
                 CommandOutcome::Nacked { reason, .. } => {
-                    return Err(RobotPlanError::Refused { what, reason })
+                    let text = refusal_text(&command, reason);
+                    return Err(RobotPlanError::Refused { what, reason, text });
                 }
                 CommandOutcome::Failed(f) => {
                     let why = f.to_string();

@@ -89,6 +89,16 @@ fn header_line(app: &App, d: Detail) -> Line<'static> {
                 Style::new().fg(Color::Cyan),
             ),
         });
+        // What the mode is doing (the robot's Progress report): the time goes first when
+        // the terminal is narrow. Not shown once telemetry is stale: it would be the past.
+        if stale.is_none() {
+            if let Some(text) = app.progress_text(d >= Detail::ShortState) {
+                spans.push(Span::styled(
+                    format!(": {text}"),
+                    Style::new().fg(Color::Cyan),
+                ));
+            }
+        }
     }
     if app.teleop.driving {
         spans.push(sep());
@@ -152,6 +162,7 @@ pub fn render_footer(app: &App, frame: &mut Frame, area: Rect) {
             ("arrows/hjkl", "move 0.1 m"),
             ("shift", "×5"),
             ("Enter", "go"),
+            ("O/P", "plan to cursor"),
             ("Esc", "cancel"),
         ]
     } else if app.view == View::Params {
@@ -177,8 +188,29 @@ pub fn render_footer(app: &App, frame: &mut Frame, area: Rect) {
             ("c", "chart"),
         ]
     };
+    // The plan's target, where a plan would go now (`app::plan_target`).
+    let target;
+    let mut hints = hints.to_vec();
+    if !app.help
+        && !app.map.cursor_mode
+        && app.transfers.prompt.is_none()
+        && app.params.input.is_none()
+        && app.view != View::Params
+        && !app.replaying
+    {
+        target = app.plan_target().short();
+        // Beside go-to, so it stays on screen at 80 columns.
+        let at = hints
+            .iter()
+            .position(|(k, _)| *k == "g")
+            .map_or(0, |i| i + 1);
+        if app.map.plan_target.is_some() {
+            hints.insert(at, ("G", "goal"));
+        }
+        hints.insert(at, ("O", target.as_str()));
+    }
     let mut spans = Vec::new();
-    for (k, what) in hints {
+    for (k, what) in &hints {
         spans.push(Span::styled(
             format!(" {k} "),
             Style::new().add_modifier(Modifier::REVERSED),

@@ -25,7 +25,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ),
     (
         "g ←↑↓→ Enter",
-        "go-to with a cursor on the map (shift: 5x step), or click",
+        "go-to with a cursor on the map (shift: 5x step), or click; Esc clears the marker",
     ),
     (
         "z Z hjkl",
@@ -39,7 +39,11 @@ pub const KEYS: &[(&str, &str)] = &[
     ("t  x", "show or hide the true pose / clear the tracks"),
     (
         "P",
-        "plan on the station: robot (or map start) to cursor / goal",
+        "plan on the station: robot (or map start) to the plan's target ◎",
+    ),
+    (
+        "g … O/P  G",
+        "plan to the cursor (it becomes the target) / back to the map's goal",
     ),
     (
         "o r n m e",

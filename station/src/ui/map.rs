@@ -149,11 +149,17 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
 /// The legend in at most `room` columns: each mark with the glyph drawn on the map, so it
 /// reads without colour; then the keys that work, as far as they fit.
 fn legend(app: &App, room: u16) -> TLine<'static> {
-    let mut items: Vec<ratatui::text::Span<'static>> = vec![
-        " ● believed ".cyan(),
-        "○ true ".magenta(),
-        "× goal ".yellow(),
-    ];
+    let mut items: Vec<ratatui::text::Span<'static>> =
+        vec![" ● believed ".cyan(), "○ true ".magenta()];
+    // A replay sends nothing: no go-to marker to explain.
+    if !app.replaying {
+        items.push("× go-to ".yellow());
+    }
+    items.push(if room < 58 {
+        "◎ plan ".light_red()
+    } else {
+        "◎ plan target ".light_red()
+    });
     if app
         .map
         .arena
@@ -295,6 +301,7 @@ fn content_bounds(app: &App) -> [f64; 4] {
         .collect();
     pts.extend(app.pose().map(|(x, y, _)| (x, y)));
     pts.extend(app.map.goal);
+    pts.extend(app.map.plan_target);
     if app.map.cursor_mode {
         pts.push(app.map.cursor);
     }
@@ -453,6 +460,10 @@ impl MapLayer for GoalLayer {
     fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {
         if let Some((x, y)) = app.map.goal {
             ctx.print(x, y, "×".yellow());
+        }
+        // Where O and P plan to: the chosen target, else the map's goal.
+        if let Some((x, y)) = app.plan_target().point() {
+            ctx.print(x, y, "◎".light_red().bold());
         }
         if app.map.cursor_mode {
             let (x, y) = app.map.cursor;
