@@ -19,7 +19,7 @@
 
 use robot_firmware::hal::{GripperCommand, GripperState, CAMERA_PIXELS};
 use robot_firmware::odometry::Pose as FwPose;
-use robot_firmware::{BeaconReading, Hal, MotorCommand, Profile, Robot, RobotOptions};
+use robot_firmware::{AnyRobot, BeaconReading, Hal, MotorCommand, Profile, RobotOptions};
 use thiserror::Error;
 
 use crate::arena::{Arena, Light, Pose};
@@ -254,12 +254,12 @@ impl SimHal {
 /// its defaults, the seed 004 arena (a 5 x 5 m square, the beacon at its centre): in
 /// Micro-Rato'99 the beacon is at (3.0, 2.571), so exploration headed for (2.5, 2.5) and every
 /// beacon calibration pulled the believed position towards the wrong point.
-fn tell_the_arena(robot: &mut Robot, world: &World) {
-    if !robot.core.profile.has(protocol::caps::BEACON) {
+fn tell_the_arena(robot: &mut AnyRobot, world: &World) {
+    if !robot.profile().has(protocol::caps::BEACON) {
         return;
     }
     let fw = |p: Point| robot_firmware::odometry::Point::new(p.x as f32, p.y as f32);
-    let dead = &mut robot.core.dead;
+    let dead = robot.dead_mut();
     if let Some(b) = world.beacon() {
         dead.params.beacon = fw(b.position);
     }
@@ -275,7 +275,8 @@ fn tell_the_arena(robot: &mut Robot, world: &World) {
 
 /// A running simulation.
 pub struct Sim {
-    robot: Robot,
+    /// The composition the profile uses (`robot_firmware::robot::kit`).
+    robot: AnyRobot,
     hal: SimHal,
     truth: TruthHistory,
     seed: u64,
@@ -387,7 +388,7 @@ impl Sim {
             world,
         };
         let firmware_seed = SimRng::new(seed, stream::FIRMWARE).next_u64() as u32;
-        let mut robot = Robot::new(RobotOptions {
+        let mut robot = AnyRobot::new(RobotOptions {
             profile,
             seed: firmware_seed,
             // The robot is told where it starts (seed 004 §5: the start pose is known).
@@ -518,12 +519,12 @@ impl Sim {
     }
 
     /// The firmware.
-    pub fn robot(&self) -> &Robot {
+    pub fn robot(&self) -> &AnyRobot {
         &self.robot
     }
 
     /// The firmware, mutably (headless runs command it directly).
-    pub fn robot_mut(&mut self) -> &mut Robot {
+    pub fn robot_mut(&mut self) -> &mut AnyRobot {
         &mut self.robot
     }
 

@@ -36,7 +36,7 @@ pub mod transfer;
 
 pub use hal::{BeaconReading, Hal, MotorCommand};
 pub use profile::{Profile, KHEPERA, MICRO_RATO};
-pub use robot::{Robot, RobotOptions};
+pub use robot::{AnyRobot, Robot, RobotOptions};
 
 /// Side of the square map the firmware holds, in cells (seed 004 used 17 x 17).
 pub const MAP_CAPACITY: usize = 64;

@@ -31,16 +31,21 @@ use crate::profile::Profile;
 use crate::telemetry;
 use crate::transfer::{Installed, Objects};
 
+mod any;
 mod calibrate;
 mod explore;
 mod follow;
 mod forage;
+pub mod kit;
 mod linecorr;
 mod scan;
 
+pub use any::AnyRobot;
 pub use calibrate::{CalPhase, LightCalibration, T1 as LIGHT_NEAR_T1};
 pub use follow::Execution;
 pub use forage::{Forage, ForageParams, ForagePhase, GripStep};
+pub use kit::{Absent, DomDinis, Khepera, Kit, Slot};
+use kit::{ExplorerSlot, ForageSlot, LightCalSlot, LineCorrSlot};
 pub use linecorr::{LineCorr, REPORT_PERIOD_MS as LOCALIZATION_PERIOD_MS};
 pub use scan::{LandmarkScan, ScanParams, Sighting};
 
@@ -100,7 +105,7 @@ pub struct Timing {
 }
 
 /// Everything but the link: the state commands act on.
-pub struct Core {
+pub struct Core<K: Kit> {
     pub profile: &'static Profile,
     pub config: RobotConfig,
     pub arbiter: Arbiter,
@@ -139,30 +144,30 @@ pub struct Core {
     plan_points: [Point; MAX_PLAN_POINTS],
     plan_points_len: usize,
     /// Seed 004 §5 reactive search with mapping.
-    pub explorer: Explorer,
+    pub explorer: K::Explorer,
     /// Time of the current control cycle, ms.
     cycle_ms: u32,
     /// Seed 000 §7 foraging state.
-    pub forage: Forage,
+    pub forage: K::Forage,
     /// The gripper command in force (sent each cycle on a robot with a gripper).
     pub gripper_cmd: GripperCommand,
     /// Seed 003 floor-grid line correction and the survey pilot.
-    pub linecorr: LineCorr,
+    pub linecorr: K::LineCorr,
     /// Seed 000 §5.3 light -> angle calibration (`Mode::CalibrateLight`).
-    pub light_cal: LightCalibration,
+    pub light_cal: K::LightCal,
 }
 
 /// Waypoints the robot keeps for execution: start, 256 region centres, goal.
 pub const MAX_PLAN_POINTS: usize = 258;
 
 /// The whole robot.
-pub struct Robot {
+pub struct Robot<K: Kit> {
     pub link: Link,
-    pub core: Core,
+    pub core: Core<K>,
     identity: Identity,
 }
 
-impl Robot {
+impl<K: Kit> Robot<K> {
     pub fn new(opts: RobotOptions) -> Self {
         let profile = opts.profile;
         let odometry_params = OdometryParams {
@@ -170,7 +175,7 @@ impl Robot {
             mm_per_pulse: profile.pulse_m * 1000.0,
             ..OdometryParams::default()
         };
-        let mut capabilities = profile.capabilities;
+        let mut capabilities = profile.capabilities & !kit::lacking::<K>();
         if opts.emulated {
             capabilities |= protocol::caps::EMULATED;
         }
@@ -213,12 +218,16 @@ impl Robot {
                 executor: Executor::new(ExecuteParams::default(), opts.start.point()),
                 plan_points: [Point::new(0.0, 0.0); MAX_PLAN_POINTS],
                 plan_points_len: 0,
-                explorer: Explorer::new(ExploreParams::default(), opts.seed ^ 0x5EED_0004),
+                explorer: Slot::fill(|| {
+                    Explorer::new(ExploreParams::default(), opts.seed ^ 0x5EED_0004)
+                }),
                 cycle_ms: 0,
-                forage: Forage::default(),
+                forage: Slot::fill(Forage::default),
                 gripper_cmd: GripperCommand::default(),
-                linecorr: LineCorr::new(odometry_params, opts.start, opts.seed ^ 0x5EED_0003),
-                light_cal: LightCalibration::new(opts.seed ^ 0x5EED_0005),
+                linecorr: Slot::fill(|| {
+                    LineCorr::new(odometry_params, opts.start, opts.seed ^ 0x5EED_0003)
+                }),
+                light_cal: Slot::fill(|| LightCalibration::new(opts.seed ^ 0x5EED_0005)),
             },
         }
     }
@@ -293,10 +302,12 @@ impl Robot {
                 next
             };
         }
-        if self.core.linecorr.report_due(now_ms) {
-            let m = self.core.linecorr.report(now_ms);
-            self.link
-                .send_low_priority(&Message::Localization(m), now_ms);
+        if let Some(lc) = self.core.linecorr.get_mut() {
+            if lc.report_due(now_ms) {
+                let m = lc.report(now_ms);
+                self.link
+                    .send_low_priority(&Message::Localization(m), now_ms);
+            }
         }
         self.link
             .heartbeat(now_ms, protocol::timing::HEARTBEAT_PERIOD_MS);
@@ -313,11 +324,11 @@ impl Robot {
     }
 }
 
-impl Core {
+impl<K: Kit> Core<K> {
     /// The pose estimate: odometry on robots with encoders, compass dead reckoning otherwise.
     pub fn pose(&self) -> Pose {
-        if self.linecorr.active() {
-            self.linecorr.pose()
+        if let Some(lc) = self.linecorr.get().filter(|lc| lc.active()) {
+            lc.pose()
         } else if self.profile.has(protocol::caps::ENCODERS) {
             self.odometry.pose()
         } else {
@@ -374,7 +385,7 @@ impl Core {
                 }))
             }
             Message::TransferChunk(c) => {
-                let (ack, installed) = self.objects.on_chunk(c, &mut self.light_cal);
+                let (ack, installed) = self.objects.on_chunk(c, self.light_cal.get_mut());
                 if let Some(i) = installed {
                     self.installed(i);
                 }
@@ -394,7 +405,8 @@ impl Core {
     fn upload_refusal(&self, object: ObjectKind) -> Option<TransferStatus> {
         if object != ObjectKind::LightCalibration {
             None
-        } else if !self.profile.has(protocol::caps::AMBIENT_LIGHT) {
+        } else if !self.profile.has(protocol::caps::AMBIENT_LIGHT) || self.light_cal.get().is_none()
+        {
             Some(TransferStatus::Rejected)
         } else if self.mode == Mode::CalibrateLight {
             Some(TransferStatus::Busy)
@@ -428,8 +440,8 @@ impl Core {
 
     fn try_apply(&mut self, command: Command, now_ms: u32) -> Result<AckInfo, NackReason> {
         match command {
-            Command::SetMode(Mode::Explore) => self.start_exploration()?,
-            Command::SetMode(Mode::Forage) => self.start_forage()?,
+            Command::SetMode(Mode::Explore) => K::Explorer::start(self)?,
+            Command::SetMode(Mode::Forage) => K::Forage::start(self)?,
             Command::SetMode(mode) => {
                 self.check_mode(mode)?;
                 if mode == Mode::GoTo && self.goal.is_none() {
@@ -484,11 +496,13 @@ impl Core {
                     return Err(NackReason::OutOfRange);
                 }
                 self.odometry.set_pose(Pose::new(p.x, p.y, heading));
-                self.linecorr.set_pose(Pose::new(p.x, p.y, heading));
+                if let Some(lc) = self.linecorr.get_mut() {
+                    lc.set_pose(Pose::new(p.x, p.y, heading));
+                }
                 // Without encoders the heading comes from the compass; only x, y are set.
                 self.dead.set_position(p);
             }
-            Command::StartExploration => self.start_exploration()?,
+            Command::StartExploration => K::Explorer::start(self)?,
             Command::ExecutePlan { plan_id } => self.start_plan(plan_id)?,
             Command::Segment => {
                 self.objects.segment()?;
@@ -506,7 +520,9 @@ impl Core {
                 self.installed(Installed::Plan { id });
             }
             Command::Download { object, offset } => {
-                return self.objects.start_download(object, offset, &self.light_cal);
+                return self
+                    .objects
+                    .start_download(object, offset, self.light_cal.get());
             }
         }
         Ok(AckInfo::Done)
@@ -570,10 +586,11 @@ impl Core {
                     Err(NackReason::Unsupported)
                 }
             }
+            Mode::Survey if self.linecorr.get().is_none() => Err(NackReason::Unsupported),
             Mode::Survey => linecorr::check(self.profile),
             Mode::CalibrateLight => {
                 let caps = protocol::caps::AMBIENT_LIGHT | protocol::caps::ENCODERS;
-                if khepera_like && self.profile.has(caps) {
+                if khepera_like && self.profile.has(caps) && self.light_cal.get().is_some() {
                     Ok(())
                 } else {
                     Err(NackReason::Unsupported)
@@ -605,7 +622,7 @@ impl Core {
                 behaviour::Mode::Idle
             }
             Mode::ExecutePlan => self.plan_arbiter_mode(),
-            Mode::Forage => self.forage_arbiter_mode(),
+            Mode::Forage => K::Forage::arbiter_mode(self),
             _ => behaviour::Mode::Idle,
         };
         self.arbiter.set_mode(arbiter_mode);
@@ -613,10 +630,13 @@ impl Core {
             self.arbiter.release_light();
         }
         if mode == Mode::Survey {
-            self.linecorr.start(self.pose(), self.cycle_ms);
+            let (pose, now) = (self.pose(), self.cycle_ms);
+            if let Some(lc) = self.linecorr.get_mut() {
+                lc.start(pose, now);
+            }
         }
         if mode == Mode::CalibrateLight {
-            self.start_light_calibration();
+            K::LightCal::start(self);
         }
         if mode != self.mode {
             self.mode = mode;
@@ -674,7 +694,7 @@ impl Core {
 
         self.read_sensors(hal);
         self.estimate(now_ms);
-        self.report_light_bearing(now_ms);
+        K::LightCal::report_bearing(self, now_ms);
         let cmd = self.decide();
         let max = self.profile.motor_max;
         let cmd = cmd.clamped(max);
@@ -699,13 +719,15 @@ impl Core {
             encoders: hal.encoders(),
             gripper: hal.gripper(),
         };
-        if self.mode == Mode::Forage && self.forage.wants_frame() {
-            // Only when a landmark scan asks (the K213 gives 2 frames a second), straight
-            // into the scan, so the line is not kept.
-            let mut line = [0u8; crate::hal::CAMERA_PIXELS];
-            let ok = hal.camera(&mut line);
-            let heading = self.pose().heading;
-            self.forage.take_frame(heading, ok.then_some(&line));
+        let heading = self.pose().heading;
+        if let Some(forage) = self.forage.get_mut() {
+            if self.mode == Mode::Forage && forage.wants_frame() {
+                // Only when a landmark scan asks (the K213 gives 2 frames a second), straight
+                // into the scan, so the line is not kept.
+                let mut line = [0u8; crate::hal::CAMERA_PIXELS];
+                let ok = hal.camera(&mut line);
+                forage.take_frame(heading, ok.then_some(&line));
+            }
         }
         if s.line && !self.sensors.line {
             self.line_events = self.line_events.wrapping_add(1);
@@ -721,7 +743,7 @@ impl Core {
                 let dl = encoder_delta(prev[0], enc[0]);
                 let dr = encoder_delta(prev[1], enc[1]);
                 self.odometry.step(dl, dr);
-                self.line_correct(dl, dr, now_ms);
+                K::LineCorr::line_correct(self, dl, dr, now_ms);
                 if period_s > 0.0 {
                     let mm = self.odometry.params.mm_per_pulse;
                     self.wheel_speed_mm_s = [
@@ -804,10 +826,10 @@ impl Core {
             | Mode::EdgeFollowRight
             | Mode::SeekLight => self.behaviour_command(),
             Mode::ExecutePlan => self.plan_command(),
-            Mode::Explore => self.explore_command(),
-            Mode::Forage => self.forage_command(),
-            Mode::Survey => self.survey_command(),
-            Mode::CalibrateLight => self.calibrate_command(),
+            Mode::Explore => K::Explorer::command(self),
+            Mode::Forage => K::Forage::command(self),
+            Mode::Survey => K::LineCorr::survey_command(self),
+            Mode::CalibrateLight => K::LightCal::command(self),
         }
     }
 

@@ -286,7 +286,7 @@ impl Objects {
         &mut self,
         object: ObjectKind,
         offset: u32,
-        light: &LightCalibration,
+        light: Option<&LightCalibration>,
     ) -> Result<AckInfo, NackReason> {
         self.map();
         let len = self.object_len(object, light)?;
@@ -319,6 +319,7 @@ impl Objects {
             }
             ObjectKind::LightCalibration => {
                 let n = light
+                    .ok_or(NackReason::BadState)?
                     .encode(&mut self.out)
                     .map_err(|_| NackReason::CapacityExceeded)?;
                 (crc32c(self.out.get(..n).unwrap_or(&[])), n)
@@ -339,7 +340,7 @@ impl Objects {
     fn object_len(
         &self,
         object: ObjectKind,
-        light: &LightCalibration,
+        light: Option<&LightCalibration>,
     ) -> Result<usize, NackReason> {
         match object {
             ObjectKind::Map => {
@@ -354,7 +355,9 @@ impl Objects {
             ObjectKind::Plan if self.plan_len > 0 => Ok(usize::from(self.plan_len)),
             ObjectKind::Plan => Err(NackReason::NoPlan),
             // An untrained network is random numbers, not a calibration.
-            ObjectKind::LightCalibration if light.trained => Ok(LIGHT_OBJECT_LEN),
+            ObjectKind::LightCalibration if light.is_some_and(|l| l.trained) => {
+                Ok(LIGHT_OBJECT_LEN)
+            }
             ObjectKind::LightCalibration => Err(NackReason::BadState),
         }
     }
@@ -389,7 +392,7 @@ impl Objects {
     pub fn on_chunk(
         &mut self,
         c: &TransferChunk<'_>,
-        light: &mut LightCalibration,
+        mut light: Option<&mut LightCalibration>,
     ) -> (TransferAck, Option<Installed>) {
         let mut installed = None;
         let Objects {
@@ -422,10 +425,15 @@ impl Objects {
                     })
                 }
                 ObjectKind::Regions => None,
-                ObjectKind::LightCalibration => LightView::parse(v.bytes).ok().map(|view| {
-                    light.install_object(&view);
-                    Installed::LightCalibration { id: v.id }
-                }),
+                // A robot without a light calibration refuses its upload at the begin; a chunk
+                // that gets here anyway installs nothing.
+                ObjectKind::LightCalibration => match (LightView::parse(v.bytes), light.as_mut()) {
+                    (Ok(view), Some(light)) => {
+                        light.install_object(&view);
+                        Some(Installed::LightCalibration { id: v.id })
+                    }
+                    _ => None,
+                },
             };
             installed.is_some()
         });

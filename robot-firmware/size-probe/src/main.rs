@@ -10,8 +10,10 @@
 mod probe {
     use core::mem::MaybeUninit;
 
+    use robot_firmware::robot::DomDinis;
     use robot_firmware::scripted::ScriptedHal;
-    use robot_firmware::{Robot, RobotOptions, MICRO_RATO};
+    use robot_firmware::{RobotOptions, MICRO_RATO};
+    type Robot = robot_firmware::Robot<DomDinis>;
 
     #[panic_handler]
     fn panic(_: &core::panic::PanicInfo) -> ! {

@@ -15,7 +15,7 @@
 
 use protocol::{Mode, NackReason, PointMm};
 
-use super::Core;
+use super::{Core, Kit};
 use crate::deadreckon::DegradeEvent;
 use crate::explore::{ExploreInput, ExplorePhase, ExploreStats, MapMarker};
 use crate::hal::MotorCommand;
@@ -28,7 +28,7 @@ use crate::MAP_CAPACITY;
 const EXPLORE_CELL_M: f32 = 0.3;
 const GRID_BYTES: usize = grid_bytes(MAP_CAPACITY, MAP_CAPACITY);
 
-impl Core {
+impl<K: Kit<Explorer = crate::explore::Explorer>> Core<K> {
     /// `StartExploration` (or `SetMode(Explore)`): begins a reactive-search run.
     pub(super) fn start_exploration(&mut self) -> Result<(), NackReason> {
         let caps = protocol::caps::COMPASS | protocol::caps::BEACON;

@@ -18,7 +18,7 @@
 
 use protocol::{EventCode, Mode, NackReason};
 
-use super::Core;
+use super::{Core, Kit};
 use crate::behaviour::{self, drift::DriftPhase};
 use crate::execute::{ExecPhase, Executor};
 use crate::guided::{guided_step, GuidedPhase};
@@ -38,7 +38,7 @@ pub struct Execution {
     pub approaching: bool,
 }
 
-impl Core {
+impl<K: Kit> Core<K> {
     /// `Command::ExecutePlan`: starts the installed plan if it has this id.
     pub(super) fn start_plan(&mut self, plan_id: u32) -> Result<(), NackReason> {
         let (id, view) = self.objects.plan().ok_or(NackReason::NoPlan)?;
