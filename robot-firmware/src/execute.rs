@@ -68,6 +68,32 @@ pub struct ExecReport {
     pub escaped: bool,
 }
 
+/// The waypoints a plan follows, metres: a slice, or the robot's installed plan object read
+/// in place (`robot::follow`), which saves the robot a 2 KB copy of them.
+pub trait Waypoints {
+    /// Waypoint `i`; `None` past the end.
+    fn point(&self, i: usize) -> Option<Point>;
+    fn count(&self) -> usize;
+}
+
+impl Waypoints for [Point] {
+    fn point(&self, i: usize) -> Option<Point> {
+        self.get(i).copied()
+    }
+    fn count(&self) -> usize {
+        self.len()
+    }
+}
+
+impl<const N: usize> Waypoints for [Point; N] {
+    fn point(&self, i: usize) -> Option<Point> {
+        self.get(i).copied()
+    }
+    fn count(&self) -> usize {
+        N
+    }
+}
+
 /// Follows a plan's waypoints.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Executor {
@@ -99,11 +125,11 @@ impl Executor {
     }
 
     /// One control cycle.
-    pub fn step(
+    pub fn step<W: Waypoints + ?Sized>(
         &mut self,
         pose: Pose,
         ir: &[(u16, f32)],
-        waypoints: &[Point],
+        waypoints: &W,
         guided: &GuidedParams,
     ) -> (MotorCommand, ExecReport) {
         let mut report = ExecReport {
@@ -128,17 +154,17 @@ impl Executor {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn drive(
+    fn drive<W: Waypoints + ?Sized>(
         &mut self,
         pose: Pose,
         ir: &[(u16, f32)],
-        waypoints: &[Point],
+        waypoints: &W,
         guided: &GuidedParams,
         index: usize,
         sub: u16,
         report: &mut ExecReport,
     ) -> MotorCommand {
-        let Some(&end) = waypoints.get(index) else {
+        let Some(end) = waypoints.point(index) else {
             self.phase = ExecPhase::Finished;
             return MotorCommand::STOP;
         };
@@ -173,7 +199,7 @@ impl Executor {
         } else {
             lerp(self.seg_from, end, (f32::from(sub) + 1.0) / subs as f32)
         };
-        let is_last_waypoint = index + 1 >= waypoints.len();
+        let is_last_waypoint = index + 1 >= waypoints.count();
         let is_end = target == end;
         let mut g = *guided;
         if !(is_end && is_last_waypoint) {

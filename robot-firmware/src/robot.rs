@@ -12,6 +12,9 @@
 //! size (`size_of::<Robot>()` is the firmware's whole RAM use apart from the stack).
 //! Maps, plans and regions live in `transfer::Objects`; plan following is in `robot::follow`.
 
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
+
 use heapless::Deque;
 use protocol::{
     AckInfo, Command, Event, EventCode, Message, Mode, NackReason, ObjectKind, PointMm,
@@ -140,9 +143,6 @@ pub struct Core<K: Kit> {
     pub exec: Option<Execution>,
     /// Seed 004 §7 heuristics for guided plan legs.
     pub executor: Executor,
-    /// The executing plan's waypoints, metres (copied from the plan object at start).
-    plan_points: [Point; MAX_PLAN_POINTS],
-    plan_points_len: usize,
     /// Seed 004 §5 reactive search with mapping.
     pub explorer: K::Explorer,
     /// Time of the current control cycle, ms.
@@ -157,9 +157,6 @@ pub struct Core<K: Kit> {
     pub light_cal: K::LightCal,
 }
 
-/// Waypoints the robot keeps for execution: start, 256 region centres, goal.
-pub const MAX_PLAN_POINTS: usize = 258;
-
 /// The whole robot.
 pub struct Robot<K: Kit> {
     pub link: Link,
@@ -168,67 +165,41 @@ pub struct Robot<K: Kit> {
 }
 
 impl<K: Kit> Robot<K> {
+    /// A robot by value, for hosts: it passes through the stack (some 30 KB), so a board
+    /// builds its robot in place with `init`.
+    #[allow(unsafe_code)] // one call of assume_init, after init
     pub fn new(opts: RobotOptions) -> Self {
+        let mut slot = MaybeUninit::uninit();
+        Self::init(&mut slot, opts);
+        // SAFETY: `init` wrote every field.
+        unsafe { slot.assume_init() }
+    }
+
+    /// Builds the robot in `slot` (a `static` on a board), field by field, so that no whole
+    /// robot and none of its large parts (the map and plan objects) pass through the stack:
+    /// the size report finds `init`'s frame small.
+    #[allow(unsafe_code)] // writes to the fields of a MaybeUninit through raw pointers
+    pub fn init(slot: &mut MaybeUninit<Self>, opts: RobotOptions) -> &mut Self {
         let profile = opts.profile;
-        let odometry_params = OdometryParams {
-            wheel_distance_mm: profile.wheel_distance_m * 1000.0,
-            mm_per_pulse: profile.pulse_m * 1000.0,
-            ..OdometryParams::default()
-        };
         let mut capabilities = profile.capabilities & !kit::lacking::<K>();
         if opts.emulated {
             capabilities |= protocol::caps::EMULATED;
         }
-        Robot {
-            link: Link::new(),
-            identity: Identity {
+        let p = slot.as_mut_ptr();
+        // SAFETY: `p` points to writable memory for a `Robot<K>`; each field is written once
+        // through a raw pointer to it, no reference to an unwritten field is made, and
+        // `Core::init` writes every field of the core (see `every_core_field_is_written`).
+        unsafe {
+            addr_of_mut!((*p).link).write(Link::new());
+            addr_of_mut!((*p).identity).write(Identity {
                 firmware: "robot-firmware",
                 firmware_version: opts.firmware_version,
                 profile: profile.id,
                 capabilities,
                 map_capacity: profile.map_capacity(),
-            },
-            core: Core {
-                profile,
-                config: RobotConfig::default(),
-                arbiter: Arbiter::new(ArbiterParams::default(), opts.seed),
-                odometry: Odometry::new(odometry_params, opts.start),
-                dead: DeadReckoner::new(DeadReckonParams::default(), opts.start.point()),
-                guided: GuidedParams::default(),
-                compass_heading: opts.start.heading,
-                mode: Mode::Idle,
-                goal: None,
-                teleop: (0, 0),
-                motor: MotorCommand::STOP,
-                sensors: Sensors::default(),
-                prev_encoders: None,
-                wheel_speed_mm_s: [0, 0],
-                arrived: false,
-                failsafe: false,
-                line_events: 0,
-                last_calibration_ms: None,
-                prev_dead_end: false,
-                guided_active: false,
-                timing: Timing::default(),
-                next_telemetry_ms: 0,
-                events: Deque::new(),
-                emulated: opts.emulated,
-                objects: Objects::new(),
-                exec: None,
-                executor: Executor::new(ExecuteParams::default(), opts.start.point()),
-                plan_points: [Point::new(0.0, 0.0); MAX_PLAN_POINTS],
-                plan_points_len: 0,
-                explorer: Slot::fill(|| {
-                    Explorer::new(ExploreParams::default(), opts.seed ^ 0x5EED_0004)
-                }),
-                cycle_ms: 0,
-                forage: Slot::fill(Forage::default),
-                gripper_cmd: GripperCommand::default(),
-                linecorr: Slot::fill(|| {
-                    LineCorr::new(odometry_params, opts.start, opts.seed ^ 0x5EED_0003)
-                }),
-                light_cal: Slot::fill(|| LightCalibration::new(opts.seed ^ 0x5EED_0005)),
-            },
+            });
+            Core::init(addr_of_mut!((*p).core), &opts);
+            slot.assume_init_mut()
         }
     }
 
@@ -325,6 +296,110 @@ impl<K: Kit> Robot<K> {
 }
 
 impl<K: Kit> Core<K> {
+    /// Writes every field of the core at `p` (`Robot::init`).
+    ///
+    /// # Safety
+    /// `p` must point to writable memory for a `Core<K>`; its old contents are overwritten,
+    /// not dropped.
+    #[allow(unsafe_code)] // raw-pointer writes of each field
+    unsafe fn init(p: *mut Self, opts: &RobotOptions) {
+        /// The map, plan and staging buffers (24 KB): copied from a constant straight into
+        /// place rather than built in a stack frame.
+        const NO_OBJECTS: Objects = Objects::new();
+        macro_rules! put {
+            ($($field:ident: $value:expr,)*) => {
+                // SAFETY: the caller's; one write per field, none read.
+                $(unsafe { addr_of_mut!((*p).$field).write($value) };)*
+            };
+        }
+        let profile = opts.profile;
+        let odometry_params = OdometryParams {
+            wheel_distance_mm: profile.wheel_distance_m * 1000.0,
+            mm_per_pulse: profile.pulse_m * 1000.0,
+            ..OdometryParams::default()
+        };
+        put! {
+            profile: profile,
+            config: RobotConfig::default(),
+            arbiter: Arbiter::new(ArbiterParams::default(), opts.seed),
+            odometry: Odometry::new(odometry_params, opts.start),
+            dead: DeadReckoner::new(DeadReckonParams::default(), opts.start.point()),
+            guided: GuidedParams::default(),
+            compass_heading: opts.start.heading,
+            mode: Mode::Idle,
+            goal: None,
+            teleop: (0, 0),
+            motor: MotorCommand::STOP,
+            sensors: Sensors::default(),
+            prev_encoders: None,
+            wheel_speed_mm_s: [0, 0],
+            arrived: false,
+            failsafe: false,
+            line_events: 0,
+            last_calibration_ms: None,
+            prev_dead_end: false,
+            guided_active: false,
+            timing: Timing::default(),
+            next_telemetry_ms: 0,
+            events: Deque::new(),
+            emulated: opts.emulated,
+            objects: NO_OBJECTS,
+            exec: None,
+            executor: Executor::new(ExecuteParams::default(), opts.start.point()),
+            explorer: Slot::fill(|| {
+                Explorer::new(ExploreParams::default(), opts.seed ^ 0x5EED_0004)
+            }),
+            cycle_ms: 0,
+            forage: Slot::fill(Forage::default),
+            gripper_cmd: GripperCommand::default(),
+            linecorr: Slot::fill(|| {
+                LineCorr::new(odometry_params, opts.start, opts.seed ^ 0x5EED_0003)
+            }),
+            light_cal: Slot::fill(|| LightCalibration::new(opts.seed ^ 0x5EED_0005)),
+        }
+    }
+
+    /// Never called: names every field of `Core` without `..`, so that a field added to the
+    /// struct and not to `init` fails to compile here instead of being left unwritten.
+    #[allow(dead_code)]
+    fn every_core_field_is_written(self) {
+        let Core {
+            profile: _,
+            config: _,
+            arbiter: _,
+            odometry: _,
+            dead: _,
+            guided: _,
+            compass_heading: _,
+            mode: _,
+            goal: _,
+            teleop: _,
+            motor: _,
+            sensors: _,
+            prev_encoders: _,
+            wheel_speed_mm_s: _,
+            arrived: _,
+            failsafe: _,
+            line_events: _,
+            last_calibration_ms: _,
+            prev_dead_end: _,
+            guided_active: _,
+            timing: _,
+            next_telemetry_ms: _,
+            events: _,
+            emulated: _,
+            objects: _,
+            exec: _,
+            executor: _,
+            explorer: _,
+            cycle_ms: _,
+            forage: _,
+            gripper_cmd: _,
+            linecorr: _,
+            light_cal: _,
+        } = self;
+    }
+
     /// The pose estimate: odometry on robots with encoders, compass dead reckoning otherwise.
     pub fn pose(&self) -> Pose {
         if let Some(lc) = self.linecorr.get().filter(|lc| lc.active()) {

@@ -220,15 +220,14 @@ impl Objects {
             return Err(NackReason::CapacityExceeded);
         }
         let crc = map_object_crc(grid, start, goal).map_err(|_| NackReason::CapacityExceeded)?;
-        let mut cells = [0u8; GRID_BYTES];
-        let n = grid_bytes(w, h);
-        let (dst, src) = (cells.get_mut(..n), grid.as_bytes().get(..n));
-        if let (Some(dst), Some(src)) = (dst, src) {
-            dst.copy_from_slice(src);
+        if grid.as_bytes().len() < grid_bytes(w, h) {
+            return Err(NackReason::CapacityExceeded);
         }
-        let new = Grid::new(grid.width(), grid.height(), grid.geometry(), cells)
+        // In place: a copy of the grid on the stack would be 1 KB (issue 15).
+        self.nav
+            .grid_mut()
+            .copy_from(grid)
             .map_err(|_| NackReason::CapacityExceeded)?;
-        *self.nav.grid_mut() = new;
         self.map_dirty = false;
         self.map = Some(MapInfo {
             id: crc,
@@ -467,8 +466,14 @@ fn install_map(nav: &mut Nav64, map: &mut Option<MapInfo>, v: &Verified<'_>) -> 
     if usize::from(h.width) > MAP_CAPACITY || usize::from(h.height) > MAP_CAPACITY {
         return None;
     }
-    let grid = load_map(&view, [0u8; GRID_BYTES]).ok()?;
-    *nav.grid_mut() = grid;
+    // A grid over the object's own cells, checked before the robot's grid (and its
+    // segmentation) is touched, then copied in place: no 1 KB grid on the stack (issue 15).
+    let geometry = Geometry::new(h.cell_mm, h.origin.x_mm, h.origin.y_mm).ok()?;
+    let incoming = Grid::new(h.width, h.height, geometry, view.cells()).ok()?;
+    if incoming.as_bytes().len() > GRID_BYTES {
+        return None;
+    }
+    nav.grid_mut().copy_from(&incoming).ok()?;
     *map = Some(MapInfo {
         id: v.id,
         crc: v.crc,

@@ -525,9 +525,10 @@ fn both_robots_announce_on_board_planning_and_transfers() {
     }
 }
 
-/// Each profile's composition carries only its capabilities' state (robot::kit); the
-/// Dom Dinis build must leave room in the board's 32 KB for its stack (size-report.sh gives
-/// the target's figures: state + worst stack).
+/// Each profile's composition carries only its capabilities' state (robot::kit). The Dom
+/// Dinis build leaves 4 KB of the board's 32 KB for the stack: on the target the worst case
+/// of Robot::step and the link handler is about 3 KB (`size-report.sh` gives the target's
+/// state + worst stack and fails CI over 32 KB).
 #[test]
 fn the_whole_robot_state_fits_the_dom_dinis_32_kb() {
     use robot_firmware::robot::{DomDinis, Khepera};
@@ -535,12 +536,59 @@ fn the_whole_robot_state_fits_the_dom_dinis_32_kb() {
     let khepera = std::mem::size_of::<robot_firmware::Robot<Khepera>>();
     println!("size_of::<Robot<DomDinis>>() = {dom_dinis} bytes");
     println!("size_of::<Robot<Khepera>>() = {khepera} bytes");
-    assert!(khepera <= 32 * 1024, "khepera state is {khepera} bytes");
-    // Without foraging, light calibration and line correction.
     assert!(
-        dom_dinis + 2048 <= khepera,
+        dom_dinis + 4 * 1024 <= 32 * 1024,
         "dom dinis state is {dom_dinis} bytes"
     );
+    assert!(khepera <= 32 * 1024, "khepera state is {khepera} bytes");
+}
+
+/// `Robot::init` (in place, for a board's static) builds the robot `Robot::new` does: the
+/// same bytes go out for the same bytes in.
+#[test]
+fn a_robot_built_in_place_answers_as_one_built_by_value() {
+    use robot_firmware::robot::DomDinis;
+    use robot_firmware::Robot;
+    let opts = RobotOptions {
+        profile: &MICRO_RATO,
+        seed: 7,
+        start: robot_firmware::odometry::Pose::new(0.5, 0.5, 0.0),
+        emulated: false,
+        firmware_version: "test",
+    };
+    let mut slot = Box::new(std::mem::MaybeUninit::<Robot<DomDinis>>::uninit());
+    let built = Robot::init(&mut slot, opts);
+    let mut by_value = Robot::<DomDinis>::new(opts);
+    let mut hello = [0u8; MAX_FRAME];
+    let n = encode(
+        0,
+        &Message::Hello(Hello {
+            fingerprint: FINGERPRINT,
+            protocol: PROTOCOL_VERSION,
+            session: 5,
+            station: "test",
+        }),
+        &mut hello,
+    )
+    .unwrap();
+    let hello = &hello[..n];
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for (robot, out) in [(built, &mut a), (&mut by_value, &mut b)] {
+        let mut hal = ScriptedHal {
+            compass: Some(0.0),
+            ..ScriptedHal::default()
+        };
+        assert_eq!(hal.push_rx(hello), n);
+        for _ in 0..300 {
+            robot.step(&mut hal);
+            hal.now_us += 1000;
+            while let Some(b) = hal.tx.pop_front() {
+                out.push(b);
+            }
+        }
+    }
+    assert!(a.len() > 50, "the robot answered: {a:?}");
+    assert_eq!(a, b);
 }
 
 proptest! {

@@ -54,8 +54,11 @@ impl<K: Kit<Explorer = crate::explore::Explorer>> Core<K> {
         }
         let geometry = Geometry::from_metres(EXPLORE_CELL_M, b.min.x, b.min.y)
             .map_err(|_| NackReason::CapacityExceeded)?;
+        // All unknown: cells over a constant in flash, which `set_map` copies into the robot's
+        // grid in place (a 1 KB array here was most of the worst-case stack, issue 15).
+        static UNKNOWN: [u8; GRID_BYTES] = [0; GRID_BYTES];
         // Both sides are at most MAP_CAPACITY (checked above), so they fit u16.
-        let grid = Grid::new(w as u16, h as u16, geometry, [0u8; GRID_BYTES])
+        let grid = Grid::new(w as u16, h as u16, geometry, &UNKNOWN[..])
             .map_err(|_| NackReason::CapacityExceeded)?;
         let here = self.pose();
         let mm = |v: f32| libm::roundf(v * 1000.0) as i32;

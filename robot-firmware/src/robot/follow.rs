@@ -20,7 +20,7 @@ use protocol::{EventCode, Mode, NackReason};
 
 use super::{Core, Kit};
 use crate::behaviour::{self, drift::DriftPhase};
-use crate::execute::{ExecPhase, Executor};
+use crate::execute::{ExecPhase, Executor, Waypoints};
 use crate::guided::{guided_step, GuidedPhase};
 use crate::hal::MotorCommand;
 use crate::odometry::Point;
@@ -36,6 +36,20 @@ pub struct Execution {
     pub count: u16,
     /// Past the last waypoint without seeing the goal area: heading for the goal light.
     pub approaching: bool,
+}
+
+/// The executing plan's waypoints, metres, read from the installed plan object (which stays
+/// while it executes: a new plan aborts the execution); `None`: the plan is gone.
+struct PlanPoints<'a>(Option<protocol::object::PlanView<'a>>);
+
+impl Waypoints for PlanPoints<'_> {
+    fn point(&self, i: usize) -> Option<Point> {
+        let p = self.0?.waypoint(u16::try_from(i).ok()?)?;
+        Some(Point::new(p.x_mm as f32 / 1000.0, p.y_mm as f32 / 1000.0))
+    }
+    fn count(&self) -> usize {
+        self.0.map_or(0, |v| usize::from(v.waypoint_count()))
+    }
 }
 
 impl<K: Kit> Core<K> {
@@ -56,7 +70,6 @@ impl<K: Kit> Core<K> {
             count,
             approaching: false,
         });
-        self.plan_points_len = self.objects.plan_points(&mut self.plan_points);
         self.executor = Executor::new(self.executor.params, self.pose().point());
         // Entering the mode (again) starts from the first waypoint.
         self.enter(Mode::ExecutePlan);
@@ -118,10 +131,13 @@ impl<K: Kit> Core<K> {
         if self.exec.is_some_and(|e| e.approaching) {
             return self.final_approach(&ir[..n]);
         }
-        let points = self.plan_points.get(..self.plan_points_len).unwrap_or(&[]);
-        let (cmd, report) = self
-            .executor
-            .step(self.pose(), &ir[..n], points, &self.guided);
+        let pose = self.pose();
+        let plan = self
+            .objects
+            .plan()
+            .filter(|(id, _)| self.exec.is_some_and(|e| e.plan_id == *id));
+        let points = PlanPoints(plan.map(|(_, view)| view));
+        let (cmd, report) = self.executor.step(pose, &ir[..n], &points, &self.guided);
         if let (Some(i), Some(exec)) = (report.passed, self.exec.as_mut()) {
             exec.next = u16::try_from(i + 1).unwrap_or(u16::MAX).min(exec.count);
         }

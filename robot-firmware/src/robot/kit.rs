@@ -220,3 +220,67 @@ impl ExplorerSlot for Absent {
         MotorCommand::STOP
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use protocol::{Command, Mode, NackReason, ObjectKind, TransferStatus};
+
+    use super::*;
+    use crate::link::Reply;
+    use crate::odometry::Pose;
+    use crate::robot::{Robot, RobotOptions};
+    use crate::{KHEPERA, MICRO_RATO};
+
+    fn robot<K: Kit>(profile: &'static crate::Profile) -> Robot<K> {
+        Robot::new(RobotOptions {
+            profile,
+            seed: 1,
+            start: Pose::new(0.5, 0.5, 0.0),
+            emulated: false,
+            firmware_version: "test",
+        })
+    }
+
+    #[test]
+    fn a_composition_refuses_the_commands_of_a_capability_it_lacks_whatever_the_profile() {
+        // A Khepera profile on the Dom Dinis composition: the profile allows foraging, the
+        // survey and the light calibration, the composition has no state for them.
+        let mut r = robot::<DomDinis>(&KHEPERA);
+        for mode in [Mode::Forage, Mode::Survey, Mode::CalibrateLight] {
+            let reply = r.core.apply(Command::SetMode(mode), 0);
+            assert_eq!(reply, Reply::Nack(NackReason::Unsupported), "{mode:?}");
+            assert_eq!(r.core.mode, Mode::Idle, "{mode:?} changed the mode");
+        }
+        let refusal = r.core.upload_refusal(ObjectKind::LightCalibration);
+        assert_eq!(refusal, Some(TransferStatus::Rejected));
+        assert_ne!(lacking::<DomDinis>() & caps::LINE_CORRECTION, 0);
+        // The profile's own composition runs them.
+        let mut k = robot::<Khepera>(&KHEPERA);
+        for mode in [Mode::Survey, Mode::CalibrateLight] {
+            let reply = k.core.apply(Command::SetMode(mode), 0);
+            assert!(matches!(reply, Reply::Ack(_)), "{mode:?}: {reply:?}");
+            k.core.apply(Command::Stop, 0);
+        }
+        assert_eq!(k.core.upload_refusal(ObjectKind::LightCalibration), None);
+        assert_eq!(lacking::<Khepera>(), 0);
+        // And the other way round: no exploration without the explorer.
+        let mut k = robot::<Khepera>(&MICRO_RATO);
+        let reply = k.core.apply(Command::StartExploration, 0);
+        assert_eq!(reply, Reply::Nack(NackReason::Unsupported));
+        let mut d = robot::<DomDinis>(&MICRO_RATO);
+        assert!(matches!(
+            d.core.apply(Command::StartExploration, 0),
+            Reply::Ack(_)
+        ));
+    }
+
+    #[test]
+    fn a_capability_left_out_costs_no_bytes() {
+        use core::mem::size_of;
+        assert_eq!(size_of::<Absent>(), 0);
+        let full = size_of::<Forage>() + size_of::<LineCorr>() + size_of::<LightCalibration>();
+        let (d, k) = (size_of::<Robot<DomDinis>>(), size_of::<Robot<Khepera>>());
+        // Khepera carries those three and not the explorer; alignment padding aside.
+        assert!(k - d + size_of::<Explorer>() >= full, "{k} - {d}");
+    }
+}
