@@ -9,7 +9,10 @@
 //!
 //! Invariants: the motors move only in a mode a handshaken station (or the firmware's own
 //! autonomy) asked for; a refused command changes nothing; every piece of state has a fixed
-//! size (`size_of::<Robot>()` is the firmware's whole RAM use apart from the stack).
+//! size (`size_of::<Robot<K>>()` is the firmware's whole RAM use apart from the stack).
+//! A robot carries the capabilities its profile uses (`kit`: `Robot<DomDinis>`,
+//! `Robot<Khepera>`); a board builds it in place (`Robot::init`), hosts pick one by profile
+//! (`AnyRobot`).
 //! Maps, plans and regions live in `transfer::Objects`; plan following is in `robot::follow`.
 
 use core::mem::MaybeUninit;

@@ -21,6 +21,8 @@ use crate::hal::MotorCommand;
 
 /// A capability's state, or `Absent`.
 pub trait Slot<T> {
+    /// Whether this is the state (not `Absent`).
+    const PRESENT: bool;
     fn get(&self) -> Option<&T>;
     fn get_mut(&mut self) -> Option<&mut T>;
     /// The state `make` builds, or `Absent` (then `make` is not called).
@@ -32,6 +34,7 @@ pub trait Slot<T> {
 pub struct Absent;
 
 impl<T> Slot<T> for Absent {
+    const PRESENT: bool = false;
     fn get(&self) -> Option<&T> {
         None
     }
@@ -46,6 +49,7 @@ impl<T> Slot<T> for Absent {
 macro_rules! present {
     ($($t:ty),*) => {$(
         impl Slot<$t> for $t {
+            const PRESENT: bool = true;
             fn get(&self) -> Option<&$t> {
                 Some(self)
             }
@@ -103,7 +107,7 @@ impl Kit for Khepera {
 /// them out).
 pub fn lacking<K: Kit>() -> u32 {
     let mut bits = 0;
-    if K::LineCorr::fill_absent() {
+    if !<K::LineCorr as Slot<LineCorr>>::PRESENT {
         bits |= caps::LINE_CORRECTION;
     }
     bits
@@ -142,16 +146,11 @@ impl ForageSlot for Absent {
 
 /// Line correction's entry points from the common code.
 pub trait LineCorrSlot: Slot<LineCorr> + Sized {
-    /// Whether this is `Absent`.
-    fn fill_absent() -> bool;
     fn line_correct<K: Kit<LineCorr = Self>>(core: &mut Core<K>, n_l: i32, n_r: i32, now: u32);
     fn survey_command<K: Kit<LineCorr = Self>>(core: &mut Core<K>) -> MotorCommand;
 }
 
 impl LineCorrSlot for LineCorr {
-    fn fill_absent() -> bool {
-        false
-    }
     fn line_correct<K: Kit<LineCorr = Self>>(core: &mut Core<K>, n_l: i32, n_r: i32, now: u32) {
         core.line_correct(n_l, n_r, now);
     }
@@ -161,9 +160,6 @@ impl LineCorrSlot for LineCorr {
 }
 
 impl LineCorrSlot for Absent {
-    fn fill_absent() -> bool {
-        true
-    }
     fn line_correct<K: Kit<LineCorr = Self>>(_: &mut Core<K>, _: i32, _: i32, _: u32) {}
     fn survey_command<K: Kit<LineCorr = Self>>(_: &mut Core<K>) -> MotorCommand {
         MotorCommand::STOP
