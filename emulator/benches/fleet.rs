@@ -29,7 +29,7 @@ fn searching(robots: usize) -> Fleet {
     ];
     let mut fleet = Fleet::new(arena, &cfg, &specs).unwrap();
     for s in fleet.sims_mut() {
-        s.robot_mut().core.apply(Command::StartExploration, 0);
+        s.robot_mut().apply(Command::StartExploration, 0);
     }
     fleet
 }

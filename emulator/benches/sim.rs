@@ -68,10 +68,7 @@ fn wandering_sim(seed: u64) -> Sim {
         ..SimConfig::new(&KHEPERA)
     };
     let mut sim = Sim::new(boxes_arena(50), cfg).unwrap();
-    let reply = sim
-        .robot_mut()
-        .core
-        .apply(Command::SetMode(Mode::Wander), 0);
+    let reply = sim.robot_mut().apply(Command::SetMode(Mode::Wander), 0);
     assert!(matches!(reply, robot_firmware::link::Reply::Ack(_)));
     sim
 }
@@ -81,14 +78,14 @@ fn wandering_sim(seed: u64) -> Sim {
 fn go_to_shuttle(sim: &mut Sim, seconds: u64) -> u32 {
     let corners = [(1800, 1800), (200, 200)];
     let mut legs = 0u32;
-    sim.robot_mut().core.apply(goal(corners[0]), 0);
+    sim.robot_mut().apply(goal(corners[0]), 0);
     for _ in 0..seconds {
         sim.run_for(1000);
-        if sim.robot().core.arrived {
+        if sim.robot().arrived() {
             legs += 1;
             let now = (sim.now_us() / 1000) as u32;
             let next = corners[(legs % 2) as usize];
-            sim.robot_mut().core.apply(goal(next), now);
+            sim.robot_mut().apply(goal(next), now);
         }
     }
     legs

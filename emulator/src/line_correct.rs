@@ -19,6 +19,7 @@ use std::time::Instant;
 use protocol::{Command, Mode};
 use robot_firmware::link::Reply;
 use robot_firmware::odometry::Pose as FwPose;
+use robot_firmware::robot::LineCorr;
 use robot_firmware::Profile;
 use serde::Serialize;
 use thiserror::Error;
@@ -191,7 +192,6 @@ pub fn run_line_correct(
     let now_ms = (sim.now_us() / 1000) as u32;
     if let Reply::Nack(r) = sim
         .robot_mut()
-        .core
         .apply(Command::SetMode(Mode::Survey), now_ms)
     {
         return Err(LineCorrectError::Refused(r));
@@ -199,9 +199,9 @@ pub fn run_line_correct(
     let started = Instant::now();
     let timeout_ms = (opts.timeout_s * 1000.0).ceil() as u64;
     let mut acc = Accumulator::default();
-    let mut last_cycle = sim.robot().core.timing.cycles;
+    let mut last_cycle = sim.robot().timing().cycles;
     let mut over = sim.world().on_line(truth_point(&sim));
-    let mut pulses_seen = sim.robot().core.line_events;
+    let mut pulses_seen = sim.robot().line_events();
     let mut run = 0u32;
     let mut next_series_m = 0.0;
     for _ in 0..timeout_ms {
@@ -212,19 +212,22 @@ pub fn run_line_correct(
             run += 1;
         }
         over = on;
-        let pulses = sim.robot().core.line_events;
+        let pulses = sim.robot().line_events();
         if pulses != pulses_seen {
             pulses_seen = pulses;
             // The pulse reports the crossing just entered.
             run = 0;
         }
         acc.max_missed_run = acc.max_missed_run.max(run.saturating_sub(1));
-        let cycles = sim.robot().core.timing.cycles;
+        let cycles = sim.robot().timing().cycles;
         if cycles == last_cycle {
             continue;
         }
         last_cycle = cycles;
-        let e = acc.sample(&sim);
+        let Some(lc) = sim.robot().linecorr() else {
+            return Err(LineCorrectError::Refused(protocol::NackReason::Unsupported));
+        };
+        let e = acc.sample(&sim, lc);
         if sim.distance_m() >= next_series_m {
             next_series_m += 1.0;
             acc.series.push(e);
@@ -233,7 +236,10 @@ pub fn run_line_correct(
             break;
         }
     }
-    let lc = &sim.robot().core.linecorr;
+    // Survey was accepted, so the composition has line correction.
+    let Some(lc) = sim.robot().linecorr() else {
+        return Err(LineCorrectError::Refused(protocol::NackReason::Unsupported));
+    };
     let m = lc.report(0);
     let (bl, br) = lc.spps().mean_bias();
     let n = acc.n.max(1) as f64;
@@ -291,9 +297,8 @@ struct Accumulator {
 }
 
 impl Accumulator {
-    fn sample(&mut self, sim: &Sim) -> ErrorSample {
+    fn sample(&mut self, sim: &Sim, lc: &LineCorr) -> ErrorSample {
         let t = sim.truth();
-        let lc = &sim.robot().core.linecorr;
         let mm = |p: FwPose| (f64::from(p.x) - t.x).hypot(f64::from(p.y) - t.y) * 1000.0;
         let e = [mm(lc.pose()), mm(lc.uncorrected()), mm(lc.baseline())];
         for ((s, sum), v) in [

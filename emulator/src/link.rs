@@ -523,11 +523,11 @@ impl Device for crate::sim::Sim {
     }
 
     fn cycles(&self) -> u32 {
-        self.robot().core.timing.cycles
+        self.robot().timing().cycles
     }
 
     fn cycle_us(&self) -> u32 {
-        self.robot().core.profile.cycle_us
+        self.robot().profile().cycle_us
     }
 
     fn next_due_us(&self) -> u64 {
@@ -535,12 +535,12 @@ impl Device for crate::sim::Sim {
         if !self.uart().idle() {
             return now + 1000;
         }
-        let cycle = self.robot().core.timing.next_cycle_us;
+        let cycle = self.robot().timing().next_cycle_us;
         cycle.clamp(now + 1000, now + IDLE_LOOK_US)
     }
 
     fn set_link_key(&mut self, key: Option<&[u8; protocol::sign::KEY_LEN]>) {
-        self.robot_mut().link.set_key(key);
+        self.robot_mut().link_mut().set_key(key);
         self.uart_mut()
             .set_truth_key(key.map(protocol::LinkKey::new));
     }

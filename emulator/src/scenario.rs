@@ -428,7 +428,7 @@ fn run_until_arrived(
     let mut window = std::collections::VecDeque::with_capacity(samples + 1);
     for i in 0..timeout_ms {
         sim.step();
-        if sim.robot().core.arrived {
+        if sim.robot().arrived() {
             arrived = true;
             sim.run_for(SETTLE_MS);
             break;
@@ -447,8 +447,8 @@ fn run_until_arrived(
         .map(|&(x, y)| (x - t.x).hypot(y - t.y))
         .fold(0.0, f64::max);
     let goal_error = (t.x - judge.goal.x_m).hypot(t.y - judge.goal.y_m);
-    let known = sim.robot().core.objects.nav().grid();
-    let map_known_cells = sim.robot().core.objects.has_map().then(|| {
+    let known = sim.robot().objects().nav().grid();
+    let map_known_cells = sim.robot().objects().has_map().then(|| {
         (0..usize::from(known.height()))
             .flat_map(|y| (0..usize::from(known.width())).map(move |x| (x, y)))
             .filter(|&(x, y)| known.get(x, y) != crate::arena::Cell::Unknown)
@@ -493,7 +493,7 @@ fn plan_and_execute(
         },
         "Plan",
     )?;
-    let (plan_id, regions) = match sim.robot().core.objects.plan() {
+    let (plan_id, regions) = match sim.robot().objects().plan() {
         Some((id, view)) => (id, view.waypoint_count().saturating_sub(2)),
         None => {
             return Err(ScenarioError::Refused {
@@ -523,14 +523,14 @@ pub(crate) fn set_arrival(
     arrival_m: Option<f64>,
     tolerance_m: f64,
 ) -> Result<(), ScenarioError> {
-    let core = &sim.robot().core;
-    let (id, default) = if core.profile.has(protocol::caps::ENCODERS) {
+    let core = sim.robot();
+    let (id, default) = if core.profile().has(protocol::caps::ENCODERS) {
         (
             param::DRIFT_ARRIVAL_RADIUS_M,
-            f64::from(core.arbiter.params.drift.arrival_radius_m),
+            f64::from(core.arbiter().params.drift.arrival_radius_m),
         )
     } else {
-        (param::GUIDED_ARRIVAL_M, f64::from(core.guided.arrival_m))
+        (param::GUIDED_ARRIVAL_M, f64::from(core.guided().arrival_m))
     };
     let value = arrival_m.unwrap_or_else(|| default.min(tolerance_m / 2.0));
     let cmd = Command::SetParam {
@@ -542,7 +542,7 @@ pub(crate) fn set_arrival(
 
 pub(crate) fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), ScenarioError> {
     let now_ms = (sim.now_us() / 1000) as u32;
-    match sim.robot_mut().core.apply(cmd, now_ms) {
+    match sim.robot_mut().apply(cmd, now_ms) {
         Reply::Ack(_) => Ok(()),
         Reply::Nack(reason) => Err(ScenarioError::Refused { what, reason }),
     }

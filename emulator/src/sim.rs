@@ -19,7 +19,7 @@
 
 use robot_firmware::hal::{GripperCommand, GripperState, CAMERA_PIXELS};
 use robot_firmware::odometry::Pose as FwPose;
-use robot_firmware::{BeaconReading, Hal, MotorCommand, Profile, Robot, RobotOptions};
+use robot_firmware::{AnyRobot, BeaconReading, Hal, MotorCommand, Profile, RobotOptions};
 use thiserror::Error;
 
 use crate::arena::{Arena, Light, Pose};
@@ -280,10 +280,10 @@ impl SimHal {
 /// Micro-Rato'99 the beacon is at (3.0, 2.571), so exploration headed for (2.5, 2.5) and every
 /// beacon calibration pulled the believed position towards the wrong point. Every robot, with
 /// a beacon sensor or not, is told the bounds: they also limit where go-to may send it.
-fn tell_the_arena(robot: &mut Robot, world: &World) {
+fn tell_the_arena(robot: &mut AnyRobot, world: &World) {
     let fw = |p: Point| robot_firmware::odometry::Point::new(p.x as f32, p.y as f32);
-    let beacon = robot.core.profile.has(protocol::caps::BEACON);
-    let dead = &mut robot.core.dead;
+    let beacon = robot.profile().has(protocol::caps::BEACON);
+    let dead = robot.dead_mut();
     if let (Some(b), true) = (world.beacon(), beacon) {
         dead.params.beacon = fw(b.position);
     }
@@ -299,9 +299,9 @@ fn tell_the_arena(robot: &mut Robot, world: &World) {
 
 /// The firmware instance of one simulated robot: the one place the emulator constructs a
 /// `Robot` (a single robot and every robot of a fleet alike), told its start and its arena.
-fn build_robot(profile: &'static Profile, seed: u64, start: Pose, world: &World) -> Robot {
+fn build_robot(profile: &'static Profile, seed: u64, start: Pose, world: &World) -> AnyRobot {
     let firmware_seed = SimRng::new(seed, stream::FIRMWARE).next_u64() as u32;
-    let mut robot = Robot::new(RobotOptions {
+    let mut robot = AnyRobot::new(RobotOptions {
         profile,
         seed: firmware_seed,
         // The robot is told where it starts (seed 004 §5: the start pose is known).
@@ -315,7 +315,8 @@ fn build_robot(profile: &'static Profile, seed: u64, start: Pose, world: &World)
 
 /// A running simulation.
 pub struct Sim {
-    robot: Robot,
+    /// The composition the profile uses (`robot_firmware::robot::kit`).
+    robot: AnyRobot,
     hal: SimHal,
     truth: TruthHistory,
     seed: u64,
@@ -576,12 +577,12 @@ impl Sim {
     }
 
     /// The firmware.
-    pub fn robot(&self) -> &Robot {
+    pub fn robot(&self) -> &AnyRobot {
         &self.robot
     }
 
     /// The firmware, mutably (headless runs command it directly).
-    pub fn robot_mut(&mut self) -> &mut Robot {
+    pub fn robot_mut(&mut self) -> &mut AnyRobot {
         &mut self.robot
     }
 

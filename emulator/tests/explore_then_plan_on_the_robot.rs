@@ -17,7 +17,7 @@ const TIMEOUT_MS: u64 = 300_000;
 
 fn apply(sim: &mut Sim, cmd: Command) -> Result<(), NackReason> {
     let now_ms = (sim.now_us() / 1000) as u32;
-    match sim.robot_mut().core.apply(cmd, now_ms) {
+    match sim.robot_mut().apply(cmd, now_ms) {
         Reply::Ack(_) => Ok(()),
         Reply::Nack(r) => Err(r),
     }
@@ -26,7 +26,7 @@ fn apply(sim: &mut Sim, cmd: Command) -> Result<(), NackReason> {
 fn run_until_arrived(sim: &mut Sim) -> bool {
     for _ in 0..TIMEOUT_MS {
         sim.step();
-        if sim.robot().core.arrived {
+        if sim.robot().arrived() {
             sim.run_for(500);
             return true;
         }
@@ -55,7 +55,7 @@ fn the_emulated_robot_knows_where_the_arenas_beacon_is() {
     let a = arena();
     let beacon = a.beacon().unwrap().position;
     let sim = Sim::new(a, SimConfig::new(&MICRO_RATO)).unwrap();
-    let p = sim.robot().core.dead.params;
+    let p = sim.robot().dead().params;
     // Micro-Rato'99's beacon is at (3.0, 2.571), not the firmware's default (2.5, 2.5).
     assert!(
         (f64::from(p.beacon.x) - beacon.x).abs() < 1e-4,
@@ -84,9 +84,9 @@ fn after_exploring_the_robot_plans_to_the_goal_it_found_and_executes_the_plan() 
         assert!(run_until_arrived(&mut sim), "seed {seed}: exploration");
 
         // The map's goal is now a free cell the robot stood in when it found the goal area.
-        let map = sim.robot_mut().core.objects.map().unwrap();
+        let map = sim.robot_mut().objects_mut().map().unwrap();
         let goal = map.goal.unwrap();
-        let grid = sim.robot().core.objects.nav().grid();
+        let grid = sim.robot().objects().nav().grid();
         let (gx, gy) = grid.geometry().to_grid(goal.x_mm, goal.y_mm).cell();
         assert_eq!(
             grid.get(gx as usize, gy as usize),
@@ -107,7 +107,7 @@ fn after_exploring_the_robot_plans_to_the_goal_it_found_and_executes_the_plan() 
         };
         apply(&mut sim, Command::SetPose { pose }).unwrap();
         assert_eq!(plan_as_the_station_does(&mut sim), Ok(()), "seed {seed}");
-        let (plan_id, view) = sim.robot().core.objects.plan().unwrap();
+        let (plan_id, view) = sim.robot().objects().plan().unwrap();
         let last = view.waypoint(view.waypoint_count() - 1).unwrap();
         // Waypoints go through nav's grid units: within a millimetre or two of the goal.
         let near = (last.x_mm - goal.x_mm).abs() <= 2 && (last.y_mm - goal.y_mm).abs() <= 2;

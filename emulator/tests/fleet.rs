@@ -71,7 +71,7 @@ fn quiet() -> SimConfig {
 /// Puts every robot in manual mode driving straight at `v_mm_s` (failsafe raised: no link).
 fn drive(fleet: &mut Fleet, v_mm_s: &[i16]) {
     for (sim, &v) in fleet.sims_mut().iter_mut().zip(v_mm_s) {
-        let core = &mut sim.robot_mut().core;
+        let core = sim.robot_mut();
         let p = core.apply(
             Command::SetParam {
                 id: ParamId(0),
@@ -171,7 +171,7 @@ fn two_robots_driving_at_each_other_meet_without_overlap_and_count_robot_not_wal
 fn the_ir_sees_another_robot_ahead_and_nothing_without_it() {
     let fw_ir = |fleet: &mut Fleet| {
         fleet.run_for(200);
-        fleet.sims()[0].robot().core.sensors.ir
+        fleet.sims()[0].robot().sensors().ir
     };
     // Robot 1 faces robot 2, 12 cm between their bodies, in the middle of an empty box.
     let pair = [rato_at(1.0, 1.0, 0.0), rato_at(1.36, 1.0, 90.0)];
@@ -212,7 +212,7 @@ fn the_ir_sees_another_robot_ahead_and_nothing_without_it() {
 fn a_robot_between_the_receiver_and_the_beacon_hides_it() {
     let beacon_of = |fleet: &mut Fleet| {
         fleet.run_for(300);
-        fleet.sims()[0].robot().core.sensors.beacon.unwrap()
+        fleet.sims()[0].robot().sensors().beacon.unwrap()
     };
     // Robot 1 at (1.0, 1.5) faces the beacon at (2.5, 1.5); robot 2 stands at (1.8, 1.5).
     let blocked = [rato_at(1.0, 1.5, 0.0), rato_at(1.8, 1.5, 90.0)];
@@ -242,7 +242,7 @@ fn a_fleet_of_one_is_the_single_robot_bit_for_bit() {
     )
     .unwrap();
     for s in [&mut sim, &mut fleet.sims_mut()[0]] {
-        s.robot_mut().core.apply(Command::StartExploration, 0);
+        s.robot_mut().apply(Command::StartExploration, 0);
     }
     for _ in 0..20_000 {
         sim.step();

@@ -82,7 +82,6 @@ fn calibrate(seed: u64, true_wheel_distance_m: Option<f64>, start_heading: f64) 
     let mut sim = Sim::new(open_box(), cfg).unwrap();
     let reply = sim
         .robot_mut()
-        .core
         .apply(Command::SetMode(Mode::CalibrateLight), 0);
     assert_eq!(reply, Reply::Ack(protocol::AckInfo::Done));
     // 21 turns of about 20 s; give it 600 s. Each control cycle (80 ms): the angle turned
@@ -94,13 +93,13 @@ fn calibrate(seed: u64, true_wheel_distance_m: Option<f64>, start_heading: f64) 
     let mut label_errors = Vec::new();
     for ms in 0..600_000u32 {
         sim.step();
-        if sim.robot().core.mode != Mode::CalibrateLight {
+        if sim.robot().mode() != Mode::CalibrateLight {
             break;
         }
         if ms % 80 != 0 {
             continue;
         }
-        let core = &sim.robot().core;
+        let core = &sim.robot().khepera().expect("a khepera").core;
         let (odo, truth) = (f64::from(core.pose().heading), sim.truth().heading);
         let training = core.light_cal.phase() == robot_firmware::robot::CalPhase::Train;
         // A training turn is one epoch; the align turns before it are not labelled.
@@ -117,7 +116,7 @@ fn calibrate(seed: u64, true_wheel_distance_m: Option<f64>, start_heading: f64) 
         }
         (prev_odo, prev_true) = (odo, truth);
     }
-    let core = &sim.robot().core;
+    let core = &sim.robot().khepera().expect("a khepera").core;
     assert_eq!(core.mode, Mode::Idle, "seed {seed}: still calibrating");
     assert!(core.light_cal.trained, "seed {seed}: calibration failed");
     let sim_s = sim.now_us() as f64 * 1e-6;
@@ -156,7 +155,6 @@ fn sweep(sim: &mut Sim, gap: f64) -> (f64, f64) {
         let truth = ((LAMP.1 - t.y).atan2(LAMP.0 - t.x) - t.heading).to_degrees();
         let got = sim
             .robot()
-            .core
             .light_bearing()
             .unwrap_or_else(|| panic!("no bearing at {a} deg, {gap} m"));
         errors.push((f64::from(got.to_degrees()) - truth).abs());
@@ -223,11 +221,10 @@ fn calibration_far_from_any_light_fails_cleanly() {
     };
     let mut sim = Sim::new(open_box(), cfg).unwrap();
     sim.robot_mut()
-        .core
         .apply(Command::SetMode(Mode::CalibrateLight), 0);
     // One turn is about 20 s.
     sim.run_for(40_000);
-    let core = &sim.robot().core;
+    let core = &sim.robot().khepera().expect("a khepera").core;
     assert_eq!(core.mode, Mode::Idle);
     assert!(!core.light_cal.trained);
     assert_eq!(core.light_bearing(), None);

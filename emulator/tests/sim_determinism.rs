@@ -138,7 +138,7 @@ fn the_same_seed_gives_the_same_micro_rato_run() {
             x_mm: 2500,
             y_mm: 4500,
         });
-        sim.robot_mut().core.apply(goal, 0);
+        sim.robot_mut().apply(goal, 0);
         trace(&mut sim, 15_000)
     };
     let (a, b, c) = (run(5), run(5), run(6));

@@ -150,7 +150,7 @@ fn a_robot_driven_into_walls_counts_each_contact_and_never_ends_inside_a_wall() 
     };
     send(&mut sim, &mut seq, &Message::Hello(hello));
     sim.run_for(20);
-    assert!(sim.robot().link.connected());
+    assert!(sim.robot().link().connected());
     let r = f64::from(KHEPERA.body_diameter_m) / 2.0;
     let mut last = 0;
     for second in 0..20u32 {

@@ -144,7 +144,7 @@ fn encoders_count_0_08_mm_of_wheel_travel_per_pulse() {
         ..SimConfig::new(&KHEPERA)
     };
     let mut sim = Sim::new(open_box(1.0, 0.6), cfg).unwrap();
-    sim.robot_mut().core.apply(
+    sim.robot_mut().apply(
         Command::GoTo(PointMm {
             x_mm: 700,
             y_mm: 300,
@@ -168,7 +168,7 @@ fn encoders_count_0_08_mm_of_wheel_travel_per_pulse() {
     );
     assert!(sim.pose_error_m() < 0.002, "{}", sim.pose_error_m());
     // The firmware read the same counts at its last control cycle (within one cycle's travel).
-    let fw = sim.robot().core.sensors.encoders.unwrap();
+    let fw = sim.robot().sensors().encoders.unwrap();
     assert!((fw[0] - enc[0]).abs() < 100, "{fw:?} vs {enc:?}");
 }
 
@@ -186,7 +186,7 @@ fn wheel_bias_is_what_odometry_cannot_see() {
             ..SimConfig::new(&KHEPERA)
         };
         let mut sim = Sim::new(open_box(1.0, 0.6), cfg).unwrap();
-        sim.robot_mut().core.apply(
+        sim.robot_mut().apply(
             Command::GoTo(PointMm {
                 x_mm: 800,
                 y_mm: 300,
@@ -221,7 +221,7 @@ fn the_firmware_counts_one_event_per_floor_line_crossed() {
         ..SimConfig::new(&KHEPERA)
     };
     let mut sim = Sim::new(open_box(1.0, 0.6), cfg).unwrap();
-    sim.robot_mut().core.apply(
+    sim.robot_mut().apply(
         Command::GoTo(PointMm {
             x_mm: 875,
             y_mm: 250,
@@ -229,9 +229,9 @@ fn the_firmware_counts_one_event_per_floor_line_crossed() {
         0,
     );
     sim.run_for(30_000);
-    assert!(sim.robot().core.arrived);
+    assert!(sim.robot().arrived());
     // Lines at x = 0.1 .. 0.8 lie between start and stop.
-    assert_eq!(sim.robot().core.line_events, 8, "{:?}", sim.truth());
+    assert_eq!(sim.robot().line_events(), 8, "{:?}", sim.truth());
 }
 
 #[test]
@@ -308,8 +308,8 @@ fn the_micro_rato_compass_reads_five_times_a_second_with_two_degrees_of_noise() 
     let mut last = None;
     for _ in 0..20_000 {
         sim.step();
-        let c = sim.robot().core.sensors.compass;
-        let cycle_just_ran = sim.robot().core.timing.last_cycle_us == Some(sim.now_us() - 1000);
+        let c = sim.robot().sensors().compass;
+        let cycle_just_ran = sim.robot().timing().last_cycle_us == Some(sim.now_us() - 1000);
         if let (Some(h), true) = (c, cycle_just_ran) {
             readings.push(f64::from(h));
         }

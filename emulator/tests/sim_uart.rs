@@ -144,7 +144,7 @@ fn session(baud: u32) -> (Vec<usize>, Vec<Seen>, TruthMm) {
         }
         per_second.push(bytes);
     }
-    assert!(sim.robot().link.connected(), "the session stayed up");
+    assert!(sim.robot().link().connected(), "the session stayed up");
     (per_second, seen, truth)
 }
 

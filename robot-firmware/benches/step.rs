@@ -7,12 +7,13 @@ use protocol::{
     encode, Command, Hello, Message, PointMm, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION,
 };
 use robot_firmware::odometry::Pose;
+use robot_firmware::robot::{DomDinis, Khepera};
 use robot_firmware::scripted::ScriptedHal;
-use robot_firmware::{Profile, Robot, RobotOptions, KHEPERA, MICRO_RATO};
+use robot_firmware::{AnyRobot, Profile, Robot, RobotOptions, KHEPERA, MICRO_RATO};
 use std::hint::black_box;
 
-fn connected(profile: &'static Profile, cmd: Command) -> (Robot, ScriptedHal) {
-    let mut robot = Robot::new(RobotOptions {
+fn connected(profile: &'static Profile, cmd: Command) -> (AnyRobot, ScriptedHal) {
+    let mut robot = AnyRobot::new(RobotOptions {
         profile,
         seed: 3,
         start: Pose::new(0.3, 0.3, 0.0),
@@ -85,10 +86,11 @@ fn bench_step(c: &mut Criterion) {
     // A full busy cycle: a heartbeat arrives, the control cycle runs, a telemetry frame
     // (50 Hz, so one every cycle) is built, encoded and written.
     let (mut robot, mut hal) = connected(&KHEPERA, Command::SetTelemetryRate { hz: 50 });
-    robot
-        .core
-        .arbiter
-        .set_mode(robot_firmware::behaviour::Mode::Wander);
+    if let AnyRobot::Khepera(r) = &mut robot {
+        r.core
+            .arbiter
+            .set_mode(robot_firmware::behaviour::Mode::Wander);
+    }
     let mut hb = [0u8; MAX_FRAME];
     let n = encode(
         9,
@@ -116,8 +118,9 @@ fn bench_step(c: &mut Criterion) {
     });
     g.finish();
     eprintln!(
-        "size_of::<Robot>() = {} bytes",
-        std::mem::size_of::<Robot>()
+        "size_of::<Robot<DomDinis>>() = {} bytes, size_of::<Robot<Khepera>>() = {} bytes",
+        std::mem::size_of::<Robot<DomDinis>>(),
+        std::mem::size_of::<Robot<Khepera>>()
     );
 }
 

@@ -85,6 +85,15 @@ pub struct ExecReport {
     pub escaped: bool,
 }
 
+impl<const N: usize> Waypoints for [Point; N] {
+    fn point(&self, i: usize) -> Option<Point> {
+        self.get(i).copied()
+    }
+    fn count(&self) -> usize {
+        N
+    }
+}
+
 /// Follows a plan's waypoints.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Executor {
@@ -116,11 +125,11 @@ impl Executor {
     }
 
     /// One control cycle.
-    pub fn step(
+    pub fn step<W: Waypoints + ?Sized>(
         &mut self,
         pose: Pose,
         ir: &[(u16, f32)],
-        waypoints: &(impl Waypoints + ?Sized),
+        waypoints: &W,
         guided: &GuidedParams,
     ) -> (MotorCommand, ExecReport) {
         let mut report = ExecReport {
@@ -145,11 +154,11 @@ impl Executor {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn drive(
+    fn drive<W: Waypoints + ?Sized>(
         &mut self,
         pose: Pose,
         ir: &[(u16, f32)],
-        waypoints: &(impl Waypoints + ?Sized),
+        waypoints: &W,
         guided: &GuidedParams,
         index: usize,
         sub: u16,

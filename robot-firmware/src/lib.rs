@@ -4,7 +4,8 @@
 //! world. Its navigation modules (`nav`) are also linked by the station, so a map segmented or a
 //! plan made on either side of the link is the same.
 //!
-//! - `robot`: `Robot::step`, the main loop over a `Hal`.
+//! - `robot`: `Robot::step`, the main loop over a `Hal`; `robot::kit`, which capabilities'
+//!   state each profile's robot carries.
 //! - `hal`, `profile`: the hardware boundary and the two robots of the papers.
 //! - `link`, `telemetry`, `params`: the robot's side of the protocol.
 //! - `transfer`: the robot's map, plan and regions objects, their uploads and downloads.
@@ -36,7 +37,7 @@ pub mod transfer;
 
 pub use hal::{BeaconReading, Hal, MotorCommand};
 pub use profile::{Profile, KHEPERA, MICRO_RATO};
-pub use robot::{Robot, RobotOptions};
+pub use robot::{AnyRobot, Robot, RobotOptions};
 
 /// Side of the square map the firmware holds, in cells (seed 004 used 17 x 17).
 pub const MAP_CAPACITY: usize = 64;

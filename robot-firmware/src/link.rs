@@ -400,6 +400,9 @@ impl LinkState {
     }
 
     /// Queues a frame if it fits whole; returns whether it was queued.
+    // Not inlined: `receive` sends from several places, and each inlined copy kept its own
+    // frame buffer in `receive`'s frame, under the decoder's and the handler's (issue 15).
+    #[inline(never)]
     fn send(&mut self, msg: &Message<'_>, now_ms: u32) -> bool {
         let mut buf = [0u8; MAX_FRAME];
         // The robot has no wall clock: its timestamps count on from the station's.

@@ -4,7 +4,8 @@
 //! proximity sensors and ambient light; `micro-rato` (seed 004, Dom Dinis) has a compass and no
 //! encoders, three IR sensors, a beacon sensor and a ground sensor. Constants the papers give
 //! are cited; constants they leave open are marked "default" and can be changed over the link
-//! as parameters where they affect behaviour.
+//! as parameters where they affect behaviour. Each profile's robot carries the state of the
+//! capabilities it uses (`robot::kit`: micro-rato runs `DomDinis`, khepera `Khepera`).
 
 use protocol::{caps, MapCapacity, ProfileId};
 

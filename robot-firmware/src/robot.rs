@@ -9,8 +9,14 @@
 //!
 //! Invariants: the motors move only in a mode a handshaken station (or the firmware's own
 //! autonomy) asked for; a refused command changes nothing; every piece of state has a fixed
-//! size (`size_of::<Robot>()` is the firmware's whole RAM use apart from the stack).
+//! size (`size_of::<Robot<K>>()` is the firmware's whole RAM use apart from the stack).
+//! A robot carries the capabilities its profile uses (`kit`: `Robot<DomDinis>`,
+//! `Robot<Khepera>`); a board builds it in place (`Robot::init`), hosts pick one by profile
+//! (`AnyRobot`).
 //! Maps, plans and regions live in `transfer::Objects`; plan following is in `robot::follow`.
+
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
 
 use heapless::Deque;
 use protocol::{
@@ -31,17 +37,22 @@ use crate::profile::Profile;
 use crate::telemetry;
 use crate::transfer::{Installed, Objects};
 
+mod any;
 mod calibrate;
 mod explore;
 mod follow;
 mod forage;
+pub mod kit;
 mod linecorr;
 mod progress;
 mod scan;
 
+pub use any::AnyRobot;
 pub use calibrate::{CalPhase, LightCalibration, T1 as LIGHT_NEAR_T1};
 pub use follow::Execution;
 pub use forage::{Forage, ForageParams, ForagePhase, GripStep};
+pub use kit::{Absent, DomDinis, Khepera, Kit, Slot};
+use kit::{ExplorerSlot, ForageSlot, LightCalSlot, LineCorrSlot};
 pub use linecorr::{LineCorr, REPORT_PERIOD_MS as LOCALIZATION_PERIOD_MS};
 pub use progress::{MotionProgress, ProgressParams, REPORT_PERIOD_MS as PROGRESS_PERIOD_MS};
 pub use scan::{LandmarkScan, ScanParams, Sighting};
@@ -102,7 +113,7 @@ pub struct Timing {
 }
 
 /// Everything but the link: the state commands act on.
-pub struct Core {
+pub struct Core<K: Kit> {
     pub profile: &'static Profile,
     pub config: RobotConfig,
     pub arbiter: Arbiter,
@@ -138,85 +149,64 @@ pub struct Core {
     /// Seed 004 §7 heuristics for guided plan legs.
     pub executor: Executor,
     /// Seed 004 §5 reactive search with mapping.
-    pub explorer: Explorer,
+    pub explorer: K::Explorer,
     /// Time of the current control cycle, ms.
     cycle_ms: u32,
     /// Seed 000 §7 foraging state.
-    pub forage: Forage,
+    pub forage: K::Forage,
     /// The gripper command in force (sent each cycle on a robot with a gripper).
     pub gripper_cmd: GripperCommand,
     /// Seed 003 floor-grid line correction and the survey pilot.
-    pub linecorr: LineCorr,
+    pub linecorr: K::LineCorr,
     /// Seed 000 §5.3 light -> angle calibration (`Mode::CalibrateLight`).
-    pub light_cal: LightCalibration,
+    pub light_cal: K::LightCal,
     /// What the mode in force is doing; giving up when it makes no progress.
     pub progress: MotionProgress,
 }
 
 /// The whole robot.
-pub struct Robot {
+pub struct Robot<K: Kit> {
     pub link: Link,
-    pub core: Core,
+    pub core: Core<K>,
     identity: Identity,
 }
 
-impl Robot {
+impl<K: Kit> Robot<K> {
+    /// A robot by value, for hosts: it passes through the stack (some 30 KB), so a board
+    /// builds its robot in place with `init`.
+    #[allow(unsafe_code)] // one call of assume_init, after init
     pub fn new(opts: RobotOptions) -> Self {
+        let mut slot = MaybeUninit::uninit();
+        Self::init(&mut slot, opts);
+        // SAFETY: `init` wrote every field.
+        unsafe { slot.assume_init() }
+    }
+
+    /// Builds the robot in `slot` (a `static` on a board), field by field, so that no whole
+    /// robot and none of its large parts (the map and plan objects) pass through the stack:
+    /// the size report finds `init`'s frame small.
+    #[allow(unsafe_code)] // writes to the fields of a MaybeUninit through raw pointers
+    pub fn init(slot: &mut MaybeUninit<Self>, opts: RobotOptions) -> &mut Self {
         let profile = opts.profile;
-        let odometry_params = OdometryParams {
-            wheel_distance_mm: profile.wheel_distance_m * 1000.0,
-            mm_per_pulse: profile.pulse_m * 1000.0,
-            ..OdometryParams::default()
-        };
-        let mut capabilities = profile.capabilities;
+        let mut capabilities = profile.capabilities & !kit::lacking::<K>();
         if opts.emulated {
             capabilities |= protocol::caps::EMULATED;
         }
-        Robot {
-            link: Link::new(),
-            identity: Identity {
+        let p = slot.as_mut_ptr();
+        // SAFETY: `p` points to writable memory for a `Robot<K>`; each field is written once
+        // through a raw pointer to it, no reference to an unwritten field is made, and
+        // `Core::init` writes every field of the core (see `every_core_field_is_written`).
+        unsafe {
+            addr_of_mut!((*p).link).write(Link::new());
+            addr_of_mut!((*p).identity).write(Identity {
                 firmware: "robot-firmware",
                 firmware_version: opts.firmware_version,
                 profile: profile.id,
                 capabilities,
                 map_capacity: profile.map_capacity(),
-            },
-            core: Core {
-                profile,
-                config: RobotConfig::default(),
-                arbiter: Arbiter::new(ArbiterParams::default(), opts.seed),
-                odometry: Odometry::new(odometry_params, opts.start),
-                dead: DeadReckoner::new(DeadReckonParams::default(), opts.start.point()),
-                guided: GuidedParams::default(),
-                compass_heading: opts.start.heading,
-                mode: Mode::Idle,
-                goal: None,
-                teleop: (0, 0),
-                motor: MotorCommand::STOP,
-                sensors: Sensors::default(),
-                prev_encoders: None,
-                wheel_speed_mm_s: [0, 0],
-                arrived: false,
-                failsafe: false,
-                line_events: 0,
-                last_calibration_ms: None,
-                prev_dead_end: false,
-                guided_active: false,
-                timing: Timing::default(),
-                next_telemetry_ms: 0,
-                events: Deque::new(),
-                emulated: opts.emulated,
-                objects: Objects::new(),
-                exec: None,
-                executor: Executor::new(ExecuteParams::default(), opts.start.point()),
-                explorer: Explorer::new(ExploreParams::default(), opts.seed ^ 0x5EED_0004),
-                cycle_ms: 0,
-                forage: Forage::default(),
-                gripper_cmd: GripperCommand::default(),
-                linecorr: LineCorr::new(odometry_params, opts.start, opts.seed ^ 0x5EED_0003),
-                light_cal: LightCalibration::new(opts.seed ^ 0x5EED_0005),
-                progress: MotionProgress::new(ProgressParams::for_profile(profile)),
-            },
+            });
+            Core::init(addr_of_mut!((*p).core), &opts);
+            slot.assume_init_mut()
         }
     }
 
@@ -294,10 +284,12 @@ impl Robot {
         if let Some(p) = self.core.progress.report_due(self.core.mode, now_ms, plan) {
             self.link.send_low_priority(&Message::Progress(p), now_ms);
         }
-        if self.core.linecorr.report_due(now_ms) {
-            let m = self.core.linecorr.report(now_ms);
-            self.link
-                .send_low_priority(&Message::Localization(m), now_ms);
+        if let Some(lc) = self.core.linecorr.get_mut() {
+            if lc.report_due(now_ms) {
+                let m = lc.report(now_ms);
+                self.link
+                    .send_low_priority(&Message::Localization(m), now_ms);
+            }
         }
         self.link
             .heartbeat(now_ms, protocol::timing::HEARTBEAT_PERIOD_MS);
@@ -314,11 +306,117 @@ impl Robot {
     }
 }
 
-impl Core {
+impl<K: Kit> Core<K> {
+    /// Writes every field of the core at `p` (`Robot::init`).
+    ///
+    /// # Safety
+    /// `p` must point to writable memory for a `Core<K>`; its old contents are overwritten,
+    /// not dropped.
+    #[allow(unsafe_code)] // raw-pointer writes of each field
+    unsafe fn init(p: *mut Self, opts: &RobotOptions) {
+        /// The map, plan and staging buffers (24 KB): copied from a constant straight into
+        /// place rather than built in a stack frame.
+        const NO_OBJECTS: Objects = Objects::new();
+        macro_rules! put {
+            ($($field:ident: $value:expr,)*) => {
+                // SAFETY: the caller's; one write per field, none read.
+                $(unsafe { addr_of_mut!((*p).$field).write($value) };)*
+            };
+        }
+        let profile = opts.profile;
+        let odometry_params = OdometryParams {
+            wheel_distance_mm: profile.wheel_distance_m * 1000.0,
+            mm_per_pulse: profile.pulse_m * 1000.0,
+            ..OdometryParams::default()
+        };
+        put! {
+            profile: profile,
+            config: RobotConfig::default(),
+            arbiter: Arbiter::new(ArbiterParams::default(), opts.seed),
+            odometry: Odometry::new(odometry_params, opts.start),
+            dead: DeadReckoner::new(DeadReckonParams::default(), opts.start.point()),
+            guided: GuidedParams::default(),
+            compass_heading: opts.start.heading,
+            mode: Mode::Idle,
+            goal: None,
+            teleop: (0, 0),
+            motor: MotorCommand::STOP,
+            sensors: Sensors::default(),
+            prev_encoders: None,
+            wheel_speed_mm_s: [0, 0],
+            arrived: false,
+            failsafe: false,
+            line_events: 0,
+            last_calibration_ms: None,
+            prev_dead_end: false,
+            guided_active: false,
+            timing: Timing::default(),
+            next_telemetry_ms: 0,
+            events: Deque::new(),
+            emulated: opts.emulated,
+            objects: NO_OBJECTS,
+            exec: None,
+            executor: Executor::new(ExecuteParams::default(), opts.start.point()),
+            explorer: Slot::fill(|| {
+                Explorer::new(ExploreParams::default(), opts.seed ^ 0x5EED_0004)
+            }),
+            cycle_ms: 0,
+            forage: Slot::fill(Forage::default),
+            gripper_cmd: GripperCommand::default(),
+            linecorr: Slot::fill(|| {
+                LineCorr::new(odometry_params, opts.start, opts.seed ^ 0x5EED_0003)
+            }),
+            light_cal: Slot::fill(|| LightCalibration::new(opts.seed ^ 0x5EED_0005)),
+            progress: MotionProgress::new(ProgressParams::for_profile(profile)),
+        }
+    }
+
+    /// Never called: names every field of `Core` without `..`, so that a field added to the
+    /// struct and not to `init` fails to compile here instead of being left unwritten.
+    #[allow(dead_code)]
+    fn every_core_field_is_written(self) {
+        let Core {
+            profile: _,
+            config: _,
+            arbiter: _,
+            odometry: _,
+            dead: _,
+            guided: _,
+            compass_heading: _,
+            mode: _,
+            goal: _,
+            teleop: _,
+            motor: _,
+            sensors: _,
+            prev_encoders: _,
+            wheel_speed_mm_s: _,
+            arrived: _,
+            failsafe: _,
+            line_events: _,
+            last_calibration_ms: _,
+            prev_dead_end: _,
+            guided_active: _,
+            timing: _,
+            next_telemetry_ms: _,
+            events: _,
+            emulated: _,
+            objects: _,
+            exec: _,
+            executor: _,
+            explorer: _,
+            cycle_ms: _,
+            forage: _,
+            gripper_cmd: _,
+            linecorr: _,
+            light_cal: _,
+            progress: _,
+        } = self;
+    }
+
     /// The pose estimate: odometry on robots with encoders, compass dead reckoning otherwise.
     pub fn pose(&self) -> Pose {
-        if self.linecorr.active() {
-            self.linecorr.pose()
+        if let Some(lc) = self.linecorr.get().filter(|lc| lc.active()) {
+            lc.pose()
         } else if self.profile.has(protocol::caps::ENCODERS) {
             self.odometry.pose()
         } else {
@@ -375,7 +473,7 @@ impl Core {
                 }))
             }
             Message::TransferChunk(c) => {
-                let (ack, installed) = self.objects.on_chunk(c, &mut self.light_cal);
+                let (ack, installed) = self.objects.on_chunk(c, self.light_cal.get_mut());
                 if let Some(i) = installed {
                     self.installed(i);
                 }
@@ -395,7 +493,8 @@ impl Core {
     fn upload_refusal(&self, object: ObjectKind) -> Option<TransferStatus> {
         if object != ObjectKind::LightCalibration {
             None
-        } else if !self.profile.has(protocol::caps::AMBIENT_LIGHT) {
+        } else if !self.profile.has(protocol::caps::AMBIENT_LIGHT) || self.light_cal.get().is_none()
+        {
             Some(TransferStatus::Rejected)
         } else if self.mode == Mode::CalibrateLight {
             Some(TransferStatus::Busy)
@@ -429,8 +528,8 @@ impl Core {
 
     fn try_apply(&mut self, command: Command, now_ms: u32) -> Result<AckInfo, NackReason> {
         match command {
-            Command::SetMode(Mode::Explore) => self.start_exploration()?,
-            Command::SetMode(Mode::Forage) => self.start_forage()?,
+            Command::SetMode(Mode::Explore) => K::Explorer::start(self)?,
+            Command::SetMode(Mode::Forage) => K::Forage::start(self)?,
             Command::SetMode(mode) => {
                 self.check_mode(mode)?;
                 if mode == Mode::GoTo && self.goal.is_none() {
@@ -496,11 +595,13 @@ impl Core {
                     return Err(NackReason::OutOfRange);
                 }
                 self.odometry.set_pose(Pose::new(p.x, p.y, heading));
-                self.linecorr.set_pose(Pose::new(p.x, p.y, heading));
+                if let Some(lc) = self.linecorr.get_mut() {
+                    lc.set_pose(Pose::new(p.x, p.y, heading));
+                }
                 // Without encoders the heading comes from the compass; only x, y are set.
                 self.dead.set_position(p);
             }
-            Command::StartExploration => self.start_exploration()?,
+            Command::StartExploration => K::Explorer::start(self)?,
             Command::ExecutePlan { plan_id } => self.start_plan(plan_id)?,
             Command::Segment => {
                 self.objects.segment()?;
@@ -518,7 +619,7 @@ impl Core {
                 self.installed(Installed::Plan { id });
             }
             Command::Download { object } => {
-                return self.objects.start_download(object, &self.light_cal);
+                return self.objects.start_download(object, self.light_cal.get());
             }
         }
         Ok(AckInfo::Done)
@@ -605,10 +706,11 @@ impl Core {
                     Err(NackReason::Unsupported)
                 }
             }
+            Mode::Survey if self.linecorr.get().is_none() => Err(NackReason::Unsupported),
             Mode::Survey => linecorr::check(self.profile),
             Mode::CalibrateLight => {
                 let caps = protocol::caps::AMBIENT_LIGHT | protocol::caps::ENCODERS;
-                if khepera_like && self.profile.has(caps) {
+                if khepera_like && self.profile.has(caps) && self.light_cal.get().is_some() {
                     Ok(())
                 } else {
                     Err(NackReason::Unsupported)
@@ -640,7 +742,7 @@ impl Core {
                 behaviour::Mode::Idle
             }
             Mode::ExecutePlan => self.plan_arbiter_mode(),
-            Mode::Forage => self.forage_arbiter_mode(),
+            Mode::Forage => K::Forage::arbiter_mode(self),
             _ => behaviour::Mode::Idle,
         };
         self.arbiter.set_mode(arbiter_mode);
@@ -648,10 +750,13 @@ impl Core {
             self.arbiter.release_light();
         }
         if mode == Mode::Survey {
-            self.linecorr.start(self.pose(), self.cycle_ms);
+            let (pose, now) = (self.pose(), self.cycle_ms);
+            if let Some(lc) = self.linecorr.get_mut() {
+                lc.start(pose, now);
+            }
         }
         if mode == Mode::CalibrateLight {
-            self.start_light_calibration();
+            K::LightCal::start(self);
         }
         if mode != self.mode {
             self.mode = mode;
@@ -710,7 +815,7 @@ impl Core {
 
         self.read_sensors(hal);
         self.estimate(now_ms);
-        self.report_light_bearing(now_ms);
+        K::LightCal::report_bearing(self, now_ms);
         self.map_as_it_moves();
         let cmd = match self.track_progress() {
             Some(stop) => stop,
@@ -739,13 +844,15 @@ impl Core {
             encoders: hal.encoders(),
             gripper: hal.gripper(),
         };
-        if self.mode == Mode::Forage && self.forage.wants_frame() {
-            // Only when a landmark scan asks (the K213 gives 2 frames a second), straight
-            // into the scan, so the line is not kept.
-            let mut line = [0u8; crate::hal::CAMERA_PIXELS];
-            let ok = hal.camera(&mut line);
-            let heading = self.pose().heading;
-            self.forage.take_frame(heading, ok.then_some(&line));
+        let heading = self.pose().heading;
+        if let Some(forage) = self.forage.get_mut() {
+            if self.mode == Mode::Forage && forage.wants_frame() {
+                // Only when a landmark scan asks (the K213 gives 2 frames a second), straight
+                // into the scan, so the line is not kept.
+                let mut line = [0u8; crate::hal::CAMERA_PIXELS];
+                let ok = hal.camera(&mut line);
+                forage.take_frame(heading, ok.then_some(&line));
+            }
         }
         if s.line && !self.sensors.line {
             self.line_events = self.line_events.wrapping_add(1);
@@ -761,7 +868,7 @@ impl Core {
                 let dl = encoder_delta(prev[0], enc[0]);
                 let dr = encoder_delta(prev[1], enc[1]);
                 self.odometry.step(dl, dr);
-                self.line_correct(dl, dr, now_ms);
+                K::LineCorr::line_correct(self, dl, dr, now_ms);
                 if period_s > 0.0 {
                     let mm = self.odometry.params.mm_per_pulse;
                     self.wheel_speed_mm_s = [
@@ -844,10 +951,10 @@ impl Core {
             | Mode::EdgeFollowRight
             | Mode::SeekLight => self.behaviour_command(),
             Mode::ExecutePlan => self.plan_command(),
-            Mode::Explore => self.explore_command(),
-            Mode::Forage => self.forage_command(),
-            Mode::Survey => self.survey_command(),
-            Mode::CalibrateLight => self.calibrate_command(),
+            Mode::Explore => K::Explorer::command(self),
+            Mode::Forage => K::Forage::command(self),
+            Mode::Survey => K::LineCorr::survey_command(self),
+            Mode::CalibrateLight => K::LightCal::command(self),
         }
     }
 

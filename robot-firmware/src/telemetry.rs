@@ -10,10 +10,10 @@ use protocol::{
 };
 
 use crate::behaviour::units;
-use crate::robot::Core;
+use crate::robot::{Core, Kit};
 
 /// The telemetry frame for the robot's current state.
-pub fn build(core: &Core, now_ms: u32) -> Telemetry {
+pub fn build<K: Kit>(core: &Core<K>, now_ms: u32) -> Telemetry {
     let pose = core.pose();
     let s = &core.sensors;
     let (sigma_xy_m, sigma_heading) = sigma(core);
@@ -88,7 +88,7 @@ pub fn build(core: &Core, now_ms: u32) -> Telemetry {
 }
 
 /// One-sigma position (m) and heading (rad) uncertainty.
-fn sigma(core: &Core) -> (f32, f32) {
+fn sigma<K: Kit>(core: &Core<K>) -> (f32, f32) {
     if core.profile.has(protocol::caps::ENCODERS) {
         let c = core.odometry.covariance();
         (c.sigma_position_m(), c.sigma_heading_rad())

@@ -225,15 +225,14 @@ impl Objects {
             return Err(NackReason::CapacityExceeded);
         }
         let crc = map_object_crc(grid, start, goal).map_err(|_| NackReason::CapacityExceeded)?;
-        let mut cells = [0u8; GRID_BYTES];
-        let n = grid_bytes(w, h);
-        let (dst, src) = (cells.get_mut(..n), grid.as_bytes().get(..n));
-        if let (Some(dst), Some(src)) = (dst, src) {
-            dst.copy_from_slice(src);
+        if grid.as_bytes().len() < grid_bytes(w, h) {
+            return Err(NackReason::CapacityExceeded);
         }
-        let new = Grid::new(grid.width(), grid.height(), grid.geometry(), cells)
+        // In place: a copy of the grid on the stack would be 1 KB (issue 15).
+        self.nav
+            .grid_mut()
+            .copy_from(grid)
             .map_err(|_| NackReason::CapacityExceeded)?;
-        *self.nav.grid_mut() = new;
         self.map_dirty = false;
         self.map = Some(MapInfo {
             id: crc,
@@ -296,7 +295,7 @@ impl Objects {
     pub fn start_download(
         &mut self,
         object: ObjectKind,
-        light: &LightCalibration,
+        light: Option<&LightCalibration>,
     ) -> Result<AckInfo, NackReason> {
         self.map();
         let len = self.object_len(object, light)?;
@@ -326,6 +325,7 @@ impl Objects {
             }
             ObjectKind::LightCalibration => {
                 let n = light
+                    .ok_or(NackReason::BadState)?
                     .encode(&mut self.out)
                     .map_err(|_| NackReason::CapacityExceeded)?;
                 (crc32c(self.out.get(..n).unwrap_or(&[])), n)
@@ -346,7 +346,7 @@ impl Objects {
     fn object_len(
         &self,
         object: ObjectKind,
-        light: &LightCalibration,
+        light: Option<&LightCalibration>,
     ) -> Result<usize, NackReason> {
         match object {
             ObjectKind::Map => {
@@ -361,7 +361,9 @@ impl Objects {
             ObjectKind::Plan if self.plan_len > 0 => Ok(usize::from(self.plan_len)),
             ObjectKind::Plan => Err(NackReason::NoPlan),
             // An untrained network is random numbers, not a calibration.
-            ObjectKind::LightCalibration if light.trained => Ok(LIGHT_OBJECT_LEN),
+            ObjectKind::LightCalibration if light.is_some_and(|l| l.trained) => {
+                Ok(LIGHT_OBJECT_LEN)
+            }
             ObjectKind::LightCalibration => Err(NackReason::BadState),
         }
     }
@@ -396,7 +398,7 @@ impl Objects {
     pub fn on_chunk(
         &mut self,
         c: &TransferChunk<'_>,
-        light: &mut LightCalibration,
+        mut light: Option<&mut LightCalibration>,
     ) -> (TransferAck, Option<Installed>) {
         let mut installed = None;
         let Objects {
@@ -429,10 +431,15 @@ impl Objects {
                     })
                 }
                 ObjectKind::Regions => None,
-                ObjectKind::LightCalibration => LightView::parse(v.bytes).ok().map(|view| {
-                    light.install_object(&view);
-                    Installed::LightCalibration { id: v.id }
-                }),
+                // A robot without a light calibration refuses its upload at the begin; a chunk
+                // that gets here anyway installs nothing.
+                ObjectKind::LightCalibration => match (LightView::parse(v.bytes), light.as_mut()) {
+                    (Ok(view), Some(light)) => {
+                        light.install_object(&view);
+                        Some(Installed::LightCalibration { id: v.id })
+                    }
+                    _ => None,
+                },
             };
             installed.is_some()
         });
@@ -466,8 +473,14 @@ fn install_map(nav: &mut Nav64, map: &mut Option<MapInfo>, v: &Verified<'_>) -> 
     if usize::from(h.width) > MAP_CAPACITY || usize::from(h.height) > MAP_CAPACITY {
         return None;
     }
-    let grid = load_map(&view, [0u8; GRID_BYTES]).ok()?;
-    *nav.grid_mut() = grid;
+    // A grid over the object's own cells, checked before the robot's grid (and its
+    // segmentation) is touched, then copied in place: no 1 KB grid on the stack (issue 15).
+    let geometry = Geometry::new(h.cell_mm, h.origin.x_mm, h.origin.y_mm).ok()?;
+    let incoming = Grid::new(h.width, h.height, geometry, view.cells()).ok()?;
+    if incoming.as_bytes().len() > GRID_BYTES {
+        return None;
+    }
+    nav.grid_mut().copy_from(&incoming).ok()?;
     *map = Some(MapInfo {
         id: v.id,
         crc: v.crc,

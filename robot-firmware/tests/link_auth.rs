@@ -6,7 +6,7 @@
 use protocol::sign::{LinkAuth, LinkKey, ROBOT_LINK, STATION_LINK};
 use protocol::*;
 use robot_firmware::scripted::ScriptedHal;
-use robot_firmware::{MotorCommand, Robot, RobotOptions, MICRO_RATO};
+use robot_firmware::{AnyRobot, MotorCommand, RobotOptions, MICRO_RATO};
 
 const KEY: [u8; 32] = [0x42; 32];
 const OTHER: [u8; 32] = [0x24; 32];
@@ -24,7 +24,7 @@ enum Seen {
 }
 
 struct Station {
-    robot: Robot,
+    robot: AnyRobot,
     hal: ScriptedHal,
     seq: u16,
     dec: FrameDecoder,
@@ -35,14 +35,14 @@ struct Station {
 
 impl Station {
     fn new(robot_key: Option<&[u8; 32]>, station_key: Option<&[u8; 32]>) -> Self {
-        let mut robot = Robot::new(RobotOptions {
+        let mut robot = AnyRobot::new(RobotOptions {
             profile: &MICRO_RATO,
             seed: 1,
             start: robot_firmware::odometry::Pose::new(0.5, 0.5, 0.0),
             emulated: false,
             firmware_version: "test",
         });
-        robot.link.set_key(robot_key);
+        robot.link_mut().set_key(robot_key);
         Station {
             robot,
             hal: ScriptedHal {
@@ -182,7 +182,7 @@ fn unsigned_and_forged_commands_are_refused_and_no_motor_moves() {
     assert!(Station::replies(&seen).is_empty(), "{seen:?}");
     assert_eq!(s.hal.motors, MotorCommand::STOP);
     assert_eq!(s.hal.motor_moves, moves, "a refused frame moved a motor");
-    let a = s.robot.link.auth_stats();
+    let a = s.robot.link().auth_stats();
     assert_eq!((a.unsigned, a.bad_signature), (1, 1));
     // The same command signed with the key is obeyed: the refusals above were the key's doing.
     let seq = s.seq;
@@ -212,7 +212,7 @@ fn a_replayed_command_is_refused() {
         "replay answered: {seen:?}"
     );
     assert_eq!(s.hal.motors, stopped);
-    assert_eq!(s.robot.link.auth_stats().stale_timestamp, 1);
+    assert_eq!(s.robot.link().auth_stats().stale_timestamp, 1);
 }
 
 #[test]
@@ -248,7 +248,7 @@ fn a_refused_hello_is_answered_with_its_reason() {
         station: "forger",
     }));
     assert_eq!(s.run(20), [refusal(-2)]);
-    assert!(!s.robot.link.connected());
+    assert!(!s.robot.link().connected());
     // Unkeyed robot, signed Hello: it has no key; its answer is unsigned.
     let mut s = Station::new(None, Some(&KEY));
     let hello = Message::Hello(Hello {
@@ -260,7 +260,7 @@ fn a_refused_hello_is_answered_with_its_reason() {
     s.send(&hello);
     s.auth = LinkAuth::new(None, STATION_LINK);
     assert_eq!(s.run(20), [refusal(-4)]);
-    assert!(!s.robot.link.connected());
+    assert!(!s.robot.link().connected());
 }
 
 #[test]
@@ -282,8 +282,8 @@ fn a_keyed_robot_refuses_an_unsigned_hello_with_a_signed_event() {
             value: -1,
         })]
     );
-    assert!(!s.robot.link.connected());
-    assert_eq!(s.robot.link.auth_stats().unsigned, 1);
+    assert!(!s.robot.link().connected());
+    assert_eq!(s.robot.link().auth_stats().unsigned, 1);
 }
 
 #[test]
@@ -303,12 +303,14 @@ fn the_robot_signs_on_from_the_stations_timestamps_and_stays_small() {
     );
     eprintln!(
         "size_of: Robot {} Link {} LinkAuth {} LinkKey {}",
-        std::mem::size_of::<Robot>(),
+        std::mem::size_of::<robot_firmware::Robot<robot_firmware::robot::DomDinis>>(),
         std::mem::size_of::<robot_firmware::link::Link>(),
         std::mem::size_of::<LinkAuth>(),
         std::mem::size_of::<LinkKey>()
     );
-    assert!(std::mem::size_of::<Robot>() <= 32 * 1024);
+    assert!(
+        std::mem::size_of::<robot_firmware::Robot<robot_firmware::robot::DomDinis>>() <= 32 * 1024
+    );
 }
 
 mod hostile {
@@ -359,7 +361,7 @@ mod hostile {
             }
             prop_assert_eq!(s.hal.motor_moves, moves);
             prop_assert_eq!(s.hal.motors, MotorCommand::STOP);
-            prop_assert!(s.robot.link.auth_stats().refused() > 0);
+            prop_assert!(s.robot.link().auth_stats().refused() > 0);
         }
     }
 }

@@ -6,14 +6,14 @@
 
 use protocol::caps;
 use robot_firmware::params::PARAMS;
-use robot_firmware::{Robot, RobotOptions, KHEPERA, MICRO_RATO};
+use robot_firmware::{AnyRobot, RobotOptions, KHEPERA, MICRO_RATO};
 
 const BEGIN: &str = "<!-- parameter table: generated from robot-firmware/src/params.rs by \
                      robot-firmware/tests/params_doc.rs -->";
 const END: &str = "<!-- end of the parameter table -->";
 
-fn robot(profile: &'static robot_firmware::Profile) -> Robot {
-    Robot::new(RobotOptions {
+fn robot(profile: &'static robot_firmware::Profile) -> AnyRobot {
+    AnyRobot::new(RobotOptions {
         profile,
         seed: 1,
         start: robot_firmware::odometry::Pose::new(0.5, 0.5, 0.0),
@@ -51,7 +51,7 @@ fn table() -> String {
         "| id | name | unit | min | max | whole | default: khepera | default: micro-rato | \
          needs | what it does |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
-    let default = |r: &mut Robot, id: u16| match r.core.param(id) {
+    let default = |r: &mut AnyRobot, id: u16| match r.param(id) {
         Ok(v) => format!("{v}"),
         Err(protocol::NackReason::Unsupported) => "(Unsupported)".into(),
         Err(e) => panic!("parameter {id}: {e:?}"),

@@ -94,7 +94,7 @@ fn an_interrupted_upload_resumes_from_the_robots_next() {
     let mut st = Station::new(&MICRO_RATO);
     assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
     let mut first = Sender::for_object(ObjectKind::Map, &bytes).unwrap();
-    while st.robot.core.objects.upload_progress().map_or(0, |p| p.2) < 448 {
+    while st.robot.objects().upload_progress().map_or(0, |p| p.2) < 448 {
         first.poll(st.now_ms(), &bytes, |m| {
             st.send(m);
             true
@@ -108,7 +108,7 @@ fn an_interrupted_upload_resumes_from_the_robots_next() {
     st.inbox.clear();
     st.run(100);
     assert_eq!(st.map_bytes(), map);
-    let held = st.robot.core.objects.upload_progress().unwrap().2;
+    let held = st.robot.objects().upload_progress().unwrap().2;
     let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &bytes).unwrap(), &bytes);
     assert_eq!(outcome, Outcome::Complete);
     assert_eq!(
@@ -156,7 +156,7 @@ fn oversize_objects_and_uploaded_regions_are_rejected_before_any_chunk() {
     let mut bytes = vec![0; 2048];
     let n = encode_map_object(&g, None, None, &mut bytes).unwrap();
     assert!(st.upload_object(ObjectKind::Map, &bytes[..n]) == Outcome::Rejected);
-    assert!(!st.robot.core.objects.has_map());
+    assert!(!st.robot.objects().has_map());
 }
 
 #[test]
@@ -259,7 +259,7 @@ fn map_and_plan_commands_are_refused_precisely_and_change_nothing() {
     assert_eq!(st.command(plan_to(9000, 150)), Err(NackReason::BadPoint));
     assert_eq!(st.command(plan_to(i32::MAX, 0)), Err(NackReason::BadPoint));
     assert!(
-        !st.robot.core.objects.has_plan(),
+        !st.robot.objects().has_plan(),
         "refused plans install nothing"
     );
     assert_eq!(st.command(plan_to(4350, 4350)), Ok(AckInfo::Done));
@@ -272,7 +272,7 @@ fn map_and_plan_commands_are_refused_precisely_and_change_nothing() {
         st.command(Command::SetMode(Mode::ExecutePlan)),
         Err(NackReason::BadState)
     );
-    assert_eq!(st.robot.core.mode, Mode::Idle);
+    assert_eq!(st.robot.mode(), Mode::Idle);
 
     // Two rooms with no door: unreachable. The old plan stays installed.
     let (split, _) = picture("..#..\n..#..\n");
@@ -287,7 +287,7 @@ fn map_and_plan_commands_are_refused_precisely_and_change_nothing() {
         to: Some(mm(1350, 150)),
     };
     assert_eq!(st.command(across), Err(NackReason::Unreachable));
-    assert_eq!(st.robot.core.objects.plan().unwrap().0, id);
+    assert_eq!(st.robot.objects().plan().unwrap().0, id);
 
     // A 64 x 64 checkerboard has 2048 one-cell regions, more than the robot holds: Segment is
     // refused, and the grid planner that plans instead finds no passage (free cells touch at
@@ -341,7 +341,7 @@ fn map_and_plan_commands_are_refused_precisely_and_change_nothing() {
         to: Some(mm(62 * 300 + 150, 61 * 300 + 150)),
     };
     assert_eq!(st.command(corner), Ok(AckInfo::Done));
-    let (_, view) = st.robot.core.objects.plan().unwrap();
+    let (_, view) = st.robot.objects().plan().unwrap();
     assert_eq!(view.nav.regions, 0, "made by the grid planner");
     assert_eq!(view.waypoint_count(), 3, "along row 0, then down column 62");
 }
@@ -368,7 +368,7 @@ fn execute_by_teleport(profile: &'static robot_firmware::Profile) {
     );
     let id = st.plan_event_id();
     let waypoints: Vec<PointMm> = {
-        let (_, view) = st.robot.core.objects.plan().unwrap();
+        let (_, view) = st.robot.objects().plan().unwrap();
         view.waypoints().collect()
     };
     assert_eq!(
@@ -376,7 +376,7 @@ fn execute_by_teleport(profile: &'static robot_firmware::Profile) {
         Ok(AckInfo::Done)
     );
     st.run(200);
-    assert_eq!(st.robot.core.mode, Mode::ExecutePlan);
+    assert_eq!(st.robot.mode(), Mode::ExecutePlan);
     // The start is the first region's centre here, so waypoints 0 and 1 are passed at once.
     assert_ne!(
         st.hal.motors,
@@ -384,8 +384,8 @@ fn execute_by_teleport(profile: &'static robot_firmware::Profile) {
         "driving to the next"
     );
     let mut legs = 0;
-    while !st.robot.core.arrived {
-        let next = st.robot.core.exec.unwrap().next;
+    while !st.robot.arrived() {
+        let next = st.robot.exec().unwrap().next;
         if usize::from(next) >= waypoints.len() {
             // Past the last waypoint the micro-rato heads for the goal light until its ground
             // sensor sees the goal area (seed 004 §2): let it see it.
@@ -398,7 +398,7 @@ fn execute_by_teleport(profile: &'static robot_firmware::Profile) {
             Ok(AckInfo::Done)
         );
         st.run(200);
-        assert!(st.robot.core.arrived || st.robot.core.exec.unwrap().next > next);
+        assert!(st.robot.arrived() || st.robot.exec().unwrap().next > next);
         legs += 1;
         assert!(legs < waypoints.len(), "no progress");
     }
@@ -437,7 +437,7 @@ fn an_uploaded_plan_replaces_the_one_being_executed_which_is_aborted() {
         Ok(AckInfo::Done)
     );
     st.run(100);
-    assert_eq!(st.robot.core.mode, Mode::ExecutePlan);
+    assert_eq!(st.robot.mode(), Mode::ExecutePlan);
     let (other, _) = host_plan(&grid, id, mm(450, 4350), goal);
     assert_eq!(
         st.upload_object(ObjectKind::Plan, &other),
@@ -445,9 +445,9 @@ fn an_uploaded_plan_replaces_the_one_being_executed_which_is_aborted() {
     );
     st.run(100);
     assert!(st.events.iter().any(|e| e.code == EventCode::PlanAborted));
-    assert_eq!(st.robot.core.mode, Mode::Idle);
+    assert_eq!(st.robot.mode(), Mode::Idle);
     assert_eq!(st.hal.motors, robot_firmware::MotorCommand::STOP);
-    assert_eq!(st.robot.core.objects.plan_bytes(), &other[..]);
+    assert_eq!(st.robot.objects().plan_bytes(), &other[..]);
     assert_eq!(
         st.command(Command::ExecutePlan { plan_id }),
         Err(NackReason::PlanIdMismatch)
@@ -563,10 +563,15 @@ fn a_light_calibration_uploads_is_used_at_once_and_downloads_byte_identical() {
         .find(|e| e.code == EventCode::CalibrationInstalled)
         .expect("CalibrationInstalled event");
     assert_eq!(installed.value as u32, crc32c(&object));
-    assert!(st.robot.core.light_cal.trained);
+    assert!(st.robot.light_cal().expect("light calibration").trained);
 
     st.run(1200);
-    let expected = st.robot.core.light_cal.bearing(&st.hal.ambient).unwrap();
+    let expected = st
+        .robot
+        .light_cal()
+        .expect("light calibration")
+        .bearing(&st.hal.ambient)
+        .unwrap();
     let bearing = st
         .events
         .iter()
@@ -588,14 +593,14 @@ fn a_light_calibration_upload_is_busy_while_calibrating_and_changes_nothing() {
     let mut st = Station::new(&KHEPERA);
     st.command(Command::SetMode(Mode::CalibrateLight)).unwrap();
     // Starting draws a fresh network to train: that one must survive the upload.
-    let before = st.robot.core.light_cal.som.clone();
+    let before = st.robot.light_cal().expect("light calibration").som.clone();
     let object = light_object();
     assert_eq!(
         st.upload_object(ObjectKind::LightCalibration, &object),
         Outcome::Busy
     );
-    assert!(!st.robot.core.light_cal.trained);
-    assert_eq!(st.robot.core.light_cal.som, before);
+    assert!(!st.robot.light_cal().expect("light calibration").trained);
+    assert_eq!(st.robot.light_cal().expect("light calibration").som, before);
     assert!(!st
         .events
         .iter()
@@ -608,5 +613,5 @@ fn a_light_calibration_upload_is_busy_while_calibrating_and_changes_nothing() {
         st.upload_object(ObjectKind::LightCalibration, &bad),
         Outcome::Rejected
     );
-    assert!(!st.robot.core.light_cal.trained);
+    assert!(!st.robot.light_cal().expect("light calibration").trained);
 }

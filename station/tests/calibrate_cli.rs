@@ -64,9 +64,7 @@ fn sim(seed: u64, mode: Mode, wheel_bias: Option<[f64; 2]>) -> Sim {
         ..SimConfig::new(&KHEPERA)
     };
     let mut sim = Sim::new(open_box(), cfg).unwrap();
-    sim.robot_mut()
-        .core
-        .apply(protocol::Command::SetMode(mode), 0);
+    sim.robot_mut().apply(protocol::Command::SetMode(mode), 0);
     sim
 }
 
@@ -77,9 +75,9 @@ fn record(sim: &mut Sim, seconds: u64) -> Vec<u8> {
     for step in 0..seconds * 10 {
         sim.run_for(100);
         let now_ms = (sim.now_us() / 1000) as u32;
-        let t = robot_firmware::telemetry::build(&sim.robot().core, now_ms);
+        let t = sim.robot().telemetry(now_ms);
         synth.from_robot(sim.now_us(), &Message::Telemetry(t));
-        if step > 0 && sim.robot().core.mode != Mode::CalibrateLight {
+        if step > 0 && sim.robot().mode() != Mode::CalibrateLight {
             break;
         }
     }
@@ -99,7 +97,7 @@ fn truth_errors(sim: &mut Sim, som: &robot_firmware::som::LightSom) -> (f64, f64
         })
         .unwrap();
         sim.run_for(90);
-        let amb = sim.robot().core.sensors.ambient;
+        let amb = sim.robot().sensors().ambient;
         let front: [u16; 6] = std::array::from_fn(|k| amb[k]);
         let inputs = robot_firmware::som::rescale(front.map(f32::from), 50.0, 500.0);
         let got = f64::from(som.recall(&inputs).unwrap()) - 90.0;
@@ -184,7 +182,7 @@ fn bad_recordings_and_arguments_are_refused_with_a_reason_and_no_output() {
     let mut synth = Synth::new(&Meta::now("in-process emulator", 115_200));
     for _ in 0..20 {
         s.run_for(100);
-        let t = robot_firmware::telemetry::build(&s.robot().core, (s.now_us() / 1000) as u32);
+        let t = s.robot().telemetry((s.now_us() / 1000) as u32);
         synth.from_robot(s.now_us(), &Message::Telemetry(t));
     }
     std::fs::write(d.join("idle.rec"), synth.finish(s.now_us(), "test")).unwrap();
@@ -250,7 +248,6 @@ fn a_calibration_run_far_from_any_lamp_is_refused_saying_so() {
     };
     let mut s = Sim::new(open_box(), cfg).unwrap();
     s.robot_mut()
-        .core
         .apply(protocol::Command::SetMode(Mode::CalibrateLight), 0);
     std::fs::write(d.join("dark.rec"), record(&mut s, 30)).unwrap();
     let o = station(&["calibrate", "dark.rec", "--out", "som.json"], &d);

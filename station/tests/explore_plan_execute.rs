@@ -81,7 +81,7 @@ fn deliver(app: &mut App, sim: &mut emulator::sim::Sim) -> Vec<(Command, Reply)>
     let mut done = Vec::new();
     for (id, command) in app.take_outbox() {
         let now_ms = (sim.now_us() / 1000) as u32;
-        let reply = sim.robot_mut().core.apply(command, now_ms);
+        let reply = sim.robot_mut().apply(command, now_ms);
         let outcome = match reply {
             Reply::Ack(info) => CommandOutcome::Acked {
                 info,
@@ -162,7 +162,7 @@ fn serve_download(app: &mut App, now: &mut u64, bytes: &[u8]) {
 fn run_until_arrived(sim: &mut emulator::sim::Sim) -> bool {
     for _ in 0..300_000 {
         sim.step();
-        if sim.robot().core.arrived {
+        if sim.robot().arrived() {
             return true;
         }
     }
@@ -202,7 +202,7 @@ fn after_exploring_o_plans_on_the_robot_x_executes_and_p_plans_to_the_goal_found
     app.update(key(&app, 'M'));
     app.update(Action::Tick { now_ms: now });
     let mut map = vec![0; MAP_OBJECT_MAX];
-    let n = sim.robot().core.objects.map_object(&mut map).unwrap();
+    let n = sim.robot().objects().map_object(&mut map).unwrap();
     map.truncate(n);
     serve_download(&mut app, &mut now, &map);
     let shown = app.map.plan.map().unwrap();
@@ -245,12 +245,12 @@ fn after_exploring_o_plans_on_the_robot_x_executes_and_p_plans_to_the_goal_found
     for (c, r) in &done {
         assert!(matches!(r, Reply::Ack(_)), "{c:?} refused: {r:?}");
     }
-    let (plan_id, _) = sim.robot().core.objects.plan().unwrap();
+    let (plan_id, _) = sim.robot().objects().plan().unwrap();
     app.update(Action::Link(LinkEvent::Robot(Event {
         code: EventCode::PlanInstalled,
         value: plan_id as i32,
     })));
-    let plan = sim.robot().core.objects.plan_bytes().to_vec();
+    let plan = sim.robot().objects().plan_bytes().to_vec();
     now += 10;
     app.update(Action::Tick { now_ms: now });
     serve_download(&mut app, &mut now, &plan);

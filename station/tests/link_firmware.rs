@@ -196,11 +196,11 @@ async fn a_dropped_command_is_retried_with_the_same_seq_and_executed_once() {
     let o = h.call(Command::SetMode(Mode::Wander)).await;
     assert!(matches!(o, CommandOutcome::Acked { sends: 2, .. }), "{o:?}");
     // The ack is lost on the way back: the robot answers the retry from its reply cache.
-    let before = b.sim.with(|s| s.robot.link.counters().retries_answered);
+    let before = b.sim.with(|s| s.robot.link().counters().retries_answered);
     b.sim.with(|s| s.faults.drop_from_robot = 1);
     let o = h.call(Command::SetMode(Mode::Idle)).await;
     assert!(matches!(o, CommandOutcome::Acked { sends: 2, .. }), "{o:?}");
-    let after = b.sim.with(|s| s.robot.link.counters().retries_answered);
+    let after = b.sim.with(|s| s.robot.link().counters().retries_answered);
     assert_eq!(
         after,
         before + 1,

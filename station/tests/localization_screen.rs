@@ -47,20 +47,18 @@ fn surveyed() -> App {
     app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
         peer(),
     ))));
-    sim.robot_mut()
-        .core
-        .apply(Command::SetMode(Mode::Survey), 0);
+    sim.robot_mut().apply(Command::SetMode(Mode::Survey), 0);
     for ms in 1..=90_000u32 {
         sim.step();
         if ms % 200 == 0 {
-            let m = sim.robot().core.linecorr.report(ms);
+            let m = sim.robot().linecorr().expect("line correction").report(ms);
             app.update(Action::Link(LinkEvent::Localization(Box::new(m))));
         }
         if ms % 100 == 0 {
             app.update(Action::Tick {
                 now_ms: u64::from(ms),
             });
-            let t = robot_firmware::telemetry::build(&sim.robot().core, ms);
+            let t = sim.robot().telemetry(ms);
             app.update(Action::Link(LinkEvent::Telemetry(t)));
             let p = sim.truth();
             app.update(Action::Link(LinkEvent::Truth(EmuTruth {

@@ -240,7 +240,7 @@ impl Bench {
     }
 
     fn robot_object(&self, object: ObjectKind) -> Option<Vec<u8>> {
-        let objects = &self.sim.robot().core.objects;
+        let objects = &self.sim.robot().objects();
         match object {
             ObjectKind::Map => {
                 let mut out = vec![0; MAP_OBJECT_MAX];
@@ -578,7 +578,7 @@ fn the_failsafe_stops_the_motors_within_300_ms_of_link_loss_in_manual_mode() {
     }
     assert_ne!(b.sim.motor(), robot_firmware::MotorCommand::STOP, "driving");
     assert!(b.sim.body().rotation_mps().iter().all(|w| w.abs() > 0.01));
-    let failsafe_ms = u64::from(b.sim.robot().core.config.failsafe_ms);
+    let failsafe_ms = u64::from(b.sim.robot().config().failsafe_ms);
     let cut_ms = b.now_ms;
     let mut command_stop = None;
     let mut wheels_stop = None;
@@ -591,7 +591,7 @@ fn the_failsafe_stops_the_motors_within_300_ms_of_link_loss_in_manual_mode() {
             wheels_stop = Some(b.now_ms);
         }
     }
-    let last_rx = u64::from(b.sim.robot().link.last_rx_ms());
+    let last_rx = u64::from(b.sim.robot().link().last_rx_ms());
     // `now_ms` is read after the step's physics; the firmware set the motors one ms earlier.
     let command_stop = command_stop.expect("the failsafe stopped the motors") - 1;
     let wheels_stop = wheels_stop.expect("the wheels stopped");

@@ -132,7 +132,7 @@ fn story() -> App {
         LinkEvent::Connection(Connection::Connected(peer())),
     );
     // The parameter fetch the connection starts, answered as a Khepera starts.
-    let mut robot = robot_firmware::Robot::new(robot_firmware::RobotOptions {
+    let mut robot = robot_firmware::AnyRobot::new(robot_firmware::RobotOptions {
         profile: &robot_firmware::KHEPERA,
         seed: 1,
         start: robot_firmware::odometry::Pose::new(0.5, 0.5, 0.0),
@@ -143,7 +143,7 @@ fn story() -> App {
         let Command::GetParam { id: param } = command else {
             continue;
         };
-        let value = robot.core.param(param.0).unwrap_or(0.0);
+        let value = robot.param(param.0).unwrap_or(0.0);
         link(
             &mut app,
             LinkEvent::CommandDone {

@@ -50,7 +50,7 @@ fn arena_map() -> (NavMap, MapObject) {
 fn robot_map(sim: &FirmwareSim) -> Option<Vec<u8>> {
     sim.with(|s| {
         let mut out = vec![0; MAP_OBJECT_MAX];
-        let n = s.robot.core.objects.map_object(&mut out).ok()?;
+        let n = s.robot.objects().map_object(&mut out).ok()?;
         out.truncate(n);
         Some(out)
     })

@@ -83,14 +83,14 @@ fn explored() -> (Vec<u8>, (f64, f64, f64)) {
     let arena = emulator::builtin::micro_rato_99(&emulator::arena::LoadOptions::default()).unwrap();
     let cfg = emulator::sim::SimConfig::new(&robot_firmware::MICRO_RATO);
     let mut sim = emulator::sim::Sim::new(arena, cfg).unwrap();
-    let reply = sim.robot_mut().core.apply(Command::StartExploration, 0);
+    let reply = sim.robot_mut().apply(Command::StartExploration, 0);
     assert!(
         matches!(reply, robot_firmware::link::Reply::Ack(_)),
         "{reply:?}"
     );
     sim.run_for(40_000);
     let mut out = vec![0; MAP_OBJECT_MAX];
-    let n = sim.robot().core.objects.map_object(&mut out).unwrap();
+    let n = sim.robot().objects().map_object(&mut out).unwrap();
     out.truncate(n);
     let p = sim.believed();
     (out, (p.x, p.y, p.heading))

@@ -131,7 +131,7 @@ pub fn serve(
             serve.cycle_period_us = clock.jitter(sim.cycle_us());
             RobotServeStats {
                 robot: i + 1,
-                profile: sim.robot().core.profile.name,
+                profile: sim.robot().profile().name,
                 link: opts.link.as_ref().map(|l| l.display().to_string()),
                 wall_collisions: sim.collisions(),
                 robot_collisions: sim.robot_collisions(),

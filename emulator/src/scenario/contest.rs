@@ -201,7 +201,7 @@ pub fn run_contest(arena: Arena, opts: &ContestOptions) -> Result<ContestReport,
         fleet.step();
         let now_ms = t + 1;
         for (i, sim) in fleet.sims().iter().enumerate() {
-            if arrival_ms[i].is_none() && sim.robot().core.arrived {
+            if arrival_ms[i].is_none() && sim.robot().arrived() {
                 arrival_ms[i] = Some(now_ms);
             }
         }
@@ -236,7 +236,7 @@ pub fn run_contest(arena: Arena, opts: &ContestOptions) -> Result<ContestReport,
                 .fold(0.0, f64::max);
             RobotResult {
                 robot: i + 1,
-                profile: sim.robot().core.profile.name,
+                profile: sim.robot().profile().name,
                 seed: robot_seed(opts.seed, i),
                 start: starts[i].into(),
                 rank: 0,

@@ -133,7 +133,11 @@ pub fn run_forage(arena: Arena, opts: ScenarioOptions) -> Result<ForageReport, S
             break;
         }
     }
-    let forage = &sim.robot().core.forage;
+    // (0, 0, 0) cannot happen: SetMode(Forage) was accepted, so the composition forages.
+    let (firmware_grasped, firmware_delivered, firmware_sources) = sim
+        .robot()
+        .forage()
+        .map_or((0, 0, 0), |f| (f.grasped, f.delivered, f.sources().len()));
     let delivered = sim.gripper().delivered();
     Ok(ForageReport {
         arena: name,
@@ -149,9 +153,9 @@ pub fn run_forage(arena: Arena, opts: ScenarioOptions) -> Result<ForageReport, S
         objects,
         delivered,
         all_delivered: delivered == objects,
-        firmware_grasped: forage.grasped,
-        firmware_delivered: forage.delivered,
-        firmware_sources: forage.sources().len(),
+        firmware_grasped,
+        firmware_delivered,
+        firmware_sources,
         max_return_error_m: returns.iter().map(|r| r.pose_error_m).fold(0.0, f64::max),
         returns,
         sim_s: sim.now_us() as f64 * 1e-6,

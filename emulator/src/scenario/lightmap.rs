@@ -142,7 +142,7 @@ fn open_box() -> Arena {
 
 fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), ScenarioError> {
     let now_ms = (sim.now_us() / 1000) as u32;
-    match sim.robot_mut().core.apply(cmd, now_ms) {
+    match sim.robot_mut().apply(cmd, now_ms) {
         Reply::Ack(_) => Ok(()),
         Reply::Nack(reason) => Err(ScenarioError::Refused { what, reason }),
     }
@@ -155,7 +155,7 @@ fn go_to(sim: &mut Sim, p: FwPoint) -> Result<(), ScenarioError> {
 }
 
 fn front_min(sim: &Sim) -> u16 {
-    let a = sim.robot().core.sensors.ambient;
+    let a = sim.robot().sensors().ambient;
     a.iter().take(6).copied().min().unwrap_or(u16::MAX)
 }
 
@@ -173,7 +173,7 @@ fn run_until(sim: &mut Sim, limit_ms: u64, mut done: impl FnMut(&Sim) -> bool) -
 }
 
 fn front_mean(sim: &Sim) -> u32 {
-    let a = sim.robot().core.sensors.ambient;
+    let a = sim.robot().sensors().ambient;
     a.iter().take(6).map(|&v| u32::from(v)).sum::<u32>() / 6
 }
 
@@ -191,7 +191,7 @@ fn seek_fix(sim: &mut Sim) -> Result<Option<BearingFix>, ScenarioError> {
         if t >= SEEK_MS {
             break false;
         }
-        let core = &sim.robot().core;
+        let core = sim.robot();
         let pose = core.pose();
         // No bearing (the light at T1's edge, or noise): keep the last step going.
         if let Some(b) = core.light_bearing() {
@@ -213,7 +213,7 @@ fn seek_fix(sim: &mut Sim) -> Result<Option<BearingFix>, ScenarioError> {
     }
     // One more cycle at rest for the readings.
     sim.run_for(CYCLE_MS);
-    let core = &sim.robot().core;
+    let core = sim.robot();
     let pose = core.pose();
     Ok(core.light_bearing().map(|b| BearingFix {
         position: pose.point(),
@@ -260,15 +260,15 @@ fn run_with(
         "SetMode(CalibrateLight)",
     )?;
     run_until(&mut sim, CALIBRATE_MS, |s| {
-        s.robot().core.mode != Mode::CalibrateLight
+        s.robot().mode() != Mode::CalibrateLight
     });
-    if !sim.robot().core.light_cal.trained {
+    let Some(cal) = sim.robot().light_cal().filter(|c| c.trained) else {
         return Err(ScenarioError::Refused {
             what: "CalibrateLight",
             reason: protocol::NackReason::BadState,
         });
-    }
-    let calibration_examples = sim.robot().core.light_cal.trained_examples();
+    };
+    let calibration_examples = cal.trained_examples();
     let (d0, t0) = (sim.distance_m(), sim.now_us());
 
     let mut map = LightMap::<4>::new(LightMapParams::default());
@@ -280,14 +280,14 @@ fn run_with(
         let Some(fix1) = seek_fix(&mut sim)? else {
             break "not_found";
         };
-        let here = sim.robot().core.pose();
+        let here = sim.robot().pose();
         let away = wrap_angle(fix1.bearing + core::f32::consts::FRAC_PI_2);
         let detour = FwPoint::new(
             here.x + DETOUR_M * away.cos(),
             here.y + DETOUR_M * away.sin(),
         );
         go_to(&mut sim, detour)?;
-        run_until(&mut sim, LEG_MS, |s| s.robot().core.arrived);
+        run_until(&mut sim, LEG_MS, |s| s.robot().arrived());
         let Some(fix2) = seek_fix(&mut sim)? else {
             break "not_found";
         };
@@ -310,7 +310,7 @@ fn run_with(
             Ok(Sighting::Recognised { correction, .. }) => {
                 recognitions += 1;
                 if opts.correct {
-                    let p = sim.robot().core.pose();
+                    let p = sim.robot().pose();
                     let pose = protocol::Pose {
                         x_mm: mm_from_m("corrected x", f64::from(p.x + correction.x))?,
                         y_mm: mm_from_m("corrected y", f64::from(p.y + correction.y))?,
@@ -349,7 +349,7 @@ fn run_with(
             }
         };
         go_to(&mut sim, target)?;
-        run_until(&mut sim, LEG_MS, |s| s.robot().core.arrived);
+        run_until(&mut sim, LEG_MS, |s| s.robot().arrived());
         if opts.wander_s > 0.0 {
             apply(&mut sim, Command::SetMode(Mode::Wander), "SetMode(Wander)")?;
             sim.run_for((opts.wander_s * 1000.0) as u64);

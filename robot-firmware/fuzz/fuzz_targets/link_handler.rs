@@ -7,13 +7,13 @@ use libfuzzer_sys::fuzz_target;
 use protocol::{encode, Feed, FrameDecoder, Hello, Message, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION};
 use robot_firmware::odometry::Pose;
 use robot_firmware::scripted::ScriptedHal;
-use robot_firmware::{Robot, RobotOptions, KHEPERA, MICRO_RATO};
+use robot_firmware::{AnyRobot, RobotOptions, KHEPERA, MICRO_RATO};
 
 fuzz_target!(|data: &[u8]| {
     let Some((&flags, bytes)) = data.split_first() else { return };
     let profile = if flags & 1 == 0 { &KHEPERA } else { &MICRO_RATO };
     let handshake = flags & 2 != 0;
-    let mut robot = Robot::new(RobotOptions {
+    let mut robot = AnyRobot::new(RobotOptions {
         profile,
         seed: 1,
         start: Pose::new(0.5, 0.5, 0.0),

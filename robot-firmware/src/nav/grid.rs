@@ -342,6 +342,26 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> Grid<S> {
         self.cells.as_mut().fill(byte);
     }
 
+    /// Takes `other`'s size, geometry and cells, in place (the robot's map install: no second
+    /// grid's storage on the stack); bytes past `other`'s cells become 0. On an error (`other`
+    /// larger than this storage) nothing changes.
+    pub fn copy_from<T: AsRef<[u8]>>(&mut self, other: &Grid<T>) -> Result<(), GridError> {
+        let needed = grid_bytes(usize::from(other.width), usize::from(other.height));
+        let src = other
+            .as_bytes()
+            .get(..needed)
+            .ok_or(GridError::StorageTooSmall {
+                needed,
+                got: other.as_bytes().len(),
+            })?;
+        check_size(other.width, other.height, self.cells.as_ref().len())?;
+        let (dst, rest) = self.cells.as_mut().split_at_mut(needed);
+        dst.copy_from_slice(src);
+        rest.fill(0);
+        (self.width, self.height, self.geometry) = (other.width, other.height, other.geometry);
+        Ok(())
+    }
+
     /// Changes the size (for storage sized for a larger map) and marks every cell `Unknown`.
     pub fn reshape(&mut self, width: u16, height: u16) -> Result<(), GridError> {
         check_size(width, height, self.cells.as_ref().len())?;
@@ -355,6 +375,24 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> Grid<S> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn copy_from_takes_size_geometry_and_cells_in_place_or_changes_nothing() {
+        let geo = Geometry::new(100, -50, 20).expect("valid");
+        let mut src = Grid::new(3, 2, geo, [0u8; 2]).expect("fits");
+        src.set(2, 1, Cell::Obstacle).expect("inside");
+        let mut dst = Grid::new(8, 8, Geometry::SEED_004, [0xFFu8; 16]).expect("fits");
+        dst.copy_from(&src).expect("fits");
+        assert_eq!((dst.width(), dst.height(), dst.geometry()), (3, 2, geo));
+        assert_eq!(dst.get(2, 1), Cell::Obstacle);
+        assert_eq!(dst.get(0, 0), Cell::Unknown);
+        assert_eq!(&dst.as_bytes()[2..], &[0; 14], "the rest is cleared");
+        let big = Grid::new(16, 16, geo, [0x55u8; 64]).expect("fits");
+        let mut before = [0u8; 16];
+        before.copy_from_slice(dst.as_bytes());
+        assert!(dst.copy_from(&big).is_err());
+        assert_eq!((dst.width(), dst.as_bytes()), (3, &before[..]));
+    }
 
     #[test]
     fn cells_pack_four_to_a_byte_in_row_major_order() {

@@ -40,7 +40,7 @@
 use protocol::object::{LightView, ObjectError};
 use protocol::{calibration, EventCode, Mode};
 
-use super::Core;
+use super::{Core, Kit, Slot};
 use crate::behaviour::XorShift32;
 use crate::hal::MotorCommand;
 use crate::odometry::wrap_angle;
@@ -321,7 +321,16 @@ pub fn inputs(front: &[u16; FRONT]) -> [f32; FRONT] {
     rescale(front.map(f32::from), RESCALE.0, RESCALE.1)
 }
 
-impl Core {
+impl<K: Kit> Core<K> {
+    /// The angle of a light from the heading, radians counter-clockwise, when the light
+    /// calibration is trained and a light is near; `None` otherwise (and without one).
+    pub fn light_bearing(&self) -> Option<f32> {
+        let cal = self.light_cal.get()?;
+        cal.bearing(&self.sensors.ambient)
+    }
+}
+
+impl<K: Kit<LightCal = LightCalibration>> Core<K> {
     /// `SetMode(CalibrateLight)`, after `check_mode`: begins the align turn.
     pub(super) fn start_light_calibration(&mut self) {
         self.light_cal.start(self.cycle_ms);
@@ -339,12 +348,6 @@ impl Core {
         } else {
             STALL_FALLBACK_MS
         }
-    }
-
-    /// The angle of a light from the heading, radians counter-clockwise, when the light
-    /// calibration is trained and a light is near; `None` otherwise.
-    pub fn light_bearing(&self) -> Option<f32> {
-        self.light_cal.bearing(&self.sensors.ambient)
     }
 
     /// This cycle's motor command in `Mode::CalibrateLight`.
@@ -502,7 +505,7 @@ mod tests {
         use crate::{odometry::Pose, Robot, RobotOptions, KHEPERA};
         use protocol::{Command, Event};
 
-        let mut robot = Robot::new(RobotOptions {
+        let mut robot = Robot::<crate::robot::Khepera>::new(RobotOptions {
             profile: &KHEPERA,
             seed: 1,
             start: Pose::new(0.5, 0.5, 0.0),

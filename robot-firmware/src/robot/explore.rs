@@ -15,9 +15,9 @@
 
 use protocol::{Mode, NackReason, PointMm};
 
-use super::Core;
+use super::{Core, Kit, Slot};
 use crate::deadreckon::DegradeEvent;
-use crate::explore::{ExploreInput, ExplorePhase, ExploreStats, MapMarker};
+use crate::explore::{ExploreInput, ExploreParams, ExplorePhase, ExploreStats, MapMarker};
 use crate::hal::MotorCommand;
 use crate::nav::{grid_bytes, Cell, Geometry, Grid, Passable, Route};
 use crate::odometry::Point;
@@ -28,7 +28,39 @@ use crate::MAP_CAPACITY;
 const EXPLORE_CELL_M: f32 = 0.3;
 const GRID_BYTES: usize = grid_bytes(MAP_CAPACITY, MAP_CAPACITY);
 
-impl Core {
+impl<K: Kit> Core<K> {
+    /// Outside exploration, the robot still maps with its sensors whatever moves it (go-to,
+    /// teleop, a plan), so that a plan can start where go-to left it. Only unknown cells are
+    /// filled in: a map the operator uploaded, or one exploration made, is never contradicted
+    /// by a passing reading. Idle, nothing is marked: a map just uploaded stays byte for byte
+    /// what was sent until the robot moves. Robots without IR sensors, or without a map,
+    /// mark nothing.
+    pub(super) fn map_as_it_moves(&mut self) {
+        if matches!(self.mode, Mode::Explore | Mode::Idle) || !self.objects.has_map() {
+            return;
+        }
+        let (ir, n) = self.ir_rays();
+        if n == 0 {
+            return;
+        }
+        let input = ExploreInput {
+            now_ms: self.cycle_ms,
+            pose: self.pose(),
+            ir: &ir[..n],
+            goal: self.dead.params.beacon,
+            ground: None,
+            arrival_m: self.guided.arrival_m,
+        };
+        // Any robot with a map marks it; one without the explorer uses its default limits.
+        let params = self
+            .explorer
+            .get()
+            .map_or_else(ExploreParams::default, |e| e.params);
+        crate::explore::mark_map(&input, &params, &mut UnknownOnly(&mut self.objects));
+    }
+}
+
+impl<K: Kit<Explorer = crate::explore::Explorer>> Core<K> {
     /// `StartExploration` (or `SetMode(Explore)`): begins a reactive-search run.
     pub(super) fn start_exploration(&mut self) -> Result<(), NackReason> {
         let caps = protocol::caps::COMPASS | protocol::caps::BEACON;
@@ -54,8 +86,11 @@ impl Core {
         }
         let geometry = Geometry::from_metres(EXPLORE_CELL_M, b.min.x, b.min.y)
             .map_err(|_| NackReason::CapacityExceeded)?;
+        // All unknown: cells over a constant in flash, which `set_map` copies into the robot's
+        // grid in place (a 1 KB array here was most of the worst-case stack, issue 15).
+        static UNKNOWN: [u8; GRID_BYTES] = [0; GRID_BYTES];
         // Both sides are at most MAP_CAPACITY (checked above), so they fit u16.
-        let grid = Grid::new(w as u16, h as u16, geometry, [0u8; GRID_BYTES])
+        let grid = Grid::new(w as u16, h as u16, geometry, &UNKNOWN[..])
             .map_err(|_| NackReason::CapacityExceeded)?;
         let here = self.pose();
         let mm = |v: f32| libm::roundf(v * 1000.0) as i32;
@@ -70,32 +105,6 @@ impl Core {
         };
         self.objects.set_map(&grid, Some(start), Some(goal))?;
         Ok(())
-    }
-
-    /// Outside exploration, the robot still maps with its sensors whatever moves it (go-to,
-    /// teleop, a plan), so that a plan can start where go-to left it. Only unknown cells are
-    /// filled in: a map the operator uploaded, or one exploration made, is never contradicted
-    /// by a passing reading. Idle, nothing is marked: a map just uploaded stays byte for byte
-    /// what was sent until the robot moves. Robots without IR sensors, or without a map,
-    /// mark nothing.
-    pub(super) fn map_as_it_moves(&mut self) {
-        if matches!(self.mode, Mode::Explore | Mode::Idle) || !self.objects.has_map() {
-            return;
-        }
-        let (ir, n) = self.ir_rays();
-        if n == 0 {
-            return;
-        }
-        let input = ExploreInput {
-            now_ms: self.cycle_ms,
-            pose: self.pose(),
-            ir: &ir[..n],
-            goal: self.dead.params.beacon,
-            ground: None,
-            arrival_m: self.guided.arrival_m,
-        };
-        let params = self.explorer.params;
-        crate::explore::mark_map(&input, &params, &mut UnknownOnly(&mut self.objects));
     }
 
     /// This cycle's motor command in `Mode::Explore`.
@@ -237,6 +246,7 @@ mod tests {
     use super::*;
     use crate::link::Reply;
     use crate::robot::follow::tests::run;
+    use crate::robot::DomDinis;
     use crate::scripted::ScriptedHal;
     use crate::{odometry::Pose, Robot, RobotOptions, MICRO_RATO};
     use protocol::Command;
@@ -246,7 +256,7 @@ mod tests {
         // Issue 16: after reaching a spot by go-to, `O` answered "start is in an unknown cell":
         // only exploration marked the map. A robot with an explored (here: all-unknown) map
         // drives by go-to, then plans back from where it stopped.
-        let mut robot = Robot::new(RobotOptions {
+        let mut robot = Robot::<DomDinis>::new(RobotOptions {
             profile: &MICRO_RATO,
             seed: 1,
             start: Pose::new(0.5, 0.5, 0.0),
@@ -292,7 +302,7 @@ mod tests {
 
     #[test]
     fn an_idle_robot_leaves_its_map_as_uploaded() {
-        let mut robot = Robot::new(RobotOptions {
+        let mut robot = Robot::<DomDinis>::new(RobotOptions {
             profile: &MICRO_RATO,
             seed: 1,
             start: Pose::new(0.5, 0.5, 0.0),
@@ -312,7 +322,7 @@ mod tests {
 
     #[test]
     fn passing_readings_never_overwrite_what_the_map_knows() {
-        let mut robot = Robot::new(RobotOptions {
+        let mut robot = Robot::<DomDinis>::new(RobotOptions {
             profile: &MICRO_RATO,
             seed: 1,
             start: Pose::new(0.5, 0.5, 0.0),

@@ -25,7 +25,7 @@
 
 use protocol::{EventCode, Mode, NackReason};
 
-use super::Core;
+use super::{Core, Kit};
 use crate::behaviour::{self, drift::DriftPhase};
 use crate::execute::{ExecPhase, Executor, Waypoints};
 use crate::guided::{guided_step, GuidedPhase};
@@ -70,7 +70,7 @@ pub struct Execution {
     pub approaching: bool,
 }
 
-impl Core {
+impl<K: Kit> Core<K> {
     /// `Command::ExecutePlan`: starts the installed plan if it has this id.
     pub(super) fn start_plan(&mut self, plan_id: u32) -> Result<(), NackReason> {
         let (id, view) = self.objects.plan().ok_or(NackReason::NoPlan)?;
@@ -284,13 +284,17 @@ pub(super) mod tests {
     extern crate std;
     use super::*;
     use crate::nav::{grid_bytes, Cell, Geometry, Grid};
+    use crate::robot::DomDinis;
     use crate::scripted::ScriptedHal;
     use crate::{odometry::Pose, Robot, RobotOptions, MAP_CAPACITY, MICRO_RATO};
     use protocol::{Command, Event, PointMm};
 
     /// A micro-rato at (0.5, 0.5) facing north-east, holding an all-free 5 x 5 m map whose
     /// goal is `goal`; the compass keeps reading north-east, so guided motion drives straight.
-    pub(in crate::robot) fn robot_on_open_map(goal: Option<PointMm>, heading: f32) -> Robot {
+    pub(in crate::robot) fn robot_on_open_map(
+        goal: Option<PointMm>,
+        heading: f32,
+    ) -> Robot<DomDinis> {
         let mut robot = Robot::new(RobotOptions {
             profile: &MICRO_RATO,
             seed: 1,
@@ -314,7 +318,7 @@ pub(super) mod tests {
     /// 3.07 mm/s a nominal unit); returns every event with the motor command of the cycle
     /// that raised it and the time, ms.
     pub(in crate::robot) fn run(
-        robot: &mut Robot,
+        robot: &mut Robot<DomDinis>,
         hal: &mut ScriptedHal,
         cycles: u32,
     ) -> std::vec::Vec<(EventCode, i32, MotorCommand, u64)> {
@@ -335,7 +339,7 @@ pub(super) mod tests {
         out
     }
 
-    fn plan_and_execute(robot: &mut Robot, to: PointMm) {
+    fn plan_and_execute(robot: &mut Robot<DomDinis>, to: PointMm) {
         let core = &mut robot.core;
         assert!(matches!(
             core.apply(

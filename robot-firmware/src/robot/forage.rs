@@ -36,7 +36,7 @@
 use protocol::{EventCode, Mode, NackReason};
 
 use super::scan::{self, LandmarkScan, ScanParams, ScanStep};
-use super::Core;
+use super::{Core, Kit};
 use crate::behaviour::{self, drift::DriftPhase, light::LightPhase};
 use crate::hal::{GripperCommand, GripperState, MotorCommand, ARM_DOWN, ARM_UP, CAMERA_PIXELS};
 use crate::landmarks::Triple;
@@ -269,7 +269,7 @@ impl Forage {
     }
 }
 
-impl Core {
+impl<K: Kit<Forage = Forage>> Core<K> {
     /// `SetMode(Forage)`: the first start makes the current position the home base.
     pub(super) fn start_forage(&mut self) -> Result<(), NackReason> {
         self.check_mode(Mode::Forage)?;
@@ -687,7 +687,7 @@ mod tests {
         use crate::{Robot, RobotOptions, KHEPERA};
         use protocol::Command;
 
-        let mut robot = Robot::new(RobotOptions {
+        let mut robot = Robot::<crate::robot::Khepera>::new(RobotOptions {
             profile: &KHEPERA,
             seed: 1,
             start: Pose::new(0.5, 0.5, 0.0),
@@ -723,7 +723,7 @@ mod tests {
     fn a_drop_is_counted_when_the_object_leaves_the_fingers_not_once_the_arm_is_up() {
         use crate::{Robot, RobotOptions, KHEPERA};
 
-        let mut robot = Robot::new(RobotOptions {
+        let mut robot = Robot::<crate::robot::Khepera>::new(RobotOptions {
             profile: &KHEPERA,
             seed: 1,
             start: Pose::new(0.5, 0.5, 0.0),

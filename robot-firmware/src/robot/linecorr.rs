@@ -25,7 +25,7 @@ use crate::localize::{
 use crate::odometry::{OdometryParams, Pose};
 use crate::profile::Profile;
 
-use super::Core;
+use super::{Core, Kit};
 
 /// Line correction needs encoders (the PPD moves with their counts) and a floor sensor.
 const NEEDS: u32 = protocol::caps::ENCODERS | protocol::caps::LINE_SENSOR;
@@ -39,7 +39,7 @@ pub fn check(profile: &Profile) -> Result<(), NackReason> {
     }
 }
 
-impl Core {
+impl<K: Kit<LineCorr = LineCorr>> Core<K> {
     /// The control cycle's line-correction step, after odometry.
     pub(super) fn line_correct(&mut self, n_l: i32, n_r: i32, now_ms: u32) {
         let level = self.sensors.line;
@@ -435,7 +435,7 @@ mod tests {
         // The PPD is most of it; the whole robot must stay within 32 KB.
         let lc = core::mem::size_of::<LineCorr>();
         assert!(lc < 1600, "{lc}");
-        assert!(core::mem::size_of::<crate::Robot>() <= 32 * 1024);
+        assert!(core::mem::size_of::<crate::Robot<crate::robot::Khepera>>() <= 32 * 1024);
     }
 
     #[test]

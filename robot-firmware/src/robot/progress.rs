@@ -31,7 +31,7 @@
 
 use protocol::{EventCode, Mode, Progress};
 
-use super::Core;
+use super::{Core, Kit};
 use crate::hal::MotorCommand;
 use crate::odometry::Point;
 use crate::profile::Profile;
@@ -175,7 +175,7 @@ pub fn gives_up(mode: Mode) -> bool {
     matches!(mode, Mode::GoTo | Mode::ExecutePlan)
 }
 
-impl Core {
+impl<K: Kit> Core<K> {
     /// The distance left to the mode's target, metres; `None` for a mode without one.
     pub(super) fn distance_left(&self) -> Option<f32> {
         let here = self.pose().point();

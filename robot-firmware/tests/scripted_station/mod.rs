@@ -16,7 +16,7 @@ use robot_firmware::scripted::ScriptedHal;
 use robot_firmware::transfer::{
     encode_map_object, encode_plan_object, encode_regions_object, MAP_OBJECT_MAX,
 };
-use robot_firmware::Robot;
+use robot_firmware::AnyRobot;
 use robot_firmware::RobotOptions;
 
 /// Seed 004 §5's grid of the Micro-Rato'99 arena at 0.3 m (as `emulator/tests/arena_formats.rs`
@@ -150,7 +150,7 @@ pub enum In {
 
 /// A scripted station on the robot's serial port; `drop` loses frames both ways.
 pub struct Station {
-    pub robot: Robot,
+    pub robot: AnyRobot,
     pub hal: ScriptedHal,
     pub dec: FrameDecoder,
     pub seq: u16,
@@ -166,7 +166,7 @@ pub struct Station {
 
 impl Station {
     pub fn new(profile: &'static robot_firmware::Profile) -> Self {
-        let robot = Robot::new(RobotOptions {
+        let robot = AnyRobot::new(RobotOptions {
             profile,
             seed: 1,
             start: robot_firmware::odometry::Pose::new(0.5, 0.5, 0.0),
@@ -198,7 +198,7 @@ impl Station {
             station: "test",
         }));
         s.run(5);
-        assert!(s.robot.link.connected());
+        assert!(s.robot.link().connected());
         s
     }
 
@@ -362,14 +362,14 @@ impl Station {
                 };
                 self.send(&Message::TransferAck(ack));
             }
-            let robot_done = self.robot.core.objects.download_progress().is_none();
+            let robot_done = self.robot.objects().download_progress().is_none();
             if robot_done {
                 if let Some(bytes) = got.take() {
                     return Ok((info, bytes));
                 }
                 panic!(
                     "download ended with {:?}",
-                    self.robot.core.objects.last_download()
+                    self.robot.objects().last_download()
                 );
             }
         }
@@ -387,7 +387,7 @@ impl Station {
 
     pub fn map_bytes(&self) -> Vec<u8> {
         let mut out = vec![0; MAP_OBJECT_MAX];
-        let n = self.robot.core.objects.map_object(&mut out).unwrap();
+        let n = self.robot.objects().map_object(&mut out).unwrap();
         out.truncate(n);
         out
     }

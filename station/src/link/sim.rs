@@ -1,6 +1,6 @@
 //! The real robot firmware on the far end of a port, in-process: for tests and demos.
 //!
-//! Layer: a test bench, not a simulation of the world. `SimCore` is a `robot_firmware::Robot`
+//! Layer: a test bench, not a simulation of the world. `SimCore` is a `robot_firmware::AnyRobot`
 //! stepped every simulated millisecond with a `ScriptedHal`; wheel motion is integrated into
 //! encoder counts, compass heading and a "true" pose (an ideal unicycle: no walls, no slip),
 //! which it reports as `EmuTruth` frames on their own sequence counter when `emulated` is set,
@@ -17,7 +17,7 @@ use std::time::Duration;
 use protocol::{caps, encode, EmuTruth, Message, Pose, MAX_FRAME};
 use robot_firmware::odometry::Pose as FwPose;
 use robot_firmware::scripted::ScriptedHal;
-use robot_firmware::{Profile, Robot, RobotOptions};
+use robot_firmware::{AnyRobot, Profile, RobotOptions};
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 
 use super::memory::MemoryPeer;
@@ -58,7 +58,7 @@ const TRUTH_PERIOD_MS: u64 = 100;
 
 /// The robot, its scripted hardware and the integrated motion.
 pub struct SimCore {
-    pub robot: Robot,
+    pub robot: AnyRobot,
     pub hal: ScriptedHal,
     pub faults: FrameFaults,
     /// The true pose: x, y metres, heading radians.
@@ -84,7 +84,7 @@ struct FaultState {
 impl SimCore {
     pub fn new(opts: SimOptions) -> Self {
         let (x, y, h) = opts.start;
-        let robot = Robot::new(RobotOptions {
+        let robot = AnyRobot::new(RobotOptions {
             profile: opts.profile,
             seed: opts.seed,
             start: FwPose::new(x, y, h),
@@ -158,7 +158,7 @@ impl SimCore {
         let now_ms = self.now_ms();
         let between_frames = raw.last().is_none_or(|&b| b == 0);
         if self.emulated
-            && self.robot.link.connected()
+            && self.robot.link().connected()
             && now_ms >= self.next_truth_ms
             && between_frames
         {
@@ -261,7 +261,7 @@ impl emulator::link::Device for SimCore {
     }
 
     fn cycles(&self) -> u32 {
-        self.robot.core.timing.cycles
+        self.robot.timing().cycles
     }
 
     fn cycle_us(&self) -> u32 {
