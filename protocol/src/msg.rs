@@ -7,8 +7,9 @@
 //! fingerprint and two builds that disagree refuse each other at handshake.
 //!
 //! Units are integers wherever the robot measures in integers: millimetres, milliradians,
-//! decidegrees, millivolts, microseconds. That keeps telemetry small (postcard varints) and
-//! makes the firmware's arithmetic exact.
+//! decidegrees, millivolts, microseconds. That makes the firmware's arithmetic exact. Most
+//! messages are postcard varints (small numbers, few bytes); telemetry, whose numbers are
+//! mostly wide, has a fixed layout (`fixed`).
 
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
@@ -229,8 +230,11 @@ pub struct CycleTiming {
 }
 
 /// Robot -> station at the rate the station sets. Fields a profile lacks are zero; the
-/// `HelloReply` capabilities say which are meaningful.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+/// `HelloReply` capabilities say which are meaningful. On the wire every multi-byte field
+/// has its type's fixed width (`fixed::TelemetryWire`, PROTOCOL.md §6): 80 bytes a frame,
+/// always.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(from = "crate::fixed::TelemetryWire", into = "crate::fixed::TelemetryWire")]
 pub struct Telemetry {
     pub time_ms: u32,
     pub mode: Mode,
