@@ -22,7 +22,8 @@ use std::path::Path;
 
 use mcap::records::MessageHeader;
 use mcap::{WriteOptions, Writer};
-use protocol::{LogLevel, Message, Pose};
+use protocol::{EmuTruth, LogLevel, Message, Pose};
+use serde::Serialize;
 use serde_json::{json, Value};
 
 use super::csv::TelemetryRow;
@@ -142,9 +143,62 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
     let mut seq: BTreeMap<u16, u32> = BTreeMap::new();
     let mut count = 0u64;
     let mut failure = None;
+    // The hot path: telemetry and truth frames (nearly every message) are serialised from
+    // typed structs straight into one reused buffer, on channels looked up once; the rest
+    // build a JSON value as before.
+    let hot = HotChannels::new(&ids);
+    let mut data = Vec::with_capacity(1024);
+    let mut send = |out: &mut Writer<W>, channel_id: u16, ns: u64, data: &[u8]| {
+        let n = seq.entry(channel_id).or_insert(0);
+        *n += 1;
+        let header = MessageHeader {
+            channel_id,
+            sequence: *n,
+            log_time: ns,
+            publish_time: ns,
+        };
+        out.write_to_known_channel(&header, data)
+    };
     walk(rec, |item| {
         if failure.is_some() {
             return;
+        }
+        if let (
+            Some(hot),
+            Item::Frame {
+                t_us,
+                dir: Direction::FromRobot,
+                msg,
+                ..
+            },
+        ) = (&hot, &item)
+        {
+            let ns = base_ns.saturating_add(t_us.saturating_mul(1000));
+            let mut emit = |channel_id: u16, data: &[u8]| {
+                if failure.is_none() {
+                    match send(&mut out, channel_id, ns, data) {
+                        Ok(()) => count += 1,
+                        Err(e) => failure = Some(err(e)),
+                    }
+                }
+            };
+            match msg {
+                Message::Telemetry(t) => {
+                    json_into(&mut data, &TelemetryRow::new(*t_us, t));
+                    emit(hot.telemetry, &data);
+                    json_into(&mut data, &PoseInFrame::new(&t.pose, ns));
+                    emit(hot.pose, &data);
+                    return;
+                }
+                Message::EmuTruth(t) => {
+                    json_into(&mut data, &Truth::new(t));
+                    emit(hot.truth, &data);
+                    json_into(&mut data, &PoseInFrame::new(&t.pose, ns));
+                    emit(hot.truth_pose, &data);
+                    return;
+                }
+                _ => {}
+            }
         }
         let (t_us, messages) = messages(&item);
         let ns = base_ns.saturating_add(t_us.saturating_mul(1000));
@@ -153,16 +207,11 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
                 continue;
             };
             stamp(&mut value, ns);
-            let n = seq.entry(channel_id).or_insert(0);
-            *n += 1;
-            let header = MessageHeader {
-                channel_id,
-                sequence: *n,
-                log_time: ns,
-                publish_time: ns,
-            };
-            let data = serde_json::to_vec(&value).unwrap_or_default();
-            if let Err(e) = out.write_to_known_channel(&header, &data) {
+            data.clear();
+            if serde_json::to_writer(&mut data, &value).is_err() {
+                data.clear();
+            }
+            if let Err(e) = send(&mut out, channel_id, ns, &data) {
                 failure = Some(err(e));
                 return;
             }
@@ -174,6 +223,123 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
     }
     out.finish().map_err(err)?;
     Ok(count)
+}
+
+/// The channels of the hot path, looked up once.
+struct HotChannels {
+    telemetry: u16,
+    pose: u16,
+    truth: u16,
+    truth_pose: u16,
+}
+
+impl HotChannels {
+    fn new(ids: &BTreeMap<&str, u16>) -> Option<HotChannels> {
+        Some(HotChannels {
+            telemetry: *ids.get("/telemetry")?,
+            pose: *ids.get("/pose")?,
+            truth: *ids.get("/truth")?,
+            truth_pose: *ids.get("/truth_pose")?,
+        })
+    }
+}
+
+/// `value` as JSON in `buf` (cleared first; these types always serialise).
+fn json_into(buf: &mut Vec<u8>, value: &impl Serialize) {
+    buf.clear();
+    if serde_json::to_writer(&mut *buf, value).is_err() {
+        buf.clear();
+    }
+}
+
+/// A foxglove `Time`.
+#[derive(Serialize)]
+struct Stamp {
+    sec: u64,
+    nsec: u64,
+}
+
+impl Stamp {
+    fn new(ns: u64) -> Stamp {
+        Stamp {
+            sec: ns / 1_000_000_000,
+            nsec: ns % 1_000_000_000,
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct Xyz {
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+#[derive(Serialize)]
+struct Quaternion {
+    x: f64,
+    y: f64,
+    z: f64,
+    w: f64,
+}
+
+#[derive(Serialize)]
+struct PoseOnly {
+    position: Xyz,
+    orientation: Quaternion,
+}
+
+/// `foxglove.PoseInFrame` in frame `map` (the same JSON as `pose_in_frame` stamped).
+#[derive(Serialize)]
+struct PoseInFrame {
+    timestamp: Stamp,
+    frame_id: &'static str,
+    pose: PoseOnly,
+}
+
+impl PoseInFrame {
+    fn new(p: &Pose, ns: u64) -> PoseInFrame {
+        let h = f64::from(p.heading_mrad) / 1000.0;
+        PoseInFrame {
+            timestamp: Stamp::new(ns),
+            frame_id: "map",
+            pose: PoseOnly {
+                position: Xyz {
+                    x: f64::from(p.x_mm) / 1000.0,
+                    y: f64::from(p.y_mm) / 1000.0,
+                    z: 0.0,
+                },
+                orientation: Quaternion {
+                    x: 0.0,
+                    y: 0.0,
+                    z: (h / 2.0).sin(),
+                    w: (h / 2.0).cos(),
+                },
+            },
+        }
+    }
+}
+
+/// `/truth`: the emulator's `EmuTruth`.
+#[derive(Serialize)]
+struct Truth {
+    robot_time_s: f64,
+    x_m: f64,
+    y_m: f64,
+    heading_rad: f64,
+    collisions: u32,
+}
+
+impl Truth {
+    fn new(t: &EmuTruth) -> Truth {
+        Truth {
+            robot_time_s: f64::from(t.time_ms) / 1000.0,
+            x_m: f64::from(t.pose.x_mm) / 1000.0,
+            y_m: f64::from(t.pose.y_mm) / 1000.0,
+            heading_rad: f64::from(t.pose.heading_mrad) / 1000.0,
+            collisions: t.collisions,
+        }
+    }
 }
 
 /// Fills in `timestamp` fields (foxglove schemas) with the log time.
