@@ -214,7 +214,9 @@ mod tests {
     fn every_telemetry_payload_is_the_same_length() {
         let mut buf = [0u8; 128];
         for t in [Telemetry::default(), widest()] {
-            let n = postcard::to_slice(&t, &mut buf).map(|b| b.len()).unwrap_or(0);
+            let n = postcard::to_slice(&t, &mut buf)
+                .map(|b| b.len())
+                .unwrap_or(0);
             assert_eq!(n, TELEMETRY_PAYLOAD);
             assert_eq!(postcard::from_bytes::<Telemetry>(&buf[..n]).ok(), Some(t));
         }

@@ -234,7 +234,10 @@ pub struct CycleTiming {
 /// has its type's fixed width (`fixed::TelemetryWire`, PROTOCOL.md §6): 80 bytes a frame,
 /// always.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(from = "crate::fixed::TelemetryWire", into = "crate::fixed::TelemetryWire")]
+#[serde(
+    from = "crate::fixed::TelemetryWire",
+    into = "crate::fixed::TelemetryWire"
+)]
 pub struct Telemetry {
     pub time_ms: u32,
     pub mode: Mode,

@@ -59,7 +59,10 @@ fn widest_telemetry() -> Telemetry {
 fn the_widest_telemetry_frame_is_the_size_protocol_md_states() {
     let mut buf = [0u8; MAX_FRAME];
     let n = encode(u16::MAX, &Message::Telemetry(widest_telemetry()), &mut buf).unwrap();
-    assert!(n <= BUDGET, "the widest telemetry frame is {n} bytes, over {BUDGET}");
+    assert!(
+        n <= BUDGET,
+        "the widest telemetry frame is {n} bytes, over {BUDGET}"
+    );
     assert_eq!(
         n, WORST_CASE_ON_THE_WIRE,
         "update PROTOCOL.md §2 and this constant"
