@@ -23,10 +23,9 @@ use std::path::Path;
 use mcap::records::MessageHeader;
 use mcap::{WriteOptions, Writer};
 use protocol::{EmuTruth, LogLevel, Message, Pose};
-use serde::Serialize;
 use serde_json::{json, Value};
 
-use super::csv::TelemetryRow;
+use super::csv::{fixed, uint, TelemetryRow};
 use super::{walk, Direction, ExportError, Item};
 use crate::link::api::command_text;
 use crate::record::Recording;
@@ -143,11 +142,13 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
     let mut seq: BTreeMap<u16, u32> = BTreeMap::new();
     let mut count = 0u64;
     let mut failure = None;
-    // The hot path: telemetry and truth frames (nearly every message) are serialised from
-    // typed structs straight into one reused buffer, on channels looked up once; the rest
+    // The hot path: telemetry and truth frames (nearly every message) are written as JSON by
+    // hand into one reused buffer (`TelemetryRow::write_json`, `pose_json`, `truth_json`: the
+    // objects `pose_in_frame` and serde would make), on channels looked up once; the rest
     // build a JSON value as before.
     let hot = HotChannels::new(&ids);
     let mut data = Vec::with_capacity(1024);
+    let mut text = String::with_capacity(1024);
     let mut send = |out: &mut Writer<W>, channel_id: u16, ns: u64, data: &[u8]| {
         let n = seq.entry(channel_id).or_insert(0);
         *n += 1;
@@ -184,17 +185,18 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
             };
             match msg {
                 Message::Telemetry(t) => {
-                    json_into(&mut data, &TelemetryRow::new(*t_us, t));
-                    emit(hot.telemetry, &data);
-                    json_into(&mut data, &PoseInFrame::new(&t.pose, ns));
-                    emit(hot.pose, &data);
+                    text.clear();
+                    TelemetryRow::new(*t_us, t).write_json(&mut text);
+                    emit(hot.telemetry, text.as_bytes());
+                    pose_json(&mut text, &t.pose, ns);
+                    emit(hot.pose, text.as_bytes());
                     return;
                 }
                 Message::EmuTruth(t) => {
-                    json_into(&mut data, &Truth::new(t));
-                    emit(hot.truth, &data);
-                    json_into(&mut data, &PoseInFrame::new(&t.pose, ns));
-                    emit(hot.truth_pose, &data);
+                    truth_json(&mut text, t);
+                    emit(hot.truth, text.as_bytes());
+                    pose_json(&mut text, &t.pose, ns);
+                    emit(hot.truth_pose, text.as_bytes());
                     return;
                 }
                 _ => {}
@@ -244,101 +246,50 @@ impl HotChannels {
     }
 }
 
-/// `value` as JSON in `buf` (cleared first; these types always serialise).
-fn json_into(buf: &mut Vec<u8>, value: &impl Serialize) {
-    buf.clear();
-    if serde_json::to_writer(&mut *buf, value).is_err() {
-        buf.clear();
-    }
+/// `foxglove.PoseInFrame` of `p` in frame `map` at `ns`, as JSON in `out` (cleared first):
+/// the object `pose_in_frame` and `stamp` make, written by hand.
+fn pose_json(out: &mut String, p: &Pose, ns: u64) {
+    let h = f64::from(p.heading_mrad) / 1000.0;
+    out.clear();
+    out.push_str("{\"timestamp\":{\"sec\":");
+    uint(out, ns / 1_000_000_000);
+    out.push_str(",\"nsec\":");
+    uint(out, ns % 1_000_000_000);
+    out.push_str("},\"frame_id\":\"map\",\"pose\":{\"position\":{\"x\":");
+    fixed(out, f64::from(p.x_mm) / 1000.0, 3);
+    out.push_str(",\"y\":");
+    fixed(out, f64::from(p.y_mm) / 1000.0, 3);
+    out.push_str(",\"z\":0.0},\"orientation\":{\"x\":0.0,\"y\":0.0,\"z\":");
+    float(out, (h / 2.0).sin());
+    out.push_str(",\"w\":");
+    float(out, (h / 2.0).cos());
+    out.push_str("}}}");
 }
 
-/// A foxglove `Time`.
-#[derive(Serialize)]
-struct Stamp {
-    sec: u64,
-    nsec: u64,
+/// `/truth` for `t` as JSON in `out` (cleared first).
+fn truth_json(out: &mut String, t: &EmuTruth) {
+    out.clear();
+    out.push_str("{\"robot_time_s\":");
+    fixed(out, f64::from(t.time_ms) / 1000.0, 3);
+    out.push_str(",\"x_m\":");
+    fixed(out, f64::from(t.pose.x_mm) / 1000.0, 3);
+    out.push_str(",\"y_m\":");
+    fixed(out, f64::from(t.pose.y_mm) / 1000.0, 3);
+    out.push_str(",\"heading_rad\":");
+    fixed(out, f64::from(t.pose.heading_mrad) / 1000.0, 3);
+    out.push_str(",\"collisions\":");
+    uint(out, u64::from(t.collisions));
+    out.push('}');
 }
 
-impl Stamp {
-    fn new(ns: u64) -> Stamp {
-        Stamp {
-            sec: ns / 1_000_000_000,
-            nsec: ns % 1_000_000_000,
-        }
-    }
-}
-
-#[derive(Serialize)]
-struct Xyz {
-    x: f64,
-    y: f64,
-    z: f64,
-}
-
-#[derive(Serialize)]
-struct Quaternion {
-    x: f64,
-    y: f64,
-    z: f64,
-    w: f64,
-}
-
-#[derive(Serialize)]
-struct PoseOnly {
-    position: Xyz,
-    orientation: Quaternion,
-}
-
-/// `foxglove.PoseInFrame` in frame `map` (the same JSON as `pose_in_frame` stamped).
-#[derive(Serialize)]
-struct PoseInFrame {
-    timestamp: Stamp,
-    frame_id: &'static str,
-    pose: PoseOnly,
-}
-
-impl PoseInFrame {
-    fn new(p: &Pose, ns: u64) -> PoseInFrame {
-        let h = f64::from(p.heading_mrad) / 1000.0;
-        PoseInFrame {
-            timestamp: Stamp::new(ns),
-            frame_id: "map",
-            pose: PoseOnly {
-                position: Xyz {
-                    x: f64::from(p.x_mm) / 1000.0,
-                    y: f64::from(p.y_mm) / 1000.0,
-                    z: 0.0,
-                },
-                orientation: Quaternion {
-                    x: 0.0,
-                    y: 0.0,
-                    z: (h / 2.0).sin(),
-                    w: (h / 2.0).cos(),
-                },
-            },
-        }
-    }
-}
-
-/// `/truth`: the emulator's `EmuTruth`.
-#[derive(Serialize)]
-struct Truth {
-    robot_time_s: f64,
-    x_m: f64,
-    y_m: f64,
-    heading_rad: f64,
-    collisions: u32,
-}
-
-impl Truth {
-    fn new(t: &EmuTruth) -> Truth {
-        Truth {
-            robot_time_s: f64::from(t.time_ms) / 1000.0,
-            x_m: f64::from(t.pose.x_mm) / 1000.0,
-            y_m: f64::from(t.pose.y_mm) / 1000.0,
-            heading_rad: f64::from(t.pose.heading_mrad) / 1000.0,
-            collisions: t.collisions,
-        }
+/// A finite float in the shortest form that reads back to it (`Debug`: `0.5`, `1e-7`, both
+/// valid JSON); `null` otherwise, as serde_json writes.
+fn float(out: &mut String, v: f64) {
+    use std::fmt::Write as _;
+    if v.is_finite() {
+        let _ = write!(out, "{v:?}");
+    } else {
+        out.push_str("null");
     }
 }
 
@@ -458,5 +409,54 @@ fn frame_messages(
             json!({"state": "hello", "text": format!("session {:#010x} from {}", h.session, h.station)}),
         )],
         _ => Vec::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_hand_written_pose_and_truth_are_the_values_serde_makes() {
+        let mut out = String::new();
+        for i in -300i32..300 {
+            let p = Pose {
+                x_mm: i * 12_345,
+                y_mm: -i * 7,
+                heading_mrad: (i * 11) as i16,
+            };
+            let ns = 1_700_000_000_000_000_000 + u64::from(i.unsigned_abs()) * 20_000_123;
+            pose_json(&mut out, &p, ns);
+            let mut want = pose_in_frame(&p);
+            stamp(&mut want, ns);
+            // Both texts through the same parser (serde_json's default one is not exact to the
+            // last bit, so a value is compared with a value read back the same way).
+            let reread = |text: &str| serde_json::from_str::<Value>(text).unwrap();
+            assert_eq!(reread(&out), reread(&want.to_string()), "{out}");
+            let t = EmuTruth {
+                time_ms: i.unsigned_abs() * 20,
+                pose: p,
+                collisions: i.unsigned_abs(),
+            };
+            truth_json(&mut out, &t);
+            let mine: Value = serde_json::from_str(&out).unwrap();
+            let want = frame_messages(0, Direction::FromRobot, 0, &Message::EmuTruth(t))
+                .into_iter()
+                .find(|(topic, _)| *topic == "/truth")
+                .map(|(_, v)| v)
+                .unwrap();
+            assert_eq!(mine, want, "{out}");
+        }
+        for v in [0.0, -0.0, 1e-7, 0.5, 1e300, f64::NAN] {
+            out.clear();
+            float(&mut out, v);
+            let back: Value = serde_json::from_str(&out).unwrap();
+            let want = serde_json::to_value(v).unwrap().to_string();
+            assert_eq!(back, serde_json::from_str::<Value>(&want).unwrap(), "{out}");
+            assert_eq!(
+                out.parse::<f64>().ok().filter(|b| b == &v),
+                v.is_finite().then_some(v)
+            );
+        }
     }
 }
