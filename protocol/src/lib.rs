@@ -8,7 +8,6 @@
 //! - `frame`: header, CRC-32C, COBS framing, the streaming `FrameDecoder`.
 //! - `seq`: loss and duplicate accounting from sequence numbers.
 //! - `packed`: eight 10-bit sensor readings in 10 bytes.
-//! - `fixed`: the telemetry frame's fixed-width layout (80 bytes on the wire, always).
 //! - `fingerprint`: the schema hash exchanged at handshake.
 //! - `sign`: optional link authentication, HMAC-SHA256 signatures and replay windows (§13).
 //! - `transfer`: the chunked-transfer sender and receiver state machines (§8).
@@ -16,7 +15,6 @@
 #![no_std]
 #![deny(unsafe_code)]
 
-pub mod fixed;
 pub mod frame;
 pub mod msg;
 pub mod object;

@@ -7,9 +7,8 @@
 //! fingerprint and two builds that disagree refuse each other at handshake.
 //!
 //! Units are integers wherever the robot measures in integers: millimetres, milliradians,
-//! decidegrees, millivolts, microseconds. That makes the firmware's arithmetic exact. Most
-//! messages are postcard varints (small numbers, few bytes); telemetry, whose numbers are
-//! mostly wide, has a fixed layout (`fixed`).
+//! decidegrees, millivolts, microseconds. That keeps telemetry small (postcard varints) and
+//! makes the firmware's arithmetic exact.
 
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
@@ -230,14 +229,8 @@ pub struct CycleTiming {
 }
 
 /// Robot -> station at the rate the station sets. Fields a profile lacks are zero; the
-/// `HelloReply` capabilities say which are meaningful. On the wire every multi-byte field
-/// has its type's fixed width (`fixed::TelemetryWire`, PROTOCOL.md §6): 80 bytes a frame,
-/// always.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(
-    from = "crate::fixed::TelemetryWire",
-    into = "crate::fixed::TelemetryWire"
-)]
+/// `HelloReply` capabilities say which are meaningful.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
 pub struct Telemetry {
     pub time_ms: u32,
     pub mode: Mode,
