@@ -538,6 +538,33 @@ impl SegmentSet {
         best
     }
 
+    /// The ids of every segment whose box comes within `r` of `c`, ascending, each once, into
+    /// `out` (cleared first; reuse it). A superset of the segments within `r` of `c`: several
+    /// rays from near `c` that reach no farther than `r` test only these
+    /// ([`SegmentSet::ray_cast_among`]) instead of walking the grid (or every segment) each.
+    pub fn near_ids(&self, c: Point, r: f64, out: &mut Vec<u32>) {
+        out.clear();
+        self.visit_near(c, r, |i| out.push(i as u32));
+        if self.index.is_some() {
+            // A segment spanning several buckets is visited once per bucket.
+            out.sort_unstable();
+            out.dedup();
+        }
+    }
+
+    /// [`SegmentSet::ray_cast`] among the segments `ids` only (from [`SegmentSet::near_ids`]
+    /// for a disc that holds the whole ray): the same distance, as every segment the ray can
+    /// hit is among them.
+    pub fn ray_cast_among(&self, ids: &[u32], o: Point, d: Vector, max_t: f64) -> Option<RayHit> {
+        if !(o.x.is_finite() && o.y.is_finite() && d.x.is_finite() && d.y.is_finite())
+            || (d.x == 0.0 && d.y == 0.0)
+            || max_t.is_nan()
+        {
+            return None;
+        }
+        self.ray_scan(ids.iter().map(|&i| i as usize), o, d, max_t, None)
+    }
+
     /// Calls `f` with every segment whose box comes within `r` of `c` (possibly repeated).
     fn visit_near(&self, c: Point, r: f64, mut f: impl FnMut(usize)) {
         if !(c.x.is_finite() && c.y.is_finite() && r >= 0.0 && r.is_finite()) {

@@ -183,10 +183,7 @@ fn run(args: &RunArgs) -> Result<(), String> {
         load_arena(&args.world.arena, &args.world.load_options()).map_err(|e| e.to_string())?;
     let report = emulator::scenario::run_scenario(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string(&report).map_err(|e| e.to_string())?
-        );
+        println!("{}", run_json(&report)?);
     } else {
         println!(
             "{}: {} in {:.1} s simulated ({:.3} s wall), {} collisions, {:.2} m travelled, \
@@ -215,7 +212,7 @@ fn forage(args: &RunArgs) -> Result<(), String> {
     let arena = load_arena(args.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
     let r = emulator::scenario::forage::run_forage(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
-        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        println!("{}", run_json(&r)?);
         return Ok(());
     }
     println!(
@@ -248,7 +245,7 @@ fn line_correct(args: &RunArgs) -> Result<(), String> {
         load_arena(&args.world.arena, &args.world.load_options()).map_err(|e| e.to_string())?;
     let r = emulator::line_correct::run_line_correct(arena, &opts).map_err(|e| e.to_string())?;
     if args.json {
-        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        println!("{}", run_json(&r)?);
     } else {
         println!(
             "{}: {:.1} m in {:.0} s simulated ({:.2} s wall), wheel bias {:+.2}/{:+.2} %, \
@@ -326,7 +323,7 @@ fn odometry_laps(args: &RunArgs) -> Result<(), String> {
     let r =
         run_odometry_laps(&OdometryLapsOptions::new(args.world.seed)).map_err(|e| e.to_string())?;
     if args.json {
-        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        println!("{}", run_json(&r)?);
         return Ok(());
     }
     println!(
@@ -359,4 +356,28 @@ fn odometry_laps(args: &RunArgs) -> Result<(), String> {
         }
     );
     Ok(())
+}
+
+/// A `run` report as JSON, with the whole process's speed: `cpu_s` (user + system CPU of this
+/// process so far: loading, setting up and running) and `speed_x` (simulated seconds per CPU
+/// second, issue 15's "emulator speed, whole process"). CPU rather than wall time: on a loaded
+/// machine wall time mostly measures the other processes.
+fn run_json(report: &impl serde::Serialize) -> Result<String, String> {
+    let mut v = serde_json::to_value(report).map_err(|e| e.to_string())?;
+    let cpu_s = process_cpu_s();
+    if let (Some(obj), Some(cpu_s)) = (v.as_object_mut(), cpu_s) {
+        let sim_s = obj.get("sim_s").and_then(serde_json::Value::as_f64);
+        obj.insert("cpu_s".into(), cpu_s.into());
+        if let Some(sim_s) = sim_s.filter(|_| cpu_s > 0.0) {
+            obj.insert("speed_x".into(), (sim_s / cpu_s).round().into());
+        }
+    }
+    serde_json::to_string(&v).map_err(|e| e.to_string())
+}
+
+/// User + system CPU seconds of this process (getrusage).
+fn process_cpu_s() -> Option<f64> {
+    let u = nix::sys::resource::getrusage(nix::sys::resource::UsageWho::RUSAGE_SELF).ok()?;
+    let s = |t: nix::sys::time::TimeVal| t.tv_sec() as f64 + t.tv_usec() as f64 * 1e-6;
+    Some(s(u.user_time()) + s(u.system_time()))
 }

@@ -263,8 +263,14 @@ impl SimHal {
             + f64::from(self.motor.right.unsigned_abs()))
             / (2.0 * max);
         self.battery.drain(STEP_S, effort);
-        self.gripper
-            .step(self.body.pose(), STEP_S, self.now_us / 1000 + 1);
+        if self.gripper.present() {
+            self.gripper.step(
+                self.body.pose(),
+                self.body.heading_vector(),
+                STEP_S,
+                self.now_us / 1000 + 1,
+            );
+        }
         if self.line.present() {
             let p = self.body.pose();
             self.line.update(self.world.on_line(Point::new(p.x, p.y)));

@@ -73,29 +73,35 @@ pub struct TruthSample {
     pub collisions: u32,
 }
 
-/// The last [`TRUTH_HISTORY_MS`] samples.
+/// The last [`TRUTH_HISTORY_MS`] samples, one a millisecond: a ring over a vector that
+/// stops growing at that length (a sample is written every simulated millisecond, so the
+/// ring is a fixed slot write, not a deque's pop and push).
 #[derive(Clone, Debug, Default)]
 pub struct TruthHistory {
-    ring: VecDeque<TruthSample>,
+    ring: Vec<TruthSample>,
+    /// Where the next sample goes.
+    next: usize,
 }
 
 impl TruthHistory {
     /// Appends a sample, forgetting the oldest beyond the history length.
     pub fn push(&mut self, s: TruthSample) {
-        if self.ring.len() >= TRUTH_HISTORY_MS {
-            self.ring.pop_front();
+        match self.ring.get_mut(self.next) {
+            Some(slot) => *slot = s,
+            None => self.ring.push(s),
         }
-        self.ring.push_back(s);
+        self.next = (self.next + 1) % TRUTH_HISTORY_MS;
     }
 
     /// The sample at `time_ms`, or the newest one if that time is not held.
     pub fn at(&self, time_ms: u32) -> Option<TruthSample> {
-        let newest = self.ring.back()?;
+        let len = self.ring.len();
+        let newest_at = self.next.checked_sub(1).unwrap_or(len.checked_sub(1)?);
+        let newest = self.ring.get(newest_at)?;
         let back = newest.time_ms.wrapping_sub(time_ms) as usize;
-        let found = back
-            .checked_add(1)
-            .and_then(|b| self.ring.len().checked_sub(b))
-            .and_then(|i| self.ring.get(i))
+        let found = (back < len)
+            .then(|| self.ring.get((newest_at + len - back) % len))
+            .flatten()
             .filter(|s| s.time_ms == time_ms);
         Some(*found.unwrap_or(newest))
     }
@@ -477,6 +483,11 @@ mod tests {
         }
         assert_eq!(h.at(4000).map(|s| s.pose.x), Some(4000.0));
         assert_eq!(h.at(10).map(|s| s.pose.x), Some(4999.0));
+        // The oldest held (4999 - 4095) and the newest; one older is gone.
+        assert_eq!(h.at(904).map(|s| s.pose.x), Some(904.0));
+        assert_eq!(h.at(4999).map(|s| s.pose.x), Some(4999.0));
+        assert_eq!(h.at(903).map(|s| s.pose.x), Some(4999.0));
+        assert_eq!(h.at(5000).map(|s| s.pose.x), Some(4999.0));
         assert_eq!(TruthHistory::default().at(0), None);
     }
 }

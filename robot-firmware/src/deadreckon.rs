@@ -58,27 +58,56 @@ impl Default for SpeedTable {
 
 impl SpeedTable {
     /// Real speed in m/s for a nominal speed command at a battery level.
+    #[inline]
     pub fn speed_mps(&self, nominal: f32, battery: f32) -> f32 {
+        self.speed_in_column(&self.column(battery), nominal)
+    }
+
+    /// Both wheels' speeds at one battery level: [`SpeedTable::speed_mps`] of each, bit for
+    /// bit, with the battery interpolated once (the emulator's motors look this up every
+    /// simulated millisecond).
+    #[inline]
+    pub fn speeds_mps(&self, nominal: [f32; 2], battery: f32) -> [f32; 2] {
+        let column = self.column(battery);
+        // Not `map`: its closure plumbing stays in the code, here once a simulated ms.
+        [
+            self.speed_in_column(&column, nominal[0]),
+            self.speed_in_column(&column, nominal[1]),
+        ]
+    }
+
+    /// Every row's speed at `battery`.
+    #[inline]
+    fn column(&self, battery: f32) -> [f32; SPEED_ROWS] {
+        let (b0, b1, tb) = bracket(&self.battery, battery);
+        let mut out = [0.0; SPEED_ROWS];
+        for (o, row) in out.iter_mut().zip(&self.mps) {
+            *o = lerp(row[b0], row[b1], tb);
+        }
+        out
+    }
+
+    #[inline]
+    fn speed_in_column(&self, column: &[f32; SPEED_ROWS], nominal: f32) -> f32 {
         let sign = if nominal < 0.0 { -1.0 } else { 1.0 };
         let n = nominal * sign;
-        let (b0, b1, tb) = bracket(&self.battery, battery);
-        let at_row = |r: usize| lerp(self.mps[r][b0], self.mps[r][b1], tb);
         let v = if n <= self.nominal[0] {
             // Below the first row: linear down to zero at a zero command.
             if self.nominal[0] > 0.0 {
-                at_row(0) * n / self.nominal[0]
+                column[0] * n / self.nominal[0]
             } else {
-                at_row(0)
+                column[0]
             }
         } else {
             let (r0, r1, tn) = bracket(&self.nominal, n);
-            lerp(at_row(r0), at_row(r1), tn)
+            lerp(column[r0], column[r1], tn)
         };
         sign * v
     }
 }
 
 /// Indices `(i, i+1)` of `xs` around `x` and the fraction between them, clamped at both ends.
+#[inline]
 fn bracket<const N: usize>(xs: &[f32; N], x: f32) -> (usize, usize, f32) {
     let last = N.saturating_sub(1);
     if N < 2 || x <= xs[0] {
@@ -96,6 +125,7 @@ fn bracket<const N: usize>(xs: &[f32; N], x: f32) -> (usize, usize, f32) {
     (i, i + 1, t)
 }
 
+#[inline]
 fn lerp(a: f32, b: f32, t: f32) -> f32 {
     a + (b - a) * t
 }

@@ -11,6 +11,12 @@
 //!   frame into a `TestBackend`, with the state of a robot that has been driving for 60 s at
 //!   50 Hz on the built-in arena (full chart history and tracks).
 //! - `export/csv_60s_50hz`, `export/mcap_60s_50hz`: formatting into memory.
+//! - `ten_minutes/{summary,csv,mcap}`: issue 15's figures, each whole command's work on ten
+//!   minutes at 50 Hz (about 30,000 telemetry and 30,000 truth frames) from the file's bytes:
+//!   parsing the recording (every record's CRC) and then the summary, or the export written
+//!   through a `BufWriter` as `station export` writes its file (here into memory). Target:
+//!   each at most 0.1 s. `PERF_TEN_MINUTES=summary` (or `csv`, `mcap`, `none`) runs only that
+//!   piece once, for `perf stat -e task-clock` or callgrind against `none`.
 //!
 //! `cargo bench -p station --bench perf` prints a one-shot summary (stderr), then runs the
 //! criterion groups with 10 samples and short measurement times (2-core machines). Without
@@ -117,6 +123,30 @@ fn time_per<T>(n: u32, mut f: impl FnMut() -> T) -> Duration {
     t0.elapsed() / n
 }
 
+/// Issue 15's commands on a recording's bytes: parse, then summarise or export.
+type Work = fn(&[u8]) -> usize;
+
+fn ten_minutes() -> [(&'static str, Work); 3] {
+    [
+        ("summary", |bytes| {
+            let rec = Recording::parse_strict(bytes).unwrap();
+            black_box(summarize(&rec));
+            rec.records.len()
+        }),
+        ("csv", |bytes| {
+            let rec = Recording::parse_strict(bytes).unwrap();
+            let mut out = std::io::BufWriter::new(Vec::with_capacity(16 << 20));
+            station::export::csv::write(&rec, &mut out).unwrap()
+        }),
+        ("mcap", |bytes| {
+            let rec = Recording::parse_strict(bytes).unwrap();
+            let out = std::io::BufWriter::new(Cursor::new(Vec::with_capacity(64 << 20)));
+            station::export::mcap::write(&rec, out, std::path::Path::new("bench.mcap")).unwrap()
+                as usize
+        }),
+    ]
+}
+
 /// One-shot figures, printed even without `--bench`.
 fn summary() {
     let bytes = telemetry_bytes();
@@ -140,6 +170,14 @@ fn summary() {
         t.as_secs_f64() * 1e3,
         60.0 / t.as_secs_f64()
     );
+    let ten = demo(600, 50);
+    for (name, f) in ten_minutes() {
+        let t = time_per(3, || f(&ten));
+        eprintln!(
+            "ten minutes at 50 Hz, {name}: {:.1} ms",
+            t.as_secs_f64() * 1e3
+        );
+    }
     for (w, h, view) in [
         (120, 40, View::Dashboard),
         (200, 60, View::Dashboard),
@@ -157,6 +195,18 @@ fn summary() {
 }
 
 fn main() {
+    // `PERF_TEN_MINUTES=summary|csv|mcap|none`: only that piece, once, after building the
+    // recording, so that `perf stat` or `valgrind --tool=callgrind` can count its CPU time or
+    // instructions against `none` on a machine too loaded for wall-clock timings.
+    if let Ok(which) = std::env::var("PERF_TEN_MINUTES") {
+        let ten = demo(600, 50);
+        for (name, f) in ten_minutes() {
+            if name == which {
+                eprintln!("{name}: {}", f(&ten));
+            }
+        }
+        return;
+    }
     summary();
     if !std::env::args().any(|a| a == "--bench") {
         return;
@@ -210,6 +260,13 @@ fn main() {
             station::export::mcap::write(&rec, out, std::path::Path::new("bench.mcap")).unwrap()
         })
     });
+    g.finish();
+
+    let ten = demo(600, 50);
+    let mut g = c.benchmark_group("ten_minutes");
+    for (name, f) in ten_minutes() {
+        g.bench_function(name, |b| b.iter(|| f(&ten)));
+    }
     g.finish();
     c.final_summary();
 }

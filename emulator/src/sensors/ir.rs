@@ -120,7 +120,15 @@ pub struct IrArray {
     radius_m: f64,
     sigma: f64,
     rng: SimRng,
+    /// Walls near the body, gathered once per reading for all its rays (reused buffer).
+    near: Vec<u32>,
+    /// `(cos, sin)` of each sensor's ray angles off the heading (its axis plus each cone
+    /// offset): a reading rotates the heading by them instead of a `sin_cos` per ray.
+    rays: [[(f64, f64); MAX_CONE]; 8],
 }
+
+/// Most rays in a sensor's cone.
+const MAX_CONE: usize = 5;
 
 impl IrArray {
     /// The sensors of `profile`; gains are drawn from `run_rng` with relative sigma
@@ -147,19 +155,29 @@ impl IrArray {
                     .clamp(-3.0 * gain_spread, 3.0 * gain_spread);
         }
         let curve = IrCurve::for_profile(profile);
+        let cone: &'static [(f64, f64)] = if curve.range_m > 0.1 {
+            &RATO_CONE
+        } else {
+            &KHEPERA_CONE
+        };
+        let mut rays = [[(1.0, 0.0); MAX_CONE]; 8];
+        for (sensor, &axis) in rays.iter_mut().zip(&angle_rad) {
+            for (ray, &(offset, _)) in sensor.iter_mut().zip(cone) {
+                let (s, c) = (axis + offset).sin_cos();
+                *ray = (c, s);
+            }
+        }
         IrArray {
             curve,
             count,
             angle_rad,
             gain,
-            cone: if curve.range_m > 0.1 {
-                &RATO_CONE
-            } else {
-                &KHEPERA_CONE
-            },
+            cone,
             radius_m: f64::from(profile.body_diameter_m) / 2.0,
             sigma: sigma_counts,
             rng,
+            near: Vec::new(),
+            rays,
         }
     }
 
@@ -197,23 +215,33 @@ impl IrArray {
         let mut out = [0u16; 8];
         let centre = Point::new(pose.x, pose.y);
         let reach = self.radius_m + self.curve.range_m;
-        // One query: nothing within radius + range means every ray would miss.
-        let any_near = walls.nearest(centre, reach).is_some();
-        let near = |d: &&Disc| (d.centre - centre).norm() - d.radius <= reach;
+        // Every ray starts on the body's edge and reaches `range` at most, so it stays within
+        // radius + range of the centre: the walls there, gathered once, are all a ray can hit
+        // (one gathering instead of a grid walk or a scan of every wall per ray: the readings
+        // were a quarter of a reach-beacon run). None near: every ray would miss.
+        let mut near = std::mem::take(&mut self.near);
+        walls.near_ids(centre, reach, &mut near);
+        let in_reach = |d: &&Disc| (d.centre - centre).norm() - d.radius <= reach;
         let mut bodies = [None::<Disc>; MAX_SEEN];
-        for (slot, d) in bodies.iter_mut().zip(others.iter().filter(near)) {
+        for (slot, d) in bodies.iter_mut().zip(others.iter().filter(in_reach)) {
             *slot = Some(*d);
         }
         let any_body = bodies[0].is_some();
+        let (hs, hc) = pose.heading.sin_cos();
         for (i, slot) in out.iter_mut().enumerate().take(self.count) {
             let mut signal: f64 = 0.0;
-            if any_near || any_body {
-                for &(offset, weight) in self.cone {
-                    let (o, d) = self.ray(pose, self.angle_rad[i] + offset);
-                    let wall = if any_near {
-                        walls.ray_cast(o, d, self.curve.range_m).map(|h| h.distance)
-                    } else {
+            if !near.is_empty() || any_body {
+                for (&(_, weight), &(c, s)) in self.cone.iter().zip(&self.rays[i]) {
+                    // The ray's direction: the heading turned by the ray's angle (within an
+                    // ulp or two of `sin_cos` of the sum).
+                    let d = Vector::new(hc * c - hs * s, hs * c + hc * s);
+                    let o = centre + d * self.radius_m;
+                    let wall = if near.is_empty() {
                         None
+                    } else {
+                        walls
+                            .ray_cast_among(&near, o, d, self.curve.range_m)
+                            .map(|h| h.distance)
                     };
                     let body = bodies
                         .iter()
@@ -233,6 +261,7 @@ impl IrArray {
             let value = self.curve.floor_counts + self.gain[i] * signal;
             *slot = counts10(value, self.sigma, &mut self.rng);
         }
+        self.near = near;
         out
     }
 

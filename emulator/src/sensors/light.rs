@@ -65,6 +65,9 @@ impl AmbientLight {
     pub fn brightness(&self, walls: &SegmentSet, lights: &[Light], pose: Pose) -> [f64; 8] {
         let mut b = [0.0; 8];
         let centre = Point::new(pose.x, pose.y);
+        // The sensors' axes, worked out once per reading (not once per light) and only when a
+        // light is bright enough to matter.
+        let mut axes: Option<[Vector; 8]> = None;
         for light in lights {
             // Cheap bound first: the brightest any sensor could see this light.
             let dc = (light.position - centre).norm() - self.radius_m;
@@ -72,9 +75,13 @@ impl AmbientLight {
             if bound.is_nan() || bound <= NEGLIGIBLE || walls.blocks(centre, light.position) {
                 continue;
             }
-            for (slot, &a) in b.iter_mut().zip(&self.angle_rad) {
-                let (s, c) = (pose.heading + a).sin_cos();
-                let axis = Vector::new(c, s);
+            let axes = axes.get_or_insert_with(|| {
+                self.angle_rad.map(|a| {
+                    let (s, c) = (pose.heading + a).sin_cos();
+                    Vector::new(c, s)
+                })
+            });
+            for (slot, &axis) in b.iter_mut().zip(axes.iter()) {
                 let v = light.position - (centre + axis * self.radius_m);
                 let d = v.norm();
                 let cos_phi = if d > 0.0 { axis.dot(&v) / d } else { 1.0 };

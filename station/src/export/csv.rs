@@ -171,56 +171,271 @@ impl TelemetryRow {
 
     /// The CSV fields, in `COLUMNS` order.
     pub fn csv_line(&self) -> String {
+        let mut out = String::with_capacity(256);
+        self.write_csv_line(&mut out);
+        out
+    }
+
+    /// Appends the CSV fields, in `COLUMNS` order, to `out` (no newline). Writing in place
+    /// with no string per field: the per-field `format!` and the join were most of a CSV
+    /// export.
+    pub fn write_csv_line(&self, out: &mut String) {
         let b = |v: bool| if v { "1" } else { "0" };
-        let opt = |v: Option<f64>| v.map(|x| format!("{x:.3}")).unwrap_or_default();
-        let mut f: Vec<String> = vec![
-            format!("{:.6}", self.time_s),
-            format!("{:.3}", self.robot_time_s),
-            self.mode.to_string(),
-            format!("{:.3}", self.x_m),
-            format!("{:.3}", self.y_m),
-            format!("{:.3}", self.heading_rad),
-            format!("{:.3}", self.sigma_xy_m),
-            format!("{:.3}", self.sigma_heading_rad),
-            format!("{:.3}", self.v_left_m_s),
-            format!("{:.3}", self.v_right_m_s),
-            self.enc_left.to_string(),
-            self.enc_right.to_string(),
-        ];
-        f.extend(self.ir.iter().map(u16::to_string));
-        f.extend(self.light.iter().map(u16::to_string));
-        f.extend([
-            format!("{:.1}", self.compass_deg),
-            self.flags.to_string(),
-            b(self.on_goal).into(),
-            b(self.on_line).into(),
-            b(self.contact).into(),
-            b(self.failsafe).into(),
-            b(self.goal_reached).into(),
-            self.line_events.to_string(),
-            format!("{:.1}", self.beacon_bearing_deg),
-            self.beacon_strength.to_string(),
-            format!("{:.3}", self.battery_v),
-            self.behaviours.to_string(),
-            format!("{:.3}", self.motor_left_m_s),
-            format!("{:.3}", self.motor_right_m_s),
-            format!("{:.3}", self.cycle_period_ms),
-            format!("{:.3}", self.cycle_busy_ms),
-            self.cycle_overruns.to_string(),
-            opt(self.true_x_m),
-            opt(self.true_y_m),
-            opt(self.true_heading_rad),
-            self.collisions.map(|c| c.to_string()).unwrap_or_default(),
-        ]);
-        f.join(",")
+        fixed(out, self.time_s, 6);
+        out.push(',');
+        fixed(out, self.robot_time_s, 3);
+        out.push(',');
+        out.push_str(self.mode);
+        for v in [
+            self.x_m,
+            self.y_m,
+            self.heading_rad,
+            self.sigma_xy_m,
+            self.sigma_heading_rad,
+            self.v_left_m_s,
+            self.v_right_m_s,
+        ] {
+            out.push(',');
+            fixed(out, v, 3);
+        }
+        for v in [self.enc_left, self.enc_right]
+            .iter()
+            .chain(&self.ir)
+            .chain(&self.light)
+        {
+            out.push(',');
+            uint(out, u64::from(*v));
+        }
+        out.push(',');
+        fixed(out, self.compass_deg, 1);
+        out.push(',');
+        uint(out, u64::from(self.flags));
+        for v in [
+            self.on_goal,
+            self.on_line,
+            self.contact,
+            self.failsafe,
+            self.goal_reached,
+        ] {
+            out.push(',');
+            out.push_str(b(v));
+        }
+        out.push(',');
+        uint(out, u64::from(self.line_events));
+        out.push(',');
+        fixed(out, self.beacon_bearing_deg, 1);
+        out.push(',');
+        uint(out, u64::from(self.beacon_strength));
+        out.push(',');
+        fixed(out, self.battery_v, 3);
+        out.push(',');
+        uint(out, u64::from(self.behaviours));
+        for v in [
+            self.motor_left_m_s,
+            self.motor_right_m_s,
+            self.cycle_period_ms,
+            self.cycle_busy_ms,
+        ] {
+            out.push(',');
+            fixed(out, v, 3);
+        }
+        out.push(',');
+        uint(out, u64::from(self.cycle_overruns));
+        for v in [self.true_x_m, self.true_y_m, self.true_heading_rad] {
+            out.push(',');
+            if let Some(v) = v {
+                fixed(out, v, 3);
+            }
+        }
+        out.push(',');
+        if let Some(c) = self.collisions {
+            uint(out, u64::from(c));
+        }
     }
 }
 
-/// Every telemetry frame of `rec`, with truth joined, in order.
-pub fn rows(rec: &Recording) -> Vec<TelemetryRow> {
-    let mut rows = Vec::new();
+impl TelemetryRow {
+    /// Appends the row as a JSON object (MCAP `/telemetry`): the same object serde writes,
+    /// key for key and value for value, written by hand (literal keys: serde escaped every key,
+    /// a fifth of an MCAP export), the numbers with the CSV's decimals, which are exact for
+    /// these scaled integers.
+    pub fn write_json(&self, out: &mut String) {
+        out.push('{');
+        let key = |out: &mut String, k: &str| {
+            if !out.ends_with('{') {
+                out.push(',');
+            }
+            out.push('"');
+            out.push_str(k);
+            out.push_str("\":");
+        };
+        let num = |out: &mut String, v: f64, k: usize| {
+            if v.is_finite() {
+                fixed(out, v, k);
+            } else {
+                out.push_str("null");
+            }
+        };
+        key(out, "time_s");
+        num(out, self.time_s, 6);
+        key(out, "robot_time_s");
+        num(out, self.robot_time_s, 3);
+        key(out, "mode");
+        json_str(out, self.mode);
+        for (k, v) in [
+            ("x_m", self.x_m),
+            ("y_m", self.y_m),
+            ("heading_rad", self.heading_rad),
+            ("sigma_xy_m", self.sigma_xy_m),
+            ("sigma_heading_rad", self.sigma_heading_rad),
+            ("v_left_m_s", self.v_left_m_s),
+            ("v_right_m_s", self.v_right_m_s),
+            ("battery_v", self.battery_v),
+            ("motor_left_m_s", self.motor_left_m_s),
+            ("motor_right_m_s", self.motor_right_m_s),
+            ("cycle_period_ms", self.cycle_period_ms),
+            ("cycle_busy_ms", self.cycle_busy_ms),
+        ] {
+            key(out, k);
+            num(out, v, 3);
+        }
+        for (k, v) in [
+            ("compass_deg", self.compass_deg),
+            ("beacon_bearing_deg", self.beacon_bearing_deg),
+        ] {
+            key(out, k);
+            num(out, v, 1);
+        }
+        for (k, v) in [
+            ("enc_left", u64::from(self.enc_left)),
+            ("enc_right", u64::from(self.enc_right)),
+            ("flags", u64::from(self.flags)),
+            ("line_events", u64::from(self.line_events)),
+            ("beacon_strength", u64::from(self.beacon_strength)),
+            ("behaviours", u64::from(self.behaviours)),
+            ("cycle_overruns", u64::from(self.cycle_overruns)),
+        ] {
+            key(out, k);
+            uint(out, v);
+        }
+        for (k, v) in [
+            ("on_goal", self.on_goal),
+            ("on_line", self.on_line),
+            ("contact", self.contact),
+            ("failsafe", self.failsafe),
+            ("goal_reached", self.goal_reached),
+        ] {
+            key(out, k);
+            out.push_str(if v { "true" } else { "false" });
+        }
+        for (k, values) in [("ir", &self.ir), ("light", &self.light)] {
+            key(out, k);
+            out.push('[');
+            for (i, v) in values.iter().enumerate() {
+                if i > 0 {
+                    out.push(',');
+                }
+                uint(out, u64::from(*v));
+            }
+            out.push(']');
+        }
+        for (k, v) in [
+            ("true_x_m", self.true_x_m),
+            ("true_y_m", self.true_y_m),
+            ("true_heading_rad", self.true_heading_rad),
+        ] {
+            if let Some(v) = v {
+                key(out, k);
+                num(out, v, 3);
+            }
+        }
+        if let Some(c) = self.collisions {
+            key(out, "collisions");
+            uint(out, u64::from(c));
+        }
+        out.push('}');
+    }
+}
+
+/// Appends `s` as a JSON string.
+pub(super) fn json_str(out: &mut String, s: &str) {
+    use std::fmt::Write as _;
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if u32::from(c) < 0x20 => {
+                let _ = write!(out, "\\u{:04x}", u32::from(c));
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+}
+
+/// Appends `v` with `decimals` digits after the point, exactly as `format!("{v:.decimals$}")`
+/// does. The row's values are whole numbers of mm, mrad, µs, ... scaled by a power of ten, so
+/// `v * 10^decimals` lies within a hair of an integer `n`, and `v` rounded to `decimals`
+/// places is `n` with the point put back: written as integers, with none of the general float
+/// formatting (the exact decimal expansion) that was most of a CSV export. Anything else (a
+/// value halfway between, NaN, huge) takes the general path.
+pub(super) fn fixed(out: &mut String, v: f64, decimals: usize) {
+    use std::fmt::Write as _;
+    const POW10: [f64; 7] = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5, 1e6];
+    const IPOW10: [u64; 7] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000];
+    if let (Some(&p), Some(&ip)) = (POW10.get(decimals), IPOW10.get(decimals)) {
+        let scaled = v * p;
+        let n = scaled.round();
+        // Within a quarter of `n`: `v` rounds to `n / p` whatever the product's rounding.
+        if (scaled - n).abs() <= 0.25 && n.abs() < 1e15 {
+            let n = n.abs() as u64;
+            // `format!` keeps the sign of a negative value that rounds to zero ("-0.000").
+            if v.is_sign_negative() {
+                out.push('-');
+            }
+            uint(out, n / ip);
+            if decimals > 0 {
+                out.push('.');
+                let frac = n % ip;
+                let mut digits = [b'0'; 6];
+                let mut f = frac;
+                for d in digits[..decimals].iter_mut().rev() {
+                    *d = b'0' + (f % 10) as u8;
+                    f /= 10;
+                }
+                out.push_str(std::str::from_utf8(&digits[..decimals]).unwrap_or(""));
+            }
+            return;
+        }
+    }
+    let _ = write!(out, "{v:.decimals$}");
+}
+
+/// Appends an unsigned integer in decimal (digit by digit: `write!` goes through the
+/// formatting machinery, which was a third of a CSV export).
+pub(super) fn uint(out: &mut String, mut v: u64) {
+    let mut digits = [0u8; 20];
+    let mut at = digits.len();
+    loop {
+        at -= 1;
+        if let Some(d) = digits.get_mut(at) {
+            *d = b'0' + (v % 10) as u8;
+        }
+        v /= 10;
+        if v == 0 || at == 0 {
+            break;
+        }
+    }
+    out.push_str(std::str::from_utf8(digits.get(at..).unwrap_or(&[])).unwrap_or(""));
+}
+
+/// Calls `f` with every telemetry frame of `rec` as a row, truth joined, in order: a row is
+/// handed over once nothing more can join it (its truth frame, the next telemetry frame, a
+/// closed port, or the end), so an export streams instead of holding every row.
+pub fn for_each_row(rec: &Recording, mut f: impl FnMut(TelemetryRow)) {
     // The newest row still open to its truth frame (which follows its telemetry frame).
-    let mut open: Option<(u32, usize)> = None;
+    let mut open: Option<(u32, TelemetryRow)> = None;
     walk(rec, |item| match item {
         Item::Frame {
             t_us,
@@ -229,14 +444,16 @@ pub fn rows(rec: &Recording) -> Vec<TelemetryRow> {
             ..
         } => match msg {
             Message::Telemetry(t) => {
-                open = Some((t.time_ms, rows.len()));
-                rows.push(TelemetryRow::new(t_us, t));
+                if let Some((_, row)) = open.replace((t.time_ms, TelemetryRow::new(t_us, t))) {
+                    f(row);
+                }
             }
             Message::EmuTruth(tr) => {
-                if let Some((time_ms, i)) = open.take() {
-                    if let (true, Some(r)) = (time_ms == tr.time_ms, rows.get_mut(i)) {
-                        r.with_truth(tr);
+                if let Some((time_ms, mut row)) = open.take() {
+                    if time_ms == tr.time_ms {
+                        row.with_truth(tr);
                     }
+                    f(row);
                 }
             }
             _ => {}
@@ -244,20 +461,43 @@ pub fn rows(rec: &Recording) -> Vec<TelemetryRow> {
         Item::Link {
             state: LinkState::Closed,
             ..
-        } => open = None,
+        } => {
+            if let Some((_, row)) = open.take() {
+                f(row);
+            }
+        }
         _ => {}
     });
+    if let Some((_, row)) = open {
+        f(row);
+    }
+}
+
+/// Every telemetry frame of `rec`, with truth joined, in order.
+pub fn rows(rec: &Recording) -> Vec<TelemetryRow> {
+    let mut rows = Vec::new();
+    for_each_row(rec, |r| rows.push(r));
     rows
 }
 
-/// Writes the CSV; returns the number of rows.
+/// Writes the CSV; returns the number of rows. Each row is formatted into one reused line
+/// buffer and handed to `w` (`station export` gives a `BufWriter`).
 pub fn write(rec: &Recording, w: &mut impl Write) -> io::Result<usize> {
     writeln!(w, "{}", COLUMNS.join(","))?;
-    let rows = rows(rec);
-    for r in &rows {
-        writeln!(w, "{}", r.csv_line())?;
-    }
-    Ok(rows.len())
+    let mut line = String::with_capacity(512);
+    let mut n = 0;
+    let mut result = Ok(());
+    for_each_row(rec, |r| {
+        if result.is_err() {
+            return;
+        }
+        line.clear();
+        r.write_csv_line(&mut line);
+        line.push('\n');
+        result = w.write_all(line.as_bytes());
+        n += 1;
+    });
+    result.map(|()| n)
 }
 
 #[cfg(test)]
@@ -269,6 +509,78 @@ mod tests {
         let r = TelemetryRow::new(1_500_000, &Telemetry::default());
         assert_eq!(r.csv_line().split(',').count(), COLUMNS.len());
         assert!(r.csv_line().starts_with("1.500000,0.000,Idle,"));
+    }
+
+    #[test]
+    fn fixed_point_writing_is_format_to_the_digit() {
+        let mut values = vec![
+            0.0,
+            -0.0,
+            -0.0001,
+            0.0005,
+            0.0015,
+            -2.5,
+            1e20,
+            -1e20,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MIN_POSITIVE,
+            123_456.789_012_5,
+        ];
+        for n in (-70_000i64..70_000).step_by(7) {
+            for p in [1.0, 10.0, 1e3, 1e6] {
+                values.push(n as f64 / p);
+            }
+        }
+        values.push(i32::MIN as f64 / 1000.0);
+        values.push(u32::MAX as f64 / 1e6);
+        let mut out = String::new();
+        for v in [0, 1, 9, 10, 65_535, u64::from(u32::MAX), u64::MAX] {
+            out.clear();
+            uint(&mut out, v);
+            assert_eq!(out, v.to_string());
+        }
+        for v in values {
+            for k in 0..=7 {
+                out.clear();
+                fixed(&mut out, v, k);
+                assert_eq!(out, format!("{v:.k$}"), "{v} to {k} places");
+            }
+        }
+    }
+
+    #[test]
+    fn the_hand_written_json_is_what_serde_writes() {
+        let mut rows = vec![TelemetryRow::new(1_234_567, &Telemetry::default())];
+        for i in 0..500u32 {
+            let mut t = crate::record::synth::telemetry(i, 50);
+            t.pose.x_mm = -(i as i32) * 37;
+            t.wheels.speed_mm_s = [i as i16, -(i as i16)];
+            t.cycle.period_us = i * 1999;
+            let mut r = TelemetryRow::new(u64::from(i) * 20_001, &t);
+            if i % 2 == 0 {
+                r.with_truth(&EmuTruth {
+                    time_ms: t.time_ms,
+                    pose: t.pose,
+                    collisions: i,
+                });
+            }
+            rows.push(r);
+        }
+        let mut out = String::new();
+        for r in rows {
+            out.clear();
+            r.write_json(&mut out);
+            let mine: serde_json::Value = serde_json::from_str(&out).unwrap();
+            assert_eq!(mine, serde_json::to_value(&r).unwrap(), "{out}");
+        }
+        out.clear();
+        json_str(&mut out, "a\"b\\c\u{1}d");
+        assert_eq!(
+            serde_json::from_str::<String>(&out).unwrap(),
+            "a\"b\\c\u{1}d"
+        );
     }
 
     #[test]
