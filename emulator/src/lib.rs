@@ -19,4 +19,5 @@ pub mod scenario;
 pub mod sensors;
 pub mod sim;
 pub mod uart;
+pub mod unsupervised_places;
 pub mod world;

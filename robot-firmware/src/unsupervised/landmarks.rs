@@ -105,6 +105,23 @@ pub enum Event {
     Full,
 }
 
+/// Why resolved kernels did not match (for reports and tuning views).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MatchStats {
+    /// Kernels resolved.
+    pub kernels: u32,
+    /// ... with no stored landmark of the same kernel.
+    pub unknown_kernel: u32,
+    /// ... whose same-kernel landmarks were all more than one diameter away (ignored).
+    pub too_far: u32,
+    /// ... with near candidates, none below the threshold.
+    pub dissimilar: u32,
+    /// Sum of the best near candidate's scaled d_lev (mean = sum / near).
+    pub lev_sum: f32,
+    /// Kernels that had a near candidate.
+    pub near: u32,
+}
+
 #[derive(Clone, Copy, Debug, Default)]
 struct Pending {
     stream: u8,
@@ -135,6 +152,7 @@ pub struct LandmarkStore {
     last_kernel: Option<u32>,
     landmarks: [Landmark; MAX_LANDMARKS],
     used: usize,
+    stats_m: MatchStats,
 }
 
 struct StreamCosts<'a, M: PrototypeMetric> {
@@ -184,12 +202,18 @@ impl LandmarkStore {
             last_kernel: None,
             landmarks: [empty; MAX_LANDMARKS],
             used: 0,
+            stats_m: MatchStats::default(),
         }
     }
 
     /// The stored landmarks.
     pub fn landmarks(&self) -> &[Landmark] {
         &self.landmarks[..self.used]
+    }
+
+    /// Why kernels matched or not.
+    pub fn match_stats(&self) -> MatchStats {
+        self.stats_m
     }
 
     /// The parameters in use.
@@ -268,14 +292,19 @@ impl LandmarkStore {
         let prm = self.params;
         let norm = (STREAMS * WINDOW) as f32 * prm.indel_cost * prm.lev_scale;
         let mut best: Option<(usize, f32)> = None;
+        let (mut same_kernel, mut near) = (false, false);
+        let mut best_lev = f32::INFINITY;
+        self.stats_m.kernels += 1;
         for (i, lm) in self.landmarks[..self.used].iter().enumerate() {
             if lm.stream != p.stream || lm.class != p.class {
                 continue;
             }
+            same_kernel = true;
             let dd = libm::hypotf(lm.x - p.x, lm.y - p.y) / prm.diameter_m;
             if dd > 1.0 {
                 continue; // §3.15.2: too far to be the same place.
             }
+            near = true;
             let mut lev = 0.0;
             for (s, (ours, theirs)) in window.iter().zip(&lm.labels).enumerate() {
                 let costs = StreamCosts {
@@ -285,9 +314,22 @@ impl LandmarkStore {
                 };
                 lev += weighted(ours, theirs, &costs).unwrap_or(f32::INFINITY);
             }
+            best_lev = best_lev.min(lev / norm);
             let d = libm::hypotf(lev / norm, dd);
             if d < prm.match_threshold && best.is_none_or(|(_, b)| d < b) {
                 best = Some((i, d));
+            }
+        }
+        if near {
+            self.stats_m.near += 1;
+            self.stats_m.lev_sum += best_lev;
+        }
+        if best.is_none() {
+            let m = &mut self.stats_m;
+            match (same_kernel, near) {
+                (false, _) => m.unknown_kernel += 1,
+                (true, false) => m.too_far += 1,
+                (true, true) => m.dissimilar += 1,
             }
         }
         if let Some((i, d)) = best {
