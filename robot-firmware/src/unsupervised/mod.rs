@@ -37,3 +37,31 @@ pub const MAX_PLACES: usize = 64;
 pub const MAX_TRANSITIONS: usize = 48;
 /// Landmarks in one place sequence.
 pub const MAX_SEQUENCE: usize = 24;
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    /// Prints the module's memory (README "Unsupervised landmarks" quotes it) and keeps the
+    /// whole inside the 128 KB budget stated there.
+    #[test]
+    fn memory_budget() {
+        use core::mem::size_of;
+        let parts = [
+            (
+                "growing K-means",
+                size_of::<super::classify::GrowingKMeans>(),
+            ),
+            ("ART-1", size_of::<super::classify::Art1>()),
+            ("Fuzzy ART", size_of::<super::classify::FuzzyArt>()),
+            (
+                "landmark store",
+                size_of::<super::landmarks::LandmarkStore>(),
+            ),
+            ("places", size_of::<super::places::Places>()),
+        ];
+        let total: usize = parts.iter().map(|p| p.1).sum();
+        std::eprintln!("{parts:?} total {total}");
+        assert!(total <= 128 * 1024, "{total}");
+    }
+}
