@@ -520,6 +520,11 @@ pub enum TaskArg {
     /// wheel distance and pulse length. Its own arena and the khepera: --arena and --profile
     /// are ignored.
     OdometryLaps,
+    /// Mächler's unsupervised landmarks and places (seed 003 ch. 3): the thesis's simulated
+    /// Khepera wanders in a generated arena (--arena unstructured|structured, from --seed),
+    /// resets its odometry on landmark matches; reports corrected vs plain odometry error in
+    /// robot diameters. --timeout is the run length [default 1200 s].
+    UnsupervisedPlaces,
 }
 
 impl WorldArgs {
@@ -743,6 +748,12 @@ impl RunArgs {
             TaskArg::LightMap => {
                 return Err("--task light-map is run by `scenario::lightmap`".to_string())
             }
+            TaskArg::UnsupervisedPlaces => {
+                return Err(
+                    "--task unsupervised-places is run by `unsupervised_places_options`"
+                        .to_string(),
+                )
+            }
             TaskArg::LineCorrect => {
                 return Err("--task line-correct is run by `line_correct_options`".to_string())
             }
@@ -803,6 +814,29 @@ impl RunArgs {
             timeout_s: self.timeout_s(DEFAULT_TIMEOUT_S)?,
             noise: self.world.noise()?,
         }))
+    }
+
+    /// The unsupervised-places run these arguments describe: `--arena` names the generated
+    /// arena kind, `--seed` its seed, `--timeout` the run length.
+    pub fn unsupervised_places_options(
+        &self,
+    ) -> Result<crate::unsupervised_places::PlacesOptions, String> {
+        use crate::unsupervised_places::{ArenaKind, PlacesOptions};
+        if self.goal.is_some() {
+            return Err("--goal is for --task go-to; unsupervised-places wanders".to_string());
+        }
+        let kind = ArenaKind::parse(&self.world.arena)?;
+        let mut o = PlacesOptions::new(kind, self.world.seed);
+        o.duration_s = self.timeout_s(o.duration_s)?;
+        if o.duration_s > crate::unsupervised_places::MAX_DURATION_S {
+            return Err(format!(
+                "--timeout {}: unsupervised-places runs at most {} s (its report keeps a series)",
+                o.duration_s,
+                crate::unsupervised_places::MAX_DURATION_S
+            ));
+        }
+        o.noise = self.world.noise()?;
+        Ok(o)
     }
 
     /// The line-correction run these arguments describe (`--task line-correct`).

@@ -21,4 +21,5 @@ pub mod scenario;
 pub mod sensors;
 pub mod sim;
 pub mod uart;
+pub mod unsupervised_places;
 pub mod world;

@@ -169,6 +169,9 @@ fn run(args: &RunArgs) -> Result<(), String> {
     if args.task == emulator::cli::TaskArg::LineCorrect {
         return line_correct(args);
     }
+    if args.task == emulator::cli::TaskArg::UnsupervisedPlaces {
+        return unsupervised_places(args);
+    }
     if args.task == emulator::cli::TaskArg::Forage {
         return forage(args);
     }
@@ -234,6 +237,44 @@ fn forage(args: &RunArgs) -> Result<(), String> {
             h.from_home_m,
             h.pose_error_m,
             h.heading_error_deg
+        );
+    }
+    Ok(())
+}
+
+fn unsupervised_places(args: &RunArgs) -> Result<(), String> {
+    let opts = args.unsupervised_places_options()?;
+    let r = emulator::unsupervised_places::run(&opts);
+    if args.json {
+        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+    } else {
+        println!(
+            "{:?} arena, seed {}: {:.1} m in {:.0} s simulated ({:.2} s wall), wheel bias \
+             {:+.2}/{:+.2} %\n\
+             classes (ART-1, K-means, Fuzzy ART) {:?}; {} landmarks ({} bytes each, store {} \
+             bytes), {} matches ({} made the error worse), {} places ({} recognitions)\n\
+             position error, robot diameters   peak    mean\n\
+             landmark-corrected             {:>7.2} {:>7.2}\n\
+             plain odometry                 {:>7.2} {:>7.2}",
+            r.arena,
+            r.seed,
+            r.distance_m,
+            r.duration_s,
+            r.wall_s,
+            r.wheel_bias[0] * 100.0,
+            r.wheel_bias[1] * 100.0,
+            r.classes,
+            r.landmarks,
+            r.landmark_bytes,
+            r.store_bytes,
+            r.matches,
+            r.worsening_matches,
+            r.places,
+            r.places_recognised,
+            r.corrected_peak,
+            r.corrected_mean,
+            r.plain_peak,
+            r.plain_mean,
         );
     }
     Ok(())

@@ -34,6 +34,7 @@ pub mod scripted;
 pub mod som;
 pub mod telemetry;
 pub mod transfer;
+pub mod unsupervised;
 
 pub use hal::{BeaconReading, Hal, MotorCommand};
 pub use profile::{Profile, KHEPERA, MICRO_RATO};
