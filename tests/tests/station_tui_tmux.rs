@@ -127,7 +127,7 @@ fn the_log_coalesces_repeats_filters_and_the_map_zooms_with_a_legend_in_glyphs()
     );
     assert!(
         s.iter()
-            .any(|r| r.contains("● believed ○ true × goal B beacon")),
+            .any(|r| r.contains("● believed ○ true × go-to ◎ plan target G goal B beacon")),
         "{}",
         s.join("\n")
     );

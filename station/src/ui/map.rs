@@ -160,6 +160,10 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
     } else {
         "◎ plan target ".light_red()
     });
+    // The map's goal letter (`map_layers`), when one is drawn.
+    if app.map.plan.result.is_some() || app.map.plan.map().is_some_and(|m| m.goal.is_some()) {
+        items.push("G goal ".light_red());
+    }
     if app
         .map
         .arena
@@ -173,6 +177,7 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
         vec!["+ cursor ".green()]
     } else {
         let mut v = Vec::new();
+        // The zoom factor is state, not a hint: it goes first among what the room allows.
         if zoom > 1.0 {
             v.push(format!("×{zoom:.1} ").white());
         }
@@ -182,6 +187,19 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
         v.push("z/Z/wheel: zoom hjkl: pan ".dark_gray());
         v
     };
+    // A zoomed view says so even when the glyph names fill the line: the zoom replaces the
+    // longest name's words ("plan target" -> "plan").
+    if zoom > 1.0 && !app.map.cursor_mode {
+        let used: usize = items.iter().map(|s| s.width()).sum();
+        let need = format!("×{zoom:.1} ").len();
+        if used + need > usize::from(room) {
+            for it in items.iter_mut() {
+                if it.content == "◎ plan target " {
+                    *it = "◎ plan ".light_red();
+                }
+            }
+        }
+    }
     let mut used: usize = items.iter().map(|s| s.width()).sum();
     for e in extra {
         if used + e.width() <= usize::from(room) {
