@@ -446,25 +446,7 @@ fn summary(cases: &[Case]) {
 
 /// The paper's arena: Micro-Rato'99 at 17 x 17 (as in the crate's tests), B = goal light.
 fn micro_rato_99() -> VecGrid {
-    const ROWS: [&str; 17] = [
-        "...#.............",
-        "...#.............",
-        "...#.............",
-        "...#.............",
-        "...#...#####.#...",
-        "...#...#.....#...",
-        "...#...#.....#...",
-        "...#...#.....#...",
-        "...#...#..B......",
-        ".......#.........",
-        ".......#.....#...",
-        ".......#.....#...",
-        ".......#####.#...",
-        ".................",
-        ".................",
-        ".................",
-        ".................",
-    ];
+    const ROWS: [&str; 17] = robot_firmware::nav::paper_map::MICRO_RATO_99;
     let mut g = empty(17, Cell::Free);
     for (y, row) in ROWS.iter().enumerate() {
         for (x, ch) in row.bytes().enumerate() {

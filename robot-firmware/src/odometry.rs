@@ -347,6 +347,37 @@ impl Odometry {
     }
 }
 
+/// Seed 000 §3.3, Tables 1 and 2: the final angular error (degrees) of two wall-following
+/// laps of the 75 x 60 cm box re-integrated with other odometry constants. The one copy of the
+/// paper's figures: the firmware's arithmetic test and the emulator's `odometry-laps` scenario
+/// both check against it.
+pub mod paper_000 {
+    /// Pulse length dl (mm, with d = 52) -> final angular error (deg).
+    pub const TABLE_1: [(f64, f64); 9] = [
+        (0.076, 18.6),
+        (0.077, 9.4),
+        (0.078, 0.1),
+        (0.079, -9.1),
+        (0.080, -18.3),
+        (0.081, -27.6),
+        (0.082, -36.8),
+        (0.083, -46.0),
+        (0.084, -55.2),
+    ];
+    /// Wheel distance d (mm, with dl = 0.080) -> final angular error (deg).
+    pub const TABLE_2: [(f64, f64); 9] = [
+        (48.0, -79.8),
+        (49.0, -63.5),
+        (50.0, -47.9),
+        (51.0, -32.81),
+        (52.0, -18.3),
+        (53.0, -4.4),
+        (54.0, 9.0),
+        (55.0, 21.9),
+        (56.0, 34.4),
+    ];
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -622,29 +653,6 @@ mod tests {
         (run.true_rotation_rad.abs() - integrated.abs()).to_degrees()
     }
 
-    const TABLE_1: [(f32, f64); 9] = [
-        (0.076, 18.6),
-        (0.077, 9.4),
-        (0.078, 0.1),
-        (0.079, -9.1),
-        (0.080, -18.3),
-        (0.081, -27.6),
-        (0.082, -36.8),
-        (0.083, -46.0),
-        (0.084, -55.2),
-    ];
-    const TABLE_2: [(f32, f64); 9] = [
-        (48.0, -79.8),
-        (49.0, -63.5),
-        (50.0, -47.9),
-        (51.0, -32.81),
-        (52.0, -18.3),
-        (53.0, -4.4),
-        (54.0, 9.0),
-        (55.0, 21.9),
-        (56.0, 34.4),
-    ];
-
     #[test]
     fn tables_1_and_2_arithmetic_of_a_synthetic_two_lap_path() {
         // All 18 entries fit Δα = 719.7 - 738.0 (Δl/0.080)(52/d): the robot truly turned
@@ -663,8 +671,9 @@ mod tests {
         assert!(run.nr.iter().zip(&run.nl).any(|(&r, &l)| r == 0 && l > 20));
         // Realistic speeds: under 100 pulses per cycle (§3.2), about 6 Khepera units.
         assert!(run.nl.iter().chain(&run.nr).all(|n| (0..100).contains(n)));
-        for (table, is_dl) in [(&TABLE_1, true), (&TABLE_2, false)] {
+        for (table, is_dl) in [(&paper_000::TABLE_1, true), (&paper_000::TABLE_2, false)] {
             for &(value, paper) in table.iter() {
+                let value = value as f32;
                 let (d, dl) = if is_dl { (52.0, value) } else { (value, 0.080) };
                 let ours = final_angular_error_deg(&run, d, dl);
                 std::println!("d={d} dl={dl}: paper {paper:+.2} ours {ours:+.3}");

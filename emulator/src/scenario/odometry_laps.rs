@@ -46,30 +46,8 @@ use crate::sim::{Sim, SimConfig};
 
 /// seed 000 §3.3: the box, metres.
 pub const BOX_M: (f64, f64) = (0.75, 0.60);
-/// seed 000 §3.3 Table 1: pulse length dl (mm, with d = 52) -> final angular error (deg).
-pub const TABLE_1: [(f64, f64); 9] = [
-    (0.076, 18.6),
-    (0.077, 9.4),
-    (0.078, 0.1),
-    (0.079, -9.1),
-    (0.080, -18.3),
-    (0.081, -27.6),
-    (0.082, -36.8),
-    (0.083, -46.0),
-    (0.084, -55.2),
-];
-/// seed 000 §3.3 Table 2: wheel distance d (mm, with dl = 0.080) -> final angular error (deg).
-pub const TABLE_2: [(f64, f64); 9] = [
-    (48.0, -79.8),
-    (49.0, -63.5),
-    (50.0, -47.9),
-    (51.0, -32.81),
-    (52.0, -18.3),
-    (53.0, -4.4),
-    (54.0, 9.0),
-    (55.0, 21.9),
-    (56.0, 34.4),
-];
+/// seed 000 §3.3 Tables 1 and 2 (dl or d -> final angular error, deg): the firmware's copy.
+pub use robot_firmware::odometry::paper_000::{TABLE_1, TABLE_2};
 /// A run whose |true rotation| is within this of `laps` x 360 deg followed the wall round
 /// without turning round, degrees (a turn-round changes it by about 180).
 pub const CLEAN_LAPS_DEG: f64 = 10.0;

@@ -160,25 +160,7 @@ fn route(nav: &mut Nav64, s: GridPoint, g: GridPoint) -> (u32, Method) {
 
 /// Seed 004's Micro-Rato'99 arena at 17 x 17 (as in the crate's tests), B the goal light.
 fn micro_rato_99(nav: &mut Nav64) {
-    const ROWS: [&str; 17] = [
-        "...#.............",
-        "...#.............",
-        "...#.............",
-        "...#.............",
-        "...#...#####.#...",
-        "...#...#.....#...",
-        "...#...#.....#...",
-        "...#...#.....#...",
-        "...#...#..B......",
-        ".......#.........",
-        ".......#.....#...",
-        ".......#.....#...",
-        ".......#####.#...",
-        ".................",
-        ".................",
-        ".................",
-        ".................",
-    ];
+    const ROWS: [&str; 17] = robot_firmware::nav::paper_map::MICRO_RATO_99;
     let g = nav.grid_mut();
     let _ = g.reshape(17, 17);
     for (y, row) in ROWS.iter().enumerate() {

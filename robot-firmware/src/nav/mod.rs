@@ -61,6 +61,7 @@ pub mod graph;
 pub mod grid;
 mod heap;
 pub mod ids;
+pub mod paper_map;
 pub mod segment;
 pub mod smooth;
 pub mod wave;

@@ -27,8 +27,10 @@ use serde_json::{json, Value};
 use super::{Direction, Item};
 use crate::record::Recording;
 
-/// Largest object reassembled, bytes (a 2048 x 2048 map is 1 MB).
-const MAX_OBJECT: u32 = 1 << 20;
+/// Largest object reassembled, bytes: the largest a robot stages or sends (a 64 x 64 map is
+/// about 1 KB). Each TransferBegin in a recording costs at most this much work, so a file of
+/// many small Begins stays linear (at 1 MB a 20-byte Begin cost a 2 MB buffer).
+const MAX_OBJECT: u32 = robot_firmware::transfer::OBJECT_CAPACITY as u32;
 /// Objects reassembled at once (the link stages one per direction).
 const MAX_IN_FLIGHT: usize = 4;
 

@@ -155,7 +155,14 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
     if !app.replaying {
         items.push("× go-to ".yellow());
     }
-    items.push(if room < 58 {
+    // The zoom factor is state, not a hint: room is kept for it before the longer label.
+    let zoom = app.map.zoom();
+    let zoom_room = if zoom > 1.0 && !app.map.cursor_mode {
+        6
+    } else {
+        0
+    };
+    items.push(if room < 58 + zoom_room {
         "◎ plan ".light_red()
     } else {
         "◎ plan target ".light_red()
@@ -172,12 +179,10 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
     {
         items.push("B beacon ".yellow());
     }
-    let zoom = app.map.zoom();
     let extra: Vec<ratatui::text::Span<'static>> = if app.map.cursor_mode {
         vec!["+ cursor ".green()]
     } else {
         let mut v = Vec::new();
-        // The zoom factor is state, not a hint: it goes first among what the room allows.
         if zoom > 1.0 {
             v.push(format!("×{zoom:.1} ").white());
         }
@@ -187,19 +192,6 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
         v.push("z/Z/wheel: zoom hjkl: pan ".dark_gray());
         v
     };
-    // A zoomed view says so even when the glyph names fill the line: the zoom replaces the
-    // longest name's words ("plan target" -> "plan").
-    if zoom > 1.0 && !app.map.cursor_mode {
-        let used: usize = items.iter().map(|s| s.width()).sum();
-        let need = format!("×{zoom:.1} ").len();
-        if used + need > usize::from(room) {
-            for it in items.iter_mut() {
-                if it.content == "◎ plan target " {
-                    *it = "◎ plan ".light_red();
-                }
-            }
-        }
-    }
     let mut used: usize = items.iter().map(|s| s.width()).sum();
     for e in extra {
         if used + e.width() <= usize::from(room) {

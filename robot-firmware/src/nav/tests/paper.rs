@@ -10,28 +10,7 @@ use super::reference;
 use super::util::{centre, encode, encode_smoothed, parse, tuples, with_adjacency, Seg, VecSearch};
 use crate::nav::{Cell, Geometry, GridPoint, Nav64};
 
-/// `shared/data/arenas/ciberrato/wallsMicRato99.xml` rasterised at 17 x 17 (a cell is
-/// obstacle when its centre is inside a wall), row 0 at the arena's y = 0. `B` is the goal
-/// light, "marked as a regular obstacle" (seed 004 §6).
-const MICRO_RATO_99: [&str; 17] = [
-    "...#.............",
-    "...#.............",
-    "...#.............",
-    "...#.............",
-    "...#...#####.#...",
-    "...#...#.....#...",
-    "...#...#.....#...",
-    "...#...#.....#...",
-    "...#...#..B......",
-    ".......#.........",
-    ".......#.....#...",
-    ".......#.....#...",
-    ".......#####.#...",
-    ".................",
-    ".................",
-    ".................",
-    ".................",
-];
+use crate::nav::paper_map::MICRO_RATO_99;
 
 fn arena() -> crate::nav::Grid<Vec<u8>> {
     let rows: Vec<std::string::String> =
