@@ -454,6 +454,8 @@ impl Sim {
         self.robot.step(&mut self.hal);
         self.hal.advance();
         self.record_truth();
+        // The id in force now (an operator may set it), so truth names the robot as it does.
+        self.truth.robot_id = self.robot.config().robot_id;
         self.hal.uart.tick(self.hal.now_us, &self.truth);
     }
 

@@ -81,6 +81,8 @@ pub struct TruthHistory {
     ring: Vec<TruthSample>,
     /// Where the next sample goes.
     next: usize,
+    /// The robot the samples are about (its `robot_id` parameter now), named in `EmuTruth`.
+    pub robot_id: u8,
 }
 
 impl TruthHistory {
@@ -368,6 +370,7 @@ impl Uart {
             time_ms,
             pose: wire_pose(s.pose),
             collisions: s.collisions,
+            robot_id: truth.robot_id,
         });
         let mut buf = [0u8; MAX_FRAME];
         let encoded = match (&self.truth_key, timestamp) {

@@ -55,6 +55,10 @@ pub struct HelloReply<'a> {
     pub telemetry_hz: u8,
     /// The robot's failsafe time in manual mode.
     pub failsafe_ms: u16,
+    /// Which robot this is in a fleet (parameter `robot_id`, like MAVLink's system id): the
+    /// station names the robot by it and reports two robots that give the same one. Last, so
+    /// the frozen prefix (fingerprint, protocol) stays where a peer of another build reads it.
+    pub robot_id: u8,
 }
 
 /// Which robot this is; selects the station's sensor layout.
@@ -508,6 +512,9 @@ pub struct EmuTruth {
     pub time_ms: u32,
     pub pose: Pose,
     pub collisions: u32,
+    /// The robot this truth is about (its `robot_id`), so truth from a fleet's robots, once
+    /// recorded or merged, is never credited to the wrong one.
+    pub robot_id: u8,
 }
 
 /// Which family of floor lines (seed 003 §2.6): `X` lines lie at x = k * pitch and fix x (the

@@ -141,6 +141,7 @@ fn the_largest_messages_fit_one_256_byte_frame() {
         },
         telemetry_hz: 255,
         failsafe_ms: u16::MAX,
+        robot_id: u8::MAX,
     });
     for m in [chunk, log, reply] {
         let mut buf = [0u8; MAX_FRAME];

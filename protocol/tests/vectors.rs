@@ -86,6 +86,7 @@ fn vectors() -> Vec<(&'static str, u16, Message<'static>)> {
                 },
                 telemetry_hz: 10,
                 failsafe_ms: 300,
+                robot_id: 1,
             }),
         ),
         (

@@ -267,6 +267,7 @@ impl Link {
                         map_capacity: identity.map_capacity,
                         telemetry_hz: status.telemetry_hz,
                         failsafe_ms: status.failsafe_ms,
+                        robot_id: status.robot_id,
                     };
                     st.send(&Message::HelloReply(reply), now_ms);
                     if accepted {
@@ -478,4 +479,5 @@ pub fn auth_refusal_code(e: &AuthError) -> i32 {
 pub struct LinkStatus {
     pub telemetry_hz: u8,
     pub failsafe_ms: u16,
+    pub robot_id: u8,
 }

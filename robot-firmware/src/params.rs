@@ -26,6 +26,9 @@ pub struct RobotConfig {
     /// Battery voltage read as empty (level 0) and full (level 1), for the speed table.
     pub battery_empty_mv: u16,
     pub battery_full_mv: u16,
+    /// Which robot this is in a fleet, stated in every `HelloReply` (like MAVLink's system
+    /// id; 0 is left out, as MAVLink keeps it for "every system").
+    pub robot_id: u8,
 }
 
 impl Default for RobotConfig {
@@ -36,9 +39,13 @@ impl Default for RobotConfig {
             teleop_max_mm_s: 300.0,
             battery_empty_mv: 7000,
             battery_full_mv: 9000,
+            robot_id: DEFAULT_ROBOT_ID,
         }
     }
 }
+
+/// The robot id a robot starts with; the emulator gives robot k of a fleet the id k.
+pub const DEFAULT_ROBOT_ID: u8 = 1;
 
 /// One parameter's description: the one table the robot checks values against, the
 /// station's editor and `station params` show, and PROTOCOL.md §16 is generated from.
@@ -104,7 +111,7 @@ const fn needs(caps: u32, info: ParamInfo) -> ParamInfo {
 use protocol::caps::ENCODERS;
 
 /// Every parameter, by id.
-pub const PARAMS: [ParamInfo; 33] = [
+pub const PARAMS: [ParamInfo; 34] = [
     pi(
         0,
         "failsafe_ms",
@@ -377,6 +384,15 @@ pub const PARAMS: [ParamInfo; 33] = [
         2.0,
         "go-to and plan execution: getting this much nearer counts as progress",
     ),
+    // Stated in the HelloReply; the station names the robot by it and warns of duplicates.
+    pi(
+        33,
+        "robot_id",
+        "",
+        1.0,
+        255.0,
+        "which robot this is in a fleet (like MAVLink's system id); the handshake states it",
+    ),
 ];
 
 /// Decimals that show every value of `info` in its unit: none for an integer parameter, else
@@ -414,6 +430,7 @@ pub mod id {
     pub const ARENA_MIN_Y_M: u16 = 28;
     pub const ARENA_MAX_X_M: u16 = 29;
     pub const ARENA_MAX_Y_M: u16 = 30;
+    pub const ROBOT_ID: u16 = 33;
 }
 
 /// The description of parameter `id`.
@@ -480,6 +497,7 @@ impl Tunables<'_> {
             30 => Slot::F32(&mut self.dead_reckon.bounds.max.y),
             31 => Slot::F32(&mut self.progress.stuck_limit_s),
             32 => Slot::F32(&mut self.progress.stuck_progress_m),
+            33 => Slot::U8(&mut self.robot.robot_id),
             _ => return None,
         })
     }
@@ -566,6 +584,7 @@ mod tests {
             (id::ARENA_MIN_Y_M, "arena_min_y_m"),
             (id::ARENA_MAX_X_M, "arena_max_x_m"),
             (id::ARENA_MAX_Y_M, "arena_max_y_m"),
+            (id::ROBOT_ID, "robot_id"),
         ] {
             assert_eq!(info(i).map(|p| p.name), Some(name));
         }

@@ -248,6 +248,7 @@ impl<K: Kit> Robot<K> {
             let status = LinkStatus {
                 telemetry_hz: self.core.config.telemetry_hz,
                 failsafe_ms: self.core.config.failsafe_ms,
+                robot_id: self.core.config.robot_id,
             };
             let core = &mut self.core;
             self.link

@@ -17,6 +17,7 @@ fn peer() -> PeerInfo {
         },
         telemetry_hz: 10,
         failsafe_ms: 300,
+        robot_id: 1,
     }
 }
 

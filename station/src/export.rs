@@ -13,6 +13,7 @@
 
 pub mod csv;
 pub mod mcap;
+pub mod robots;
 pub mod scene;
 
 use std::path::{Path, PathBuf};
@@ -34,10 +35,13 @@ pub struct ExportArgs {
     pub file: PathBuf,
     /// Write an MCAP file (JSON channels: /telemetry, /pose, /truth, /truth_pose, /events,
     /// /log, /link, /commands, /replies, and for the 3D panel /tf, /map, /regions, /plan,
-    /// /arena), for Foxglove.
+    /// /arena), for Foxglove; a recording of several robots puts each under its own prefix
+    /// (/robot1/telemetry, ...).
     #[arg(long, value_name = "OUT")]
     pub mcap: Option<PathBuf>,
-    /// Write the telemetry as CSV, one row per frame (columns in README.md, "Recordings").
+    /// Write the telemetry as CSV, one row per frame (columns in README.md, "Recordings"); a
+    /// recording of several robots writes one file each (OUT with `.robot<ID>` or `.link<K>`
+    /// before its extension).
     #[arg(long, value_name = "OUT")]
     pub csv: Option<PathBuf>,
     /// Export a damaged or torn recording up to its last good record instead of refusing it.
@@ -152,19 +156,38 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         bail!("--mcap and --csv name the same file");
     }
     let rec = open_whole(&args.file, args.salvage)?;
-    // Both outputs are complete before either takes its final name; an output not committed
-    // is removed when dropped.
+    // One robot per link: a file of several gets per-robot topics and CSV files (`robots`).
+    let file_meta = rec.meta.clone();
+    let links = if rec.link_count() > 1 {
+        rec.links()
+    } else {
+        vec![rec]
+    };
+    let labels = robots::labels(&links);
+    let csvs: Vec<PathBuf> = match &args.csv {
+        Some(out) => labels.iter().map(|l| robots::csv_path(out, l)).collect(),
+        None => Vec::new(),
+    };
+    if links.len() > 1 {
+        for out in &csvs {
+            check_out(out, &args.file, args.force)?;
+        }
+    }
+    // Every output is complete before any takes its final name; an output not committed is
+    // removed when dropped.
     let mut done = Vec::new();
     let mut notes = Vec::new();
     if let Some(out) = &args.mcap {
         let mut f = OutputFile::create(out, args.force)?;
-        let n = mcap::write(&rec, f.writer(), out)?;
+        let robots: Vec<(&str, &Recording)> =
+            labels.iter().map(String::as_str).zip(&links).collect();
+        let n = mcap::write_robots(&file_meta, &robots, f.writer(), out)?;
         done.push(f);
         notes.push(format!("wrote {} ({n} messages)", out.display()));
     }
-    if let Some(out) = &args.csv {
+    for (out, rec) in csvs.iter().zip(&links) {
         let mut f = OutputFile::create(out, args.force)?;
-        let n = csv::write(&rec, f.writer()).map_err(|e| io(out, e))?;
+        let n = csv::write(rec, f.writer()).map_err(|e| io(out, e))?;
         done.push(f);
         notes.push(format!("wrote {} ({n} telemetry rows)", out.display()));
     }

@@ -11,7 +11,7 @@
 //! What can fail: parsing a file that is not a recording, of another version, truncated or
 //! corrupted (`ReadError`, each with the byte offset), and file I/O (`RecordError`).
 //!
-//! # File format, version 1
+//! # File format, version 2 (version 1 still read)
 //!
 //! All integers are little-endian; "varint" is unsigned LEB128 (7 bits a byte, least
 //! significant group first, high bit set on every byte but the last, at most 10 bytes), as in
@@ -19,18 +19,25 @@
 //!
 //! ```text
 //! header   magic     8 bytes  89 53 54 52 45 43 0d 0a   ("\x89STREC\r\n")
-//!          version   u16      1
+//!          version   u16      2 (1: the single-link format, still read)
 //!          flags     u16      0 (reserved; readers ignore it)
 //!          meta_len  u32      length of meta, at most 65536
-//!          meta      bytes    a UTF-8 JSON object (see `Meta`; unknown keys are ignored)
+//!          meta      bytes    a UTF-8 JSON object (see `Meta`; unknown keys are ignored);
+//!                             version 2: `links`, the ports recorded, 1 to `MAX_LINKS`
 //!          crc       u32      CRC-32C of every header byte before it
 //! record   t_us      varint   microseconds since the recording started, never decreasing,
 //!                             at most `MAX_T_US` (a year)
 //!          kind      u8       0 from robot, 1 to robot, 2 link event, 3 end (below)
+//!          link      u8       version 2 only: which link (an index into `links`); a
+//!                             version 1 record is link 0
 //!          len       varint   length of data, at most 1 MiB
 //!          data      len bytes
 //!          crc       u32      CRC-32C of the record's bytes from t_us through data
 //! ```
+//!
+//! Several links share the one clock and the one sequence of records: a record's link says
+//! whose bytes or connection change it holds. An end record ends the whole file (its link is
+//! 0). A link id that names no link of the header is damage at its record's offset.
 //!
 //! Record kinds:
 //! - 0 `FromRobot`: bytes as the station read them from the port (robot to station).
@@ -40,8 +47,9 @@
 //!   3 refused; the rest is UTF-8 text (the reason, the port, the robot, the refusal).
 //! - 3 `End`: the recording was finished cleanly; UTF-8 text says why (time limit, stopped,
 //!   interrupted). Nothing may follow it.
-//! - 4..=255: reserved for later additions to version 1; a reader skips records of a kind it
-//!   does not know (after checking their CRC). A change to anything above is a new version.
+//! - 4..=255: reserved for later additions to versions 1 and 2; a reader skips records of a
+//!   kind it does not know (after checking their CRC). A change to anything above is a new
+//!   version.
 //!
 //! A recording is written as `FILE.partial`, flushed every second, synced to disk every five,
 //! and renamed to `FILE` when it ends cleanly. After a crash `FILE.partial` holds everything up
@@ -61,8 +69,12 @@ pub use writer::RecordWriter;
 /// The first 8 bytes of every recording. The high first byte catches 7-bit transfers and the
 /// CR LF catches newline conversion, as PNG's signature does.
 pub const MAGIC: [u8; 8] = *b"\x89STREC\r\n";
-/// The format version this code writes and reads.
-pub const VERSION: u16 = 1;
+/// The format version this code writes (it reads `OLDEST_VERSION` to `VERSION`).
+pub const VERSION: u16 = 2;
+/// The oldest version this code reads: version 1, one link, its records read as link 0.
+pub const OLDEST_VERSION: u16 = 1;
+/// Most links one recording holds (link ids are a byte; the emulator runs at most 16).
+pub const MAX_LINKS: usize = 64;
 /// Bytes of the fixed header before `meta`.
 pub const HEADER_FIXED: usize = 16;
 /// Longest `meta` accepted.
@@ -147,6 +159,8 @@ impl LinkState {
 pub struct Record {
     pub t_us: u64,
     pub kind: RecordKind,
+    /// Which link (an index into the header's `links`); 0 in a version 1 file.
+    pub link: u8,
     pub data: Vec<u8>,
 }
 
@@ -171,6 +185,7 @@ impl Record {
         Record {
             t_us,
             kind: RecordKind::Link,
+            link: 0,
             data,
         }
     }
@@ -198,6 +213,10 @@ pub struct Meta {
     /// The arena drawn under the map (a file, or the emulator's built-in name), if known.
     #[serde(default)]
     pub arena: String,
+    /// Version 2: the ports recorded, by link id ("/tmp/robot1", "/tmp/robot2"); `port` names
+    /// them all. Empty in a version 1 file (one link, `port`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub links: Vec<String>,
 }
 
 impl Meta {
@@ -213,6 +232,24 @@ impl Meta {
             protocol: protocol::PROTOCOL_VERSION,
             fingerprint: crate::link::machine::hex(&protocol::FINGERPRINT),
             arena: String::new(),
+            links: vec![port.to_string()],
+        }
+    }
+
+    /// Metadata for a recording of several ports starting now: `port` names them all.
+    pub fn now_links(ports: &[String], baud: u32) -> Meta {
+        Meta {
+            links: ports.to_vec(),
+            ..Meta::now(&ports.join(", "), baud)
+        }
+    }
+
+    /// The port of each link, by link id: `links`, or in a version 1 file `port` alone.
+    pub fn link_ports(&self) -> Vec<String> {
+        if self.links.is_empty() {
+            vec![self.port.clone()]
+        } else {
+            self.links.clone()
         }
     }
 }
@@ -222,7 +259,10 @@ impl Meta {
 pub enum ReadError {
     #[error("not a station recording (byte 0: the file does not start with the recording magic)")]
     NotARecording,
-    #[error("recording format version {version} (byte 8); this station reads version {VERSION}")]
+    #[error(
+        "recording format version {version} (byte 8); this station reads versions \
+         {OLDEST_VERSION} to {VERSION}"
+    )]
     UnsupportedVersion { version: u16 },
     #[error("bad header at byte {offset}: {why}")]
     BadHeader { offset: u64, why: String },
@@ -275,6 +315,8 @@ pub enum RecordError {
 /// A parsed recording: everything up to the last good record, and what stopped the reading.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Recording {
+    /// The file's format version (1 or 2).
+    pub version: u16,
     pub meta: Meta,
     pub records: Vec<Record>,
     /// The `End` record's text, when the recording was finished cleanly.
@@ -298,7 +340,9 @@ impl Recording {
     /// Reads a recording up to its last good record; damage after the header is reported in
     /// `damage`, not as an error. A bad header is an error.
     pub fn parse(bytes: &[u8]) -> Result<Recording, ReadError> {
-        let (meta, mut at) = parse_header(bytes)?;
+        let (header, mut at) = parse_header(bytes)?;
+        let meta = header.meta;
+        let links = meta.link_ports().len();
         let mut records = Vec::new();
         let mut end = None;
         let mut damage = None;
@@ -311,7 +355,7 @@ impl Recording {
                 });
                 break;
             }
-            match parse_record(bytes, at) {
+            match parse_record(bytes, at, header.version, links) {
                 Ok((rec, next)) => {
                     if rec.t_us < last_t {
                         damage = Some(ReadError::BadRecord {
@@ -345,6 +389,7 @@ impl Recording {
             }
         }
         Ok(Recording {
+            version: header.version,
             meta,
             records,
             end,
@@ -388,6 +433,47 @@ impl Recording {
     pub fn duration_us(&self) -> u64 {
         self.records.last().map_or(0, |r| r.t_us)
     }
+
+    /// How many links the file holds (1 for a version 1 file).
+    pub fn link_count(&self) -> usize {
+        self.meta.link_ports().len()
+    }
+
+    /// One link of the file as a recording of its own: its records (and the end record, which
+    /// ends every link), its port as `meta.port`, the file's damage and length. Every consumer
+    /// of a one-link recording (summary, export, replay) then works per link unchanged.
+    pub fn link(&self, id: u8) -> Recording {
+        let port = self
+            .meta
+            .link_ports()
+            .get(usize::from(id))
+            .cloned()
+            .unwrap_or_default();
+        Recording {
+            version: self.version,
+            meta: Meta {
+                port: port.clone(),
+                links: vec![port],
+                ..self.meta.clone()
+            },
+            records: self
+                .records
+                .iter()
+                .filter(|r| r.link == id || r.kind == RecordKind::End)
+                .cloned()
+                .collect(),
+            end: self.end.clone(),
+            damage: self.damage.clone(),
+            file_len: self.file_len,
+        }
+    }
+
+    /// Every link as a recording of its own (`link`), by link id.
+    pub fn links(&self) -> Vec<Recording> {
+        (0..self.link_count().min(MAX_LINKS))
+            .map(|i| self.link(u8::try_from(i).unwrap_or(u8::MAX)))
+            .collect()
+    }
 }
 
 /// CRC-32C of a record: `protocol::crc32c`, computed 16 bytes a step (a 16 KB table; the
@@ -406,9 +492,13 @@ pub fn partial_path(path: &Path) -> PathBuf {
     PathBuf::from(s)
 }
 
-/// The header's bytes.
+/// The header's bytes (version 2). A meta without `links` is given one link, its `port`.
 pub fn encode_header(meta: &Meta) -> Vec<u8> {
-    let json = serde_json::to_vec(meta).unwrap_or_else(|_| b"{}".to_vec());
+    let mut meta = meta.clone();
+    if meta.links.is_empty() {
+        meta.links = vec![meta.port.clone()];
+    }
+    let json = serde_json::to_vec(&meta).unwrap_or_else(|_| b"{}".to_vec());
     let mut out = Vec::with_capacity(HEADER_FIXED + json.len() + 4);
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&VERSION.to_le_bytes());
@@ -420,12 +510,13 @@ pub fn encode_header(meta: &Meta) -> Vec<u8> {
     out
 }
 
-/// Appends one record's bytes to `out`. Data longer than `MAX_DATA` must be split by the
-/// caller (`writer` does).
-pub fn encode_record(out: &mut Vec<u8>, t_us: u64, kind: RecordKind, data: &[u8]) {
+/// Appends one record's bytes (version 2) to `out`. Data longer than `MAX_DATA` must be split
+/// by the caller (`writer` does).
+pub fn encode_record(out: &mut Vec<u8>, t_us: u64, kind: RecordKind, link: u8, data: &[u8]) {
     let start = out.len();
     put_varint(out, t_us);
     out.push(kind.code());
+    out.push(link);
     put_varint(out, data.len() as u64);
     out.extend_from_slice(data);
     let crc = record_crc(out.get(start..).unwrap_or(&[]));
@@ -471,8 +562,15 @@ fn le_u32(b: &[u8], at: usize) -> Option<u32> {
     Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?))
 }
 
-/// Parses the header: the metadata and the offset of the first record.
-pub fn parse_header(bytes: &[u8]) -> Result<(Meta, usize), ReadError> {
+/// What the header says: the format version and the metadata.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Header {
+    pub version: u16,
+    pub meta: Meta,
+}
+
+/// Parses the header: the version, the metadata and the offset of the first record.
+pub fn parse_header(bytes: &[u8]) -> Result<(Header, usize), ReadError> {
     let short = |offset: usize| ReadError::BadHeader {
         offset: offset as u64,
         why: "the file ends inside the header".into(),
@@ -484,7 +582,7 @@ pub fn parse_header(bytes: &[u8]) -> Result<(Meta, usize), ReadError> {
         None => return Err(ReadError::NotARecording),
     }
     let version = le_u16(bytes, 8).ok_or_else(|| short(bytes.len()))?;
-    if version != VERSION {
+    if !(OLDEST_VERSION..=VERSION).contains(&version) {
         return Err(ReadError::UnsupportedVersion { version });
     }
     let meta_len = le_u32(bytes, 12).ok_or_else(|| short(bytes.len()))? as usize;
@@ -505,15 +603,31 @@ pub fn parse_header(bytes: &[u8]) -> Result<(Meta, usize), ReadError> {
         });
     }
     let json = bytes.get(HEADER_FIXED..crc_at).unwrap_or(&[]);
-    let meta = serde_json::from_slice(json).map_err(|e| ReadError::BadHeader {
+    let meta: Meta = serde_json::from_slice(json).map_err(|e| ReadError::BadHeader {
         offset: HEADER_FIXED as u64,
         why: format!("metadata is not a JSON object: {e}"),
     })?;
-    Ok((meta, crc_at + 4))
+    // Version 2 names its links: record link ids are checked against them.
+    if version >= 2 && !(1..=MAX_LINKS).contains(&meta.links.len()) {
+        return Err(ReadError::BadHeader {
+            offset: HEADER_FIXED as u64,
+            why: format!(
+                "metadata names {} links; a version {version} recording names 1 to {MAX_LINKS}",
+                meta.links.len()
+            ),
+        });
+    }
+    Ok((Header { version, meta }, crc_at + 4))
 }
 
-/// Parses the record at `at`: the record and the offset after it.
-pub fn parse_record(bytes: &[u8], at: usize) -> Result<(Record, usize), ReadError> {
+/// Parses the record at `at` of a file of format `version` with `links` links: the record and
+/// the offset after it.
+pub fn parse_record(
+    bytes: &[u8],
+    at: usize,
+    version: u16,
+    links: usize,
+) -> Result<(Record, usize), ReadError> {
     let offset = at as u64;
     let bad = |why: String| ReadError::BadRecord { offset, why };
     let truncated = ReadError::Truncated { offset };
@@ -521,7 +635,12 @@ pub fn parse_record(bytes: &[u8], at: usize) -> Result<(Record, usize), ReadErro
         .map_err(bad)?
         .ok_or(truncated.clone())?;
     let code = *bytes.get(p).ok_or(truncated.clone())?;
-    let (len, p) = get_varint(bytes, p + 1)
+    let (link, p) = if version >= 2 {
+        (*bytes.get(p + 1).ok_or(truncated.clone())?, p + 2)
+    } else {
+        (0, p + 1)
+    };
+    let (len, p) = get_varint(bytes, p)
         .map_err(bad)?
         .ok_or(truncated.clone())?;
     let len = usize::try_from(len).unwrap_or(usize::MAX);
@@ -539,6 +658,14 @@ pub fn parse_record(bytes: &[u8], at: usize) -> Result<(Record, usize), ReadErro
         });
     }
     let kind = RecordKind::from_code(code);
+    // After the CRC: a wrong id in a record whose bytes are intact is a writer's fault (or a
+    // forgery), named as such; a damaged byte is a CRC error like any other.
+    if usize::from(link) >= links {
+        return Err(bad(format!(
+            "link id {link}, but the header names {links} link(s) (ids 0 to {})",
+            links.saturating_sub(1)
+        )));
+    }
     if kind == RecordKind::Link
         && data
             .first()
@@ -551,6 +678,7 @@ pub fn parse_record(bytes: &[u8], at: usize) -> Result<(Record, usize), ReadErro
         Record {
             t_us,
             kind,
+            link,
             data: data.to_vec(),
         },
         p + len + 4,
@@ -566,19 +694,19 @@ mod tests {
             port: "memory".into(),
             ..Meta::default()
         });
-        encode_record(&mut b, 0, RecordKind::Link, &[1, b'm']);
-        encode_record(&mut b, 10, RecordKind::ToRobot, &[0, 1, 2]);
-        encode_record(&mut b, 300, RecordKind::FromRobot, &[5; 200]);
-        encode_record(&mut b, 301, RecordKind::End, b"done");
+        encode_record(&mut b, 0, RecordKind::Link, 0, &[1, b'm']);
+        encode_record(&mut b, 10, RecordKind::ToRobot, 0, &[0, 1, 2]);
+        encode_record(&mut b, 300, RecordKind::FromRobot, 0, &[5; 200]);
+        encode_record(&mut b, 301, RecordKind::End, 0, b"done");
         b
     }
 
     #[test]
     fn a_record_has_the_documented_bytes() {
         let mut b = Vec::new();
-        encode_record(&mut b, 300, RecordKind::ToRobot, &[0xaa, 0x00]);
-        let crc = protocol::crc32c(&[0xac, 0x02, 0x01, 0x02, 0xaa, 0x00]).to_le_bytes();
-        let mut want = vec![0xac, 0x02, 0x01, 0x02, 0xaa, 0x00];
+        encode_record(&mut b, 300, RecordKind::ToRobot, 0, &[0xaa, 0x00]);
+        let crc = protocol::crc32c(&[0xac, 0x02, 0x01, 0x00, 0x02, 0xaa, 0x00]).to_le_bytes();
+        let mut want = vec![0xac, 0x02, 0x01, 0x00, 0x02, 0xaa, 0x00];
         want.extend_from_slice(&crc);
         assert_eq!(b, want);
     }
@@ -587,9 +715,10 @@ mod tests {
     fn the_header_starts_with_magic_and_version() {
         let h = encode_header(&Meta::default());
         assert_eq!(&h[..8], b"\x89STREC\r\n");
-        assert_eq!(&h[8..12], &[1, 0, 0, 0]);
-        let (meta, at) = parse_header(&h).unwrap();
-        assert_eq!(meta, Meta::default());
+        assert_eq!(&h[8..12], &[2, 0, 0, 0]);
+        let (header, at) = parse_header(&h).unwrap();
+        assert_eq!(header.version, 2);
+        assert_eq!(header.meta.links, vec![String::new()], "one link, the port");
         assert_eq!(at, h.len());
     }
 
@@ -643,11 +772,17 @@ mod tests {
     fn bad_headers_are_named() {
         assert_eq!(Recording::parse(b"hello"), Err(ReadError::NotARecording));
         assert_eq!(Recording::parse(b""), Err(ReadError::NotARecording));
-        let mut v2 = sample();
-        v2[8] = 2;
+        let mut v3 = sample();
+        v3[8] = 3;
         assert_eq!(
-            Recording::parse(&v2),
-            Err(ReadError::UnsupportedVersion { version: 2 })
+            Recording::parse(&v3),
+            Err(ReadError::UnsupportedVersion { version: 3 })
+        );
+        let mut v0 = sample();
+        v0[8] = 0;
+        assert_eq!(
+            Recording::parse(&v0),
+            Err(ReadError::UnsupportedVersion { version: 0 })
         );
         let mut meta = sample();
         meta[HEADER_FIXED] ^= 0x20;
@@ -672,7 +807,7 @@ mod tests {
     #[test]
     fn unknown_kinds_are_kept_for_consumers_to_skip() {
         let mut b = encode_header(&Meta::default());
-        encode_record(&mut b, 5, RecordKind::Unknown(200), b"future");
+        encode_record(&mut b, 5, RecordKind::Unknown(200), 0, b"future");
         let r = Recording::parse_strict(&b).unwrap();
         assert_eq!(r.records[0].kind, RecordKind::Unknown(200));
     }
@@ -696,10 +831,10 @@ mod tests {
     fn a_time_beyond_a_year_is_damage_at_its_record() {
         for t in [MAX_T_US + 1, u64::MAX] {
             let mut b = encode_header(&Meta::default());
-            encode_record(&mut b, 0, RecordKind::Link, &[1, b'm']);
-            encode_record(&mut b, MAX_T_US, RecordKind::FromRobot, &[0]);
+            encode_record(&mut b, 0, RecordKind::Link, 0, &[1, b'm']);
+            encode_record(&mut b, MAX_T_US, RecordKind::FromRobot, 0, &[0]);
             let at = b.len() as u64;
-            encode_record(&mut b, t, RecordKind::FromRobot, &[0]);
+            encode_record(&mut b, t, RecordKind::FromRobot, 0, &[0]);
             let r = Recording::parse(&b).unwrap();
             let e = r.damage.clone().expect("refused");
             assert_eq!(e.offset(), at);
@@ -711,9 +846,136 @@ mod tests {
     #[test]
     fn records_after_the_end_are_damage() {
         let mut b = sample();
-        encode_record(&mut b, 400, RecordKind::FromRobot, &[1]);
+        encode_record(&mut b, 400, RecordKind::FromRobot, 0, &[1]);
         let r = Recording::parse(&b).unwrap();
         assert!(matches!(r.damage, Some(ReadError::BadRecord { .. })));
         assert_eq!(r.records.len(), 4);
+    }
+
+    /// A version 1 header and record, as the station wrote them before links existed.
+    fn v1_header(meta: &Meta) -> Vec<u8> {
+        let mut h = encode_header(meta);
+        // The same header with version 1 and the meta without `links`, CRC recomputed.
+        let json = serde_json::to_vec(meta).unwrap();
+        h.truncate(8);
+        h.extend_from_slice(&1u16.to_le_bytes());
+        h.extend_from_slice(&0u16.to_le_bytes());
+        h.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        h.extend_from_slice(&json);
+        let crc = protocol::crc32c(&h);
+        h.extend_from_slice(&crc.to_le_bytes());
+        h
+    }
+
+    fn v1_record(out: &mut Vec<u8>, t_us: u64, kind: RecordKind, data: &[u8]) {
+        let start = out.len();
+        put_varint(out, t_us);
+        out.push(kind.code());
+        put_varint(out, data.len() as u64);
+        out.extend_from_slice(data);
+        let crc = protocol::crc32c(&out[start..]);
+        out.extend_from_slice(&crc.to_le_bytes());
+    }
+
+    #[test]
+    fn a_version_1_file_reads_as_link_0() {
+        let mut b = v1_header(&Meta {
+            port: "/dev/ttyUSB0".into(),
+            ..Meta::default()
+        });
+        v1_record(&mut b, 0, RecordKind::Link, &[1, b'm']);
+        v1_record(&mut b, 7, RecordKind::FromRobot, &[5; 20]);
+        v1_record(&mut b, 9, RecordKind::End, b"done");
+        let r = Recording::parse_strict(&b).unwrap();
+        assert_eq!(r.version, 1);
+        assert_eq!(r.link_count(), 1);
+        assert_eq!(r.meta.link_ports(), vec!["/dev/ttyUSB0".to_string()]);
+        assert!(r.records.iter().all(|x| x.link == 0));
+        assert_eq!(r.link(0).records, r.records);
+    }
+
+    fn two_links() -> Vec<u8> {
+        let mut b = encode_header(&Meta {
+            links: vec!["/tmp/robot1".into(), "/tmp/robot2".into()],
+            ..Meta::default()
+        });
+        encode_record(&mut b, 0, RecordKind::Link, 0, &[1, b'a']);
+        encode_record(&mut b, 1, RecordKind::Link, 1, &[1, b'b']);
+        encode_record(&mut b, 5, RecordKind::FromRobot, 1, &[2; 30]);
+        encode_record(&mut b, 6, RecordKind::FromRobot, 0, &[3; 30]);
+        encode_record(&mut b, 9, RecordKind::End, 0, b"done");
+        b
+    }
+
+    #[test]
+    fn links_split_into_recordings_of_their_own() {
+        let r = Recording::parse_strict(&two_links()).unwrap();
+        assert_eq!(r.link_count(), 2);
+        let [a, b] = <[Recording; 2]>::try_from(r.links()).unwrap();
+        assert_eq!(a.meta.port, "/tmp/robot1");
+        assert_eq!(b.meta.port, "/tmp/robot2");
+        let data = |x: &Recording| -> Vec<u8> {
+            x.records
+                .iter()
+                .filter(|r| r.kind == RecordKind::FromRobot)
+                .flat_map(|r| r.data.clone())
+                .collect()
+        };
+        assert_eq!(data(&a), vec![3; 30]);
+        assert_eq!(data(&b), vec![2; 30]);
+        // The end record ends every link.
+        assert_eq!(a.end.as_deref(), Some("done"));
+        assert_eq!(b.records.last().map(|r| r.kind), Some(RecordKind::End));
+    }
+
+    #[test]
+    fn a_link_id_the_header_does_not_name_is_damage_at_its_record() {
+        let mut b = encode_header(&Meta {
+            links: vec!["a".into(), "b".into()],
+            ..Meta::default()
+        });
+        encode_record(&mut b, 0, RecordKind::Link, 1, &[1, b'b']);
+        let at = b.len() as u64;
+        encode_record(&mut b, 3, RecordKind::FromRobot, 2, &[0]);
+        let r = Recording::parse(&b).unwrap();
+        let e = r.damage.expect("refused");
+        assert_eq!(e.offset(), at);
+        assert!(
+            e.to_string()
+                .contains("link id 2, but the header names 2 link(s)"),
+            "{e}"
+        );
+        assert_eq!(r.records.len(), 1);
+    }
+
+    #[test]
+    fn a_version_2_header_without_links_is_refused() {
+        let mut meta = Meta::default();
+        meta.links.clear();
+        let mut h = v1_header(&meta);
+        h[8] = 2;
+        let n = h.len();
+        let crc = protocol::crc32c(&h[..n - 4]);
+        h[n - 4..].copy_from_slice(&crc.to_le_bytes());
+        let e = Recording::parse(&h).unwrap_err();
+        assert!(matches!(e, ReadError::BadHeader { offset: 16, .. }), "{e}");
+        assert!(e.to_string().contains("names 0 links"), "{e}");
+    }
+
+    #[test]
+    fn every_truncation_of_a_two_link_file_is_named_at_its_record() {
+        let full = two_links();
+        let (_, first) = parse_header(&full).unwrap();
+        for cut in first + 1..full.len() {
+            let r = Recording::parse(&full[..cut]).unwrap();
+            // A cut at a record boundary reads cleanly (without an end record).
+            let Some(e) = r.damage else { continue };
+            let ReadError::Truncated { offset } = e else {
+                panic!("{cut}: {e}");
+            };
+            assert!(offset as usize <= cut, "{cut}");
+            let (_, next) = parse_record(&full, offset as usize, 2, 2).unwrap();
+            assert!(next > cut, "{cut}: the record at {offset} is the one cut");
+        }
     }
 }

@@ -2,7 +2,8 @@
 //!
 //! Layer: pure state (time passed in, no I/O) plus the replay's edge in submodules: `player`
 //! (position, speed, pause), `screen` (the progress bar), `tui` (the terminal loop), `summary`
-//! (`station replay --json`), `command` (the CLI). `ReplayFeed` turns records into the same
+//! (`station replay --json`), `links` (its per-link form for a file of several links),
+//! `command` (the CLI). `ReplayFeed` turns records into the same
 //! `Action`s the TUI gets live: the robot's bytes go through the station's own `LinkMachine`
 //! (decoder, sequence accounting, statistics, event translation), so the sensors, map, charts,
 //! link panel and log show what they showed live; the connection state comes from the
@@ -14,6 +15,7 @@
 //! fail: damaged bytes inside a good record are decoding errors, counted as live.
 
 pub mod command;
+pub mod links;
 pub mod player;
 pub mod screen;
 pub mod session;
@@ -179,6 +181,7 @@ impl ReplayFeed {
                     },
                     telemetry_hz: 0,
                     failsafe_ms: 0,
+                    robot_id: 1,
                 }),
             },
             LinkState::Refused => Connection::Refused {

@@ -35,6 +35,7 @@ fn peer() -> PeerInfo {
         },
         telemetry_hz: 10,
         failsafe_ms: 300,
+        robot_id: 1,
     }
 }
 

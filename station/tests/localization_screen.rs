@@ -28,6 +28,7 @@ fn peer() -> PeerInfo {
         },
         telemetry_hz: 10,
         failsafe_ms: 300,
+        robot_id: 1,
     }
 }
 
@@ -69,6 +70,7 @@ fn surveyed() -> App {
                     heading_mrad: (p.heading * 1000.0).round() as i16,
                 },
                 collisions: sim.collisions(),
+                robot_id: 1,
             })));
         }
     }

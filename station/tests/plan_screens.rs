@@ -26,6 +26,7 @@ fn connect(app: &mut App) {
         },
         telemetry_hz: 10,
         failsafe_ms: 300,
+        robot_id: 1,
     };
     app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
         peer,

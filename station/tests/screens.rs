@@ -40,6 +40,7 @@ fn peer() -> PeerInfo {
         },
         telemetry_hz: 10,
         failsafe_ms: 300,
+        robot_id: 1,
     }
 }
 
@@ -172,6 +173,7 @@ fn story() -> App {
                 time_ms: t.time_ms,
                 pose: truth,
                 collisions: 0,
+                robot_id: 1,
             }),
         );
     }

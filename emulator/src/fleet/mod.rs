@@ -106,10 +106,13 @@ impl Fleet {
                 start: Some(pose),
                 ..base.clone()
             };
-            let sim = Sim::new(arena.clone(), cfg).map_err(|source| FleetError::Robot {
+            let mut sim = Sim::new(arena.clone(), cfg).map_err(|source| FleetError::Robot {
                 robot: i + 1,
                 source,
             })?;
+            // Robot k is robot id k (MAX_ROBOTS is far below 255), as `--link` names its
+            // pty k: the station can tell the robots apart from the handshake on.
+            sim.robot_mut().config_mut().robot_id = u8::try_from(i + 1).unwrap_or(u8::MAX);
             sims.push(sim);
         }
         let mut fleet = Fleet {

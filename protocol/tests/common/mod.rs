@@ -43,6 +43,7 @@ pub struct HelloFixed {
     pub map_capacity: MapCapacity,
     pub telemetry_hz: u8,
     pub failsafe_ms: u16,
+    pub robot_id: u8,
 }
 
 impl OwnedMsg {
@@ -75,6 +76,7 @@ impl OwnedMsg {
                 map_capacity: base.map_capacity,
                 telemetry_hz: base.telemetry_hz,
                 failsafe_ms: base.failsafe_ms,
+                robot_id: base.robot_id,
             }),
             OwnedMsg::Chunk { id, offset, data } => Message::TransferChunk(TransferChunk {
                 id: *id,
@@ -293,6 +295,7 @@ fn hello_fixed() -> impl Strategy<Value = HelloFixed> {
         any::<(u16, u16)>(),
         any::<u8>(),
         any::<u16>(),
+        any::<u8>(),
     )
         .prop_map(
             |(
@@ -305,6 +308,7 @@ fn hello_fixed() -> impl Strategy<Value = HelloFixed> {
                 (w, h),
                 telemetry_hz,
                 failsafe_ms,
+                robot_id,
             )| HelloFixed {
                 fingerprint,
                 protocol,
@@ -318,6 +322,7 @@ fn hello_fixed() -> impl Strategy<Value = HelloFixed> {
                 },
                 telemetry_hz,
                 failsafe_ms,
+                robot_id,
             },
         )
 }
@@ -379,13 +384,16 @@ pub fn any_message() -> impl Strategy<Value = OwnedMsg> {
         )
             .prop_filter("fits MAX_LOG_TEXT", |(_, t)| t.len() <= MAX_LOG_TEXT)
             .prop_map(|(level, text)| OwnedMsg::Log { level, text }),
-        (any::<u32>(), pose(), any::<u32>()).prop_map(|(time_ms, pose, collisions)| {
-            OwnedMsg::Plain(Message::EmuTruth(EmuTruth {
-                time_ms,
-                pose,
-                collisions,
-            }))
-        }),
+        (any::<u32>(), pose(), any::<u32>(), any::<u8>()).prop_map(
+            |(time_ms, pose, collisions, robot_id)| {
+                OwnedMsg::Plain(Message::EmuTruth(EmuTruth {
+                    time_ms,
+                    pose,
+                    collisions,
+                    robot_id,
+                }))
+            }
+        ),
     ]
 }
 

@@ -110,6 +110,12 @@ impl AnyRobot {
         each!(self, r => &r.core.config)
     }
 
+    /// The robot-level settings, to set as an operator would (the emulator numbers a
+    /// fleet's robots with `robot_id`).
+    pub fn config_mut(&mut self) -> &mut RobotConfig {
+        each!(self, r => &mut r.core.config)
+    }
+
     pub fn mode(&self) -> Mode {
         each!(self, r => r.core.mode)
     }

@@ -27,6 +27,7 @@ fuzz_target!(|data: &[u8]| {
         if r.kind == RecordKind::End {
             assert_eq!(i + 1, rec.records.len(), "a record after End");
         }
+        assert!(usize::from(r.link) < rec.link_count(), "a link the header does not name");
         let _ = r.link();
     }
     let mut link = LinkMachine::new(MachineConfig {

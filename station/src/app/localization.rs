@@ -183,6 +183,7 @@ mod tests {
             time_ms,
             pose: pose(x_mm),
             collisions: 0,
+            robot_id: 1,
         }
     }
 

@@ -24,6 +24,7 @@ fn app_on_micro_rato_99() -> App {
             },
             telemetry_hz: 10,
             failsafe_ms: 300,
+            robot_id: 1,
         },
     ))));
     app.take_outbox();

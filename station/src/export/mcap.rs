@@ -136,6 +136,18 @@ const INTEGER_COLUMNS: &[&str] = &[
 
 /// Writes `rec` as MCAP to `w`; returns the number of messages.
 pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64, ExportError> {
+    write_robots(&rec.meta, &[("", rec)], w, path)
+}
+
+/// Writes several robots' recordings (the links of one file, `meta` its header) as one MCAP
+/// file, each robot's channels under its prefix ([`topic_name`]); returns the number of
+/// messages. Robots are written one after the other: MCAP readers order by log time.
+pub fn write_robots<W: Write + Seek>(
+    meta: &crate::record::Meta,
+    robots: &[(&str, &Recording)],
+    w: W,
+    path: &Path,
+) -> Result<u64, ExportError> {
     let err = |e: mcap::McapError| ExportError::Mcap {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -145,16 +157,72 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
         .profile("")
         .library(format!("station {}", env!("CARGO_PKG_VERSION")));
     let mut out = Writer::with_options(w, opts).map_err(err)?;
+    let mut schemas = BTreeMap::new();
+    let mut count = 0;
+    let mut first = true;
+    for (prefix, rec) in robots {
+        count += write_robot(
+            &mut out,
+            &mut schemas,
+            prefix,
+            rec,
+            first.then_some(meta),
+            path,
+        )?;
+        first = false;
+    }
+    out.finish().map_err(err)?;
+    Ok(count)
+}
+
+/// A robot's topic: `topic` itself for the only robot of a file (today's names), else under
+/// the robot's prefix (`/robot1/telemetry`, `/robot1/tf`, ...).
+pub fn topic_name(prefix: &str, topic: &str) -> String {
+    if prefix.is_empty() {
+        topic.to_string()
+    } else {
+        format!("/{prefix}{topic}")
+    }
+}
+
+/// One robot's channels and messages into `out` (and the file's metadata, when given).
+fn write_robot<W: Write + Seek>(
+    out: &mut Writer<W>,
+    schemas: &mut BTreeMap<&'static str, u16>,
+    prefix: &str,
+    rec: &Recording,
+    file_meta: Option<&crate::record::Meta>,
+    path: &Path,
+) -> Result<u64, ExportError> {
+    let err = |e: mcap::McapError| ExportError::Mcap {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
     let mut ids = BTreeMap::new();
     for (topic, name, schema) in channels() {
-        let data = serde_json::to_vec(&schema).unwrap_or_default();
-        let schema_id = out.add_schema(name, "jsonschema", &data).map_err(err)?;
+        let schema_id = match schemas.get(name) {
+            Some(&id) => id,
+            None => {
+                let data = serde_json::to_vec(&schema).unwrap_or_default();
+                let id = out.add_schema(name, "jsonschema", &data).map_err(err)?;
+                schemas.insert(name, id);
+                id
+            }
+        };
         let id = out
-            .add_channel(schema_id, topic, "json", &BTreeMap::new())
+            .add_channel(
+                schema_id,
+                &topic_name(prefix, topic),
+                "json",
+                &BTreeMap::new(),
+            )
             .map_err(err)?;
         ids.insert(topic, id);
     }
-    let meta = serde_json::to_value(&rec.meta).unwrap_or(Value::Null);
+    let Some(file_meta) = file_meta else {
+        return write_messages(out, &ids, rec, path);
+    };
+    let meta = serde_json::to_value(file_meta).unwrap_or(Value::Null);
     let meta: BTreeMap<String, String> = meta
         .as_object()
         .map(|m| {
@@ -168,7 +236,20 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
         metadata: meta,
     })
     .map_err(err)?;
+    write_messages(out, &ids, rec, path)
+}
 
+/// Every message of `rec` on its channel (`ids`, by topic).
+fn write_messages<W: Write + Seek>(
+    out: &mut Writer<W>,
+    ids: &BTreeMap<&'static str, u16>,
+    rec: &Recording,
+    path: &Path,
+) -> Result<u64, ExportError> {
+    let err = |e: mcap::McapError| ExportError::Mcap {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
     let base_ns = rec.meta.created_unix_ms.saturating_mul(1_000_000);
     let mut seq: BTreeMap<u16, u32> = BTreeMap::new();
     let mut count = 0u64;
@@ -205,7 +286,6 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
     if let Some(e) = failure {
         return Err(e);
     }
-    out.finish().map_err(err)?;
     Ok(count)
 }
 

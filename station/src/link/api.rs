@@ -121,6 +121,8 @@ pub struct PeerInfo {
     pub map_capacity: MapCapacity,
     pub telemetry_hz: u8,
     pub failsafe_ms: u16,
+    /// Which robot this is in a fleet (its `robot_id` parameter, like MAVLink's system id).
+    pub robot_id: u8,
 }
 
 impl PeerInfo {

@@ -618,6 +618,7 @@ impl LinkMachine {
                 map_capacity: r.map_capacity,
                 telemetry_hz: r.telemetry_hz,
                 failsafe_ms: r.failsafe_ms,
+                robot_id: r.robot_id,
             }));
             // Commands that waited through a renewal go out in the new session.
             self.pump(now_ms);
@@ -759,6 +760,7 @@ struct OwnedHelloReply {
     map_capacity: protocol::MapCapacity,
     telemetry_hz: u8,
     failsafe_ms: u16,
+    robot_id: u8,
 }
 
 impl From<Message<'_>> for Owned {
@@ -804,6 +806,7 @@ fn owned_reply(r: &HelloReply<'_>) -> OwnedHelloReply {
         map_capacity: r.map_capacity,
         telemetry_hz: r.telemetry_hz,
         failsafe_ms: r.failsafe_ms,
+        robot_id: r.robot_id,
     }
 }
 

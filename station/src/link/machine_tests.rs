@@ -64,6 +64,7 @@ fn reply(session: u32, fingerprint: [u8; 8], accepted: bool) -> Vec<u8> {
             },
             telemetry_hz: 10,
             failsafe_ms: 300,
+            robot_id: 1,
         }),
     )
 }

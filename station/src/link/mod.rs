@@ -4,7 +4,8 @@
 //! state with no I/O (handshake, heartbeat, commands with retries, link timeout, statistics);
 //! `task` does the I/O around it and reconnects; `transport` is the byte-stream seam with a
 //! real serial implementation (`serial`) and an in-memory one (`memory`); `sim` runs the real
-//! robot firmware on the far end of an in-memory port, for tests and demos.
+//! robot firmware on the far end of an in-memory port, for tests and demos; `robot_ids` finds
+//! two links whose robots state the same id.
 
 pub mod api;
 pub mod clock;
@@ -12,6 +13,7 @@ pub mod commands;
 pub mod machine;
 pub mod memory;
 pub mod paced;
+pub mod robot_ids;
 pub mod serial;
 pub mod sim;
 pub mod stats;

@@ -180,6 +180,7 @@ impl SimCore {
                 heading_mrad: (h * 1000.0).round() as i16,
             },
             collisions: 0,
+            robot_id: 1,
         };
         let mut buf = [0u8; MAX_FRAME];
         if let Ok(n) = encode(self.truth_seq, &Message::EmuTruth(truth), &mut buf) {

@@ -33,11 +33,18 @@ pub struct LiveCounts {
     pub connected: bool,
 }
 
-/// A recording of a running link.
+/// A recording of running links (one, or a fleet's several into one file).
 pub struct LiveRecorder {
     writer: RecordWriter,
+    /// The recording's time 0.
+    start: Instant,
+    links: Vec<LinkTrack>,
+}
+
+/// One link's side of a recording.
+struct LinkTrack {
+    /// The link task's clock origin: its tap stamps bytes in µs since then.
     epoch: Instant,
-    start_us: u64,
     /// Skip bytes up to the first delimiter, per direction (from robot, to robot).
     align: [bool; 2],
     was_connected: bool,
@@ -45,8 +52,8 @@ pub struct LiveRecorder {
 }
 
 impl LiveRecorder {
-    /// Starts recording to `path` (written as `path.partial`). `epoch` is the link's clock
-    /// origin; `current` the connection state now.
+    /// Starts recording one link to `path` (written as `path.partial`). `epoch` is the link's
+    /// clock origin; `current` the connection state now.
     pub fn start(
         path: &Path,
         meta: &Meta,
@@ -54,19 +61,37 @@ impl LiveRecorder {
         epoch: Instant,
         current: &Connection,
     ) -> Result<LiveRecorder, RecordError> {
+        LiveRecorder::start_links(path, meta, overwrite, &[(epoch, current.clone())])
+    }
+
+    /// Starts recording several links into one file: link `i` is `links[i]` (its clock origin
+    /// and its connection state now) and `meta.links[i]`.
+    pub fn start_links(
+        path: &Path,
+        meta: &Meta,
+        overwrite: bool,
+        links: &[(Instant, Connection)],
+    ) -> Result<LiveRecorder, RecordError> {
         let writer = RecordWriter::create(path, meta, overwrite)?;
-        let mid_stream = !matches!(current, Connection::Closed { .. });
         let mut r = LiveRecorder {
             writer,
-            epoch,
-            start_us: epoch.elapsed().as_micros() as u64,
-            // The station writes whole frames; the robot's bytes arrive in arbitrary pieces.
-            align: [mid_stream, false],
-            was_connected: false,
-            counts: LiveCounts::default(),
+            start: Instant::now(),
+            links: links
+                .iter()
+                .map(|(epoch, current)| LinkTrack {
+                    epoch: *epoch,
+                    // The station writes whole frames; the robot's bytes arrive in arbitrary
+                    // pieces.
+                    align: [!matches!(current, Connection::Closed { .. }), false],
+                    was_connected: false,
+                    counts: LiveCounts::default(),
+                })
+                .collect(),
         };
-        if mid_stream {
-            r.on_connection(current)?;
+        for (i, (_, current)) in links.iter().enumerate() {
+            if !matches!(current, Connection::Closed { .. }) {
+                r.on_link_connection(link_id(i), current)?;
+            }
         }
         Ok(r)
     }
@@ -78,25 +103,48 @@ impl LiveRecorder {
 
     /// Recording time now, µs.
     pub fn elapsed_us(&self) -> u64 {
-        (self.epoch.elapsed().as_micros() as u64).saturating_sub(self.start_us)
+        self.start.elapsed().as_micros() as u64
     }
 
+    /// Counts over every link.
     pub fn counts(&self) -> LiveCounts {
-        self.counts
+        let mut all = LiveCounts::default();
+        for c in self.link_counts() {
+            all.bytes_from_robot += c.bytes_from_robot;
+            all.bytes_to_robot += c.bytes_to_robot;
+            all.link_events += c.link_events;
+            all.gaps += c.gaps;
+            all.connected |= c.connected;
+        }
+        all
     }
 
-    /// Records tapped bytes.
+    /// Counts of each link, by link id.
+    pub fn link_counts(&self) -> Vec<LiveCounts> {
+        self.links.iter().map(|l| l.counts).collect()
+    }
+
+    /// Records bytes tapped from link 0.
     pub fn on_tap(&mut self, rec: &TapRecord) -> Result<(), RecordError> {
+        self.on_link_tap(0, rec)
+    }
+
+    /// Records bytes tapped from link `link`, on the recording's clock.
+    pub fn on_link_tap(&mut self, link: u8, rec: &TapRecord) -> Result<(), RecordError> {
+        let start = self.start;
+        let Some(track) = self.links.get_mut(usize::from(link)) else {
+            return Ok(());
+        };
         let (kind, i) = match rec.direction {
             TapDirection::FromRobot => (RecordKind::FromRobot, 0),
             TapDirection::ToRobot => (RecordKind::ToRobot, 1),
         };
         let mut bytes = rec.bytes.as_slice();
-        if self.align.get(i).copied().unwrap_or(false) {
+        if track.align.get(i).copied().unwrap_or(false) {
             match bytes.iter().position(|&b| b == 0) {
                 Some(p) => {
                     bytes = bytes.get(p + 1..).unwrap_or(&[]);
-                    if let Some(a) = self.align.get_mut(i) {
+                    if let Some(a) = track.align.get_mut(i) {
                         *a = false;
                     }
                 }
@@ -107,28 +155,44 @@ impl LiveRecorder {
             return Ok(());
         }
         match kind {
-            RecordKind::FromRobot => self.counts.bytes_from_robot += bytes.len() as u64,
-            _ => self.counts.bytes_to_robot += bytes.len() as u64,
+            RecordKind::FromRobot => track.counts.bytes_from_robot += bytes.len() as u64,
+            _ => track.counts.bytes_to_robot += bytes.len() as u64,
         }
-        let t = rec.t_us.saturating_sub(self.start_us);
-        self.writer.append(t, kind, bytes)
+        // The link's clock to the recording's: the two origins differ by the moments the
+        // link task and the recording started.
+        let t = if track.epoch >= start {
+            rec.t_us
+                .saturating_add(track.epoch.duration_since(start).as_micros() as u64)
+        } else {
+            rec.t_us
+                .saturating_sub(start.duration_since(track.epoch).as_micros() as u64)
+        };
+        self.writer.append_link(t, kind, link, bytes)
     }
 
-    /// Records a connection change (a gap marker when the session is lost).
+    /// Records a connection change of link 0 (a gap marker when the session is lost).
     pub fn on_connection(&mut self, c: &Connection) -> Result<(), RecordError> {
+        self.on_link_connection(0, c)
+    }
+
+    /// Records a connection change of link `link`.
+    pub fn on_link_connection(&mut self, link: u8, c: &Connection) -> Result<(), RecordError> {
+        let t = self.elapsed_us();
+        let Some(track) = self.links.get_mut(usize::from(link)) else {
+            return Ok(());
+        };
         let (state, text) = link_record(c);
         let connected = state == LinkState::Connected;
-        if self.was_connected && !connected {
-            self.counts.gaps += 1;
+        if track.was_connected && !connected {
+            track.counts.gaps += 1;
         }
-        self.was_connected = connected;
-        self.counts.connected |= connected;
-        self.counts.link_events += 1;
+        track.was_connected = connected;
+        track.counts.connected |= connected;
+        track.counts.link_events += 1;
         let mut data = Vec::with_capacity(1 + text.len());
         data.push(state.code());
         data.extend_from_slice(text.as_bytes());
-        let t = self.elapsed_us();
-        self.writer.append(t, RecordKind::Link, &data)
+        self.writer.append_link(t, RecordKind::Link, link, &data)
     }
 
     /// Flushes and syncs when due.
@@ -141,6 +205,11 @@ impl LiveRecorder {
         let t = self.elapsed_us().max(self.writer.last_t_us());
         self.writer.finish(t, reason)
     }
+}
+
+/// Link index `i` as a record's link id (a recording holds at most `MAX_LINKS`).
+fn link_id(i: usize) -> u8 {
+    u8::try_from(i).unwrap_or(u8::MAX)
 }
 
 /// What a `Link` record says for a connection state. A connected state carries the robot as a
@@ -169,6 +238,10 @@ pub struct PeerRecord {
     pub map_capacity: [u16; 2],
     pub telemetry_hz: u8,
     pub failsafe_ms: u16,
+    /// The robot's id from its handshake; absent in recordings made before robots had ids
+    /// (they were all robot 1, the firmware's default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robot_id: Option<u8>,
 }
 
 impl From<&PeerInfo> for PeerRecord {
@@ -182,6 +255,7 @@ impl From<&PeerInfo> for PeerRecord {
             map_capacity: [p.map_capacity.width, p.map_capacity.height],
             telemetry_hz: p.telemetry_hz,
             failsafe_ms: p.failsafe_ms,
+            robot_id: Some(p.robot_id),
         }
     }
 }
@@ -201,6 +275,9 @@ impl PeerRecord {
             },
             telemetry_hz: self.telemetry_hz,
             failsafe_ms: self.failsafe_ms,
+            robot_id: self
+                .robot_id
+                .unwrap_or(robot_firmware::params::DEFAULT_ROBOT_ID),
         }
     }
 }

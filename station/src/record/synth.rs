@@ -42,7 +42,7 @@ impl Synth {
 
     /// Raw bytes in a record.
     pub fn raw(&mut self, t_us: u64, kind: RecordKind, data: &[u8]) {
-        encode_record(&mut self.bytes, t_us, kind, data);
+        encode_record(&mut self.bytes, t_us, kind, 0, data);
     }
 
     /// A frame from the robot (truth frames on their own counter).
@@ -114,6 +114,7 @@ impl Synth {
                 map_capacity: peer.map_capacity,
                 telemetry_hz: 10,
                 failsafe_ms: 300,
+                robot_id: peer.robot_id,
             }),
         );
         self.link(t0_us + 5_100, &Connection::Connected(peer));
@@ -121,7 +122,7 @@ impl Synth {
 
     /// The file's bytes, finished with an end record.
     pub fn finish(mut self, t_us: u64, reason: &str) -> Vec<u8> {
-        encode_record(&mut self.bytes, t_us, RecordKind::End, reason.as_bytes());
+        encode_record(&mut self.bytes, t_us, RecordKind::End, 0, reason.as_bytes());
         self.bytes
     }
 
@@ -129,6 +130,40 @@ impl Synth {
     pub fn unfinished(self) -> Vec<u8> {
         self.bytes
     }
+}
+
+/// Several one-link recordings as one file of as many links (format version 2), link `i`
+/// holding `parts[i]`'s records, interleaved by time as a fleet's recorder writes them; the
+/// header is the first part's with every part's port in `links`. Ends with one end record at
+/// the last time. Parts that are not whole recordings are left out.
+pub fn merge(parts: &[Vec<u8>], reason: &str) -> Vec<u8> {
+    let recs: Vec<super::Recording> = parts
+        .iter()
+        .filter_map(|p| super::Recording::parse_strict(p).ok())
+        .collect();
+    let mut meta = recs.first().map(|r| r.meta.clone()).unwrap_or_default();
+    meta.links = recs.iter().map(|r| r.meta.port.clone()).collect();
+    meta.port = meta.links.join(", ");
+    let mut all: Vec<(u64, u8, &super::Record)> = Vec::new();
+    for (i, r) in recs.iter().enumerate() {
+        let link = u8::try_from(i).unwrap_or(u8::MAX);
+        all.extend(
+            r.records
+                .iter()
+                .filter(|x| x.kind != RecordKind::End)
+                .map(|x| (x.t_us, link, x)),
+        );
+    }
+    // Stable: each link's own order is kept at equal times.
+    all.sort_by_key(|&(t, ..)| t);
+    let mut bytes = encode_header(&meta);
+    let mut last = 0;
+    for (t, link, r) in all {
+        encode_record(&mut bytes, t, r.kind, link, &r.data);
+        last = t;
+    }
+    encode_record(&mut bytes, last, RecordKind::End, 0, reason.as_bytes());
+    bytes
 }
 
 /// The robot a demo recording talks to.
@@ -145,6 +180,7 @@ pub fn demo_peer() -> PeerInfo {
         },
         telemetry_hz: 10,
         failsafe_ms: 300,
+        robot_id: 1,
     }
 }
 
@@ -199,6 +235,7 @@ pub fn demo(seconds: u32, hz: u32) -> Vec<u8> {
                     ..tm.pose
                 },
                 collisions: 0,
+                robot_id: 1,
             }),
         );
         if i % (hz / 4).max(1) == 0 {

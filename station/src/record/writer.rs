@@ -126,8 +126,19 @@ impl RecordWriter {
         self.last_t
     }
 
-    /// Appends a record (split into several if longer than the format allows).
+    /// Appends a record of link 0 (split into several if longer than the format allows).
     pub fn append(&mut self, t_us: u64, kind: RecordKind, data: &[u8]) -> Result<(), RecordError> {
+        self.append_link(t_us, kind, 0, data)
+    }
+
+    /// Appends a record of link `link` (an index into the header's `links`).
+    pub fn append_link(
+        &mut self,
+        t_us: u64,
+        kind: RecordKind,
+        link: u8,
+        data: &[u8],
+    ) -> Result<(), RecordError> {
         let t_us = t_us.max(self.last_t);
         self.last_t = t_us;
         let chunks: Vec<&[u8]> = if data.is_empty() {
@@ -137,7 +148,7 @@ impl RecordWriter {
         };
         for chunk in chunks {
             self.scratch.clear();
-            encode_record(&mut self.scratch, t_us, kind, chunk);
+            encode_record(&mut self.scratch, t_us, kind, link, chunk);
             let Some(file) = self.file.as_mut() else {
                 return Ok(());
             };

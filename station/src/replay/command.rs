@@ -52,6 +52,31 @@ fn parse_speed(s: &str) -> Result<f64, String> {
 pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
     let rec = Recording::open(&args.file)?;
     let file = args.file.display().to_string();
+    if (args.json || args.summary) && rec.link_count() > 1 {
+        let s = super::links::summarize_links(&rec);
+        if args.json {
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&s).context("cannot print JSON")?
+            );
+        } else {
+            print!(
+                "{}",
+                crate::terminal_text::printable_text(&super::links::text(&file, &s))
+            );
+        }
+        for d in &s.duplicate_robot_ids {
+            eprintln!(
+                "station: {file}: {}",
+                crate::terminal_text::printable_text(&d.warning())
+            );
+        }
+        if let Some(d) = &rec.damage {
+            eprintln!("station: {file}: {d}");
+            return Ok(ExitCode::FAILURE);
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
     if args.json || args.summary {
         let s = summarize(&rec);
         if args.json {

@@ -26,6 +26,8 @@ pub const BAR_REFRESH_US: u64 = 100_000;
 /// A replay in progress.
 pub struct ReplaySession {
     rec: Recording,
+    /// Links in the file: a file of several shows its first (the fleet view takes the rest).
+    links: usize,
     file: String,
     opts: AppOptions,
     pub app: App,
@@ -38,14 +40,19 @@ pub struct ReplaySession {
 
 impl ReplaySession {
     /// A session at the start of `rec`, playing at `speed`. `file` names it on screen.
+    /// A file of several links replays its first link (link 0), and its log says how many
+    /// robots the file holds.
     pub fn new(rec: Recording, file: &str, opts: AppOptions, speed: f64) -> ReplaySession {
+        let links = rec.link_count();
+        let rec = if links > 1 { rec.link(0) } else { rec };
         let player = Player::new(rec.duration_us(), speed);
         let feed = ReplayFeed::new(&rec.meta.port);
         let mut app = App::new(opts.clone());
         app.replaying = true;
-        notes(&mut app, &rec, file);
+        notes(&mut app, &rec, file, links);
         ReplaySession {
             rec,
+            links,
             file: file.to_string(),
             opts,
             app,
@@ -92,7 +99,7 @@ impl ReplaySession {
         app.view = self.app.view;
         app.chart = self.app.chart;
         app.map.hidden = std::mem::take(&mut self.app.map.hidden);
-        notes(&mut app, &self.rec, &self.file);
+        notes(&mut app, &self.rec, &self.file, self.links);
         self.app = app;
         self.feed = ReplayFeed::new(&self.rec.meta.port);
     }
@@ -210,8 +217,9 @@ fn view_action(app: &App, code: KeyCode) -> Option<Action> {
     })
 }
 
-/// The lines a replay's log starts with: what is replayed, and any damage.
-fn notes(app: &mut App, rec: &Recording, file: &str) {
+/// The lines a replay's log starts with: what is replayed, how many robots the file holds,
+/// and any damage.
+fn notes(app: &mut App, rec: &Recording, file: &str, links: usize) {
     let mut note = |level, text: String| {
         app.log.push(LogLine::new(0, level, Source::Link, text));
     };
@@ -231,6 +239,16 @@ fn notes(app: &mut App, rec: &Recording, file: &str) {
             }
         ),
     );
+    if links > 1 {
+        note(
+            Level::Warn,
+            format!(
+                "{file} holds {links} robots (links); showing the first, {}; \
+                 `station replay {file} --summary` reports each",
+                rec.meta.port
+            ),
+        );
+    }
     if let Some(d) = &rec.damage {
         note(
             Level::Error,

@@ -16,7 +16,7 @@ use crate::action::Action;
 use crate::link::stats::{CommandCounts, DecoderCounts, RttSummary, SeqStats};
 use crate::link::{Connection, LinkEvent};
 use crate::record::live::PeerRecord;
-use crate::record::{Meta, Recording, VERSION};
+use crate::record::{Meta, Recording};
 
 /// Everything `station replay --json` prints.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -131,7 +131,7 @@ fn replay(rec: &Recording) -> (Summary, u64) {
     let telemetry = c.telemetry();
     let timer_runs = feed.timer_runs();
     let summary = Summary {
-        format_version: VERSION,
+        format_version: rec.version,
         meta: rec.meta.clone(),
         file_bytes: rec.file_len,
         records: rec.records.len(),
@@ -336,7 +336,15 @@ pub fn text(file: &str, s: &Summary) -> String {
     if let Some(r) = &s.robot {
         line(
             "robot",
-            format!("{} {} {:?}", r.firmware, r.firmware_version, r.profile),
+            format!(
+                "{} {} {:?}{}",
+                r.firmware,
+                r.firmware_version,
+                r.profile,
+                r.robot_id
+                    .map(|id| format!(", robot id {id}"))
+                    .unwrap_or_default()
+            ),
         );
     }
     line("duration", format!("{:.1} s", s.duration_s));

@@ -22,6 +22,7 @@ fn connected() -> LinkEvent {
         },
         telemetry_hz: 10,
         failsafe_ms: 300,
+        robot_id: 1,
     }))
 }
 
