@@ -91,7 +91,7 @@ pub enum Sub {
     /// probe (a parameter read) sent every 250 ms.
     Stats {
         #[command(flatten)]
-        port: RequiredPort,
+        port: StatsPorts,
         /// Seconds to watch.
         #[arg(long, short = 's', default_value_t = 5.0, value_parser = parse_seconds,
           allow_negative_numbers = true)]
@@ -249,6 +249,35 @@ pub enum Sub {
     ///   station download-calibration --port /dev/ttyUSB0 --out som.bin
     #[command(verbatim_doc_comment)]
     DownloadCalibration(crate::transfer::calibration::DownloadCalibrationArgs),
+}
+
+/// The ports `station stats` watches: one, or several at once (`--port A --port B`), each
+/// reported on its own with its robot's id.
+#[derive(Debug, Args, Clone)]
+pub struct StatsPorts {
+    /// Serial port (or pty) of a robot; repeat it to watch several.
+    #[arg(long, short = 'p', value_name = "PATH", required = true)]
+    pub port: Vec<PathBuf>,
+    /// Baud rate (ignored by ptys).
+    #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
+    pub baud: u32,
+    /// Link authentication key (PROTOCOL.md §13), for every port.
+    #[arg(long, value_name = "PATH")]
+    pub key_file: Option<PathBuf>,
+}
+
+impl StatsPorts {
+    /// Each port as a one-port argument set.
+    pub fn each(&self) -> Vec<RequiredPort> {
+        self.port
+            .iter()
+            .map(|p| RequiredPort {
+                port: p.clone(),
+                baud: self.baud,
+                key_file: self.key_file.clone(),
+            })
+            .collect()
+    }
 }
 
 /// A port that headless commands require.

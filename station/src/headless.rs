@@ -22,6 +22,7 @@ use crate::app::{App, AppOptions};
 use crate::builtin::start_builtin_emulator_with;
 use crate::cli::{Cli, RequiredPort, SendCmd, Sub};
 use crate::link::api::{command_text, param_name, refusal_text};
+use crate::link::robot_ids::duplicates;
 use crate::link::serial::{open_exclusive, SerialConnector};
 use crate::link::{
     spawn_link, CommandOutcome, Connection, LinkEvent, LinkOptions, LinkStats, PeerInfo,
@@ -478,12 +479,112 @@ const PROBE: protocol::Command = protocol::Command::GetParam {
 /// Time between two probes, ms: a few a second, a small share of the link.
 const PROBE_PERIOD_MS: u64 = 250;
 
+/// What `station stats` measured on one port.
+struct Watched {
+    port: String,
+    peer: PeerInfo,
+    stats: LinkStats,
+    round_trip: Option<RoundTrips>,
+    probe_failures: Vec<String>,
+}
+
+impl Watched {
+    fn json(&self) -> serde_json::Value {
+        json!({"port": self.port, "peer": self.peer, "stats": self.stats,
+               "round_trip": self.round_trip, "probe": command_text(&PROBE),
+               "probe_failures": self.probe_failures})
+    }
+}
+
+/// `station stats`: one port as before; several watched at once, each reported on its own
+/// (a port that fails does not stop the others), with robots that state the same id named.
 async fn stats(
-    port: &RequiredPort,
+    ports: &crate::cli::StatsPorts,
     seconds: f64,
     json: bool,
     timeout: f64,
 ) -> anyhow::Result<ExitCode> {
+    let each = ports.each();
+    if let [one] = each.as_slice() {
+        let w = watch(one, seconds, timeout).await?;
+        if json {
+            println!("{}", serde_json::to_string_pretty(&w.json())?);
+        } else {
+            print_watched(&w);
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    for (i, p) in each.iter().enumerate() {
+        if each.iter().take(i).any(|q| q.port == p.port) {
+            bail!("--port {} is given twice", p.port.display());
+        }
+    }
+    let tasks: Vec<_> = each
+        .into_iter()
+        .map(|p| tokio::spawn(async move { (p.port.clone(), watch(&p, seconds, timeout).await) }))
+        .collect();
+    let mut results = Vec::new();
+    for t in tasks {
+        results.push(t.await.context("a port's watch ended abnormally")?);
+    }
+    let ids: Vec<(String, Option<u8>)> = results
+        .iter()
+        .map(|(p, r)| {
+            (
+                p.display().to_string(),
+                r.as_ref().ok().map(|w| w.peer.robot_id),
+            )
+        })
+        .collect();
+    let dups = duplicates(ids.iter().map(|(p, id)| (p.as_str(), *id)));
+    let failed = results.iter().any(|(_, r)| r.is_err());
+    if json {
+        let links: Vec<serde_json::Value> = results
+            .iter()
+            .map(|(p, r)| match r {
+                Ok(w) => w.json(),
+                Err(e) => json!({"port": p.display().to_string(), "error": format!("{e:#}")}),
+            })
+            .collect();
+        let v = json!({"links": links, "duplicate_robot_ids": dups});
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        for (i, (p, r)) in results.iter().enumerate() {
+            if i > 0 {
+                println!();
+            }
+            match r {
+                Ok(w) => print_watched(w),
+                Err(e) => {
+                    println!("port        {}", p.display());
+                    println!(
+                        "error       {}",
+                        crate::terminal_text::printable_text(&format!("{e:#}"))
+                    );
+                }
+            }
+        }
+    }
+    for d in &dups {
+        eprintln!(
+            "station: warning: {}",
+            crate::terminal_text::printable_text(&d.warning())
+        );
+    }
+    for (p, r) in &results {
+        if let Err(e) = r {
+            eprintln!("station: {}: {e:#}", p.display());
+        }
+    }
+    Ok(if failed {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+/// Watches one port for `seconds`, probing the round trip.
+async fn watch(port: &RequiredPort, seconds: f64, timeout: f64) -> anyhow::Result<Watched> {
     let (mut link, peer) = connect(port, timeout).await?;
     let deadline = Instant::now() + Duration::from_secs_f64(seconds);
     let mut last: Option<LinkStats> = None;
@@ -518,81 +619,85 @@ async fn stats(
     let round_trip = RoundTrips::of(probes);
     link.handle.shutdown();
     let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;
-    let Some(s) = last else {
+    let Some(stats) = last else {
         bail!("no statistics were published in {seconds} s");
     };
+    Ok(Watched {
+        port: port.port.display().to_string(),
+        peer,
+        stats,
+        round_trip,
+        probe_failures,
+    })
+}
+
+fn print_watched(w: &Watched) {
+    let (peer, s, round_trip) = (&w.peer, &w.stats, &w.round_trip);
     let probe = command_text(&PROBE);
-    if json {
-        let v = json!({"port": port.port.display().to_string(), "peer": peer, "stats": s,
-                       "round_trip": round_trip, "probe": probe,
-                       "probe_failures": probe_failures});
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else {
-        println!("port        {}", port.port.display());
+    println!("port        {}", w.port);
+    println!(
+        "robot       {} {} {:?}, robot id {}",
+        crate::terminal_text::printable(&peer.firmware),
+        crate::terminal_text::printable(&peer.firmware_version),
+        peer.profile,
+        peer.robot_id
+    );
+    println!(
+        "state       {} for {:.1} s",
+        s.state,
+        s.session_ms as f64 / 1000.0
+    );
+    println!(
+        "frames      in {} out {}  bytes in {} ({:.0}/s) out {} ({:.0}/s)",
+        s.frames_in, s.frames_out, s.bytes_in, s.bytes_in_per_s, s.bytes_out, s.bytes_out_per_s
+    );
+    println!(
+        "telemetry   {:.1} Hz ({} frames)",
+        s.telemetry_hz, s.telemetry_frames
+    );
+    println!(
+        "loss        robot {} ({:.2}%)  truth {}  duplicates {}",
+        s.robot_seq.lost, s.robot_seq.loss_percent, s.truth_seq.lost, s.robot_seq.duplicates
+    );
+    println!(
+        "errors      CRC {}  bad frames {}  dropped bytes {}",
+        s.decoder.crc_errors,
+        s.decoder.errors(),
+        s.decoder.bytes_dropped
+    );
+    if s.auth.keyed || s.auth.refused() > 0 {
+        let a = &s.auth;
         println!(
-            "robot       {} {} {:?}",
-            crate::terminal_text::printable(&peer.firmware),
-            crate::terminal_text::printable(&peer.firmware_version),
-            peer.profile
+            "auth        {}; verified {}  bad signature {}  stale {}  unsigned {}  \
+             unexpected signature {}",
+            if a.keyed { "signed" } else { "no key" },
+            a.verified,
+            a.bad_signature,
+            a.stale_timestamp,
+            a.unsigned,
+            a.unexpected_signature
         );
-        println!(
-            "state       {} for {:.1} s",
-            s.state,
-            s.session_ms as f64 / 1000.0
-        );
-        println!(
-            "frames      in {} out {}  bytes in {} ({:.0}/s) out {} ({:.0}/s)",
-            s.frames_in, s.frames_out, s.bytes_in, s.bytes_in_per_s, s.bytes_out, s.bytes_out_per_s
-        );
-        println!(
-            "telemetry   {:.1} Hz ({} frames)",
-            s.telemetry_hz, s.telemetry_frames
-        );
-        println!(
-            "loss        robot {} ({:.2}%)  truth {}  duplicates {}",
-            s.robot_seq.lost, s.robot_seq.loss_percent, s.truth_seq.lost, s.robot_seq.duplicates
-        );
-        println!(
-            "errors      CRC {}  bad frames {}  dropped bytes {}",
-            s.decoder.crc_errors,
-            s.decoder.errors(),
-            s.decoder.bytes_dropped
-        );
-        if s.auth.keyed || s.auth.refused() > 0 {
-            let a = &s.auth;
-            println!(
-                "auth        {}; verified {}  bad signature {}  stale {}  unsigned {}  \
-                 unexpected signature {}",
-                if a.keyed { "signed" } else { "no key" },
-                a.verified,
-                a.bad_signature,
-                a.stale_timestamp,
-                a.unsigned,
-                a.unexpected_signature
-            );
-        }
-        println!(
-            "commands    {} ok, {} refused, {} failed, {} superseded",
-            s.commands.acked, s.commands.nacked, s.commands.failed, s.commands.superseded
-        );
-        match &round_trip {
-            Some(r) => println!(
-                "round trip  p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms over {} probes ({probe}, \
-                 every {PROBE_PERIOD_MS} ms)",
-                r.p50_us as f64 / 1000.0,
-                r.p99_us as f64 / 1000.0,
-                r.max_us as f64 / 1000.0,
-                r.samples
-            ),
-            None => println!("round trip  no answer to any probe ({probe})"),
-        }
-        if let Some(why) = probe_failures.first() {
-            println!(
-                "probes      {} unanswered or refused: {}",
-                probe_failures.len(),
-                crate::terminal_text::printable_text(why)
-            );
-        }
     }
-    Ok(ExitCode::SUCCESS)
+    println!(
+        "commands    {} ok, {} refused, {} failed, {} superseded",
+        s.commands.acked, s.commands.nacked, s.commands.failed, s.commands.superseded
+    );
+    match round_trip {
+        Some(r) => println!(
+            "round trip  p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms over {} probes ({probe}, \
+             every {PROBE_PERIOD_MS} ms)",
+            r.p50_us as f64 / 1000.0,
+            r.p99_us as f64 / 1000.0,
+            r.max_us as f64 / 1000.0,
+            r.samples
+        ),
+        None => println!("round trip  no answer to any probe ({probe})"),
+    }
+    if let Some(why) = w.probe_failures.first() {
+        println!(
+            "probes      {} unanswered or refused: {}",
+            w.probe_failures.len(),
+            crate::terminal_text::printable_text(why)
+        );
+    }
 }

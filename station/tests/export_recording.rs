@@ -141,15 +141,15 @@ fn a_corrupted_recording_is_refused_with_its_offset_and_nothing_is_written() {
     std::fs::write(d.join("bad.rec"), &bad).unwrap();
     std::fs::write(d.join("torn.rec"), &good[..good.len() - 3]).unwrap();
     std::fs::write(d.join("text.rec"), b"hello, world\n").unwrap();
-    let mut v2 = good.clone();
-    v2[8] = 2;
-    std::fs::write(d.join("v2.rec"), &v2).unwrap();
+    let mut v3 = good.clone();
+    v3[8] = 3;
+    std::fs::write(d.join("v3.rec"), &v3).unwrap();
     let before = files(&d);
     let cases = [
         ("bad.rec", "corrupted record at byte"),
         ("torn.rec", "truncated at byte"),
         ("text.rec", "not a station recording"),
-        ("v2.rec", "recording format version 2"),
+        ("v3.rec", "recording format version 3"),
         ("missing.rec", "does not exist"),
     ];
     for (file, needle) in cases {
@@ -356,4 +356,97 @@ fn mcap_export_carries_the_scene_for_the_3d_panel() {
     );
     assert_eq!(props["x_m"]["type"], "number");
     let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Two robots in one file (format 2): each robot's messages under its own prefix, none on the
+/// one-robot names; one CSV file per robot, named by its id.
+#[test]
+fn a_recording_of_two_robots_exports_per_robot_topics_and_csv_files() {
+    use station::record::synth::{demo_robot, merge};
+    let d = dir("fleet");
+    let both = merge(
+        &[
+            demo_robot(SECONDS, HZ, 1, "/tmp/robot1"),
+            demo_robot(SECONDS / 2, HZ, 2, "/tmp/robot2"),
+        ],
+        "done",
+    );
+    std::fs::write(d.join("two.rec"), both).unwrap();
+    let o = station(
+        &[
+            "export", "two.rec", "--mcap", "two.mcap", "--csv", "two.csv",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        files(&d),
+        ["two.mcap", "two.rec", "two.robot1.csv", "two.robot2.csv"]
+    );
+    let bytes = std::fs::read(d.join("two.mcap")).unwrap();
+    let mut per_topic: BTreeMap<String, usize> = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        *per_topic
+            .entry(m.unwrap().channel.topic.clone())
+            .or_default() += 1;
+    }
+    let n = (SECONDS * HZ) as usize;
+    for (topic, want) in [
+        ("/robot1/telemetry", n),
+        ("/robot1/truth", n),
+        ("/robot1/tf", 2 * n),
+        ("/robot2/telemetry", n / 2),
+        ("/robot2/pose", n / 2),
+    ] {
+        assert_eq!(
+            per_topic.get(topic).copied(),
+            Some(want),
+            "{topic}: {per_topic:?}"
+        );
+    }
+    assert!(
+        per_topic
+            .keys()
+            .all(|t| t.starts_with("/robot1/") || t.starts_with("/robot2/")),
+        "{per_topic:?}"
+    );
+    let rows = |f: &str| std::fs::read_to_string(d.join(f)).unwrap().lines().count() - 1;
+    assert_eq!(rows("two.robot1.csv"), n);
+    assert_eq!(rows("two.robot2.csv"), n / 2);
+}
+
+/// A version 1 recording (made by the station before recordings had link ids; the good
+/// recording the bad-input corpus is made from) still replays and exports, as one robot with
+/// today's topic names.
+#[test]
+fn a_version_1_recording_still_replays_and_exports() {
+    let d = dir("v1");
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/recording-v1.rec");
+    let bytes = std::fs::read(&fixture).unwrap();
+    assert_eq!(&bytes[8..10], &[1, 0], "the fixture is version 1");
+    std::fs::write(d.join("v1.rec"), &bytes).unwrap();
+    let o = station(&["replay", "v1.rec", "--json"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(s["format_version"], 1);
+    assert!(s["damage"].is_null());
+    let frames = s["telemetry"]["frames"].as_u64().unwrap();
+    assert!(frames > 0, "{s}");
+    let o = station(
+        &["export", "v1.rec", "--mcap", "v1.mcap", "--csv", "v1.csv"],
+        &d,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = std::fs::read_to_string(d.join("v1.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    assert_eq!(rows as u64, frames);
+    let mcap_bytes = std::fs::read(d.join("v1.mcap")).unwrap();
+    let telemetry = mcap::MessageStream::new(&mcap_bytes)
+        .unwrap()
+        .filter(|m| m.as_ref().unwrap().channel.topic == "/telemetry")
+        .count();
+    assert_eq!(telemetry as u64, frames);
 }

@@ -37,6 +37,8 @@ pub struct TestStation {
     dec: FrameDecoder,
     seq: u16,
     pub bytes_in: u64,
+    /// The robot id of the last `HelloReply` read (issue 17: robots state who they are).
+    pub last_robot_id: Option<u8>,
 }
 
 impl TestStation {
@@ -50,6 +52,7 @@ impl TestStation {
             dec: FrameDecoder::new(),
             seq: 0,
             bytes_in: 0,
+            last_robot_id: None,
         })
     }
 
@@ -101,6 +104,9 @@ impl TestStation {
                     Feed::NeedMore => break,
                     Feed::Error { rest, .. } => input = rest,
                     Feed::Frame { frame, rest } => {
+                        if let Message::HelloReply(r) = &frame.message {
+                            self.last_robot_id = Some(r.robot_id);
+                        }
                         out.push((now, owned(&frame.message)));
                         input = rest;
                     }

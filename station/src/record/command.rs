@@ -1,4 +1,4 @@
-//! `station record`: record a link to a file, headless.
+//! `station record`: record a link, or several (`--port A --port B`), to one file, headless.
 //!
 //! Layer: the binary's edge (anyhow). Checks everything it can before it creates a file (the
 //! output name, the port), then runs the link with its tap into a `LiveRecorder` until the time
@@ -18,21 +18,23 @@ use serde_json::json;
 use tokio::sync::mpsc;
 use tokio::time::Instant;
 
-use super::live::LiveRecorder;
+use super::live::{LiveCounts, LiveRecorder};
 use super::writer::Written;
-use super::{partial_path, Meta};
+use super::{partial_path, Meta, MAX_LINKS};
 use crate::builtin::start_builtin_emulator;
 use crate::cli::{parse_baud, parse_seconds};
+use crate::link::robot_ids::duplicates;
 use crate::link::serial::{open_exclusive, SerialConnector, DEFAULT_BAUD};
-use crate::link::{spawn_link, Connection, LinkEvent, LinkOptions};
+use crate::link::{spawn_link, Connection, LinkEvent, LinkOptions, TapRecord};
 
 /// Arguments of `station record`.
 #[derive(Debug, Args, Clone)]
 pub struct RecordArgs {
-    /// Serial port (or pty) of the robot. Without it, the built-in emulator is started and
+    /// Serial port (or pty) of the robot; repeat it to record several robots into one file
+    /// (link 0, 1, ... in this order). Without it, the built-in emulator is started and
     /// recorded.
     #[arg(long, short = 'p', value_name = "PATH")]
-    pub port: Option<PathBuf>,
+    pub port: Vec<PathBuf>,
     /// Baud rate (ignored by ptys).
     #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
     pub baud: u32,
@@ -52,61 +54,108 @@ pub struct RecordArgs {
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
-    /// Link authentication key file (64 hex digits, PROTOCOL.md §13). Without --port the
-    /// built-in emulator is given the same key.
+    /// Link authentication key file (64 hex digits, PROTOCOL.md §13), for every port. Without
+    /// --port the built-in emulator is given the same key.
     #[arg(long, value_name = "PATH")]
     pub key_file: Option<PathBuf>,
+}
+
+/// What a link tells the recording loop, tagged with its link id.
+enum FromLink {
+    Tap(u8, TapRecord),
+    Event(u8, LinkEvent),
 }
 
 /// Runs `station record`.
 pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
     check_out(&args.out, args.force)?;
+    if args.port.len() > MAX_LINKS {
+        bail!(
+            "--port is given {} times; a recording holds at most {MAX_LINKS} links",
+            args.port.len()
+        );
+    }
+    for (i, p) in args.port.iter().enumerate() {
+        if args.port.iter().take(i).any(|q| q == p) {
+            bail!(
+                "--port {} is given twice; each link needs its own port",
+                p.display()
+            );
+        }
+    }
     let raw_key =
         crate::cli::load_key_bytes(args.key_file.as_deref()).map_err(anyhow::Error::msg)?;
     let key = raw_key.map(|k| protocol::LinkKey::new(&k));
     let mut builtin = None;
-    let (path, label) = match &args.port {
-        Some(p) => {
-            drop(open_exclusive(p, args.baud)?);
-            (p.clone(), p.display().to_string())
-        }
-        None => {
-            let mut emu = start_builtin_emulator(raw_key.as_ref())?;
-            let label = format!("built-in emulator on {}", emu.pty_path().display());
-            let path = emu.path().to_path_buf();
-            builtin = Some(emu);
-            (path, label)
-        }
-    };
-    let mut meta = Meta::now(&label, args.baud);
+    // (path opened, label recorded) per link.
+    let mut ports: Vec<(PathBuf, String)> = Vec::new();
+    for p in &args.port {
+        drop(open_exclusive(p, args.baud)?);
+        ports.push((p.clone(), p.display().to_string()));
+    }
+    if ports.is_empty() {
+        let mut emu = start_builtin_emulator(raw_key.as_ref())?;
+        let label = format!("built-in emulator on {}", emu.pty_path().display());
+        ports.push((emu.path().to_path_buf(), label));
+        builtin = Some(emu);
+    }
+    let labels: Vec<String> = ports.iter().map(|(_, l)| l.clone()).collect();
+    let label = labels.join(", ");
+    let mut meta = Meta::now_links(&labels, args.baud);
     if builtin.is_some() {
         meta.arena = emulator::builtin::MICRO_RATO_99.to_string();
     }
+    // One link task per port, as the one-port recording has; their taps and events come to
+    // this loop tagged with the link id, so one file holds them all on one clock.
+    let (tx, mut from_links) = mpsc::unbounded_channel();
+    let mut links = Vec::new();
+    let mut epochs = Vec::new();
+    let mut forwarders = Vec::new();
+    for (i, (path, _)) in ports.iter().enumerate() {
+        let id = u8::try_from(i).unwrap_or(u8::MAX);
+        let (tap_tx, mut tap) = mpsc::unbounded_channel();
+        epochs.push((
+            Instant::now(),
+            Connection::Closed {
+                reason: "starting".into(),
+            },
+        ));
+        // Paced like the TUI's port: one read (so one record) per 32 ms slot while bytes
+        // keep coming, instead of one a millisecond (206k records for 10 min at 50 Hz, the
+        // file 1.87x the link's bytes, 1.8 % of a core). Awaited replies are still read as
+        // they come, so the round trips a replay measures keep their times; frames carry
+        // their own robot time.
+        let mut link = spawn_link(
+            SerialConnector::new(path, args.baud).paced(true),
+            LinkOptions {
+                station: format!("station-record {}", env!("CARGO_PKG_VERSION")),
+                tap: Some(tap_tx),
+                paced: true,
+                key: key.clone(),
+                ..LinkOptions::default()
+            },
+        );
+        let (taps, events) = (tx.clone(), tx.clone());
+        let mut ev = std::mem::replace(&mut link.events, mpsc::unbounded_channel().1);
+        forwarders.push(tokio::spawn(async move {
+            while let Some(t) = tap.recv().await {
+                if taps.send(FromLink::Tap(id, t)).is_err() {
+                    break;
+                }
+            }
+        }));
+        forwarders.push(tokio::spawn(async move {
+            while let Some(e) = ev.recv().await {
+                if events.send(FromLink::Event(id, e)).is_err() {
+                    break;
+                }
+            }
+        }));
+        links.push(link);
+    }
+    drop(tx);
+    let mut rec = LiveRecorder::start_links(&args.out, &meta, args.force, &epochs)?;
     let epoch = Instant::now();
-    let mut rec = LiveRecorder::start(
-        &args.out,
-        &meta,
-        args.force,
-        epoch,
-        &Connection::Closed {
-            reason: "starting".into(),
-        },
-    )?;
-    let (tap_tx, mut tap) = mpsc::unbounded_channel();
-    // Paced like the TUI's port: one read (so one record) per 32 ms slot while bytes keep
-    // coming, instead of one a millisecond (206k records for 10 min at 50 Hz, the file 1.87x
-    // the link's bytes, 1.8 % of a core). Awaited replies are still read as they come, so the
-    // round trips a replay measures keep their times; frames carry their own robot time.
-    let mut link = spawn_link(
-        SerialConnector::new(&path, args.baud).paced(true),
-        LinkOptions {
-            station: format!("station-record {}", env!("CARGO_PKG_VERSION")),
-            tap: Some(tap_tx),
-            paced: true,
-            key,
-            ..LinkOptions::default()
-        },
-    );
     if !args.json {
         eprintln!(
             "recording {} to {} ({})",
@@ -125,6 +174,8 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
     let mut failure: Option<anyhow::Error> = None;
+    let mut ids: Vec<Option<u8>> = vec![None; links.len()];
+    let mut warned = Vec::new();
     let reason = loop {
         let until = async {
             match deadline {
@@ -133,15 +184,23 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
             }
         };
         let step = tokio::select! {
-            Some(t) = tap.recv() => rec.on_tap(&t),
-            Some(ev) = link.events.recv() => match ev {
-                LinkEvent::Connection(c) => {
-                    if let (Connection::Connected(_), Some(hz)) = (&c, args.rate) {
-                        link.handle.submit(Command::SetTelemetryRate { hz });
+            Some(m) = from_links.recv() => match m {
+                FromLink::Tap(id, t) => rec.on_link_tap(id, &t),
+                FromLink::Event(id, LinkEvent::Connection(c)) => {
+                    if let Connection::Connected(p) = &c {
+                        if let Some(hz) = args.rate {
+                            if let Some(l) = links.get(usize::from(id)) {
+                                l.handle.submit(Command::SetTelemetryRate { hz });
+                            }
+                        }
+                        if let Some(slot) = ids.get_mut(usize::from(id)) {
+                            *slot = Some(p.robot_id);
+                        }
+                        warn_duplicates(&labels, &ids, &mut warned);
                     }
-                    rec.on_connection(&c)
+                    rec.on_link_connection(id, &c)
                 }
-                _ => Ok(()),
+                FromLink::Event(..) => Ok(()),
             },
             _ = flush.tick() => rec.tick(Instant::now()),
             () = until => break "time limit",
@@ -152,12 +211,20 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
             break "write failed";
         }
     };
-    // Stop the link, keeping the bytes of its last moments (its final writes to the port).
-    link.handle.shutdown();
-    let _ = tokio::time::timeout(Duration::from_secs(1), &mut link.task).await;
-    while let Ok(t) = tap.try_recv() {
-        if failure.is_none() {
-            if let Err(e) = rec.on_tap(&t) {
+    // Stop the links, keeping the bytes of their last moments (their final writes to the
+    // ports): each task ends, its tap closes, its forwarder passes on what was left.
+    for l in &links {
+        l.handle.shutdown();
+    }
+    for l in links {
+        let _ = tokio::time::timeout(Duration::from_secs(1), l.task).await;
+    }
+    for f in forwarders {
+        let _ = tokio::time::timeout(Duration::from_secs(1), f).await;
+    }
+    while let Ok(m) = from_links.try_recv() {
+        if let (FromLink::Tap(id, t), None) = (m, &failure) {
+            if let Err(e) = rec.on_link_tap(id, &t) {
                 failure = Some(e.into());
             }
         }
@@ -170,16 +237,38 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
             partial_path(&args.out).display()
         )));
     }
+    let per_link = rec.link_counts();
     let counts = rec.counts();
     let written = rec.finish(reason)?;
-    report(args, &written, counts, reason)?;
-    if !counts.connected {
+    report(args, &written, counts, reason, &labels, &per_link, &ids)?;
+    let silent: Vec<&str> = labels
+        .iter()
+        .zip(&per_link)
+        .filter(|(_, c)| !c.connected)
+        .map(|(l, _)| l.as_str())
+        .collect();
+    if !silent.is_empty() {
         eprintln!(
-            "station: no robot answered on {label}; the recording holds only what the port said"
+            "station: no robot answered on {}; the recording holds only what the port said",
+            silent.join(", ")
         );
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Warns (once per id) of two links whose robots state the same id.
+fn warn_duplicates(labels: &[String], ids: &[Option<u8>], warned: &mut Vec<u8>) {
+    let dups = duplicates(labels.iter().map(String::as_str).zip(ids.iter().copied()));
+    for d in dups {
+        if !warned.contains(&d.robot_id) {
+            warned.push(d.robot_id);
+            eprintln!(
+                "station: warning: {}",
+                crate::terminal_text::printable_text(&d.warning())
+            );
+        }
+    }
 }
 
 /// Refuses an output that cannot be written, before a port is opened or a file created.
@@ -198,11 +287,33 @@ fn check_out(out: &Path, force: bool) -> anyhow::Result<()> {
 fn report(
     args: &RecordArgs,
     w: &Written,
-    counts: super::live::LiveCounts,
+    counts: LiveCounts,
     reason: &str,
+    labels: &[String],
+    per_link: &[LiveCounts],
+    ids: &[Option<u8>],
 ) -> anyhow::Result<()> {
     let duration_s = w.duration_us as f64 / 1e6;
+    let dups = duplicates(labels.iter().map(String::as_str).zip(ids.iter().copied()));
     if args.json {
+        let links: Vec<serde_json::Value> = labels
+            .iter()
+            .zip(per_link)
+            .zip(ids)
+            .enumerate()
+            .map(|(i, ((port, c), id))| {
+                json!({
+                    "link": i,
+                    "port": port,
+                    "robot_id": id,
+                    "bytes_from_robot": c.bytes_from_robot,
+                    "bytes_to_robot": c.bytes_to_robot,
+                    "link_events": c.link_events,
+                    "gaps": c.gaps,
+                    "connected": c.connected,
+                })
+            })
+            .collect();
         let v = json!({
             "file": w.path.display().to_string(),
             "records": w.records,
@@ -214,6 +325,8 @@ fn report(
             "gaps": counts.gaps,
             "connected": counts.connected,
             "end": reason,
+            "links": links,
+            "duplicate_robot_ids": dups,
         });
         println!(
             "{}",
@@ -230,6 +343,18 @@ fn report(
             counts.bytes_to_robot,
             counts.gaps
         );
+        if labels.len() > 1 {
+            for (i, ((port, c), id)) in labels.iter().zip(per_link).zip(ids).enumerate() {
+                println!(
+                    "  link {i} {}: robot id {}, {} bytes from the robot, {} to it, {} gap(s)",
+                    crate::terminal_text::printable(port),
+                    id.map_or("unknown".to_string(), |id| id.to_string()),
+                    c.bytes_from_robot,
+                    c.bytes_to_robot,
+                    c.gaps
+                );
+            }
+        }
     }
     Ok(())
 }

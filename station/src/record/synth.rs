@@ -210,16 +210,24 @@ pub fn telemetry(i: u32, hz: u32) -> Telemetry {
 /// A whole session of `seconds` at `hz`: the handshake (both sides), telemetry and truth,
 /// heartbeats, a `SetMode` answered by an Ack, a log line and an event.
 pub fn demo(seconds: u32, hz: u32) -> Vec<u8> {
+    demo_robot(seconds, hz, 1, "memory")
+}
+
+/// `demo` of the robot with id `robot_id` on `port` (the parts of a fleet recording, `merge`).
+pub fn demo_robot(seconds: u32, hz: u32, robot_id: u8, port: &str) -> Vec<u8> {
     let meta = Meta {
         created_unix_ms: 1_700_000_000_000,
         writer: "synth".into(),
-        port: "memory".into(),
+        port: port.into(),
         baud: 115_200,
         protocol: PROTOCOL_VERSION,
         ..Meta::default()
     };
     let mut s = Synth::new(&meta);
-    s.handshake(demo_peer());
+    s.handshake(PeerInfo {
+        robot_id,
+        ..demo_peer()
+    });
     let period_us = 1_000_000 / u64::from(hz.max(1));
     let mut cmd_seq = None;
     for i in 0..seconds * hz {
@@ -235,7 +243,7 @@ pub fn demo(seconds: u32, hz: u32) -> Vec<u8> {
                     ..tm.pose
                 },
                 collisions: 0,
-                robot_id: 1,
+                robot_id,
             }),
         );
         if i % (hz / 4).max(1) == 0 {
