@@ -5,6 +5,8 @@ Run from this directory with a good recording and a good Plan object at hand:
     station record --out /tmp/good.rec --seconds 2
     station plan --map builtin:micro-rato-99 --out-object /tmp/good.plan
     python3 generate.py /tmp/good.rec /tmp/good.plan
+The good recording must be of format version 1 (the station writes version 2 since issue 17):
+station/tests/data/recording-v1.rec is the one the committed files were made from.
 Arena files (arenas/) are copies of emulator/tests/data/bad. MANIFEST.tsv says how each file
 is used and what the error must say; keep the two in step.
 
@@ -92,6 +94,12 @@ def record(t_us, kind, data):
     return body + struct.pack("<I", crc32c(body))
 
 
+def record2(t_us, kind, link, data):
+    """A record of format version 2: the link id follows the kind."""
+    body = varint(t_us) + bytes([kind, link]) + varint(len(data)) + data
+    return body + struct.pack("<I", crc32c(body))
+
+
 def header(meta, version=1):
     fixed = b"\x89STREC\r\n" + struct.pack("<HHI", version, 0, len(meta)) + meta
     return fixed + struct.pack("<I", crc32c(fixed))
@@ -104,7 +112,7 @@ def recordings(good):
     write("recordings/01-empty.rec", b"")
     write("recordings/02-text-file.rec", b"time,x,y\n0,1,2\n")
     write("recordings/03-bad-magic.rec", b"\x89STREX\r\n" + good[8:])
-    write("recordings/04-version-2.rec", header(meta, version=2) + body)
+    write("recordings/04-version-3.rec", header(meta, version=3) + body)
     write("recordings/05-header-crc.rec", head[:-1] + bytes([head[-1] ^ 1]) + body)
     write("recordings/06-meta-too-long.rec",
           b"\x89STREC\r\n" + struct.pack("<HHI", 1, 0, 1 << 20) + b"{}")
@@ -122,6 +130,41 @@ def recordings(good):
     # A last record at 2^64 - 1 us: the summary once stepped through it a second at a time.
     write("recordings/14-time-beyond-a-year.rec",
           header(meta) + first + record(2**64 - 1, 0, b"\x00"))
+    # Format version 2 (several links): the good recording's records as link 0 of two.
+    two = json.loads(meta)
+    two["links"] = ["/tmp/robot1", "/tmp/robot2"]
+    meta2 = json.dumps(two).encode()
+    body2 = b""
+    at = 0
+    while at < len(body):
+        rec, at = next_record(body, at)
+        t_us, kind, data = rec
+        body2 += record2(t_us, kind, 0, data)
+    # A record naming link 5 of a file of two, after a good one.
+    write("recordings/15-v2-bad-link-id.rec",
+          header(meta2, version=2) + record2(0, 2, 1, b"\x01sim") + record2(10, 0, 5, b"\x00"))
+    # A version 2 file torn inside a record (its length says more than follows).
+    write("recordings/16-v2-torn-tail.rec", header(meta2, version=2) + body2[:-7])
+    # A version 2 header that names no links.
+    write("recordings/17-v2-no-links.rec", header(meta, version=2) + body2)
+
+
+def next_record(body, at):
+    """A version 1 record at `at`: (t_us, kind, data) and the offset after it."""
+    def uvar(at):
+        v, shift = 0, 0
+        while True:
+            b = body[at]
+            v |= (b & 0x7F) << shift
+            at += 1
+            shift += 7
+            if not b & 0x80:
+                return v, at
+    t_us, at = uvar(at)
+    kind = body[at]
+    n, at = uvar(at + 1)
+    data = body[at:at + n]
+    return (t_us, kind, data), at + n + 4
 
 
 def light_bin(outputs=None, neurons=60, inputs=6):
