@@ -256,3 +256,52 @@ fn notes(app: &mut App, rec: &Recording, file: &str, links: usize) {
         );
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::synth::{demo_robot, merge};
+    use crate::record::RecordKind;
+
+    fn logged(s: &ReplaySession) -> Vec<String> {
+        s.app.log.shown().iter().map(|l| l.text.clone()).collect()
+    }
+
+    #[test]
+    fn a_file_of_two_robots_replays_the_first_and_says_it_holds_two() {
+        let both = merge(
+            &[
+                demo_robot(2, 10, 1, "/tmp/robot1"),
+                demo_robot(4, 10, 2, "/tmp/robot2"),
+            ],
+            "done",
+        );
+        let rec = Recording::parse_strict(&both).unwrap();
+        let opts = AppOptions {
+            port_label: "replay".into(),
+            arena: None,
+        };
+        let mut s = ReplaySession::new(rec, "two.rec", opts, 1.0);
+        assert_eq!(s.recording().meta.port, "/tmp/robot1");
+        assert!(s
+            .recording()
+            .records
+            .iter()
+            .all(|r| r.link == 0 || r.kind == RecordKind::End));
+        let note = "two.rec holds 2 robots (links); showing the first, /tmp/robot1";
+        assert!(
+            logged(&s).iter().any(|l| l.contains(note)),
+            "{:?}",
+            logged(&s)
+        );
+        // Seeking back rebuilds the app: the note stays.
+        s.sync(3_000_000);
+        s.player.seek(3_000_000, 0);
+        s.sync(3_000_001);
+        assert!(
+            logged(&s).iter().any(|l| l.contains(note)),
+            "{:?}",
+            logged(&s)
+        );
+    }
+}
