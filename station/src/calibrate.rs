@@ -534,6 +534,15 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
     // Before the work, and so that the map never replaces the recording it came from.
     crate::export::check_out(&args.out, &args.recording, args.force).context("--out")?;
     let rec = crate::export::open_whole(&args.recording, args.salvage)?;
+    // One robot's light map: a recording of several robots would mix their readings.
+    if rec.link_count() > 1 {
+        bail!(
+            "{}: the recording holds {} robots (links); calibration trains one robot's map: \
+             record the calibrating robot alone",
+            args.recording.display(),
+            rec.link_count()
+        );
+    }
     let frames = samples(&rec, args.any_mode);
     if frames.is_empty() {
         bail!(

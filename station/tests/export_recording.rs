@@ -450,3 +450,27 @@ fn a_version_1_recording_still_replays_and_exports() {
         .count();
     assert_eq!(telemetry as u64, frames);
 }
+
+/// A light map is one robot's: `calibrate` refuses a recording of several robots instead of
+/// training on their readings mixed, and writes nothing.
+#[test]
+fn calibrate_refuses_a_recording_of_two_robots() {
+    use station::record::synth::{demo_robot, merge};
+    let d = dir("calibrate-two");
+    let both = merge(
+        &[
+            demo_robot(2, HZ, 1, "/tmp/robot1"),
+            demo_robot(2, HZ, 2, "/tmp/robot2"),
+        ],
+        "done",
+    );
+    std::fs::write(d.join("two.rec"), both).unwrap();
+    let o = station(
+        &["calibrate", "two.rec", "--out", "som.json", "--any-mode"],
+        &d,
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("holds 2 robots"), "{err}");
+    assert_eq!(files(&d), ["two.rec"]);
+}
