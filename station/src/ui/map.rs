@@ -53,7 +53,7 @@ pub struct BelievedLayer;
 pub struct GoalLayer;
 
 /// Layers in drawing order: the planner's grid and squares under the arena, plans above it.
-pub static LAYERS: [&dyn MapLayer; 15] = [
+pub static LAYERS: [&dyn MapLayer; 16] = [
     &map_layers::GridLayer,
     &map_layers::RegionsLayer,
     &super::localization::FloorLayer,
@@ -64,6 +64,7 @@ pub static LAYERS: [&dyn MapLayer; 15] = [
     &super::transfer::RobotPlanLayer,
     &super::localization::OdometryLayer,
     &TruthLayer,
+    &super::fleet::FleetLayer,
     &BelievedLayer,
     &super::localization::LinesLayer,
     &super::localization::PpdLayer,
@@ -447,13 +448,15 @@ impl MapLayer for BelievedLayer {
 
     fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>) {
         let pts: Vec<(f64, f64)> = app.believed.points().copied().collect();
+        // In a fleet: the selected robot in its fleet colour, its number reversed.
+        let (color, glyph) = super::fleet::selected_mark(app).unwrap_or((Color::Cyan, "●".cyan()));
         ctx.draw(&Points {
             coords: &pts,
-            color: Color::Cyan,
+            color,
         });
         if let Some(p) = app.pose() {
-            robot(ctx, view, p, Color::Cyan);
-            ctx.print(p.0, p.1, "●".cyan());
+            robot(ctx, view, p, color);
+            ctx.print(p.0, p.1, glyph);
         }
     }
 }
