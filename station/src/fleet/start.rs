@@ -31,14 +31,15 @@ pub async fn interactive(
     profile: Option<&'static robot_firmware::Profile>,
     key: Option<[u8; protocol::sign::KEY_LEN]>,
 ) -> anyhow::Result<ExitCode> {
-    if !std::io::stdout().is_terminal() {
-        bail!("the TUI needs a terminal; for scripts use `station send` or `station stats`");
-    }
+    // Before the terminal check: a wrong command line is said as such, anywhere.
     if ports.len() > MAX_ROBOTS {
         bail!(
             "{} ports given: the station drives at most {MAX_ROBOTS} robots at once",
             ports.len()
         );
+    }
+    if !std::io::stdout().is_terminal() {
+        bail!("the TUI needs a terminal; for scripts use `station send` or `station stats`");
     }
     let mut plan = PlanState::default();
     let mut overlay: Option<ArenaOverlay> = None;

@@ -161,6 +161,11 @@ fn main_area(a: &Areas) -> Option<Rect> {
 fn notice(app: &App, frame: &mut Frame, main: Rect) {
     use ratatui::style::{Color, Style};
     use ratatui::widgets::{Block, Clear, Paragraph, Wrap};
+    // In a fleet the robot's fleet line and link panel say why, and the box would cover the
+    // log where "stop all" reports each robot.
+    if app.in_fleet() {
+        return;
+    }
     let (title, text) = match &app.connection {
         // A replay between sessions: the header says so; nobody is trying anything.
         crate::link::Connection::Closed { .. } if app.replaying => return,
