@@ -85,7 +85,7 @@ fn fleet_line(screen: &[String], k: usize) -> String {
 }
 
 fn all_connected(s: &[String]) -> bool {
-    (1..=3).all(|k| fleet_line(s, k).contains(" ok "))
+    (1..=3).all(|k| fleet_line(s, k).contains("link ok"))
 }
 
 #[test]
@@ -164,10 +164,10 @@ fn a_cut_link_marks_its_robot_while_the_others_keep_updating() {
     t.keys(&["E", "Tab", "Tab", "E", "Tab"]);
     let s = t.wait_for("robot 2's link down", WAIT, |s| {
         let two = fleet_line(s, 2);
-        two.contains("down") || two.contains("stale")
+        two.contains("link down") || two.contains("stale")
     });
-    assert!(fleet_line(&s, 1).contains(" ok "), "{}", s.join("\n"));
-    assert!(fleet_line(&s, 3).contains(" ok "), "{}", s.join("\n"));
+    assert!(fleet_line(&s, 1).contains("link ok"), "{}", s.join("\n"));
+    assert!(fleet_line(&s, 3).contains("link ok"), "{}", s.join("\n"));
     // Robot 1 keeps moving on screen: its pose line changes.
     let pose = |s: &[String]| {
         s.iter()
@@ -184,7 +184,7 @@ fn a_cut_link_marks_its_robot_while_the_others_keep_updating() {
     });
     assert!(fleet_line(&s, 1).contains("Explore"), "{}", s.join("\n"));
     assert!(!fleet_line(&s, 1).contains("stale"), "{}", s.join("\n"));
-    assert!(fleet_line(&s, 3).contains("Explore") && fleet_line(&s, 3).contains(" ok "));
+    assert!(fleet_line(&s, 3).contains("Explore") && fleet_line(&s, 3).contains("link ok"));
     // Picking robot 2 shows why it is gone, and stop all says it cannot reach it.
     t.keys(&["Tab", "!"]);
     let s = t.wait_for("stop all's report", WAIT, |s| {

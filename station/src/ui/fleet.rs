@@ -83,29 +83,33 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
                     },
                 ),
                 Span::raw("  "),
-                Span::raw(format!("{:<18}", r.activity)),
+                Span::raw(format!("{:<16}  ", r.activity)),
             ];
+            spans.push(Span::raw(match r.battery_v {
+                Some(v) => format!("{v:.2} V  "),
+                None => "        ".into(),
+            }));
+            if r.duplicate_id {
+                spans.push(Span::styled(
+                    "SAME ID  ",
+                    Style::new().fg(Color::Red).bold(),
+                ));
+            }
+            if let Some(s) = r.stale_s {
+                spans.push(Span::styled(
+                    format!("stale {s} s  "),
+                    Style::new().dark_gray(),
+                ));
+            }
+            // Last: why a link is down can be long, and a narrow panel cuts only that.
             spans.push(Span::styled(
-                format!("{:<20}", crate::terminal_text::printable_text(&r.link)),
+                format!("link {}", crate::terminal_text::printable_text(&r.link)),
                 if r.connected {
                     Style::new().fg(Color::Green)
                 } else {
                     Style::new().fg(Color::Red)
                 },
             ));
-            spans.push(Span::raw(match r.battery_v {
-                Some(v) => format!(" {v:.2} V"),
-                None => "       ".into(),
-            }));
-            if let Some(s) = r.stale_s {
-                spans.push(Span::styled(
-                    format!(" stale {s} s"),
-                    Style::new().dark_gray(),
-                ));
-            }
-            if r.duplicate_id {
-                spans.push(Span::styled(" SAME ID", Style::new().fg(Color::Red).bold()));
-            }
             Line::from(spans)
         })
         .collect();
