@@ -19,8 +19,10 @@ use crate::ui::{self, Panel};
 /// The "stop all" key: unused by the single-robot key map, shown in the footer and help.
 pub const STOP_ALL_KEY: char = '!';
 
-/// The fleet's action for a terminal event, if it is one of the fleet's.
-pub fn fleet_action_for(app: &App, ev: &Event) -> Option<Action> {
+/// Whether a terminal event is the fleet's (`Some`), and its action if it has one: `Alt-4`
+/// with three robots is the fleet's and does nothing (it must not fall through to the robot's
+/// key map, where `4` sets a mode). `None`: the selected robot's.
+pub fn fleet_action_for(app: &App, ev: &Event) -> Option<Option<Action>> {
     let fleet = app.fleet.as_ref().filter(|f| f.robots.len() > 1)?;
     match ev {
         Event::Key(k) if k.kind != KeyEventKind::Release => {
@@ -32,12 +34,17 @@ pub fn fleet_action_for(app: &App, ev: &Event) -> Option<Action> {
                 return None;
             }
             match k.code {
-                KeyCode::Char(STOP_ALL_KEY) => Some(Action::StopAll),
-                KeyCode::Tab => Some(Action::StepRobot(1)),
-                KeyCode::BackTab => Some(Action::StepRobot(-1)),
-                KeyCode::Char(c @ '1'..='9') if k.modifiers.contains(KeyModifiers::ALT) => {
-                    let i = c.to_digit(10)? as usize - 1;
-                    (i < fleet.robots.len()).then_some(Action::SelectRobot(i))
+                KeyCode::Char(STOP_ALL_KEY) => Some(Some(Action::StopAll)),
+                KeyCode::Tab => Some(Some(Action::StepRobot(1))),
+                KeyCode::BackTab => Some(Some(Action::StepRobot(-1))),
+                KeyCode::Char(c)
+                    if k.modifiers.contains(KeyModifiers::ALT) && c.is_ascii_digit() =>
+                {
+                    let i = (c.to_digit(10).unwrap_or(0) as usize).checked_sub(1);
+                    Some(
+                        i.filter(|&i| i < fleet.robots.len())
+                            .map(Action::SelectRobot),
+                    )
                 }
                 _ => None,
             }
@@ -52,7 +59,7 @@ pub fn fleet_action_for(app: &App, ev: &Event) -> Option<Action> {
                     && m.row < panel.y + panel.height.saturating_sub(1);
                 if inside {
                     let i = usize::from(m.row - panel.y - 1);
-                    return (i < fleet.robots.len()).then_some(Action::SelectRobot(i));
+                    return Some((i < fleet.robots.len()).then_some(Action::SelectRobot(i)));
                 }
             }
             let map = areas.find(Panel::Map)?;
@@ -71,7 +78,7 @@ pub fn fleet_action_for(app: &App, ev: &Event) -> Option<Action> {
                 .filter_map(|(i, r)| r.pose.map(|(rx, ry, _)| (i, (rx - x).hypot(ry - y))))
                 .filter(|(_, d)| *d <= reach)
                 .min_by(|a, b| a.1.total_cmp(&b.1))
-                .map(|(i, _)| Action::SelectRobot(i))
+                .map(|(i, _)| Some(Action::SelectRobot(i)))
         }
         _ => None,
     }
@@ -79,5 +86,5 @@ pub fn fleet_action_for(app: &App, ev: &Event) -> Option<Action> {
 
 /// The action for a terminal event: the fleet's, else the selected robot's.
 pub fn action_for(app: &App, ev: &Event) -> Option<Action> {
-    fleet_action_for(app, ev).or_else(|| crate::input::action_for(app, ev))
+    fleet_action_for(app, ev).unwrap_or_else(|| crate::input::action_for(app, ev))
 }

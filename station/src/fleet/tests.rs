@@ -211,3 +211,132 @@ fn one_robot_is_a_pass_through() {
     assert_eq!(f.selected(), 0);
     assert!(f.app().fleet.is_none(), "no overlay: today's screens");
 }
+
+mod keys_and_clicks {
+    use super::*;
+    use crate::fleet::input::action_for;
+    use ratatui::crossterm::event::{
+        Event, KeyCode, KeyEvent, KeyModifiers, MouseButton, MouseEvent, MouseEventKind,
+    };
+    use ratatui::layout::Rect;
+
+    fn key(code: KeyCode, modifiers: KeyModifiers) -> Event {
+        Event::Key(KeyEvent::new(code, modifiers))
+    }
+
+    fn click(column: u16, row: u16) -> Event {
+        Event::Mouse(MouseEvent {
+            kind: MouseEventKind::Down(MouseButton::Left),
+            column,
+            row,
+            modifiers: KeyModifiers::NONE,
+        })
+    }
+
+    fn sized(mut f: Fleet) -> Fleet {
+        f.update(Action::Resize {
+            width: 150,
+            height: 40,
+        });
+        f.sync_overlay();
+        f
+    }
+
+    #[test]
+    fn tab_alt_digits_and_bang_are_the_fleets_and_digits_stay_modes() {
+        let f = sized(fleet([true; 3]));
+        let app = f.app();
+        let none = KeyModifiers::NONE;
+        assert_eq!(
+            action_for(app, &key(KeyCode::Tab, none)),
+            Some(Action::StepRobot(1))
+        );
+        assert_eq!(
+            action_for(app, &key(KeyCode::BackTab, KeyModifiers::SHIFT)),
+            Some(Action::StepRobot(-1))
+        );
+        assert_eq!(
+            action_for(app, &key(KeyCode::Char('3'), KeyModifiers::ALT)),
+            Some(Action::SelectRobot(2))
+        );
+        // No robot 4: nothing, not a mode.
+        assert_eq!(
+            action_for(app, &key(KeyCode::Char('4'), KeyModifiers::ALT)),
+            None
+        );
+        assert_eq!(
+            action_for(app, &key(KeyCode::Char('3'), none)),
+            Some(Action::SetMode(protocol::Mode::Wander))
+        );
+        assert_eq!(
+            action_for(app, &key(KeyCode::Char('!'), none)),
+            Some(Action::StopAll)
+        );
+    }
+
+    #[test]
+    fn while_typing_bang_is_text_and_one_robot_keeps_todays_keys() {
+        let mut f = sized(fleet([true; 3]));
+        f.update(Action::LogFilterStart);
+        f.sync_overlay();
+        assert_eq!(
+            action_for(f.app(), &key(KeyCode::Char('!'), KeyModifiers::NONE)),
+            Some(Action::LogFilterInput('!'))
+        );
+        let one = sized(Fleet::new(vec![Member {
+            app: App::new(AppOptions::default()),
+            port: "p".into(),
+        }]));
+        assert_eq!(
+            action_for(one.app(), &key(KeyCode::Tab, KeyModifiers::NONE)),
+            Some(Action::NextView)
+        );
+        assert_eq!(
+            action_for(one.app(), &key(KeyCode::Char('!'), KeyModifiers::NONE)),
+            None
+        );
+    }
+
+    #[test]
+    fn a_click_on_a_fleet_line_or_on_another_robot_picks_it_elsewhere_it_is_a_go_to() {
+        let mut f = fleet([true; 3]);
+        // Robot 2 stands at (2, 1.5) m; no arena: the map fits what it shows.
+        let t = protocol::Telemetry {
+            pose: protocol::Pose {
+                x_mm: 2000,
+                y_mm: 1500,
+                heading_mrad: 0,
+            },
+            ..protocol::Telemetry::default()
+        };
+        f.on_link(1, LinkEvent::Telemetry(t));
+        let f = sized(f);
+        let app = f.app();
+        let areas = crate::ui::areas(Rect::new(0, 0, 150, 40), app);
+        let panel = areas.find(crate::ui::Panel::Fleet).unwrap();
+        assert_eq!(
+            action_for(app, &click(panel.x + 5, panel.y + 3)),
+            Some(Action::SelectRobot(2))
+        );
+        // The map cell under robot 2: scan the map for the cell nearest its pose.
+        let map = areas.find(crate::ui::Panel::Map).unwrap();
+        let inner = ratatui::widgets::Block::bordered().inner(crate::ui::map::map_area(app, map));
+        let mut best = (f64::MAX, 0, 0);
+        for row in inner.y..inner.y + inner.height {
+            for col in inner.x..inner.x + inner.width {
+                let (x, y) = crate::ui::map::to_world(app, inner, col, row).unwrap();
+                let d = (x - 2.0).hypot(y - 1.5);
+                if d < best.0 {
+                    best = (d, col, row);
+                }
+            }
+        }
+        assert_eq!(
+            action_for(app, &click(best.1, best.2)),
+            Some(Action::SelectRobot(1))
+        );
+        // Far from any robot: the selected robot's go-to.
+        let far = action_for(app, &click(inner.x + 1, inner.y + 1));
+        assert!(matches!(far, Some(Action::GoToPoint { .. })), "{far:?}");
+    }
+}

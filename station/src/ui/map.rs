@@ -311,6 +311,14 @@ fn content_bounds(app: &App) -> [f64; 4] {
         .copied()
         .collect();
     pts.extend(app.pose().map(|(x, y, _)| (x, y)));
+    // In a fleet, the other robots too: a map without an arena shows them all.
+    if let Some(f) = app.fleet.as_ref() {
+        pts.extend(
+            f.robots
+                .iter()
+                .filter_map(|r| r.pose.map(|(x, y, _)| (x, y))),
+        );
+    }
     pts.extend(app.map.goal);
     pts.extend(app.map.plan_target);
     if app.map.cursor_mode {
