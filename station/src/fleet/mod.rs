@@ -132,6 +132,9 @@ impl Fleet {
     /// Applies one action: the fleet's own, or the selected robot's (ticks and resizes go to
     /// every robot).
     pub fn update(&mut self, action: Action) {
+        // Ticks change nothing the overlay shows but staleness, which the next frame's sync
+        // picks up: no copy of every track 30 times a second.
+        let sync = !matches!(action, Action::Tick { .. });
         match action {
             Action::SelectRobot(i) => self.select(i),
             Action::StepRobot(d) => {
@@ -157,7 +160,9 @@ impl Fleet {
                 self.quit |= self.app().quit;
             }
         }
-        self.sync_overlay();
+        if sync {
+            self.sync_overlay();
+        }
     }
 
     /// A link event from robot `i`'s link.
@@ -240,7 +245,8 @@ impl Fleet {
         }
         self.selected = i;
         let label = self.label(i);
-        let port = self.members[i].port.clone();
+        // A path from the command line: no control character reaches the terminal.
+        let port = crate::terminal_text::printable(&self.members[i].port).into_owned();
         self.app_mut()
             .fleet_note(Level::Info, format!("selected {label} on {port}"));
     }
@@ -307,7 +313,7 @@ fn warn_duplicates(fleet: &mut Fleet, ids: &[Option<u8>]) {
         let ports: Vec<String> = dups
             .iter()
             .filter(|&&i| ids[i] == Some(id))
-            .map(|&i| fleet.members[i].port.clone())
+            .map(|&i| crate::terminal_text::printable(&fleet.members[i].port).into_owned())
             .collect();
         fleet.app_mut().fleet_note(
             Level::Warn,
