@@ -150,8 +150,14 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
 /// The legend in at most `room` columns: each mark with the glyph drawn on the map, so it
 /// reads without colour; then the keys that work, as far as they fit.
 fn legend(app: &App, room: u16) -> TLine<'static> {
-    let mut items: Vec<ratatui::text::Span<'static>> =
-        vec![" ● believed ".cyan(), "○ true ".magenta()];
+    let mut items: Vec<ratatui::text::Span<'static>> = match &app.fleet {
+        // In a fleet the robots are their numbers (`ui::fleet`), the selected one reversed.
+        Some(f) if app.in_fleet() => vec![
+            format!(" 1-{} robots ", f.robots.len()).white(),
+            "○ true ".magenta(),
+        ],
+        _ => vec![" ● believed ".cyan(), "○ true ".magenta()],
+    };
     // A replay sends nothing: no go-to marker to explain.
     if !app.replaying {
         items.push("× go-to ".yellow());
