@@ -198,3 +198,36 @@ fn a_cut_link_marks_its_robot_while_the_others_keep_updating() {
     );
     t.keys(&["q"]);
 }
+
+#[test]
+fn the_built_in_emulator_runs_three_robots_in_one_world() {
+    if !tmux_or_skip() {
+        return;
+    }
+    let d = dir("builtin");
+    let t = Tmux::start(
+        "builtin",
+        150,
+        40,
+        &d,
+        &workspace_bin("station"),
+        &["--robots", "3"],
+    );
+    let s = t.wait_for("three robots connected", WAIT, all_connected);
+    // One arena for all, each robot on its own pty, each drawn on the map by its number.
+    assert!(
+        s.iter().any(|r| r.contains("Map — Ciber-Rato 1999")),
+        "{}",
+        s.join("\n")
+    );
+    assert!(
+        s.iter().any(|r| r.contains(" 1-3 robots ")),
+        "{}",
+        s.join("\n")
+    );
+    // Robot 3's own panels after Alt-3: its pty in the header.
+    t.keys(&["M-3"]);
+    let s = t.wait_text("Fleet: 3 of 3", WAIT);
+    assert!(fleet_line(&s, 3).contains("▶3"), "{}", s.join("\n"));
+    t.keys(&["q"]);
+}
