@@ -108,4 +108,10 @@ pub enum Action {
     Recording(crate::record::live::RecordingNote),
     /// Upload, download, plan on the robot, execute, explore (`app::transfers`).
     Transfer(crate::app::transfers::TransferAction),
+    /// Fleet: select robot `i` (0-based) for the panels, the keys and the commands.
+    SelectRobot(usize),
+    /// Fleet: select the next (+1) or previous (-1) robot.
+    StepRobot(i32),
+    /// Fleet: send `Stop` to every connected robot.
+    StopAll,
 }

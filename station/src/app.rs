@@ -9,6 +9,7 @@
 //! (with the robot's Nack reason) reaches the log and the parameter editor. Cannot fail.
 
 pub mod arena;
+pub mod fleet;
 pub mod forage;
 pub mod history;
 pub mod localization;
@@ -241,6 +242,8 @@ pub struct App {
     pub forage: forage::ForageProgress,
     /// The robot's last `Progress` report: what its mode is doing.
     pub progress: Option<protocol::Progress>,
+    /// The fleet this robot is the selected one of (`app::fleet`); `None`: one robot.
+    pub fleet: Option<fleet::FleetOverlay>,
     next_id: CommandId,
     pending: HashMap<CommandId, Pending>,
     /// The last telemetry rate asked for and not yet answered: quick `+`/`-` presses step on
@@ -303,6 +306,7 @@ impl App {
             localization: localization::LocalizationState::default(),
             forage: forage::ForageProgress::default(),
             progress: None,
+            fleet: None,
             next_id: 1,
             pending: HashMap::new(),
             rate_asked: None,
@@ -476,6 +480,8 @@ impl App {
             Action::ToggleRecording => {}
             Action::Recording(note) => self.on_recording(note),
             Action::Transfer(a) => self.on_transfer_action(a),
+            // The fleet's own (`crate::fleet::Fleet::update`); one robot has nothing to pick.
+            Action::SelectRobot(_) | Action::StepRobot(_) | Action::StopAll => {}
         }
     }
 

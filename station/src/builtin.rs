@@ -111,3 +111,136 @@ pub fn start_builtin_emulator_with(
         arena,
     })
 }
+
+/// The built-in emulator with several robots in one world (`station --robots N`): one pty
+/// each, reached through `robot1`, `robot2`, ... symlinks in a private directory. Stops (and
+/// removes the ptys) when dropped.
+pub struct BuiltinFleet {
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+    links: Vec<PathBuf>,
+    ptys: Vec<PathBuf>,
+    dir: PathBuf,
+    /// The arena the emulator simulates, for the map.
+    pub arena: Option<ArenaOverlay>,
+}
+
+impl BuiltinFleet {
+    /// The paths to open, robot by robot: symlinks that follow each robot's current pty.
+    pub fn paths(&self) -> &[PathBuf] {
+        &self.links
+    }
+
+    /// Each robot's pty when it started.
+    pub fn pty_paths(&self) -> &[PathBuf] {
+        &self.ptys
+    }
+}
+
+impl Drop for BuiltinFleet {
+    fn drop(&mut self) {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+        let _ = std::fs::remove_dir(&self.dir);
+    }
+}
+
+/// Starts `robots` robots of `profile` (default micro-rato; khepera in `builtin:forage` and
+/// `builtin:floor-grid`, as `start_builtin_emulator_with`) in `arena`, each on its own pty,
+/// from the arena's start areas (`emulator::fleet::starts`). With `key` every robot signs
+/// its frames. Returns once every robot's pty exists.
+pub fn start_builtin_fleet(
+    robots: usize,
+    arena: Option<&str>,
+    profile: Option<&'static robot_firmware::Profile>,
+    key: Option<&[u8; protocol::sign::KEY_LEN]>,
+) -> Result<BuiltinFleet, BuiltinError> {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+    let base = std::env::var_os("XDG_RUNTIME_DIR")
+        .map(PathBuf::from)
+        .filter(|p| p.is_dir())
+        .unwrap_or_else(std::env::temp_dir);
+    let dir = base.join(format!("station-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(BuiltinError::Dir)?;
+    let mut opts = EmulatorOptions::builtin_default();
+    if let Some(a) = arena {
+        opts.arena = a.to_string();
+    }
+    let forage = opts.arena == emulator::forage::BUILTIN_FORAGE;
+    opts.sim.floor_grid_m = emulator::builtin::floor_grid_pitch(&opts.arena);
+    let grid = opts.sim.floor_grid_m.is_some();
+    if let Some(p) = profile.or_else(|| (forage || grid).then_some(&robot_firmware::KHEPERA)) {
+        opts.sim.profile = p;
+    }
+    let loaded = emulator::builtin::load(&opts.arena, &opts.load)
+        .map_err(|e| BuiltinError::Spawn(e.to_string()))?;
+    let overlay = Some(ArenaOverlay::from_arena(&loaded));
+    let specs = vec![
+        emulator::fleet::RobotSpec {
+            profile: opts.sim.profile,
+            start: None,
+        };
+        robots
+    ];
+    let mut fleet = emulator::fleet::Fleet::new(loaded, &opts.sim, &specs)
+        .map_err(|e| BuiltinError::Spawn(e.to_string()))?;
+    let links: Vec<PathBuf> = (1..=robots)
+        .map(|k| emulator::fleet::serve::link_for(&dir.join("robot"), k, robots))
+        .collect();
+    let serve: Vec<emulator::link::ServeOptions> = links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| emulator::link::ServeOptions {
+            link: Some(l.clone()),
+            key: key.copied(),
+            seed: emulator::fleet::robot_seed(opts.sim.seed, i),
+            ..opts.serve.clone()
+        })
+        .collect();
+    let stop = Arc::new(AtomicBool::new(false));
+    let stop2 = Arc::clone(&stop);
+    let (tx, rx) = std::sync::mpsc::channel::<Result<(usize, PathBuf), String>>();
+    let thread = std::thread::Builder::new()
+        .name("robot-emulator-fleet".into())
+        .spawn(move || {
+            let ready = tx.clone();
+            let result = emulator::fleet::serve::serve(&mut fleet, &serve, &stop2, &mut |i, p| {
+                let _ = ready.send(Ok((i, p.to_path_buf())));
+            });
+            if let Err(e) = result {
+                let _ = tx.send(Err(e.to_string()));
+            }
+        })
+        .map_err(|e| BuiltinError::Spawn(e.to_string()))?;
+    let mut started = BuiltinFleet {
+        stop,
+        thread: Some(thread),
+        ptys: vec![PathBuf::new(); robots],
+        links,
+        dir,
+        arena: overlay,
+    };
+    let mut ready = 0;
+    while ready < robots {
+        match rx.recv_timeout(std::time::Duration::from_secs(10)) {
+            Ok(Ok((i, p))) => {
+                if let Some(slot) = started.ptys.get_mut(i) {
+                    if slot.as_os_str().is_empty() {
+                        ready += 1;
+                    }
+                    *slot = p;
+                }
+            }
+            Ok(Err(e)) => return Err(BuiltinError::Spawn(e)),
+            Err(_) => {
+                return Err(BuiltinError::Spawn(
+                    "the emulator's ptys did not appear within 10 s".into(),
+                ))
+            }
+        }
+    }
+    Ok(started)
+}

@@ -48,9 +48,14 @@ pub struct Cli {
 /// Which port to use.
 #[derive(Debug, Args, Clone)]
 pub struct PortArgs {
-    /// Serial port (or pty) of the robot, e.g. /dev/ttyUSB0.
+    /// Serial port (or pty) of the robot, e.g. /dev/ttyUSB0. Repeat it for several robots
+    /// (at most 9), one link each: `--port /tmp/robot1 --port /tmp/robot2`.
     #[arg(long, short = 'p', value_name = "PATH")]
-    pub port: Option<PathBuf>,
+    pub port: Vec<PathBuf>,
+    /// The built-in emulator with this many robots in one world (without --port), 1 to 9.
+    #[arg(long, value_name = "N", conflicts_with_all = ["port", "start"],
+          value_parser = clap::value_parser!(u8).range(1..=9))]
+    pub robots: Option<u8>,
     /// Baud rate (ignored by ptys).
     #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
     pub baud: u32,
@@ -724,6 +729,30 @@ mod tests {
     fn no_arguments_means_the_built_in_emulator() {
         let cli = parse(&[]).expect("parses");
         assert!(cli.command.is_none());
-        assert!(cli.port.port.is_none());
+        assert!(cli.port.port.is_empty());
+    }
+
+    #[test]
+    fn ports_repeat_and_the_built_in_emulator_takes_a_robot_count() {
+        let cli = parse(&[
+            "--port",
+            "/tmp/robot1",
+            "-p",
+            "/tmp/robot2",
+            "--port",
+            "/tmp/robot3",
+        ])
+        .unwrap();
+        assert_eq!(cli.port.port.len(), 3);
+        assert_eq!(cli.port.port[1], PathBuf::from("/tmp/robot2"));
+        assert_eq!(parse(&["--robots", "3"]).unwrap().port.robots, Some(3));
+        for (args, needle) in [
+            (&["--robots", "0"][..], "not in 1..=9"),
+            (&["--robots", "10"][..], "not in 1..=9"),
+            (&["--robots", "2", "--port", "p"][..], "cannot be used with"),
+        ] {
+            let e = parse(args).unwrap_err();
+            assert!(e.to_string().contains(needle), "{args:?}: {e}");
+        }
     }
 }

@@ -36,8 +36,20 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         None => {
             let key = crate::cli::load_key_bytes(cli.port.key_file.as_deref())
                 .map_err(anyhow::Error::msg)?;
+            // Several robots: one link each (`fleet`).
+            if cli.port.port.len() > 1 || cli.port.robots.is_some_and(|n| n > 1) {
+                return crate::fleet::start::interactive(
+                    &cli.port.port,
+                    cli.port.robots.map_or(0, usize::from),
+                    cli.port.baud,
+                    cli.arena.as_deref(),
+                    cli.profile.map(|p| p.profile()),
+                    key,
+                )
+                .await;
+            }
             interactive(
-                cli.port.port.as_deref(),
+                cli.port.port.first().map(|p| p.as_path()),
                 cli.port.baud,
                 cli.arena.as_deref(),
                 cli.profile.map(|p| p.profile()),

@@ -4,7 +4,8 @@
 //! applies them, `ui::render` draws the app. One task (`link`) owns the serial port.
 //!
 //! - `link`: the port's owner: handshake, heartbeat, retries, reconnect, statistics.
-//! - `action`, `app`, `input`: the UI's state machine and what feeds it.
+//! - `action`, `app`, `input`: the UI's state machine and what feeds it; `fleet`: one `App`
+//!   per robot when several are driven at once, and the picker.
 //! - `ui`: drawing, pure.
 //! - `params`: `station params` and its parameter files.
 //! - `plan`: planning on the station with the robot's nav code (`station plan`, map layers).
@@ -24,6 +25,7 @@ pub mod builtin;
 pub mod calibrate;
 pub mod cli;
 pub mod export;
+pub mod fleet;
 pub mod headless;
 pub mod input;
 pub mod link;

@@ -30,9 +30,10 @@ use tokio::time::Instant;
 
 use crate::action::Action;
 use crate::app::App;
+use crate::fleet::{self, Fleet, Member};
 use crate::link::RunningLink;
 use crate::record::live::TuiRecorder;
-use crate::{input, pace, ui};
+use crate::{pace, ui};
 
 /// Time between ticks while driving: one `pace` slot (32 ms), so that teleop repeats every
 /// three ticks, about every 100 ms (`app::TELEOP_PERIOD_MS`).
@@ -48,7 +49,26 @@ pub const LINK_FRAME: Duration = pace::SLOT.saturating_mul(3);
 
 /// Runs the TUI until the operator quits. Restores the terminal whatever happens. `recorder`
 /// records the link while the operator asks (`R`); a recording running at quit is saved.
-pub async fn run(mut app: App, mut link: RunningLink, mut recorder: TuiRecorder) -> io::Result<()> {
+pub async fn run(app: App, link: RunningLink, recorder: TuiRecorder) -> io::Result<()> {
+    run_fleet(
+        Fleet::new(vec![Member {
+            port: app.port_label.clone(),
+            app,
+        }]),
+        vec![link],
+        recorder,
+    )
+    .await
+}
+
+/// `run` for several robots: `links[i]` is robot `i`'s link (`fleet`: one link task per
+/// port; one robot's link going down leaves the others' alone). `recorder` records the first
+/// link's tap.
+pub async fn run_fleet(
+    mut fleet: Fleet,
+    mut links: Vec<RunningLink>,
+    mut recorder: TuiRecorder,
+) -> io::Result<()> {
     // Before raw mode: from here on, these signals end the loop instead of the process.
     let mut signals = StopSignals::new()?;
     install_panic_hook();
@@ -57,8 +77,8 @@ pub async fn run(mut app: App, mut link: RunningLink, mut recorder: TuiRecorder)
         execute!(stdout(), EnableMouseCapture)?;
         event_loop(
             &mut terminal,
-            &mut app,
-            &mut link,
+            &mut fleet,
+            &mut links,
             &mut recorder,
             &mut signals,
         )
@@ -70,11 +90,18 @@ pub async fn run(mut app: App, mut link: RunningLink, mut recorder: TuiRecorder)
         eprintln!("station: stopped by {name}");
     }
     if let Some(note) = recorder.stop() {
-        app.update(Action::Recording(note));
+        fleet.update(Action::Recording(note));
     }
-    // Let the link send a final Stop and close the port.
-    link.handle.shutdown();
-    let _ = tokio::time::timeout(Duration::from_secs(1), &mut link.task).await;
+    // Let every link send a final Stop and close its port.
+    for link in &links {
+        link.handle.shutdown();
+    }
+    let _ = tokio::time::timeout(Duration::from_secs(1), async {
+        for link in &mut links {
+            let _ = (&mut link.task).await;
+        }
+    })
+    .await;
     result
 }
 
@@ -149,13 +176,13 @@ pub(crate) fn install_panic_hook() {
 
 async fn event_loop(
     terminal: &mut DefaultTerminal,
-    app: &mut App,
-    link: &mut RunningLink,
+    fleet: &mut Fleet,
+    links: &mut [RunningLink],
     recorder: &mut TuiRecorder,
     signals: &mut StopSignals,
 ) -> io::Result<()> {
     let size = terminal.size()?;
-    app.update(Action::Resize {
+    fleet.update(Action::Resize {
         width: size.width,
         height: size.height,
     });
@@ -179,7 +206,8 @@ async fn event_loop(
     tokio::pin!(stop_signal);
     let result = loop {
         if dirty && (urgent || last_draw.elapsed() >= frame) {
-            if let Err(e) = terminal.draw(|f| ui::render(app, f)) {
+            fleet.sync_overlay();
+            if let Err(e) = terminal.draw(|f| ui::render(fleet.app(), f)) {
                 break Err(e);
             }
             last_draw = pace::slot_at_or_before(Instant::now());
@@ -195,12 +223,14 @@ async fn event_loop(
                     if let Err(e) = resize(terminal, &ev) {
                         break Err(e);
                     }
-                    match input::action_for(app, &ev) {
+                    // Clicks are mapped against the screen as it is now.
+                    fleet.sync_overlay();
+                    match fleet::input::action_for(fleet.app(), &ev) {
                         // The loop owns the recording's file: it starts or stops it.
                         Some(Action::ToggleRecording) => {
-                            app.update(Action::Recording(recorder.toggle()));
+                            fleet.update(Action::Recording(recorder.toggle()));
                         }
-                        Some(a) => app.update(a),
+                        Some(a) => fleet.update(a),
                         None => {}
                     }
                     dirty = true;
@@ -209,41 +239,47 @@ async fn event_loop(
                 Some(Err(e)) => break Err(e),
                 None => break Ok(()),
             },
-            Some(ev) = link.events.recv() => {
+            Some((i, ev)) = next_link_event(links) => {
                 // Everything already queued in one go: one wake-up, one redraw decision.
-                on_link(app, recorder, ev);
-                while let Ok(ev) = link.events.try_recv() {
-                    on_link(app, recorder, ev);
+                on_link(fleet, recorder, i, ev);
+                for (i, link) in links.iter_mut().enumerate() {
+                    while let Ok(ev) = link.events.try_recv() {
+                        on_link(fleet, recorder, i, ev);
+                    }
                 }
                 // The tap's records carry their own times: taking them here, with the
                 // events that follow them, costs no wake-up of its own.
                 if let Some(note) = recorder.drain_taps() {
-                    app.update(Action::Recording(note));
+                    fleet.update(Action::Recording(note));
                 }
                 dirty = true;
             }
             () = &mut tick => {
-                let driving = app.teleop.driving;
-                app.update(Action::Tick { now_ms: t0.elapsed().as_millis() as u64 });
+                let driving = fleet.members.iter().any(|m| m.app.teleop.driving);
+                fleet.update(Action::Tick { now_ms: t0.elapsed().as_millis() as u64 });
                 dirty |= driving;
                 let note = recorder.drain_taps().or_else(|| recorder.tick());
                 if let Some(note) = note {
-                    app.update(Action::Recording(note));
+                    fleet.update(Action::Recording(note));
                     dirty = true;
                 }
-                let every = if app.teleop.driving { DRIVING_TICK } else { IDLE_TICK };
+                let driving = fleet.members.iter().any(|m| m.app.teleop.driving);
+                let every = if driving { DRIVING_TICK } else { IDLE_TICK };
                 tick.as_mut().reset(pace::slot_at_or_before(Instant::now()) + every);
             }
             () = &mut redraw, if dirty => {}
             () = &mut stop_signal => break Ok(()),
         }
-        for (id, command) in app.take_outbox() {
-            link.handle.submit_with_id(id, command);
+        // Each robot's commands and transfers to its own link.
+        for (m, link) in fleet.members.iter_mut().zip(links.iter()) {
+            for (id, command) in m.app.take_outbox() {
+                link.handle.submit_with_id(id, command);
+            }
+            for t in m.app.transfers.take_frames() {
+                link.handle.transfer(t);
+            }
         }
-        for t in app.transfers.take_frames() {
-            link.handle.transfer(t);
-        }
-        if app.quit {
+        if fleet.quit {
             break Ok(());
         }
     };
@@ -252,12 +288,37 @@ async fn event_loop(
     result
 }
 
-/// One link event: to the recorder (connection changes), then to the app.
-fn on_link(app: &mut App, recorder: &mut TuiRecorder, ev: crate::link::LinkEvent) {
-    if let Some(note) = recorder.on_link_event(&ev) {
-        app.update(Action::Recording(note));
+/// One link event from robot `i`: to the recorder (connection changes of the link it
+/// records, the first), then to the fleet.
+fn on_link(fleet: &mut Fleet, recorder: &mut TuiRecorder, i: usize, ev: crate::link::LinkEvent) {
+    if i == 0 {
+        if let Some(note) = recorder.on_link_event(&ev) {
+            fleet.update(Action::Recording(note));
+        }
     }
-    app.update(Action::Link(ev));
+    fleet.on_link(i, ev);
+}
+
+/// The next event of any link, with its robot's index. No forwarding task: the links are
+/// polled in order, and each wake-up drains them all (`event_loop`), so none waits behind
+/// another. `None` when every link has ended.
+async fn next_link_event(links: &mut [RunningLink]) -> Option<(usize, crate::link::LinkEvent)> {
+    std::future::poll_fn(|cx| {
+        let mut open = 0;
+        for (i, link) in links.iter_mut().enumerate() {
+            match link.events.poll_recv(cx) {
+                std::task::Poll::Ready(Some(ev)) => return std::task::Poll::Ready(Some((i, ev))),
+                std::task::Poll::Ready(None) => {}
+                std::task::Poll::Pending => open += 1,
+            }
+        }
+        if open == 0 {
+            std::task::Poll::Ready(None)
+        } else {
+            std::task::Poll::Pending
+        }
+    })
+    .await
 }
 
 /// Forwards terminal events from crossterm's event stream until the receiver is gone or the

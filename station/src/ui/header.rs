@@ -209,6 +209,7 @@ pub fn render_footer(app: &App, frame: &mut Frame, area: Rect) {
         }
         hints.insert(at, ("O", target.as_str()));
     }
+    fleet_hints(app, &mut hints);
     let mut spans = Vec::new();
     for (k, what) in &hints {
         spans.push(Span::styled(
@@ -218,4 +219,23 @@ pub fn render_footer(app: &App, frame: &mut Frame, area: Rect) {
         spans.push(Span::raw(format!(" {what} ")));
     }
     frame.render_widget(Paragraph::new(Line::from(spans)), area);
+}
+
+/// Several robots: "stop all" first, where it is never cut off, whenever its key works (not
+/// while typing); Tab picks robots instead of views.
+fn fleet_hints(app: &App, hints: &mut Vec<(&str, &str)>) {
+    if !app.in_fleet() {
+        return;
+    }
+    let typing = app.help
+        || app.transfers.prompt.is_some()
+        || app.log.filter_input.is_some()
+        || app.params.input.is_some();
+    if typing {
+        return;
+    }
+    if let Some(tab) = hints.iter_mut().find(|(k, _)| *k == "Tab") {
+        *tab = ("Tab", "robot");
+    }
+    hints.insert(0, ("!", "STOP ALL"));
 }

@@ -72,21 +72,44 @@ pub const KEYS: &[(&str, &str)] = &[
     ("R", "record the link to a file here; R again saves it"),
 ];
 
+/// With several robots, these come first (`fleet::input`).
+pub const FLEET_KEYS: &[(&str, &str)] = &[
+    (
+        "!",
+        "STOP ALL: Stop to every connected robot; each one's answer in the log",
+    ),
+    (
+        "Tab  Alt-1..9",
+        "pick a robot (or click its fleet line or it on the map); F1-F7 views",
+    ),
+];
+
 pub fn render(frame: &mut Frame, screen: Rect) {
+    render_keys(frame, screen, false);
+}
+
+/// The help overlay; `fleet`: with the fleet's keys first.
+pub fn render_keys(frame: &mut Frame, screen: Rect, fleet: bool) {
+    let keys: Vec<(&str, &str)> = if fleet {
+        FLEET_KEYS.iter().chain(KEYS).copied().collect()
+    } else {
+        KEYS.to_vec()
+    };
+    let keys = keys.as_slice();
     let width = screen.width.min(80);
-    let height = screen.height.min(KEYS.len() as u16 + 4);
+    let height = screen.height.min(keys.len() as u16 + 4);
     let [row] = Layout::vertical([Constraint::Length(height)])
         .flex(Flex::Center)
         .areas(screen);
     let [area] = Layout::horizontal([Constraint::Length(width)])
         .flex(Flex::Center)
         .areas(row);
-    let key_w = KEYS
+    let key_w = keys
         .iter()
         .map(|(k, _)| k.chars().count())
         .max()
         .unwrap_or(0);
-    let lines: Vec<Line> = KEYS
+    let lines: Vec<Line> = keys
         .iter()
         .map(|(k, what)| {
             Line::from(vec![

@@ -53,7 +53,7 @@ pub struct BelievedLayer;
 pub struct GoalLayer;
 
 /// Layers in drawing order: the planner's grid and squares under the arena, plans above it.
-pub static LAYERS: [&dyn MapLayer; 15] = [
+pub static LAYERS: [&dyn MapLayer; 16] = [
     &map_layers::GridLayer,
     &map_layers::RegionsLayer,
     &super::localization::FloorLayer,
@@ -64,6 +64,7 @@ pub static LAYERS: [&dyn MapLayer; 15] = [
     &super::transfer::RobotPlanLayer,
     &super::localization::OdometryLayer,
     &TruthLayer,
+    &super::fleet::FleetLayer,
     &BelievedLayer,
     &super::localization::LinesLayer,
     &super::localization::PpdLayer,
@@ -149,8 +150,14 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
 /// The legend in at most `room` columns: each mark with the glyph drawn on the map, so it
 /// reads without colour; then the keys that work, as far as they fit.
 fn legend(app: &App, room: u16) -> TLine<'static> {
-    let mut items: Vec<ratatui::text::Span<'static>> =
-        vec![" ● believed ".cyan(), "○ true ".magenta()];
+    let mut items: Vec<ratatui::text::Span<'static>> = match &app.fleet {
+        // In a fleet the robots are their numbers (`ui::fleet`), the selected one reversed.
+        Some(f) if app.in_fleet() => vec![
+            format!(" 1-{} robots ", f.robots.len()).white(),
+            "○ true ".magenta(),
+        ],
+        _ => vec![" ● believed ".cyan(), "○ true ".magenta()],
+    };
     // A replay sends nothing: no go-to marker to explain.
     if !app.replaying {
         items.push("× go-to ".yellow());
@@ -310,6 +317,14 @@ fn content_bounds(app: &App) -> [f64; 4] {
         .copied()
         .collect();
     pts.extend(app.pose().map(|(x, y, _)| (x, y)));
+    // In a fleet, the other robots too: a map without an arena shows them all.
+    if let Some(f) = app.fleet.as_ref() {
+        pts.extend(
+            f.robots
+                .iter()
+                .filter_map(|r| r.pose.map(|(x, y, _)| (x, y))),
+        );
+    }
     pts.extend(app.map.goal);
     pts.extend(app.map.plan_target);
     if app.map.cursor_mode {
@@ -447,13 +462,15 @@ impl MapLayer for BelievedLayer {
 
     fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>) {
         let pts: Vec<(f64, f64)> = app.believed.points().copied().collect();
+        // In a fleet: the selected robot in its fleet colour, its number reversed.
+        let (color, glyph) = super::fleet::selected_mark(app).unwrap_or((Color::Cyan, "●".cyan()));
         ctx.draw(&Points {
             coords: &pts,
-            color: Color::Cyan,
+            color,
         });
         if let Some(p) = app.pose() {
-            robot(ctx, view, p, Color::Cyan);
-            ctx.print(p.0, p.1, "●".cyan());
+            robot(ctx, view, p, color);
+            ctx.print(p.0, p.1, glyph);
         }
     }
 }

@@ -7,6 +7,7 @@
 //! room of a large terminal. Cannot fail: a panel too small for its content clips it.
 
 pub mod charts;
+pub mod fleet;
 pub mod forage;
 pub mod header;
 pub mod help;
@@ -34,6 +35,8 @@ pub enum Panel {
     Link,
     Log,
     Params,
+    /// One line per robot, with several robots.
+    Fleet,
 }
 
 /// Where everything goes.
@@ -66,7 +69,9 @@ pub fn areas(area: Rect, app: &App) -> Areas {
         Constraint::Length(1),
     ])
     .areas(area);
-    let panels = match app.view {
+    // Several robots: their lines above the selected robot's panels.
+    let (fleet, main) = fleet::split(app, main);
+    let mut panels = match app.view {
         View::Dashboard => dashboard(main),
         View::Sensors => vec![(Panel::Sensors, main)],
         View::Charts => vec![(Panel::Charts, main)],
@@ -75,6 +80,7 @@ pub fn areas(area: Rect, app: &App) -> Areas {
         View::Log => vec![(Panel::Log, main)],
         View::Params => vec![(Panel::Params, main)],
     };
+    panels.extend(fleet.map(|r| (Panel::Fleet, r)));
     Areas {
         header,
         footer,
@@ -131,6 +137,7 @@ pub fn render(app: &App, frame: &mut Frame) {
             Panel::Link => link::render(app, frame, *area),
             Panel::Log => log::render(app, frame, *area),
             Panel::Params => params::render(app, frame, *area),
+            Panel::Fleet => fleet::render(app, frame, *area),
         }
     }
     if let Some(main) = main_area(&a) {
@@ -138,7 +145,7 @@ pub fn render(app: &App, frame: &mut Frame) {
         transfer::render(app, frame, main);
     }
     if app.help {
-        help::render(frame, frame.area());
+        help::render_keys(frame, frame.area(), app.in_fleet());
     }
 }
 
@@ -154,6 +161,11 @@ fn main_area(a: &Areas) -> Option<Rect> {
 fn notice(app: &App, frame: &mut Frame, main: Rect) {
     use ratatui::style::{Color, Style};
     use ratatui::widgets::{Block, Clear, Paragraph, Wrap};
+    // In a fleet the robot's fleet line and link panel say why, and the box would cover the
+    // log where "stop all" reports each robot.
+    if app.in_fleet() {
+        return;
+    }
     let (title, text) = match &app.connection {
         // A replay between sessions: the header says so; nobody is trying anything.
         crate::link::Connection::Closed { .. } if app.replaying => return,

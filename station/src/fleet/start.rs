@@ -1,0 +1,142 @@
+//! Starting the TUI on several robots: `station --port A --port B ...` or `station --robots N`
+//! (the built-in emulator with N robots in one world).
+//!
+//! Layer: the binary's edge for the fleet, the several-robot form of `headless::interactive`.
+//! One link task per port, each exactly the single robot's (paced, its own reconnects and
+//! handshakes), so a robot that is unplugged, refuses the handshake or has another key
+//! changes only its own line. A port that exists but cannot be used (busy, not a tty) is
+//! refused before the TUI opens, naming the port, as for one robot; a port not there yet is
+//! waited for. What can fail: the terminal, the arena, the emulator, those ports.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context as _};
+
+use super::{Fleet, Member, MAX_ROBOTS};
+use crate::app::arena::ArenaOverlay;
+use crate::app::{App, AppOptions};
+use crate::link::serial::{open_exclusive, SerialConnector};
+use crate::link::{spawn_link, LinkOptions};
+use crate::plan::PlanState;
+
+/// Runs the TUI on `ports`, or on the built-in emulator with `robots` robots when `ports` is
+/// empty.
+pub async fn interactive(
+    ports: &[PathBuf],
+    robots: usize,
+    baud: u32,
+    arena: Option<&Path>,
+    profile: Option<&'static robot_firmware::Profile>,
+    key: Option<[u8; protocol::sign::KEY_LEN]>,
+) -> anyhow::Result<ExitCode> {
+    // Before the terminal check: a wrong command line is said as such, anywhere.
+    if ports.len() > MAX_ROBOTS {
+        bail!(
+            "{} ports given: the station drives at most {MAX_ROBOTS} robots at once",
+            ports.len()
+        );
+    }
+    if !std::io::stdout().is_terminal() {
+        bail!("the TUI needs a terminal; for scripts use `station send` or `station stats`");
+    }
+    let mut plan = PlanState::default();
+    let mut overlay: Option<ArenaOverlay> = None;
+    if let Some(p) = arena {
+        let name = p.to_string_lossy();
+        let load = if ports.is_empty() {
+            emulator::arena::LoadOptions::for_simulation()
+        } else {
+            emulator::arena::LoadOptions::default()
+        };
+        let a = emulator::builtin::load(&name, &load)
+            .with_context(|| format!("cannot load arena {}", p.display()))?;
+        let o = ArenaOverlay::from_arena(&a);
+        if o.forage.is_none() {
+            plan = PlanState::for_arena(&a, &p.display().to_string());
+        }
+        overlay = Some(o);
+    }
+    // Keeps the built-in emulator alive for the whole session.
+    let mut builtin = None;
+    let targets: Vec<(PathBuf, String)> = if ports.is_empty() {
+        let simulated = arena.map(|p| p.to_string_lossy().into_owned());
+        let emu = crate::builtin::start_builtin_fleet(
+            robots,
+            simulated.as_deref(),
+            profile,
+            key.as_ref(),
+        )?;
+        if overlay.is_none() {
+            overlay = emu.arena.clone();
+            plan = PlanState::for_builtin();
+        }
+        let t = emu
+            .paths()
+            .iter()
+            .zip(emu.pty_paths())
+            .map(|(link, pty)| {
+                (
+                    link.clone(),
+                    format!("built-in emulator on {}", pty.display()),
+                )
+            })
+            .collect();
+        builtin = Some(emu);
+        t
+    } else {
+        for p in ports {
+            match open_exclusive(p, baud) {
+                Ok(port) => drop(port),
+                Err(crate::link::transport::OpenError::NotFound { .. }) => {}
+                Err(e) => {
+                    return Err(anyhow::Error::new(e).context(format!("port {}", p.display())))
+                }
+            }
+        }
+        ports
+            .iter()
+            .map(|p| (p.clone(), p.display().to_string()))
+            .collect()
+    };
+    // The `R` key records the first robot's link (recording several links in one file is
+    // the recorder's own work).
+    let (tap, taps) = tokio::sync::mpsc::unbounded_channel();
+    let first = targets.first().map(|(_, l)| l.clone()).unwrap_or_default();
+    let mut meta = crate::record::Meta::now(&first, baud);
+    meta.arena = match (arena, &builtin) {
+        (Some(p), _) => p.display().to_string(),
+        (None, Some(_)) => emulator::builtin::MICRO_RATO_99.to_string(),
+        (None, None) => String::new(),
+    };
+    let epoch = tokio::time::Instant::now();
+    let mut tap = Some(tap);
+    let mut links = Vec::with_capacity(targets.len());
+    let mut members = Vec::with_capacity(targets.len());
+    for (path, label) in &targets {
+        links.push(spawn_link(
+            SerialConnector::new(path, baud).paced(true),
+            LinkOptions {
+                tap: tap.take(),
+                paced: true,
+                key: key.map(|k| protocol::LinkKey::new(&k)),
+                ..LinkOptions::default()
+            },
+        ));
+        let mut app = App::new(AppOptions {
+            port_label: label.clone(),
+            arena: overlay.clone(),
+        });
+        app.map.plan = plan.clone();
+        app.map.hidden.push(crate::ui::map_layers::REGIONS);
+        members.push(Member {
+            app,
+            port: path.display().to_string(),
+        });
+    }
+    let recorder = crate::record::live::TuiRecorder::new(taps, epoch, meta);
+    crate::tui::run_fleet(Fleet::new(members), links, recorder).await?;
+    drop(builtin);
+    Ok(ExitCode::SUCCESS)
+}
