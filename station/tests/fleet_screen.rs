@@ -19,7 +19,7 @@ fn arena() -> ArenaOverlay {
     ArenaOverlay::load(std::path::Path::new(path)).unwrap()
 }
 
-fn peer() -> PeerInfo {
+fn peer(robot_id: u8) -> PeerInfo {
     PeerInfo {
         session: 0x1234_5678,
         firmware: "robot-firmware".into(),
@@ -32,6 +32,7 @@ fn peer() -> PeerInfo {
         },
         telemetry_hz: 10,
         failsafe_ms: 300,
+        robot_id,
     }
 }
 
@@ -64,7 +65,7 @@ fn fleet() -> Fleet {
     let mut f = Fleet::new(members);
     f.update(Action::Tick { now_ms: 100 });
     for i in [0, 2] {
-        f.on_link(i, LinkEvent::Connection(Connection::Connected(peer())));
+        f.on_link(i, LinkEvent::Connection(Connection::Connected(peer(i as u8 + 1))));
     }
     f.on_link(
         1,

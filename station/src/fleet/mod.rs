@@ -11,7 +11,7 @@
 pub mod input;
 pub mod start;
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 
 use protocol::Command;
 
@@ -44,12 +44,10 @@ pub struct Fleet {
     pub quit: bool,
 }
 
-/// The id a robot reports in its handshake (MAVLink's system id), if it does.
-///
-/// The one place that reads it: robots whose handshake carries no id (until the protocol's
-/// `robot_id`, parameter 33, lands) are known by their port's index alone.
-pub fn robot_id(_peer: &PeerInfo) -> Option<u8> {
-    None
+/// The id a robot states in its handshake (`HelloReply.robot_id`, parameter 33, like MAVLink's
+/// system id). The one place the fleet reads it; a robot not yet connected has none.
+pub fn robot_id(peer: &PeerInfo) -> Option<u8> {
+    Some(peer.robot_id)
 }
 
 /// What a robot is called everywhere: its profile and its id when it reports one, else its
@@ -63,15 +61,18 @@ pub fn robot_label(index: usize, profile: Option<&str>, id: Option<u8>) -> Strin
     }
 }
 
-/// The robots (indices) whose id another robot reports too.
+/// The robots (indices) whose id another robot reports too (`link::robot_ids` decides).
 pub fn duplicate_ids(ids: &[Option<u8>]) -> Vec<usize> {
-    let mut count: HashMap<u8, usize> = HashMap::new();
-    for id in ids.iter().flatten() {
-        *count.entry(*id).or_default() += 1;
-    }
+    let labels: Vec<String> = (0..ids.len()).map(|i| i.to_string()).collect();
+    let shared: HashSet<u8> = crate::link::robot_ids::duplicates(
+        labels.iter().map(String::as_str).zip(ids.iter().copied()),
+    )
+    .into_iter()
+    .map(|d| d.robot_id)
+    .collect();
     ids.iter()
         .enumerate()
-        .filter(|(_, id)| id.is_some_and(|id| count.get(&id).copied().unwrap_or(0) > 1))
+        .filter(|(_, id)| id.is_some_and(|id| shared.contains(&id)))
         .map(|(i, _)| i)
         .collect()
 }
@@ -302,27 +303,17 @@ impl Fleet {
 }
 
 fn warn_duplicates(fleet: &mut Fleet, ids: &[Option<u8>]) {
-    let dups = duplicate_ids(ids);
-    let mut shared: Vec<u8> = dups.iter().filter_map(|&i| ids[i]).collect();
-    shared.sort_unstable();
-    shared.dedup();
-    for id in shared {
-        if !fleet.reported_duplicates.insert(id) {
-            continue;
+    let ports: Vec<String> = fleet
+        .members
+        .iter()
+        .map(|m| crate::terminal_text::printable(&m.port).into_owned())
+        .collect();
+    let dups =
+        crate::link::robot_ids::duplicates(ports.iter().map(String::as_str).zip(ids.iter().copied()));
+    for d in dups {
+        if fleet.reported_duplicates.insert(d.robot_id) {
+            fleet.app_mut().fleet_note(Level::Warn, d.warning());
         }
-        let ports: Vec<String> = dups
-            .iter()
-            .filter(|&&i| ids[i] == Some(id))
-            .map(|&i| crate::terminal_text::printable(&fleet.members[i].port).into_owned())
-            .collect();
-        fleet.app_mut().fleet_note(
-            Level::Warn,
-            format!(
-                "robot id {id} is reported by {} robots ({}): give each its own (parameter robot_id)",
-                ports.len(),
-                ports.join(", ")
-            ),
-        );
     }
 }
 

@@ -7,7 +7,7 @@ use super::*;
 use crate::app::{AppOptions, V_STEP};
 use crate::link::{CommandFailure, PeerInfo};
 
-fn peer(profile: ProfileId) -> PeerInfo {
+fn peer(profile: ProfileId, robot_id: u8) -> PeerInfo {
     PeerInfo {
         session: 1,
         firmware: "robot-firmware".into(),
@@ -20,6 +20,7 @@ fn peer(profile: ProfileId) -> PeerInfo {
         },
         telemetry_hz: 10,
         failsafe_ms: 300,
+        robot_id,
     }
 }
 
@@ -34,7 +35,7 @@ fn fleet(connected: [bool; 3]) -> Fleet {
     let mut f = Fleet::new(members);
     for (i, up) in connected.iter().enumerate() {
         let c = if *up {
-            Connection::Connected(peer(ProfileId::MicroRato))
+            Connection::Connected(peer(ProfileId::MicroRato, i as u8 + 1))
         } else {
             Connection::Closed {
                 reason: "cannot open /tmp/robot: no such file".into(),
@@ -67,7 +68,7 @@ fn keys_and_commands_go_to_the_selected_robot_only() {
     assert!(out[0].is_empty() && out[2].is_empty(), "{out:?}");
     assert_eq!(out[1][0].1, Command::SetMode(protocol::Mode::Wander));
     assert!(matches!(out[1][1].1, Command::Teleop { v_mm_s: 50, .. }));
-    assert!(log_has(f.app(), "selected micro-rato 2 on /tmp/robot2"));
+    assert!(log_has(f.app(), "selected micro-rato #2 on /tmp/robot2"));
 }
 
 #[test]
@@ -149,9 +150,9 @@ fn stop_all_sends_stop_to_every_connected_robot_and_reports_each_answer() {
     let shown = f.app();
     assert!(log_has(
         shown,
-        "stop all: micro-rato 1: stopped (acked in 9 ms)"
+        "stop all: micro-rato #1: stopped (acked in 9 ms)"
     ));
-    assert!(log_has(shown, "stop all: micro-rato 2: REFUSED"));
+    assert!(log_has(shown, "stop all: micro-rato #2: REFUSED"));
     // The robot not shown has it in its own log too.
     assert!(log_has(&f.members[0].app, "stop all: stopped"));
     // An ordinary Stop later is not reported as part of stop all.
@@ -180,7 +181,7 @@ fn labels_use_the_robot_id_when_there_is_one_and_the_port_index_otherwise() {
     assert_eq!(robot_label(1, Some("micro-rato"), Some(7)), "micro-rato #7");
     assert_eq!(robot_label(2, None, None), "robot 3");
     let f = fleet([true, false, false]);
-    assert_eq!(f.label(0), "micro-rato 1");
+    assert_eq!(f.label(0), "micro-rato #1");
     assert_eq!(f.label(1), "robot 2");
 }
 
@@ -195,10 +196,10 @@ fn two_robots_with_the_same_id_are_reported_once_and_marked() {
         .app()
         .log
         .window(100)
-        .filter(|l| l.text.contains("robot id 4 is reported by 2 robots"))
+        .filter(|l| l.text.contains("robot id 4 is stated by the robots on"))
         .count();
     assert_eq!(warnings, 1);
-    assert!(log_has(f.app(), "/tmp/robot1, /tmp/robot2"));
+    assert!(log_has(f.app(), "/tmp/robot1 and /tmp/robot2"));
 }
 
 #[test]
