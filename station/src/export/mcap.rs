@@ -219,10 +219,7 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
 fn item_messages(item: &Item<'_>, out: &mut Vec<(&'static str, Body)>) -> u64 {
     match item {
         Item::Link { t_us, state, text } => {
-            out.push((
-                "/link",
-                Body::Json(json!({"state": state, "text": text})),
-            ));
+            out.push(("/link", Body::Json(json!({"state": state, "text": text}))));
             *t_us
         }
         Item::BadFrame { t_us, dir, error } => {

@@ -22,7 +22,10 @@ use super::csv::TelemetryRow;
 pub enum Body {
     /// `/telemetry`; `caps` (the robot's, once its HelloReply was seen) nulls the sensors it
     /// lacks.
-    Telemetry { row: Box<TelemetryRow>, caps: Option<u32> },
+    Telemetry {
+        row: Box<TelemetryRow>,
+        caps: Option<u32>,
+    },
     /// `foxglove.PoseInFrame` (`/pose`, `/truth_pose`).
     Pose(PoseInFrame),
     /// `foxglove.FrameTransform` (`/tf`).
@@ -98,7 +101,7 @@ pub fn scaled(out: &mut Vec<u8>, v: f64, decimals: u32) {
                 return;
             }
             let mut digits = decimals;
-            while frac % 10 == 0 {
+            while frac.is_multiple_of(10) {
                 frac /= 10;
                 digits -= 1;
             }
@@ -252,11 +255,17 @@ fn write_telemetry(out: &mut Vec<u8>, r: &TelemetryRow, caps: Option<u32>) {
         }
         out.push(b']');
     };
-    sensor(out, "enc_left", b",\"enc_left\":", &|o| uint(o, u64::from(r.enc_left)));
-    sensor(out, "enc_right", b",\"enc_right\":", &|o| uint(o, u64::from(r.enc_right)));
+    sensor(out, "enc_left", b",\"enc_left\":", &|o| {
+        uint(o, u64::from(r.enc_left))
+    });
+    sensor(out, "enc_right", b",\"enc_right\":", &|o| {
+        uint(o, u64::from(r.enc_right))
+    });
     sensor(out, "ir", b",\"ir\":", &|o| readings(o, &r.ir));
     sensor(out, "light", b",\"light\":", &|o| readings(o, &r.light));
-    sensor(out, "compass_deg", b",\"compass_deg\":", &|o| scaled(o, r.compass_deg, 1));
+    sensor(out, "compass_deg", b",\"compass_deg\":", &|o| {
+        scaled(o, r.compass_deg, 1)
+    });
     key(out, b",\"flags\":");
     uint(out, u64::from(r.flags));
     sensor(out, "on_goal", b",\"on_goal\":", &|o| boolean(o, r.on_goal));
@@ -270,13 +279,18 @@ fn write_telemetry(out: &mut Vec<u8>, r: &TelemetryRow, caps: Option<u32>) {
     sensor(out, "line_events", b",\"line_events\":", &|o| {
         uint(o, u64::from(r.line_events))
     });
-    sensor(out, "beacon_bearing_deg", b",\"beacon_bearing_deg\":", &|o| {
-        scaled(o, r.beacon_bearing_deg, 1)
-    });
+    sensor(
+        out,
+        "beacon_bearing_deg",
+        b",\"beacon_bearing_deg\":",
+        &|o| scaled(o, r.beacon_bearing_deg, 1),
+    );
     sensor(out, "beacon_strength", b",\"beacon_strength\":", &|o| {
         uint(o, u64::from(r.beacon_strength))
     });
-    sensor(out, "battery_v", b",\"battery_v\":", &|o| scaled(o, r.battery_v, 3));
+    sensor(out, "battery_v", b",\"battery_v\":", &|o| {
+        scaled(o, r.battery_v, 3)
+    });
     key(out, b",\"behaviours\":");
     uint(out, u64::from(r.behaviours));
     for (k, v) in [
@@ -502,13 +516,26 @@ mod tests {
 
     #[test]
     fn scaled_numbers_are_what_serde_json_writes() {
-        let mut values = vec![0.0, -0.0, 1e20, -1e20, f64::NAN, f64::INFINITY, 0.1 + 0.2, 1e-7];
+        let mut values = vec![
+            0.0,
+            -0.0,
+            1e20,
+            -1e20,
+            f64::NAN,
+            f64::INFINITY,
+            0.1 + 0.2,
+            1e-7,
+        ];
         for n in (-3_000_000i64..3_000_000).step_by(997) {
             for p in [1.0, 10.0, 1e3, 1e6] {
                 values.push(n as f64 / p);
             }
         }
-        for n in [i64::from(i32::MIN), i64::from(i32::MAX), i64::from(u32::MAX)] {
+        for n in [
+            i64::from(i32::MIN),
+            i64::from(i32::MAX),
+            i64::from(u32::MAX),
+        ] {
             values.extend([n as f64 / 1e3, n as f64 / 1e6, n as f64 / 10.0]);
         }
         let mut out = Vec::new();
@@ -562,7 +589,7 @@ mod tests {
                 robot_time_s: 4294967.295,
                 x_m: -0.001,
                 y_m: 2147483.647,
-                heading_rad: 3.142,
+                heading_rad: 2.5,
                 collisions: 9,
             }),
             Body::Json(serde_json::json!({"state": "x\u{1b}y", "n": [1, 2.5]})),
