@@ -233,8 +233,9 @@ pub struct CycleTiming {
 }
 
 /// Robot -> station at the rate the station sets. Fields a profile lacks are zero; the
-/// `HelloReply` capabilities say which are meaningful.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+/// `HelloReply` capabilities say which are meaningful. It is serialised within the ranges of
+/// `telemetry_range` (80 bytes on the wire at most), by the `Serialize` impl below.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Schema)]
 pub struct Telemetry {
     pub time_ms: u32,
     pub mode: Mode,
@@ -255,6 +256,66 @@ pub struct Telemetry {
     pub battery_mv: u16,
     pub behaviour: BehaviourOut,
     pub cycle: CycleTiming,
+}
+
+/// `Telemetry`'s fields in the same order, serialised as derived: what `Telemetry` writes after
+/// bringing each field into its range, so that no encoding path can send a wider frame.
+#[derive(Serialize)]
+#[serde(rename = "Telemetry")]
+struct TelemetryFields {
+    time_ms: u32,
+    mode: Mode,
+    pose: Pose,
+    sigma: PoseSigma,
+    wheels: Wheels,
+    ir: Packed10x8,
+    light: Packed10x8,
+    compass_ddeg: u16,
+    flags: u8,
+    line_events: u8,
+    beacon: Beacon,
+    battery_mv: u16,
+    behaviour: BehaviourOut,
+    cycle: CycleTiming,
+}
+
+impl Serialize for Telemetry {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        // Destructured so that a field added to `Telemetry` but not here fails to compile.
+        let Telemetry {
+            time_ms,
+            mode,
+            pose,
+            sigma,
+            wheels,
+            ir,
+            light,
+            compass_ddeg,
+            flags,
+            line_events,
+            beacon,
+            battery_mv,
+            behaviour,
+            cycle,
+        } = self.bounded();
+        TelemetryFields {
+            time_ms,
+            mode,
+            pose,
+            sigma,
+            wheels,
+            ir,
+            light,
+            compass_ddeg,
+            flags,
+            line_events,
+            beacon,
+            battery_mv,
+            behaviour,
+            cycle,
+        }
+        .serialize(s)
+    }
 }
 
 /// Parameters settable over the link. Values travel as f32 in the parameter's unit.

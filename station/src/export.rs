@@ -14,6 +14,7 @@
 pub mod csv;
 pub mod mcap;
 pub mod robots;
+pub mod mcap_msg;
 pub mod scene;
 
 use std::path::{Path, PathBuf};
