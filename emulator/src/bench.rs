@@ -19,7 +19,13 @@
 //!   generated), `setup_error` (the runner refused: start in a wall, a refused command, no
 //!   goal), `panic` (a bug; the run is caught so the others finish).
 //!
-//! Determinism: a run depends only on (arena, seed); rows come out in (arena, seed) order
+//! Seeds: every run gets its own emulator seed, [`run_seed`]`(--seed, arena index, draw)`, so
+//! each arena's run draws its own noise (wheel speed errors, IR gains, ...) and the success
+//! rate measures the noise's distribution, not one draw shared by every arena. `--seeds K`
+//! runs draws 1..=K of each arena. A row's `seed` is that emulator seed: `robot-emulator run
+//! --seed S` with the same arena repeats the run.
+//!
+//! Determinism: a run depends only on (arena, seed); rows come out in (arena, draw) order
 //! whatever the number of jobs. Only `wall_s` varies between runs of the benchmark.
 
 use std::io::IsTerminal as _;
@@ -35,6 +41,7 @@ use serde::Serialize;
 use crate::arena::{Arena, LoadOptions};
 use crate::arena_gen::{self, Kind};
 use crate::geometry::Point;
+use crate::rng::SimRng;
 use crate::scenario::{ScenarioOptions, Task};
 use crate::sensors::Noise;
 
@@ -110,6 +117,40 @@ impl ArenaSource {
             }
         }
     }
+}
+
+/// Stream of the benchmark's base seed from which each run's emulator seed is drawn (beyond
+/// the per-component streams of `rng::stream` and the fleet's).
+const BENCH_SEED_STREAM: u64 = 0x0042_656e_6368; // "Bench"
+
+/// The emulator seed of draw `draw` (1-based, `--seeds K` runs 1..=K) on the arena at
+/// `arena_index` (0-based, the order of `--arenas` after expansion: `generated:N` is
+/// arenas 1..N at indices 0..N-1) of a benchmark with base seed `base` (`--seed`): the
+/// `draw`-th value of the generator seeded with `base` on stream "Bench" + `arena_index`.
+/// Different arenas and draws get independent noise; the same triple always the same seed.
+pub fn run_seed(base: u64, arena_index: usize, draw: u64) -> u64 {
+    run_seeds(base, arena_index, draw)
+        .last()
+        .copied()
+        .unwrap_or_default()
+}
+
+/// Draws 1..=`draws` of [`run_seed`] for one arena.
+fn run_seeds(base: u64, arena_index: usize, draws: u64) -> Vec<u64> {
+    let mut rng = SimRng::new(base, BENCH_SEED_STREAM.wrapping_add(arena_index as u64));
+    (0..draws).map(|_| rng.next_u64()).collect()
+}
+
+/// Every (arena index, draw, emulator seed) of a benchmark, in report order.
+pub(crate) fn run_list(arenas: usize, base: u64, draws: u64) -> Vec<(usize, u64, u64)> {
+    (0..arenas)
+        .flat_map(|a| {
+            run_seeds(base, a, draws)
+                .into_iter()
+                .zip(1..)
+                .map(move |(seed, draw)| (a, draw, seed))
+        })
+        .collect()
 }
 
 /// Most arenas `generated:N` may ask for.
@@ -190,8 +231,10 @@ pub struct BenchOptions {
     pub profile: &'static Profile,
     /// The arenas.
     pub arenas: Vec<ArenaSource>,
-    /// Seeds 1..=seeds per arena.
+    /// Noise draws per arena (`--seeds`): draws 1..=seeds, each with its own [`run_seed`].
     pub seeds: u64,
+    /// The base seed (`--seed`) every run's emulator seed is derived from.
+    pub seed: u64,
     /// Worker threads.
     pub jobs: usize,
     /// Simulated seconds per run.
@@ -255,8 +298,10 @@ impl Cause {
 pub struct Row {
     /// Arena label.
     pub arena: String,
-    /// Seed.
+    /// The emulator seed ([`run_seed`]; `robot-emulator run --seed` repeats the run).
     pub seed: u64,
+    /// Which draw of this arena, 1..=`--seeds`.
+    pub draw: u64,
     /// Succeeded (see the module text).
     pub success: bool,
     /// Why not, when it did not.
@@ -300,6 +345,7 @@ impl Row {
         Row {
             arena,
             seed,
+            draw: 0,
             success: false,
             cause: Some(cause),
             sim_s: None,
@@ -408,8 +454,10 @@ pub struct BenchReport {
     pub profile: &'static str,
     /// Arenas run.
     pub arenas: usize,
-    /// Seeds per arena (1..=seeds).
+    /// Noise draws per arena (`--seeds`).
     pub seeds: u64,
+    /// The base seed (`--seed`) of every run's [`run_seed`].
+    pub seed: u64,
     /// Simulated seconds allowed per run.
     pub timeout_s: f64,
     /// Worker threads.
@@ -424,20 +472,21 @@ pub struct BenchReport {
 
 /// Runs the benchmark.
 pub fn run(opts: &BenchOptions) -> BenchReport {
-    let jobs: Vec<(usize, u64)> = (0..opts.arenas.len())
-        .flat_map(|a| (1..=opts.seeds).map(move |s| (a, s)))
-        .collect();
+    let jobs = run_list(opts.arenas.len(), opts.seed, opts.seeds);
     let started = Instant::now();
     let workers = opts.jobs.clamp(1, jobs.len().max(1));
     let rows = run_parallel(jobs.len(), workers, opts.progress, |i| {
-        let (a, seed) = jobs[i];
-        run_one(&opts.arenas[a], seed, opts)
+        let (a, draw, seed) = jobs[i];
+        let mut row = run_one(&opts.arenas[a], seed, opts);
+        row.draw = draw;
+        row
     });
     BenchReport {
         task: opts.task,
         profile: opts.profile.name,
         arenas: opts.arenas.len(),
         seeds: opts.seeds,
+        seed: opts.seed,
         timeout_s: opts.timeout_s,
         jobs: workers,
         wall_s: started.elapsed().as_secs_f64(),
@@ -672,10 +721,11 @@ pub fn render(r: &BenchReport) -> String {
     let s = &r.summary;
     let pct = |x: f64| x * 100.0;
     let mut out = format!(
-        "bench {}: {} arenas x {} seeds = {} runs, {} robot, {:.0} s timeout ({} jobs, {:.1} s wall)\n",
+        "bench {}: {} arenas x {} noise draws (base seed {}) = {} runs, {} robot, {:.0} s timeout ({} jobs, {:.1} s wall)\n",
         task_name(r.task),
         r.arenas,
         r.seeds,
+        r.seed,
         s.runs,
         r.profile,
         r.timeout_s,
@@ -762,6 +812,23 @@ mod tests {
         let s = spread((1..=10).map(f64::from).collect()).expect("values");
         assert_eq!((s.median, s.p90), (5.0, 9.0));
         assert!(spread(Vec::new()).is_none());
+    }
+
+    #[test]
+    fn every_arena_and_draw_gets_its_own_seed_and_the_same_base_the_same_ones() {
+        let list = run_list(3, 1, 2);
+        assert_eq!(list.len(), 6);
+        let seeds: std::collections::BTreeSet<u64> = list.iter().map(|x| x.2).collect();
+        assert_eq!(seeds.len(), 6, "{list:?}");
+        assert_eq!(
+            list.iter().map(|x| (x.0, x.1)).collect::<Vec<_>>(),
+            vec![(0, 1), (0, 2), (1, 1), (1, 2), (2, 1), (2, 2)]
+        );
+        assert_eq!(list, run_list(3, 1, 2));
+        assert_eq!(run_seed(1, 2, 2), list[5].2);
+        // More draws keep the first ones: --seeds 5 extends --seeds 2.
+        assert_eq!(run_list(3, 1, 5)[0..2], list[0..2]);
+        assert_ne!(run_list(3, 2, 2), list, "another base seed, other draws");
     }
 
     #[test]

@@ -99,9 +99,14 @@ pub struct BenchArgs {
     /// Kind of generated arena [default: micro-rato for the search tasks, box otherwise].
     #[arg(long, value_enum)]
     pub kind: Option<crate::arena_gen::Kind>,
-    /// Seeds per arena: runs use seeds 1..=K.
+    /// Noise draws per arena: each run gets its own emulator seed, drawn from --seed and the
+    /// arena's index (`bench::run_seed`; a row's `seed` repeats it with `run --seed`), so the
+    /// rate measures the noise's distribution, not one draw shared by every arena.
     #[arg(long, default_value_t = 1, value_name = "K")]
     pub seeds: u64,
+    /// Base seed of the runs' emulator seeds.
+    #[arg(long, default_value_t = 1, value_name = "S")]
+    pub seed: u64,
     /// Runs in parallel [default: the number of cores].
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -189,6 +194,7 @@ impl BenchArgs {
             profile,
             arenas,
             seeds: self.seeds,
+            seed: self.seed,
             jobs,
             timeout_s,
             noise: if self.no_noise {

@@ -11,6 +11,7 @@ fn options(task: BenchTask, arenas: Vec<ArenaSource>, seeds: u64) -> BenchOption
         profile: task.default_profile(),
         arenas,
         seeds,
+        seed: 1,
         jobs: 2,
         timeout_s: 120.0,
         noise: Noise::default(),
@@ -52,9 +53,20 @@ fn a_small_reach_beacon_bench_has_the_right_shape_and_counts() {
             )
         })
         .collect();
-    assert_eq!(order[0], ("micro-rato-0001".to_string(), 1));
-    assert_eq!(order[1], ("micro-rato-0001".to_string(), 2));
-    assert_eq!(order[5], ("micro-rato-0003".to_string(), 2));
+    // Rows in (arena, draw) order; each run has its own emulator seed (bench::run_seed), so
+    // arenas do not share one noise draw.
+    let draws: Vec<u64> = rows
+        .iter()
+        .map(|r| r["draw"].as_u64().unwrap_or(0))
+        .collect();
+    assert_eq!(draws, vec![1, 2, 1, 2, 1, 2, 1, 2]);
+    assert_eq!(order[0].0, "micro-rato-0001");
+    assert_eq!(order[5].0, "micro-rato-0003");
+    for (i, (_, seed)) in order.iter().enumerate() {
+        assert_eq!(*seed, bench::run_seed(1, i / 2, draws[i]));
+    }
+    let distinct: std::collections::BTreeSet<u64> = order.iter().map(|o| o.1).collect();
+    assert_eq!(distinct.len(), 8);
     // The missing file is an import error, with the importer's message, on both seeds.
     for r in &rows[6..] {
         assert_eq!(r["cause"], "import_error");
