@@ -104,7 +104,7 @@ const fn needs(caps: u32, info: ParamInfo) -> ParamInfo {
 use protocol::caps::ENCODERS;
 
 /// Every parameter, by id.
-pub const PARAMS: [ParamInfo; 33] = [
+pub const PARAMS: [ParamInfo; 34] = [
     pi(
         0,
         "failsafe_ms",
@@ -377,6 +377,17 @@ pub const PARAMS: [ParamInfo; 33] = [
         2.0,
         "go-to and plan execution: getting this much nearer counts as progress",
     ),
+    needs(
+        ENCODERS,
+        p(
+            50,
+            "odo_wheel_ratio_ppm",
+            "ppm",
+            -50_000.0,
+            50_000.0,
+            "odometry: right over left wheel travel per pulse, minus 1 (0: equal; `station calibrate odometry` measures it)",
+        ),
+    ),
 ];
 
 /// Decimals that show every value of `info` in its unit: none for an integer parameter, else
@@ -414,6 +425,8 @@ pub mod id {
     pub const ARENA_MIN_Y_M: u16 = 28;
     pub const ARENA_MAX_X_M: u16 = 29;
     pub const ARENA_MAX_Y_M: u16 = 30;
+    pub const ODO_WHEEL_DISTANCE_MM: u16 = 5;
+    pub const ODO_WHEEL_RATIO_PPM: u16 = 50;
 }
 
 /// The description of parameter `id`.
@@ -480,6 +493,7 @@ impl Tunables<'_> {
             30 => Slot::F32(&mut self.dead_reckon.bounds.max.y),
             31 => Slot::F32(&mut self.progress.stuck_limit_s),
             32 => Slot::F32(&mut self.progress.stuck_progress_m),
+            50 => Slot::F32(&mut self.odometry.wheel_ratio_error_ppm),
             _ => return None,
         })
     }
@@ -540,7 +554,11 @@ mod tests {
     fn every_listed_parameter_has_a_slot_and_ids_are_unique() {
         with_tunables(|t| {
             for (i, info) in PARAMS.iter().enumerate() {
-                assert_eq!(usize::from(info.id), i, "ids are dense and in order");
+                // Ids are assigned per branch (33-49 to others), so strictly increasing, not
+                // dense.
+                if i > 0 {
+                    assert!(info.id > PARAMS[i - 1].id, "ids are unique and in order");
+                }
                 let v = t.get(info.id).expect("slot exists");
                 assert!(
                     v >= info.min && v <= info.max,
@@ -566,6 +584,8 @@ mod tests {
             (id::ARENA_MIN_Y_M, "arena_min_y_m"),
             (id::ARENA_MAX_X_M, "arena_max_x_m"),
             (id::ARENA_MAX_Y_M, "arena_max_y_m"),
+            (id::ODO_WHEEL_DISTANCE_MM, "odo_wheel_distance_mm"),
+            (id::ODO_WHEEL_RATIO_PPM, "odo_wheel_ratio_ppm"),
         ] {
             assert_eq!(info(i).map(|p| p.name), Some(name));
         }
