@@ -245,6 +245,10 @@ pub struct BenchOptions {
     pub progress: bool,
     /// Robots per contest; above 1 the benchmark is `crate::fleet_bench`'s.
     pub robots: usize,
+    /// Go-to: before each run, the same robot (same seed) calibrates its odometry in the same
+    /// arena ([`crate::scenario::calibrate_odometry`]) and the go-to run starts with the
+    /// result set, as an operator who calibrated once and loads the parameter file.
+    pub calibrate_odometry: bool,
 }
 
 /// Why a run failed.
@@ -338,6 +342,8 @@ pub struct Row {
     pub firmware_delivered: Option<u16>,
     /// The error of an import or setup failure, or a panic's message.
     pub error: Option<String>,
+    /// The odometry calibration before the run (`--calibrate-odometry`).
+    pub calibration: Option<crate::scenario::calibrate_odometry::CalibrationReport>,
 }
 
 impl Row {
@@ -364,6 +370,7 @@ impl Row {
             delivered: None,
             firmware_delivered: None,
             error: Some(error),
+            calibration: None,
         }
     }
 }
@@ -443,6 +450,26 @@ pub struct Summary {
     pub plan: Option<PlanSummary>,
     /// Forage only.
     pub forage: Option<ForageSummary>,
+    /// `--calibrate-odometry` only.
+    pub calibration: Option<CalibrationSummary>,
+}
+
+/// The odometry calibrations' figures (`--calibrate-odometry`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct CalibrationSummary {
+    /// Calibrations run.
+    pub runs: usize,
+    /// Calibrations that gave parameters.
+    pub succeeded: usize,
+    /// Of those, both directions closed a lap.
+    pub both_directions: usize,
+    /// |true ratio error| before calibration, ppm (the emulator's truth; the robot never sees
+    /// it).
+    pub true_ratio_ppm: Option<Spread>,
+    /// |measured - true ratio error| of the successful calibrations, ppm.
+    pub residual_ppm: Option<Spread>,
+    /// Simulated seconds of the calibrations.
+    pub sim_s: Option<Spread>,
 }
 
 /// The benchmark's report (`--json` prints it whole).
@@ -592,6 +619,16 @@ fn run_checked(
     let setup = |e: crate::scenario::ScenarioError| (Cause::SetupError, e.to_string());
     let mut row = Row::failed(source.label(), seed, Cause::Timeout, String::new(), 0.0);
     row.error = None;
+    if opts.calibrate_odometry {
+        let c = crate::scenario::calibrate_odometry::run_calibration(
+            arena.clone(),
+            &so,
+            crate::scenario::calibrate_odometry::DEFAULT_TIMEOUT_S,
+        )
+        .map_err(setup)?;
+        so.params = c.params();
+        row.calibration = Some(c);
+    }
     if opts.task == BenchTask::Forage {
         let r = crate::scenario::forage::run_forage(arena, so).map_err(setup)?;
         row.success = r.all_delivered;
@@ -676,6 +713,28 @@ pub fn summarise(task: BenchTask, rows: &[Row]) -> Summary {
             run2_faster_rate: ratio(faster, both.len()),
         }
     });
+    let cals: Vec<&crate::scenario::calibrate_odometry::CalibrationReport> =
+        rows.iter().filter_map(|r| r.calibration.as_ref()).collect();
+    let calibration = (!cals.is_empty()).then(|| {
+        let ok: Vec<_> = cals
+            .iter()
+            .filter(|c| c.wheel_ratio_ppm.is_some())
+            .collect();
+        CalibrationSummary {
+            runs: cals.len(),
+            succeeded: ok.len(),
+            both_directions: ok.iter().filter(|c| c.both_directions).count(),
+            true_ratio_ppm: spread(cals.iter().map(|c| c.true_ratio_ppm.abs()).collect()),
+            residual_ppm: spread(
+                ok.iter()
+                    .filter_map(|c| c.wheel_ratio_ppm)
+                    .zip(ok.iter().map(|c| c.true_ratio_ppm))
+                    .map(|(m, t)| (f64::from(m) - t).abs())
+                    .collect(),
+            ),
+            sim_s: spread(cals.iter().map(|c| c.sim_s).collect()),
+        }
+    });
     let forage = (task == BenchTask::Forage).then(|| {
         let objects = rows.iter().filter_map(|r| r.objects).sum();
         let delivered = rows.iter().filter_map(|r| r.delivered).sum();
@@ -713,6 +772,7 @@ pub fn summarise(task: BenchTask, rows: &[Row]) -> Summary {
         failures,
         plan,
         forage,
+        calibration,
     }
 }
 
@@ -779,6 +839,21 @@ pub fn render(r: &BenchReport) -> String {
             p.both_reached,
             p.run2_faster,
             pct(p.run2_faster_rate)
+        );
+    }
+    if let Some(c) = s.calibration {
+        let ppm = |x: Option<Spread>| match x {
+            Some(v) => format!("median {:.0} ppm, p90 {:.0} ppm", v.median, v.p90),
+            None => "none".to_string(),
+        };
+        out += &format!(
+            "  calibration    {} of {} gave parameters ({} both directions); wheel ratio error \
+             {} before, residual {}\n",
+            c.succeeded,
+            c.runs,
+            c.both_directions,
+            ppm(c.true_ratio_ppm),
+            ppm(c.residual_ppm)
         );
     }
     if let Some(f) = s.forage {

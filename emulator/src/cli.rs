@@ -127,6 +127,11 @@ pub struct BenchArgs {
     /// against alone, and the collisions between robots.
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub robots: usize,
+    /// Go-to only: before each run the same robot calibrates its odometry in the arena (two
+    /// wall-following laps, `station calibrate odometry`'s manoeuvre) and starts the go-to
+    /// with the measured wheel distance and ratio set.
+    #[arg(long)]
+    pub calibrate_odometry: bool,
 }
 
 /// Most seeds per arena `bench --seeds` takes.
@@ -187,6 +192,15 @@ impl BenchArgs {
                 self.robots
             ));
         }
+        if self.calibrate_odometry
+            && (self.task != BenchTask::Goto || !profile.has(protocol::caps::ENCODERS))
+        {
+            return Err(
+                "--calibrate-odometry: the odometry calibration is the Khepera go-to's; use \
+                 --task goto --profile khepera"
+                    .to_string(),
+            );
+        }
         let kind = self.kind.unwrap_or_else(|| self.task.default_kind());
         let arenas = crate::bench::resolve_arenas(&self.arenas, kind)?;
         Ok(crate::bench::BenchOptions {
@@ -204,6 +218,7 @@ impl BenchArgs {
             },
             progress: !self.json,
             robots: self.robots,
+            calibrate_odometry: self.calibrate_odometry,
         })
     }
 }

@@ -17,6 +17,7 @@ fn options(task: BenchTask, arenas: Vec<ArenaSource>, seeds: u64) -> BenchOption
         noise: Noise::default(),
         progress: false,
         robots: 1,
+        calibrate_odometry: false,
     }
 }
 

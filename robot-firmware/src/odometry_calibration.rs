@@ -28,6 +28,12 @@
 //! the system is nearly singular; the mean wheel factor is then taken as nominal (distance
 //! scale errors of 1 % matter little next to a bent straight line).
 //!
+//! An uncalibrated lap can drift by more than the closing tolerance (a 2 % wheel difference
+//! turns the belief 0.38 rad a metre). So the recogniser also measures, on every straight
+//! stretch along a wall (where the true heading is constant), the belief's heading rate per
+//! metre, and judges a closure by the heading with that rate taken out: the wall as a
+//! straight edge gives a first estimate, the closed laps the exact one.
+//!
 //! The anchors are window means: the believed heading is linear in the encoder counts, so the
 //! window's mean heading belongs to its mean counts, and the wall-following wobble averages
 //! out of the true heading too.
@@ -62,6 +68,12 @@ pub struct CalibrationParams {
     pub max_ratio_error: f32,
     /// Largest accepted |distance / nominal - 1| (seed 000's 53.3 vs 52 mm is 2.5 %).
     pub max_distance_error: f32,
+    /// Lap travel wanted in each direction before the calibration ends, mm (laps in one
+    /// direction are summed: more travel, smaller share of the anchors' error).
+    pub direction_mm: f32,
+    /// Shortest straight stretch whose heading rate counts towards the straight-edge
+    /// estimate, mm (two windows).
+    pub min_stretch_mm: f32,
 }
 
 impl Default for CalibrationParams {
@@ -73,6 +85,8 @@ impl Default for CalibrationParams {
             min_lap_mm: 500.0,
             max_ratio_error: 0.05,
             max_distance_error: 0.10,
+            min_stretch_mm: 160.0,
+            direction_mm: 2000.0,
         }
     }
 }
@@ -122,8 +136,10 @@ pub struct Calibration {
     /// Both directions were measured (else the mean wheel factor was taken as nominal and
     /// the wheel distance kept).
     pub both_directions: bool,
-    /// The laps used.
+    /// The laps used: the sums of the counter-clockwise and of the clockwise ones.
     pub laps: [Lap; 2],
+    /// The wheel ratio is the median of this many laps' own (0: from the sums).
+    pub median_of: u8,
 }
 
 /// Why no calibration came out.
@@ -135,6 +151,8 @@ pub enum CalibrationError {
     DistanceOutOfRange(f32),
     /// The equations have no usable solution (a degenerate lap).
     Degenerate,
+    /// No lap closed.
+    NoLap,
 }
 
 /// What the caller should do next.
@@ -182,6 +200,35 @@ pub struct LapCalibrator {
     head: usize,
     start: Option<Anchor>,
     laps: [Option<Lap>; 2],
+    // Every closed lap, for the median (a lap whose anchors caught the follower's wobble at
+    // its worst, or a closure on the wrong wall, is an outlier, not a shift of the result).
+    each: [Lap; MAX_LAPS],
+    count: usize,
+    // The straight stretch under way (first and last anchor), and the sums of the finished
+    // stretches' belief heading change and travel.
+    stretch: Option<(Anchor, Anchor)>,
+    stretch_heading: f32,
+    stretch_travel: f32,
+}
+
+/// Most laps kept; the calibration ends when it has this many.
+pub const MAX_LAPS: usize = 12;
+
+const NO_LAP: Lap = Lap {
+    right_mm: 0.0,
+    left_mm: 0.0,
+    turns: 0,
+    drift_rad: 0.0,
+};
+
+/// What the newest samples say.
+enum Window {
+    /// Less than `window_mm` of travel along the wall yet.
+    Short,
+    /// The heading moved more than `straight_spread_rad`.
+    Bent,
+    /// Straight along the wall: the window's mean anchor.
+    Straight(Anchor),
 }
 
 impl LapCalibrator {
@@ -200,6 +247,31 @@ impl LapCalibrator {
             head: 0,
             start: None,
             laps: [None, None],
+            each: [NO_LAP; MAX_LAPS],
+            count: 0,
+            stretch: None,
+            stretch_heading: 0.0,
+            stretch_travel: 0.0,
+        }
+    }
+
+    /// The belief's heading rate along straight walls so far, radians a millimetre (0 until
+    /// `2 min_stretch_mm` of straight stretches): minus the path's true curvature error.
+    pub fn straight_rate(&self) -> f32 {
+        if self.stretch_travel < 2.0 * self.params.min_stretch_mm {
+            0.0
+        } else {
+            self.stretch_heading / self.stretch_travel
+        }
+    }
+
+    fn end_stretch(&mut self) {
+        if let Some((a, b)) = self.stretch.take() {
+            let ds = b.travel_mm - a.travel_mm;
+            if ds >= self.params.min_stretch_mm {
+                self.stretch_heading += b.heading - a.heading;
+                self.stretch_travel += ds;
+            }
         }
     }
 
@@ -223,8 +295,9 @@ impl LapCalibrator {
         let right_mm = (s.pulses[1] - origin[1]) as f32 * self.mm_per_pulse;
         let travel_mm = (libm::fabsf(left_mm) + libm::fabsf(right_mm)) / 2.0;
         if !s.wall_beside {
-            // Not along a wall: the window restarts.
+            // Not along a wall: the window and the stretch restart.
             self.len = 0;
+            self.end_stretch();
             return Next::Follow(self.side);
         }
         let p = Point {
@@ -234,9 +307,18 @@ impl LapCalibrator {
             right_mm,
         };
         self.push(p);
-        let Some(anchor) = self.straight_window() else {
-            return Next::Follow(self.side);
+        let anchor = match self.window() {
+            Window::Short => return Next::Follow(self.side),
+            Window::Bent => {
+                self.end_stretch();
+                return Next::Follow(self.side);
+            }
+            Window::Straight(a) => a,
         };
+        self.stretch = Some(match self.stretch {
+            Some((first, _)) => (first, anchor),
+            None => (anchor, anchor),
+        });
         match self.start {
             None => {
                 self.start = Some(anchor);
@@ -246,7 +328,9 @@ impl LapCalibrator {
                 if anchor.travel_mm - start.travel_mm < self.params.min_lap_mm {
                     return Next::Follow(self.side);
                 }
-                let turned = anchor.heading - start.heading;
+                let travel = anchor.travel_mm - start.travel_mm;
+                // The straight-edge estimate of the lap's drift taken out (module text).
+                let turned = anchor.heading - start.heading - self.straight_rate() * travel;
                 let turns = libm::roundf(turned / (2.0 * PI));
                 let drift = turned - turns * 2.0 * PI;
                 if turns == 0.0 || libm::fabsf(drift) > self.params.heading_tolerance_rad {
@@ -256,20 +340,40 @@ impl LapCalibrator {
                     right_mm: anchor.right_mm - start.right_mm,
                     left_mm: anchor.left_mm - start.left_mm,
                     turns: turns as i32,
-                    drift_rad: drift,
+                    drift_rad: anchor.heading - start.heading - turns * 2.0 * PI,
                 };
-                match self.side {
-                    WallSide::Right => {
-                        self.laps[0] = Some(lap);
-                        self.side = WallSide::Left;
-                        self.start = None;
-                        self.len = 0;
-                    }
-                    WallSide::Left => {
-                        self.laps[1] = Some(lap);
-                        return Next::Done(self.solve());
-                    }
+                // Laps chain: this closing anchor starts the next one.
+                self.start = Some(anchor);
+                self.len = 0;
+                if let Some(e) = self.each.get_mut(self.count) {
+                    *e = lap;
+                    self.count += 1;
                 }
+                let slot = usize::from(lap.turns < 0);
+                self.laps[slot] = Some(match self.laps[slot] {
+                    Some(sum) => Lap {
+                        right_mm: sum.right_mm + lap.right_mm,
+                        left_mm: sum.left_mm + lap.left_mm,
+                        turns: sum.turns + lap.turns,
+                        drift_rad: sum.drift_rad + lap.drift_rad,
+                    },
+                    None => lap,
+                });
+                let enough = |l: Option<Lap>| {
+                    l.is_some_and(|l| {
+                        (libm::fabsf(l.right_mm) + libm::fabsf(l.left_mm)) / 2.0
+                            >= self.params.direction_mm
+                    })
+                };
+                if (enough(self.laps[0]) && enough(self.laps[1])) || self.count == MAX_LAPS {
+                    return Next::Done(self.finish());
+                }
+                // Counter-clockwise first, then ask for the other way round.
+                self.side = if enough(self.laps[0]) {
+                    WallSide::Left
+                } else {
+                    WallSide::Right
+                };
             }
         }
         Next::Follow(self.side)
@@ -292,9 +396,9 @@ impl LapCalibrator {
     }
 
     /// The mean anchor of the newest samples spanning `window_mm`, if they are straight.
-    fn straight_window(&self) -> Option<Anchor> {
+    fn window(&self) -> Window {
         if self.len < 2 {
-            return None;
+            return Window::Short;
         }
         let newest = self.ring[(self.head + WINDOW - 1) % WINDOW];
         let (mut lo, mut hi) = (newest.heading, newest.heading);
@@ -305,7 +409,7 @@ impl LapCalibrator {
             lo = lo.min(q.heading);
             hi = hi.max(q.heading);
             if hi - lo > self.params.straight_spread_rad {
-                return None;
+                return Window::Bent;
             }
             sum.heading += q.heading;
             sum.left_mm += q.left_mm;
@@ -313,7 +417,7 @@ impl LapCalibrator {
             sum.travel_mm += q.travel_mm;
             n += 1.0;
             if newest.travel_mm - q.travel_mm >= self.params.window_mm {
-                return Some(Anchor {
+                return Window::Straight(Anchor {
                     heading: sum.heading / n,
                     left_mm: sum.left_mm / n,
                     right_mm: sum.right_mm / n,
@@ -321,20 +425,77 @@ impl LapCalibrator {
                 });
             }
         }
-        None
+        Window::Short
     }
 
-    fn solve(&self) -> Result<Calibration, CalibrationError> {
-        let (Some(l1), Some(l2)) = (self.laps[0], self.laps[1]) else {
-            return Err(CalibrationError::Degenerate);
+    /// The calibration from the laps closed so far (the caller's time is up, or both
+    /// directions have enough): both directions if there are, else one.
+    pub fn finish(&self) -> Result<Calibration, CalibrationError> {
+        let (l1, l2) = match self.laps {
+            [Some(a), Some(b)] => (a, b),
+            // One direction: split nothing, solve it with itself (the nominal-mean branch).
+            [Some(a), None] | [None, Some(a)] => (a, NO_LAP),
+            [None, None] => return Err(CalibrationError::NoLap),
         };
-        solve_laps(
+        let solved = solve_laps(
             [l1, l2],
             self.nominal_distance_mm,
             self.params.max_ratio_error,
             self.params.max_distance_error,
-        )
+        );
+        // Three laps or more: each lap's own ratio (mean wheel factor nominal), the median,
+        // whatever one outlier did to the sums.
+        let mut r = [0.0f32; MAX_LAPS];
+        let mut n = 0;
+        for lap in &self.each[..self.count] {
+            if let Some(x) = lap_ratio(lap, self.nominal_distance_mm) {
+                r[n] = x;
+                n += 1;
+            }
+        }
+        if n < 3 {
+            return solved;
+        }
+        let v = &mut r[..n];
+        v.sort_unstable_by(f32::total_cmp);
+        let median = if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            (v[n / 2 - 1] + v[n / 2]) / 2.0
+        };
+        if libm::fabsf(median - 1.0) > self.params.max_ratio_error {
+            return Err(CalibrationError::RatioOutOfRange(median));
+        }
+        let c = match solved {
+            // The sums agree with the median: keep their wheel distance.
+            Ok(c) if libm::fabsf(c.wheel_ratio - median) < 2e-3 => Calibration {
+                wheel_ratio: median,
+                median_of: n as u8,
+                ..c
+            },
+            _ => Calibration {
+                wheel_ratio: median,
+                wheel_distance_mm: self.nominal_distance_mm,
+                both_directions: false,
+                laps: [l1, l2],
+                median_of: n as u8,
+            },
+        };
+        Ok(c)
     }
+}
+
+/// One lap's ratio with the mean wheel factor nominal (`a + c = 2` in units of the nominal
+/// distance), `None` for a degenerate lap.
+fn lap_ratio(lap: &Lap, nominal_distance_mm: f32) -> Option<f32> {
+    let (r, q) = (lap.right_mm / nominal_distance_mm, lap.left_mm / nominal_distance_mm);
+    let t = 2.0 * PI * lap.turns as f32;
+    if libm::fabsf(r + q) < 1e-6 {
+        return None;
+    }
+    let a = (t + 2.0 * q) / (r + q);
+    let c = 2.0 - a;
+    (a > 0.0 && c > 0.0).then(|| a / c)
 }
 
 /// Solves two laps' equations `a R - c L = 2 pi k` (see the module text), in f64-free f32
@@ -356,7 +517,7 @@ pub fn solve_laps(
         l2.left_mm / b,
     );
     let det = -r1 * q2 + q1 * r2;
-    let both = l1.turns.signum() != l2.turns.signum();
+    let both = l1.turns * l2.turns < 0;
     let (a, c) = if both && libm::fabsf(det) > 1e-3 * (r1 * q2).abs().max(1.0) {
         // Cramer on [r1 -q1; r2 -q2] [a; c] = [t1; t2].
         let a = (t(&l1) * -q2 + q1 * t(&l2)) / det;
@@ -388,6 +549,7 @@ pub fn solve_laps(
         wheel_distance_mm: distance,
         both_directions: both,
         laps,
+        median_of: 0,
     })
 }
 
