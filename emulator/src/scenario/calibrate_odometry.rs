@@ -83,20 +83,8 @@ pub fn run_calibration(
     let bias = sim.wheel_bias();
     let true_ratio_ppm = ((1.0 + bias[1]) / (1.0 + bias[0]) - 1.0) * 1e6;
     let profile = opts.profile;
-    let mut cp = CalibrationParams::default();
-    // DIAG-ENV (remove)
-    if let Ok(v) = std::env::var("NAV_CAL") {
-        let f: Vec<f32> = v.split(',').filter_map(|x| x.parse().ok()).collect();
-        if f.len() == 5 {
-            cp.window_mm = f[0];
-            cp.straight_spread_rad = f[1];
-            cp.heading_tolerance_rad = f[2];
-            cp.min_lap_mm = f[3];
-            cp.min_stretch_mm = f[4];
-        }
-    }
     let mut cal = LapCalibrator::new(
-        cp,
+        CalibrationParams::default(),
         profile.pulse_m * 1000.0,
         profile.wheel_distance_m * 1000.0,
     );
@@ -124,13 +112,12 @@ pub fn run_calibration(
             heading_rad: core.pose().heading,
             wall_beside: core.sensors().ir[sensor] >= wall_level,
         };
-        if std::env::var("NAV_CAL_TRACE").is_ok() {
-            let t = sim.truth();
-            eprintln!("T {} {:.4} {:.4} {:.4} {:.4} {} {} {} {:?} {:.5}", sim.now_us()/1000, t.x, t.y, t.heading, sample.heading_rad, sample.pulses[0], sample.pulses[1], sample.wall_beside as u8, side, cal.straight_rate());
-        }
         match cal.observe(sample) {
             Next::Follow(s) if s != side => {
                 side = s;
+                // Turn round on the spot (half a turn by the robot's own heading), so the
+                // wall it was following is now on its other side: the laps go the other way.
+                turn_round(&mut sim, end_ms)?;
                 apply(&mut sim, follow(side), "SetMode(EdgeFollowLeft)")?;
             }
             Next::Follow(_) => {}
@@ -158,13 +145,40 @@ pub fn run_calibration(
         Ok(c) => fill(&mut report, &c),
         Err(e) => report.error = Some(format!("{e:?} after {sim_s:.0} s")),
     }
-    if std::env::var("NAV_ORACLE").is_ok() {
-        report.wheel_ratio_ppm = Some(report.true_ratio_ppm as f32);
-        let m = (bias[0] + bias[1]) / 2.0;
-        report.wheel_distance_mm = Some((f64::from(profile.wheel_distance_m) * 1000.0 / (1.0 + m)) as f32);
-        report.error = None;
-    }
     Ok(report)
+}
+
+/// Turn rate of the turn round, mrad/s (about 0.6 rad/s: 16 mm/s a wheel on a Khepera).
+const TURN_MRAD_S: i16 = 600;
+
+/// Turns the robot half a turn on the spot by its believed heading (Manual mode, a teleop
+/// command every sample as a station's joystick would), then stops.
+fn turn_round(sim: &mut Sim, end_ms: u64) -> Result<(), ScenarioError> {
+    apply(sim, Command::SetMode(Mode::Manual), "SetMode(Manual)")?;
+    let mut last = sim.robot().pose().heading;
+    let mut turned = 0.0f32;
+    while turned < core::f32::consts::PI && sim.now_us() / 1000 < end_ms {
+        apply(
+            sim,
+            Command::Teleop {
+                v_mm_s: 0,
+                w_mrad_s: TURN_MRAD_S,
+            },
+            "Teleop(turn round)",
+        )?;
+        sim.run_for(SAMPLE_MS);
+        let h = sim.robot().pose().heading;
+        turned += robot_firmware::odometry::wrap_angle(h - last);
+        last = h;
+    }
+    apply(
+        sim,
+        Command::Teleop {
+            v_mm_s: 0,
+            w_mrad_s: 0,
+        },
+        "Teleop(stop)",
+    )
 }
 
 fn follow(side: WallSide) -> Command {
