@@ -99,9 +99,14 @@ pub struct BenchArgs {
     /// Kind of generated arena [default: micro-rato for the search tasks, box otherwise].
     #[arg(long, value_enum)]
     pub kind: Option<crate::arena_gen::Kind>,
-    /// Seeds per arena: runs use seeds 1..=K.
+    /// Noise draws per arena: each run gets its own emulator seed, drawn from --seed and the
+    /// arena's index (`bench::run_seed`; a row's `seed` repeats it with `run --seed`), so the
+    /// rate measures the noise's distribution, not one draw shared by every arena.
     #[arg(long, default_value_t = 1, value_name = "K")]
     pub seeds: u64,
+    /// Base seed of the runs' emulator seeds.
+    #[arg(long, default_value_t = 1, value_name = "S")]
+    pub seed: u64,
     /// Runs in parallel [default: the number of cores].
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -122,6 +127,11 @@ pub struct BenchArgs {
     /// against alone, and the collisions between robots.
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub robots: usize,
+    /// Go-to only: before each run the same robot calibrates its odometry in the arena (two
+    /// wall-following laps, `station calibrate odometry`'s manoeuvre) and starts the go-to
+    /// with the measured wheel distance and ratio set.
+    #[arg(long)]
+    pub calibrate_odometry: bool,
 }
 
 /// Most seeds per arena `bench --seeds` takes.
@@ -182,6 +192,15 @@ impl BenchArgs {
                 self.robots
             ));
         }
+        if self.calibrate_odometry
+            && (self.task != BenchTask::Goto || !profile.has(protocol::caps::ENCODERS))
+        {
+            return Err(
+                "--calibrate-odometry: the odometry calibration is the Khepera go-to's; use \
+                 --task goto --profile khepera"
+                    .to_string(),
+            );
+        }
         let kind = self.kind.unwrap_or_else(|| self.task.default_kind());
         let arenas = crate::bench::resolve_arenas(&self.arenas, kind)?;
         Ok(crate::bench::BenchOptions {
@@ -189,6 +208,7 @@ impl BenchArgs {
             profile,
             arenas,
             seeds: self.seeds,
+            seed: self.seed,
             jobs,
             timeout_s,
             noise: if self.no_noise {
@@ -198,6 +218,7 @@ impl BenchArgs {
             },
             progress: !self.json,
             robots: self.robots,
+            calibrate_odometry: self.calibrate_odometry,
         })
     }
 }

@@ -27,6 +27,7 @@ pub mod link;
 pub mod localize;
 pub mod nav;
 pub mod odometry;
+pub mod odometry_calibration;
 pub mod params;
 pub mod profile;
 pub mod robot;

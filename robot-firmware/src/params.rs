@@ -111,7 +111,7 @@ const fn needs(caps: u32, info: ParamInfo) -> ParamInfo {
 use protocol::caps::ENCODERS;
 
 /// Every parameter, by id.
-pub const PARAMS: [ParamInfo; 34] = [
+pub const PARAMS: [ParamInfo; 35] = [
     pi(
         0,
         "failsafe_ms",
@@ -393,6 +393,17 @@ pub const PARAMS: [ParamInfo; 34] = [
         255.0,
         "which robot this is in a fleet (like MAVLink's system id); the handshake states it",
     ),
+    needs(
+        ENCODERS,
+        p(
+            50,
+            "odo_wheel_ratio_ppm",
+            "ppm",
+            -50_000.0,
+            50_000.0,
+            "odometry: right over left wheel travel per pulse, minus 1 (0: equal; `station calibrate odometry` measures it)",
+        ),
+    ),
 ];
 
 /// Decimals that show every value of `info` in its unit: none for an integer parameter, else
@@ -431,6 +442,8 @@ pub mod id {
     pub const ARENA_MAX_X_M: u16 = 29;
     pub const ARENA_MAX_Y_M: u16 = 30;
     pub const ROBOT_ID: u16 = 33;
+    pub const ODO_WHEEL_DISTANCE_MM: u16 = 5;
+    pub const ODO_WHEEL_RATIO_PPM: u16 = 50;
 }
 
 /// The description of parameter `id`.
@@ -498,6 +511,7 @@ impl Tunables<'_> {
             31 => Slot::F32(&mut self.progress.stuck_limit_s),
             32 => Slot::F32(&mut self.progress.stuck_progress_m),
             33 => Slot::U8(&mut self.robot.robot_id),
+            50 => Slot::F32(&mut self.odometry.wheel_ratio_error_ppm),
             _ => return None,
         })
     }
@@ -558,7 +572,11 @@ mod tests {
     fn every_listed_parameter_has_a_slot_and_ids_are_unique() {
         with_tunables(|t| {
             for (i, info) in PARAMS.iter().enumerate() {
-                assert_eq!(usize::from(info.id), i, "ids are dense and in order");
+                // Ids are assigned per branch (33-49 to others), so strictly increasing, not
+                // dense.
+                if i > 0 {
+                    assert!(info.id > PARAMS[i - 1].id, "ids are unique and in order");
+                }
                 let v = t.get(info.id).expect("slot exists");
                 assert!(
                     v >= info.min && v <= info.max,
@@ -585,6 +603,8 @@ mod tests {
             (id::ARENA_MAX_X_M, "arena_max_x_m"),
             (id::ARENA_MAX_Y_M, "arena_max_y_m"),
             (id::ROBOT_ID, "robot_id"),
+            (id::ODO_WHEEL_DISTANCE_MM, "odo_wheel_distance_mm"),
+            (id::ODO_WHEEL_RATIO_PPM, "odo_wheel_ratio_ppm"),
         ] {
             assert_eq!(info(i).map(|p| p.name), Some(name));
         }
