@@ -122,6 +122,9 @@ pub struct PlacesOptions {
     /// Leave a followed wall now and then to cross open space (default true); false: follow
     /// the first wall met, always on the same side.
     pub excursions: bool,
+    /// Keep every step's class labels in the report (`class_streams`; default false: they
+    /// are 3 bytes a step, for the station's view).
+    pub record_labels: bool,
 }
 
 impl PlacesOptions {
@@ -147,6 +150,7 @@ impl PlacesOptions {
             places: PlaceParams::default(),
             series_every_s: 2.0,
             excursions: true,
+            record_labels: false,
         }
     }
 }
@@ -499,6 +503,10 @@ pub struct MatchRecord {
     pub err_before: f64,
     /// See `err_before`.
     pub err_after: f64,
+    /// Corrected position before and after the reset, metres.
+    pub from: [f64; 2],
+    /// See `from`.
+    pub to: [f64; 2],
 }
 
 /// [`robot_firmware::unsupervised::landmarks::MatchStats`] for the report.
@@ -616,6 +624,12 @@ pub struct PlacesReport {
     pub landmark_positions: Vec<[f64; 3]>,
     /// Each landmark's true position when it was made (metres; report only).
     pub landmark_truth: Vec<[f64; 2]>,
+    /// Control period, seconds (the time step of `class_streams`).
+    pub period_s: f64,
+    /// Every step's label per stream (ART-1, growing K-means, Fuzzy ART), when
+    /// `record_labels`; empty otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub class_streams: Vec<[u8; STREAMS]>,
 }
 
 /// Run the scenario.
@@ -696,6 +710,8 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
         match_log: Vec::new(),
         landmark_positions: Vec::new(),
         landmark_truth: Vec::new(),
+        period_s: opts.period_s,
+        class_streams: Vec::new(),
     };
     let err =
         |p: &FwPose, t: &Pose| ((f64::from(p.x) - t.x).hypot(f64::from(p.y) - t.y)) / DIAMETER_M;
@@ -744,6 +760,9 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
             cls.fuzzy.classify(&v2).unwrap_or(0),
         ];
         // Landmarks: kernel-time position is the corrected odometry.
+        if opts.record_labels {
+            report.class_streams.push(labels);
+        }
         let event = store.step(labels, (corrected.x, corrected.y, corrected.heading), &cls);
         if let (Some(e), Some(&(kt, ko))) = (event, ring.front()) {
             diag.resolved(e, kt, ko, &store, &cls, &mut lm_truth);
@@ -757,6 +776,7 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
                 d,
             }) => {
                 let before = err(&corrected, &truth);
+                let from = [f64::from(corrected.x), f64::from(corrected.y)];
                 corrected.x += dx;
                 corrected.y += dy;
                 match opts.heading_reset {
@@ -776,6 +796,8 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
                     correction: f64::from(dx.hypot(dy)) / DIAMETER_M,
                     err_before: before,
                     err_after: after,
+                    from,
+                    to: [f64::from(corrected.x), f64::from(corrected.y)],
                 });
                 if let Some(PlaceEvent::Recognised { .. }) = places.push(index) {
                     report.places_recognised += 1;
