@@ -44,9 +44,22 @@ fn main() {
             d.revisit_lev_same_direction.map(|x| (x * 10.0).round() / 10.0),
             d.revisit_odo_dist, r.match_stats
         );
-        println!("         impostors {} lev {:?} | matches {} offset mean {:.2} over half {}", d.impostors, d.impostor_lev.map(|x| (x * 10.0).round() / 10.0), d.matches, d.match_offset_mean, d.match_offset_over_half);
+        println!(
+            "         impostors {} lev {:?} | matches {} offset mean {:.2} over half {}",
+            d.impostors,
+            d.impostor_lev.map(|x| (x * 10.0).round() / 10.0),
+            d.matches,
+            d.match_offset_mean,
+            d.match_offset_over_half
+        );
         peaks.push((r.corrected_peak, r.landmarks));
     }
     peaks.sort_by(|a, b| a.0.total_cmp(&b.0));
-    println!("corrected peaks sorted: {:?}", peaks.iter().map(|p| (p.0 * 100.0).round() / 100.0).collect::<Vec<_>>());
+    println!(
+        "corrected peaks sorted: {:?}",
+        peaks
+            .iter()
+            .map(|p| (p.0 * 100.0).round() / 100.0)
+            .collect::<Vec<_>>()
+    );
 }

@@ -419,7 +419,11 @@ impl Wander {
         let (fwd, turn) = if ahead > 0.3 || diag > 0.6 {
             if self.crossing {
                 self.crossing = false;
-                self.right = if self.excursions { rng.chance(0.5) } else { true };
+                self.right = if self.excursions {
+                    rng.chance(0.5)
+                } else {
+                    true
+                };
                 self.follow_left = 300 + (rng.next_u64() % 900) as u32;
             }
             (0.0, 0.7)

@@ -30,8 +30,8 @@ pub mod link;
 /// Lives in the emulator crate so that `robot-emulator arena generate` writes the same way.
 pub use emulator::output_file;
 pub mod pace;
-pub mod places;
 pub mod params;
+pub mod places;
 pub mod plan;
 pub mod record;
 pub mod replay;

@@ -509,7 +509,10 @@ mod tests {
         assert_eq!(ev[1], Some(Event::Created(1)), "{ev:?}");
         // The same lap with stream 2 as stored matches again.
         lap(&mut store, 0.02, &mut ev, &mut n);
-        assert!(matches!(ev[2], Some(Event::Matched { index: 0, .. })), "{ev:?}");
+        assert!(
+            matches!(ev[2], Some(Event::Matched { index: 0, .. })),
+            "{ev:?}"
+        );
     }
 
     /// A match turns the heading by the stored heading minus the heading at the kernel.

@@ -156,7 +156,9 @@ mod tests {
         assert!(e.contains("--arena \"bogus\""), "{e}");
         let e = options(&args("structured", 0.0)).unwrap_err().to_string();
         assert!(e.contains("--duration 0"), "{e}");
-        let e = options(&args("structured", f64::NAN)).unwrap_err().to_string();
+        let e = options(&args("structured", f64::NAN))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("--duration NaN"), "{e}");
         let o = options(&args("structured", 30.0)).unwrap();
         assert!(o.record_labels && o.duration_s == 30.0);

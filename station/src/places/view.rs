@@ -60,7 +60,12 @@ impl PlacesView {
             .iter()
             .map(|s| [s.a.x, s.a.y, s.b.x, s.b.y])
             .collect();
-        let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+        let mut b = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
         for w in &walls {
             b = [
                 b[0].min(w[0]).min(w[2]),
@@ -119,9 +124,9 @@ impl PlacesView {
     pub fn header(&self, speed: f64, paused: bool) -> String {
         let r = &self.report;
         let n = self.series_len();
-        let (ec, ep) = n
-            .checked_sub(1)
-            .map_or((0.0, 0.0), |i| (r.series[i].corrected_err, r.series[i].plain_err));
+        let (ec, ep) = n.checked_sub(1).map_or((0.0, 0.0), |i| {
+            (r.series[i].corrected_err, r.series[i].plain_err)
+        });
         format!(
             "Mächler places · {:?} seed {} · t {:.0}/{:.0} s {} · landmarks {} · matches {} · \
              error corrected {:.2} plain {:.2} diameters",
@@ -227,9 +232,7 @@ fn render_map(f: &mut Frame, view: &PlacesView, area: Rect) {
                 let pts: Vec<(f64, f64)> = r.landmark_positions[..lm]
                     .iter()
                     .enumerate()
-                    .filter(|(i, p)| {
-                        p[2] as usize == s && !matched.contains(&(*i as u16))
-                    })
+                    .filter(|(i, p)| p[2] as usize == s && !matched.contains(&(*i as u16)))
                     .map(|(_, p)| (p[0], p[1]))
                     .collect();
                 ctx.draw(&Points::new(&pts, *colour));
@@ -242,7 +245,13 @@ fn render_map(f: &mut Frame, view: &PlacesView, area: Rect) {
                 .collect();
             ctx.draw(&Points::new(&hits, Color::White));
             if let Some(m) = recent {
-                ctx.draw(&Line::new(m.from[0], m.from[1], m.to[0], m.to[1], Color::LightBlue));
+                ctx.draw(&Line::new(
+                    m.from[0],
+                    m.from[1],
+                    m.to[0],
+                    m.to[1],
+                    Color::LightBlue,
+                ));
             }
         });
     f.render_widget(canvas, area);
@@ -251,7 +260,10 @@ fn render_map(f: &mut Frame, view: &PlacesView, area: Rect) {
 fn render_errors(f: &mut Frame, view: &PlacesView, area: Rect) {
     let r = &view.report;
     let n = view.series_len();
-    let c: Vec<(f64, f64)> = r.series[..n].iter().map(|p| (p.t_s, p.corrected_err)).collect();
+    let c: Vec<(f64, f64)> = r.series[..n]
+        .iter()
+        .map(|p| (p.t_s, p.corrected_err))
+        .collect();
     let p: Vec<(f64, f64)> = r.series[..n].iter().map(|p| (p.t_s, p.plain_err)).collect();
     let bound = [(0.0, 0.5), (r.duration_s, 0.5)];
     let top = r.plain_peak.max(r.corrected_peak).max(1.0).ceil();
@@ -338,7 +350,10 @@ fn render_matches(f: &mut Frame, view: &PlacesView, area: Rect) {
         })
         .collect();
     let title = format!(" matches ({}; newest first) ", log.len());
-    f.render_widget(Paragraph::new(lines).block(Block::bordered().title(title)), area);
+    f.render_widget(
+        Paragraph::new(lines).block(Block::bordered().title(title)),
+        area,
+    );
 }
 
 #[cfg(test)]
@@ -385,7 +400,10 @@ mod tests {
             end.contains(&format!("landmarks {lms} · matches {matches}")),
             "{end}"
         );
-        assert!(end.contains(&format!("matches ({matches}; newest first)")), "{end}");
+        assert!(
+            end.contains(&format!("matches ({matches}; newest first)")),
+            "{end}"
+        );
         // The newest match is listed with its time and landmark.
         let m = v.report.match_log.last().unwrap();
         assert!(
