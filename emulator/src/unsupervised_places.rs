@@ -983,10 +983,10 @@ impl Diagnoser {
                 if same {
                     self.d.revisits_same_direction += 1;
                 }
-                for s in 0..STREAMS {
-                    self.lev[s] += f64::from(lev[s]);
+                for ((all, same_dir), v) in self.lev.iter_mut().zip(&mut self.lev_same).zip(lev) {
+                    *all += f64::from(v);
                     if same {
-                        self.lev_same[s] += f64::from(lev[s]);
+                        *same_dir += f64::from(v);
                     }
                 }
             }
@@ -1015,10 +1015,8 @@ impl Diagnoser {
     fn finish(mut self) -> RevisitDiagnosis {
         let n = f64::from(self.d.revisits.max(1));
         let m = f64::from(self.d.revisits_same_direction.max(1));
-        for s in 0..STREAMS {
-            self.d.revisit_lev[s] = (self.lev[s] / n) as f32;
-            self.d.revisit_lev_same_direction[s] = (self.lev_same[s] / m) as f32;
-        }
+        self.d.revisit_lev = self.lev.map(|v| (v / n) as f32);
+        self.d.revisit_lev_same_direction = self.lev_same.map(|v| (v / m) as f32);
         self.d.revisit_odo_dist = (self.odo / n) as f32;
         let k = f64::from(self.d.impostors.max(1));
         self.d.impostor_lev = self.imp.map(|v| (v / k) as f32);
