@@ -254,6 +254,18 @@ pub enum Sub {
     ///   station download-calibration --port /dev/ttyUSB0 --out som.bin
     #[command(verbatim_doc_comment)]
     DownloadCalibration(crate::transfer::calibration::DownloadCalibrationArgs),
+    /// Mächler's unsupervised landmarks and places (seed 003 ch. 3), run and played back here
+    ///
+    /// Runs the unsupervised-places scenario on the station with the firmware's own code and
+    /// plays it back: landmarks on the map, the class streams, matches as they happen,
+    /// corrected vs plain odometry vs truth, the error over time. Keys: space pause, left/right
+    /// 10 s, Home/End, +/- speed, q quit.
+    ///
+    /// Examples:
+    ///   station places --arena unstructured --seed 4
+    ///   station places --arena structured --seed 2 --duration 600 --json
+    #[command(verbatim_doc_comment)]
+    Places(crate::places::PlacesArgs),
 }
 
 /// The ports `station stats` watches: one, or several at once (`--port A --port B`), each

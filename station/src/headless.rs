@@ -84,6 +84,7 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Sub::Calibrate(args)) => crate::calibrate::run(&args),
         Some(Sub::UploadCalibration(args)) => crate::transfer::calibration::upload(&args).await,
         Some(Sub::DownloadCalibration(args)) => crate::transfer::calibration::download(&args).await,
+        Some(Sub::Places(args)) => crate::places::command(&args),
     }
 }
 

@@ -33,6 +33,7 @@ pub mod link;
 pub use emulator::output_file;
 pub mod pace;
 pub mod params;
+pub mod places;
 pub mod plan;
 pub mod record;
 pub mod replay;
