@@ -19,5 +19,5 @@ pub mod situation;
 
 pub use model::{QtModel, Sample, Stats};
 pub use network::{Cell, Network};
-pub use params::{ParamError, Params};
+pub use params::{OrMethod, ParamError, Params};
 pub use situation::Pose;

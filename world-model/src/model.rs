@@ -20,8 +20,8 @@ use std::collections::VecDeque;
 use serde::Serialize;
 
 use crate::network::Network;
-use crate::params::{ParamError, Params};
-use crate::situation::{axis_difference, principal_axis, situation, Pose, Weights};
+use crate::params::{OrMethod, ParamError, Params};
+use crate::situation::{axis_difference, principal_axis, ring_shift, situation, Pose, Weights};
 
 /// One sensor sample as the robot gives it.
 #[derive(Clone, Debug, PartialEq)]
@@ -200,18 +200,20 @@ impl QtModel {
             let mut s = std::mem::take(&mut self.buf);
             situation(&p, sample.light, sample.touch, self.pose, &mut s);
             if let Some((w, d)) = self.net.winner(&s, at, p.g_search, &mut self.scratch) {
-                let mut members = vec![(w, d)];
+                let _ = d;
+                let mut members = vec![w];
                 if let Some(c) = self.net.cell(w) {
-                    for &(n, _) in &c.edges {
-                        if let Some(nc) = self.net.cell(n) {
-                            members.push((n, self.net.distance(&nc.s, &s)));
-                        }
-                    }
+                    members.extend(c.edges.iter().map(|e| e.0));
                 }
+                // Weights from the sensor part only: the position part of the distance was
+                // measured from the very position being corrected, and would vote for it.
+                let sensor = p.lights + p.touches;
                 let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
-                for (id, d) in members {
-                    let u = self.net.cell(id).map_or(0, |c| c.updates) as f64;
-                    let wt = (1.0 + u) / (d + 0.05);
+                for id in members {
+                    let Some(c) = self.net.cell(id) else { continue };
+                    let d = self.net.distance_part(&c.s, &s, sensor);
+                    let u = c.updates as f64;
+                    let wt = (1.0 + u).ln_1p() * (-(d * d) / (p.d_acc * p.d_acc)).exp();
                     let (x, y) = self.net.position(id);
                     sx += wt * x;
                     sy += wt * y;
@@ -227,21 +229,33 @@ impl QtModel {
         }
         if p.eps_or > 0.0 {
             let at = (self.pose.x, self.pose.y);
-            if let Some((near, _)) = self.net.nearest(at, p.g_search, &mut self.scratch) {
+            if let Some((near, _)) = self.net.nearest(at, p.or_radius, &mut self.scratch) {
                 let mut light = std::mem::take(&mut self.buf);
                 crate::situation::rotate_to_world(sample.light, self.pose.heading, &mut light);
-                let cur = principal_axis(&light);
-                let stored = self
-                    .net
-                    .cell(near)
-                    .and_then(|c| principal_axis(&c.s[..p.lights]));
-                if let (Some((oc, rc)), Some((on, rn))) = (cur, stored) {
-                    if rc >= p.or_min_anisotropy && rn >= p.or_min_anisotropy {
-                        // The world-frame pattern turns with the heading error: undo part of it.
-                        self.pose.heading =
-                            wrap(self.pose.heading - p.eps_or * axis_difference(oc, on));
-                        self.stats.or_corrections += 1;
+                let error = match p.or_method {
+                    OrMethod::Axis => {
+                        let cur = principal_axis(&light);
+                        let stored = self
+                            .net
+                            .cell(near)
+                            .and_then(|c| principal_axis(&c.s[..p.lights]));
+                        match (cur, stored) {
+                            (Some((oc, rc)), Some((on, rn)))
+                                if rc >= p.or_min_anisotropy && rn >= p.or_min_anisotropy =>
+                            {
+                                Some(axis_difference(oc, on))
+                            }
+                            _ => None,
+                        }
                     }
+                    OrMethod::Shift => self.net.cell(near).and_then(|c| {
+                        ring_shift(&light, &c.s[..p.lights], p.or_max_shift, p.or_max_residual)
+                    }),
+                };
+                if let Some(e) = error {
+                    // The world-frame pattern turns with the heading error: undo part of it.
+                    self.pose.heading = wrap(self.pose.heading - p.eps_or * e);
+                    self.stats.or_corrections += 1;
                 }
                 self.buf = light;
             }

@@ -102,6 +102,11 @@ impl Network {
         self.weights.distance(a, b)
     }
 
+    /// Weighted distance over the first `n` components only (e.g. the sensor part).
+    pub fn distance_part(&self, a: &[f64], b: &[f64], n: usize) -> f64 {
+        self.weights.distance_prefix(a, b, n)
+    }
+
     /// The cell nearest to situation `s` (eq. 1) among those within `r` metres of `at`.
     pub fn winner(
         &self,

@@ -33,7 +33,7 @@ pub struct Params {
     pub eps_n: f64,
     /// Factor applied to eps_o while the winner is within d_acc (eps_Delta, 0 < . < 1; ours 0.95).
     pub eps_delta: f64,
-    /// Tolerated classification error (d_acc; ours 0.45).
+    /// Tolerated classification error (d_acc; ours 0.8: about a tenth of the adaptations miss once the network has settled).
     pub d_acc: f64,
     /// Spontaneous insertion threshold (rho_s; ours 1.1).
     pub rho_s: f64,
@@ -46,7 +46,7 @@ pub struct Params {
     pub k: usize,
     /// Delay, in samples, before a situation is integrated (l; ours 2).
     pub l: usize,
-    /// Position correlation rate (eps_pos; ours 0.15). 0 turns it off.
+    /// Position correlation rate (eps_pos; ours 0.05). 0 turns it off.
     pub eps_pos: f64,
     /// Orientation correlation rate (eps_or; ours 0.1). 0 turns it off.
     pub eps_or: f64,
@@ -54,6 +54,17 @@ pub struct Params {
     /// moments (1 = circular) give no orientation estimate (ours 1.15: a round pattern has
     /// no axis to fit, so an estimate from it is noise).
     pub or_min_anisotropy: f64,
+    /// How the orientation error is estimated (see [`OrMethod`]; ours: `Shift`).
+    pub or_method: OrMethod,
+    /// The `Shift` method's estimate counts only when the aligned rings' squared residual is
+    /// at most this fraction of the ring's variance (ours: 0.25).
+    pub or_max_residual: f64,
+    /// The nearest cell must be within this many metres to give an orientation estimate
+    /// (ours: 0.15; lamps' bearings change with the place, so a farther cell's light ring
+    /// is turned against the robot's by the parallax, not by a heading error).
+    pub or_radius: f64,
+    /// Largest orientation error the `Shift` method looks for, radians (ours: 0.5).
+    pub or_max_shift: f64,
     /// Updates after which a cell is "confirmed" (n_fix; ours 40).
     pub n_fix: u32,
     /// Factor on the adaptation rates of confirmed cells (the thesis's "cell-specific
@@ -82,21 +93,38 @@ impl Default for Params {
             eps_o: 0.03,
             eps_n: 0.003,
             eps_delta: 0.95,
-            d_acc: 0.45,
+            d_acc: 0.8,
             rho_s: 1.1,
             n_insert: 60,
             a_red: 0.1,
             k: 10,
             l: 2,
-            eps_pos: 0.15,
+            eps_pos: 0.05,
             eps_or: 0.1,
             or_min_anisotropy: 1.15,
+            or_method: OrMethod::Shift,
+            or_max_shift: 0.5,
+            or_radius: 0.15,
+            or_max_residual: 0.25,
             n_fix: 40,
             fix_slowdown: 0.3,
             max_cells: 2000,
             nav_fail_per_m: 4.0,
         }
     }
+}
+
+/// How the orientation correlation estimates the heading error from the light ring.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OrMethod {
+    /// The thesis's (eq. 10): the principal axis of the readings as polar points, compared
+    /// with the nearest cell's (modulo 180 degrees).
+    Axis,
+    /// Ours: the turn that best aligns the whole ring with the nearest cell's (circular
+    /// correlation). See the README's ALICE section for what the axis method did in the
+    /// scenarios.
+    Shift,
 }
 
 /// A parameter set that cannot run, and why.
@@ -126,6 +154,9 @@ impl Params {
             ("eps_pos", self.eps_pos),
             ("eps_or", self.eps_or),
             ("fix_slowdown", self.fix_slowdown),
+            ("or_max_shift", self.or_max_shift),
+            ("or_radius", self.or_radius),
+            ("or_max_residual", self.or_max_residual),
             ("nav_fail_per_m", self.nav_fail_per_m),
         ];
         for (name, v) in finite_nonneg {
@@ -198,6 +229,16 @@ impl Params {
             "eps_pos" => self.eps_pos = f()?,
             "eps_or" => self.eps_or = f()?,
             "or_min_anisotropy" => self.or_min_anisotropy = f()?,
+            "or_method" => {
+                self.or_method = match value {
+                    "axis" => OrMethod::Axis,
+                    "shift" => OrMethod::Shift,
+                    _ => return Err(ParamError(format!("or_method={value:?}: axis or shift"))),
+                }
+            }
+            "or_max_shift" => self.or_max_shift = f()?,
+            "or_radius" => self.or_radius = f()?,
+            "or_max_residual" => self.or_max_residual = f()?,
             "n_fix" => self.n_fix = u()?,
             "fix_slowdown" => self.fix_slowdown = f()?,
             "max_cells" => self.max_cells = u()? as usize,

@@ -36,6 +36,17 @@ impl Weights {
         Weights(w)
     }
 
+    /// [`Weights::distance`] over the first `n` components.
+    pub fn distance_prefix(&self, a: &[f64], b: &[f64], n: usize) -> f64 {
+        self.0
+            .iter()
+            .zip(a.iter().zip(b))
+            .take(n)
+            .map(|(w, (x, y))| w * (x - y) * (x - y))
+            .sum::<f64>()
+            .sqrt()
+    }
+
     /// Weighted Euclidean distance between two situations of the same layout.
     pub fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
         self.0
@@ -142,6 +153,56 @@ pub fn principal_axis(readings: &[f64]) -> Option<(f64, f64)> {
     Some((angle, ratio))
 }
 
+/// The rotation (radians, within +-`max`) by which ring `cur` is turned against ring `stored`:
+/// the shift minimising the squared difference, searched in quarter-sensor steps and refined
+/// by a parabola through the best step and its neighbours. `None` for flat rings (nothing to
+/// align), rings of different lengths, a best shift at the search's edge, or a best fit
+/// whose squared residual exceeds `max_residual` times the ring's variance (summed).
+pub fn ring_shift(cur: &[f64], stored: &[f64], max: f64, max_residual: f64) -> Option<f64> {
+    let n = cur.len();
+    if n == 0 || stored.len() != n {
+        return None;
+    }
+    let mean = cur.iter().sum::<f64>() / n as f64;
+    let var = cur.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n as f64;
+    if var < 1e-6 {
+        return None;
+    }
+    let step = TAU / n as f64 / 4.0;
+    let k = (max / step).floor() as i64;
+    let mut turned = Vec::with_capacity(n);
+    let mut cost = |s: f64| {
+        // Turning `cur` back by s: its value at direction j is cur at j + s.
+        rotate_to_world(cur, -s, &mut turned);
+        turned
+            .iter()
+            .zip(stored)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+    };
+    let costs: Vec<(f64, f64)> = (-k..=k)
+        .map(|i| (i as f64 * step, cost(i as f64 * step)))
+        .collect();
+    let (bi, _) = costs
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1 .1.total_cmp(&b.1 .1))?;
+    // A minimum at the edge of the search is no minimum; a poor best fit is another place's
+    // pattern (a lamp in shadow, a different spot), not a turned copy of this one.
+    if bi == 0 || bi + 1 == costs.len() || costs[bi].1 > max_residual * var * n as f64 {
+        return None;
+    }
+    let mut best = costs[bi].0;
+    {
+        let (l, c, r) = (costs[bi - 1].1, costs[bi].1, costs[bi + 1].1);
+        let den = l - 2.0 * c + r;
+        if den > 1e-12 {
+            best += 0.5 * (l - r) / den * step;
+        }
+    }
+    Some(best)
+}
+
 /// `a - b` for axes (modulo pi), in (-pi/2, pi/2].
 pub fn axis_difference(a: f64, b: f64) -> f64 {
     let half = std::f64::consts::FRAC_PI_2;
@@ -185,6 +246,20 @@ mod tests {
         rotate_to_world(&base, 0.5, &mut rotated);
         let (a1, _) = principal_axis(&rotated).expect("pattern");
         assert!((axis_difference(a1, a0) - 0.5).abs() < 0.02, "{a0} {a1}");
+    }
+
+    #[test]
+    fn the_ring_shift_finds_the_turn() {
+        let base: Vec<f64> = (0..24)
+            .map(|i| {
+                (-(((i as f64) - 7.0) / 1.5).powi(2)).exp()
+                    + 0.5 * (-(((i as f64) - 16.0) / 2.0).powi(2)).exp()
+            })
+            .collect();
+        let mut turned = Vec::new();
+        rotate_to_world(&base, 0.2, &mut turned);
+        let s = ring_shift(&turned, &base, 0.6, 0.25).expect("pattern");
+        assert!((s - 0.2).abs() < 0.03, "{s}");
     }
 
     #[test]
