@@ -44,7 +44,11 @@ fn eps_o_large_gives_few_cells_and_muddled_edges_small_gives_many_cells() {
     for e in &r {
         let c: Vec<usize> = e.runs.iter().map(|s| s.cells).collect();
         assert!(c[0] < c[1] && c[1] < c[2], "seed {}: cells {c:?}", e.seed);
-        assert!(c[2] as f64 >= 1.3 * c[1] as f64, "seed {}: cells {c:?}", e.seed);
+        assert!(
+            c[2] as f64 >= 1.3 * c[1] as f64,
+            "seed {}: cells {c:?}",
+            e.seed
+        );
         cross[0] += e.runs[0].crossings_per_edge;
         cross[1] += e.runs[1].crossings_per_edge;
     }
@@ -64,7 +68,10 @@ fn eps_o_small_makes_the_correlation_fail() {
         base += e.runs[1].late_absolute_error_m;
         small += e.runs[2].late_absolute_error_m;
     }
-    assert!(small >= 1.5 * base, "late error 0.005 {small} against base {base}");
+    assert!(
+        small >= 1.5 * base,
+        "late error 0.005 {small} against base {base}"
+    );
 }
 
 /// Thesis §4.5.3: without position or without orientation correlation "none of these
@@ -79,7 +86,11 @@ fn turning_either_correlation_off_loses_consistency_under_the_drift() {
     let mut sum = [0.0; 3];
     for e in &r {
         let v: Vec<f64> = e.runs.iter().map(|s| s.late_absolute_error_m).collect();
-        assert!(v[1] >= 1.25 * v[0] && v[2] >= 1.25 * v[0], "seed {}: {v:?}", e.seed);
+        assert!(
+            v[1] >= 1.25 * v[0] && v[2] >= 1.25 * v[0],
+            "seed {}: {v:?}",
+            e.seed
+        );
         for i in 0..3 {
             sum[i] += v[i];
         }
@@ -100,8 +111,18 @@ fn turning_either_correlation_off_loses_consistency_under_the_drift() {
 #[ignore = "not reproduced: the gap is not clear while the wall stands in seeds 1 and 3 (8 and 6 edges across at removal)"]
 fn a_removed_wall_leaves_a_gap_that_closes_within_1500_situations() {
     for e in each(dynamic) {
-        assert!(e.gap_edges_at_removal.unwrap_or(99) <= 1, "seed {}: {:?}", e.seed, e.gap_edges_at_removal);
-        assert!(e.gap_closed_after.is_some_and(|a| a <= 1500), "seed {}: {:?}", e.seed, e.gap_closed_after);
+        assert!(
+            e.gap_edges_at_removal.unwrap_or(99) <= 1,
+            "seed {}: {:?}",
+            e.seed,
+            e.gap_edges_at_removal
+        );
+        assert!(
+            e.gap_closed_after.is_some_and(|a| a <= 1500),
+            "seed {}: {:?}",
+            e.seed,
+            e.gap_closed_after
+        );
     }
 }
 
@@ -112,5 +133,6 @@ fn a_removed_wall_leaves_a_gap_that_closes_within_1500_situations() {
 #[test]
 #[ignore = "not reproduced: the reinforcement-trained path execution (§5.2) that gives the gains is not built"]
 fn navigation_improves_after_four_runs() {
-    panic!("no path execution learner: see the doc comment");
+    let built = false; // no path execution learner: see the doc comment
+    assert!(built, "the §5.2 path execution is not built");
 }

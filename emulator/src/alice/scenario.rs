@@ -15,6 +15,9 @@ use super::sensors::Sensors;
 use crate::geometry::{Point, Segment};
 use crate::rng::SimRng;
 
+/// One sample's true, internal and odometry positions and the winner.
+type Trace = ((f64, f64), (f64, f64), (f64, f64), Option<u32>);
+
 /// Sensor samples per second (§4.3: "3 sensor-samples per second").
 pub const SAMPLES_PER_S: f64 = 3.0;
 /// Most samples one run takes (the report's series grows with it).
@@ -154,7 +157,7 @@ pub fn run_with(
     .map_err(|e| e.to_string())?;
     let dt = 1.0 / SAMPLES_PER_S / SUBSTEPS as f64;
     let mut pending_turn = 0.0f64;
-    let mut hist: VecDeque<((f64, f64), (f64, f64), (f64, f64), Option<u32>)> = VecDeque::new();
+    let mut hist: VecDeque<Trace> = VecDeque::new();
     let mut checkpoints = Vec::new();
     let mut true_place: std::collections::HashMap<u32, (f64, f64)> =
         std::collections::HashMap::new();
@@ -239,7 +242,9 @@ pub fn run_with(
                 crossings_per_edge: if t % 1000 == 0 || t == o.samples {
                     crossings_per_edge(net)
                 } else {
-                    checkpoints.last().map_or(0.0, |c: &Checkpoint| c.crossings_per_edge)
+                    checkpoints
+                        .last()
+                        .map_or(0.0, |c: &Checkpoint| c.crossings_per_edge)
                 },
                 unreachable: unreachable_fraction(net, &r, &walls, |p| arena.is_solid(p)),
                 gap_edges: o
