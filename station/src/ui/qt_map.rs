@@ -20,7 +20,11 @@ pub const ROBOT: Color = Color::Cyan;
 
 /// The grey for an edge of confidence `c` (0..1): xterm's grey ramp 236 (dark) .. 255.
 pub fn edge_color(c: f64) -> Color {
-    let c = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 };
+    let c = if c.is_finite() {
+        c.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     Color::Indexed(236 + (c * 19.0).round() as u8)
 }
 
@@ -99,7 +103,11 @@ mod tests {
         }
         assert!(QtLayer.dots(&app));
         let net = app.qt.model.as_ref().expect("model").network();
-        assert!(net.len() >= 2 && net.edges().count() >= 1, "{} cells", net.len());
+        assert!(
+            net.len() >= 2 && net.edges().count() >= 1,
+            "{} cells",
+            net.len()
+        );
         let area = Rect::new(0, 0, 40, 12);
         let mut buf = Buffer::empty(area);
         let view = MapView {
@@ -113,9 +121,17 @@ mod tests {
             .y_bounds(view.y)
             .paint(|ctx| QtLayer.paint(&app, &view, ctx))
             .render(area, &mut buf);
-        let fg: Vec<Color> = buf.content().iter().filter(|c| c.symbol() != " ").map(|c| c.fg).collect();
+        let fg: Vec<Color> = buf
+            .content()
+            .iter()
+            .filter(|c| c.symbol() != " ")
+            .map(|c| c.fg)
+            .collect();
         assert!(fg.contains(&CELL) || fg.contains(&WINNER), "{fg:?}");
-        assert!(fg.iter().any(|c| matches!(c, Color::Indexed(236..=255))), "{fg:?}");
+        assert!(
+            fg.iter().any(|c| matches!(c, Color::Indexed(236..=255))),
+            "{fg:?}"
+        );
         // A malformed situation is refused with its reason, and counted.
         let short = Sample {
             light: &light[..3],
