@@ -391,3 +391,84 @@ pub fn wrap(a: f64) -> f64 {
         r
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ring(x: f64, y: f64) -> Vec<f64> {
+        // A lamp north-east: brighter nearer to it, seen in its direction.
+        let (lx, ly) = (3.0, 3.0);
+        let bearing = (ly - y).atan2(lx - x);
+        let d2 = (lx - x).powi(2) + (ly - y).powi(2);
+        (0..24)
+            .map(|i| {
+                let a = i as f64 * std::f64::consts::TAU / 24.0;
+                let off = wrap(bearing - a);
+                (2.0 / d2) * (-(off * off) / 0.1).exp()
+            })
+            .collect()
+    }
+
+    /// With exact odometry the model grows cells along the way and joins consecutive winners;
+    /// malformed samples are refused with the reason.
+    #[test]
+    fn a_walk_builds_a_connected_chain_and_bad_samples_are_refused() {
+        let mut m = QtModel::new(Params::default(), Pose::default()).expect("valid");
+        let touch = vec![false; 24];
+        for i in 0..60 {
+            let x = 0.05 * f64::from(i);
+            let light = ring(x, 0.0);
+            let s = Sample {
+                light: &light,
+                touch: &touch,
+                odometry: Pose {
+                    x,
+                    y: 0.0,
+                    heading: 0.0,
+                },
+            };
+            m.observe(&s).expect("valid sample");
+        }
+        let net = m.network();
+        assert!(net.len() >= 5, "{} cells", net.len());
+        assert!(
+            net.cells().all(|(_, c)| !c.edges.is_empty()),
+            "no isolated cell"
+        );
+        assert_eq!(m.stats().samples, 60);
+        let light = ring(0.0, 0.0);
+        let short = Sample {
+            light: &light[..10],
+            touch: &touch,
+            odometry: Pose::default(),
+        };
+        assert!(m.observe(&short).is_err());
+        let nan = Sample {
+            light: &light,
+            touch: &touch,
+            odometry: Pose {
+                x: f64::NAN,
+                y: 0.0,
+                heading: 0.0,
+            },
+        };
+        assert!(m.observe(&nan).is_err());
+        assert_eq!(m.stats().samples, 60, "refused samples change nothing");
+    }
+
+    /// Every named parameter can be set by name and is range-checked.
+    #[test]
+    fn parameters_are_settable_by_name_and_checked() {
+        let mut p = Params::default();
+        p.set("eps_o", "0.05").expect("in range");
+        assert_eq!(p.eps_o, 0.05);
+        assert!(p.set("a_red", "0").is_err());
+        assert!(p.set("eps_delta", "1").is_err());
+        assert!(p.set("nope", "1").is_err());
+        // A refused value leaves the parameters as they were (it used to stay, invalid).
+        assert_eq!(p.a_red, Params::default().a_red);
+        p.validate().expect("still valid");
+        assert!(p.set("or_method", "axis").is_ok());
+    }
+}

@@ -260,3 +260,79 @@ impl Network {
         removed
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Params;
+
+    fn net(cap: usize) -> Network {
+        Network::new(Weights::new(&Params::default()), 0.8, cap)
+    }
+
+    fn at(net: &mut Network, x: f64, y: f64) -> Option<u32> {
+        let mut s = vec![0.0; 48];
+        s.extend([x, y]);
+        net.insert(s, 0.0)
+    }
+
+    /// Eqs. 7-8: the new winner's edge to the old one is set to 1, its m other edges lose
+    /// a_red / m each; an edge reaching 0 goes, and a cell left with no edge goes with it.
+    #[test]
+    fn a_winner_change_confirms_one_edge_and_wears_the_others() {
+        let mut n = net(10);
+        let [a, b, c, d] = [0.0, 0.3, 0.6, 0.9].map(|x| at(&mut n, x, 0.0).expect("room"));
+        n.set_edge(b, c, 0.5);
+        n.set_edge(b, d, 0.05);
+        n.set_edge(c, d, 0.5);
+        let removed = n.winner_changed(b, a, 0.2);
+        assert!(removed.is_empty());
+        let conf = |n: &Network, x: u32, y: u32| {
+            n.cell(x)
+                .and_then(|c| c.edges.iter().find(|e| e.0 == y).map(|e| e.1))
+        };
+        assert_eq!(conf(&n, b, a), Some(1.0));
+        assert_eq!(conf(&n, a, b), Some(1.0), "edges are symmetric");
+        assert!((conf(&n, b, c).expect("kept") - 0.4).abs() < 1e-12);
+        assert_eq!(conf(&n, b, d), None, "0.05 - 0.1 <= 0: gone");
+        // d keeps its edge to c, so it stays; a cell that loses its only edge is removed.
+        assert!(n.cell(d).is_some());
+        let e = at(&mut n, 1.2, 0.0).expect("room");
+        n.set_edge(b, e, 0.01);
+        let removed = n.winner_changed(b, a, 0.2);
+        assert_eq!(removed, vec![e]);
+        assert!(n.cell(e).is_none() && n.len() == 4);
+    }
+
+    /// The cap bounds memory: a full network refuses and counts.
+    #[test]
+    fn a_full_network_refuses_insertions() {
+        let mut n = net(2);
+        assert!(at(&mut n, 0.0, 0.0).is_some() && at(&mut n, 1.0, 0.0).is_some());
+        assert_eq!(at(&mut n, 2.0, 0.0), None);
+        assert_eq!((n.len(), n.refused), (2, 1));
+    }
+
+    /// The winner search sees only cells within the radius, through the index, also after
+    /// cells moved between buckets.
+    #[test]
+    fn the_search_is_limited_to_g_search_and_follows_moved_cells() {
+        let mut n = net(10);
+        let a = at(&mut n, 0.0, 0.0).expect("room");
+        let far = at(&mut n, 5.0, 5.0).expect("room");
+        let mut q = vec![0.0; 48];
+        q.extend([4.9, 4.9]);
+        let mut scratch = Vec::new();
+        assert_eq!(
+            n.winner(&q, (4.9, 4.9), 0.8, &mut scratch).map(|w| w.0),
+            Some(far)
+        );
+        // Move a next to the query: it must be found in its new bucket.
+        n.move_toward(a, &q, 1.0);
+        assert_eq!(
+            n.nearest((4.9, 4.9), 0.05, &mut scratch).map(|w| w.0),
+            Some(a)
+        );
+        assert_eq!(n.winner(&q, (0.0, 0.0), 0.8, &mut scratch), None);
+    }
+}

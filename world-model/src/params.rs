@@ -199,8 +199,17 @@ impl Params {
         Ok(())
     }
 
-    /// Set one parameter by name from text (station `--param`-style settings).
+    /// Set one parameter by name from text (station `--param`-style settings). On error the
+    /// parameters are left as they were.
     pub fn set(&mut self, name: &str, value: &str) -> Result<(), ParamError> {
+        let mut next = self.clone();
+        next.set_unchecked(name, value)?;
+        next.validate()?;
+        *self = next;
+        Ok(())
+    }
+
+    fn set_unchecked(&mut self, name: &str, value: &str) -> Result<(), ParamError> {
         let f = || {
             value
                 .parse::<f64>()
@@ -249,6 +258,6 @@ impl Params {
                 )))
             }
         }
-        self.validate()
+        Ok(())
     }
 }
