@@ -513,6 +513,9 @@ pub struct RunArgs {
     /// line-correct: true distance to drive, metres.
     #[arg(long, default_value_t = 40.0, value_name = "M")]
     pub distance: f64,
+    /// alice-*: set a QT world-model parameter (repeatable), e.g. `--qt-param eps_o=0.05`.
+    #[arg(long = "qt-param", value_name = "NAME=VALUE")]
+    pub qt_param: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -546,6 +549,16 @@ pub enum TaskArg {
     /// resets its odometry on landmark matches; reports corrected vs plain odometry error in
     /// robot diameters. --timeout is the run length [default 1200 s].
     UnsupervisedPlaces,
+    /// ALICE's QT world model (seed 001 §4.5.4): one 8000-situation run in builtin:alice;
+    /// when the cell count settles (thesis: about 5000). Own arena and robot; --seed.
+    AliceEquilibrium,
+    /// ALICE's QT model, eps_o at 0.1 / 0.03 / 0.005 (§4.5.1).
+    AliceEpsO,
+    /// ALICE's QT model with both correlations, without position, without orientation
+    /// (§4.5.3).
+    AliceCorrelation,
+    /// ALICE's QT model with a wall below the pillar removed at situation 3500 (§4.5.4).
+    AliceDynamic,
 }
 
 impl WorldArgs {
@@ -777,6 +790,12 @@ impl RunArgs {
             }
             TaskArg::LineCorrect => {
                 return Err("--task line-correct is run by `line_correct_options`".to_string())
+            }
+            TaskArg::AliceEquilibrium
+            | TaskArg::AliceEpsO
+            | TaskArg::AliceCorrelation
+            | TaskArg::AliceDynamic => {
+                return Err("the alice-* tasks are run by `alice::experiments`".to_string())
             }
         };
         let profile = if task == Task::Forage {

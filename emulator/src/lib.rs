@@ -1,6 +1,7 @@
 //! The robot emulator: the unchanged robot firmware driven by a simulated world.
 #![deny(unsafe_code)]
 
+pub mod alice;
 pub mod arena;
 pub mod arena_gen;
 pub mod bench;

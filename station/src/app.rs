@@ -16,6 +16,7 @@ pub mod localization;
 pub mod log;
 pub mod params;
 pub mod plan_target;
+pub mod qt_state;
 pub mod transfers;
 
 use std::collections::HashMap;
@@ -238,6 +239,8 @@ pub struct App {
     pub transfers: transfers::Transfers,
     /// Floor-grid line correction (seed 003): tracks, line events, PPD, errors.
     pub localization: localization::LocalizationState,
+    /// The QT world model (seed 001), fed by the robot's situations.
+    pub qt: qt_state::QtState,
     /// Foraging (seed 000 §7): objects gripped and delivered, which were taken.
     pub forage: forage::ForageProgress,
     /// The robot's last `Progress` report: what its mode is doing.
@@ -304,6 +307,7 @@ impl App {
             recording: None,
             transfers: transfers::Transfers::default(),
             localization: localization::LocalizationState::default(),
+            qt: qt_state::QtState::default(),
             forage: forage::ForageProgress::default(),
             progress: None,
             fleet: None,

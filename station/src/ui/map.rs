@@ -63,6 +63,7 @@ pub static LAYERS: [&dyn MapLayer; 16] = [
     &map_layers::SmoothedLayer,
     &super::transfer::RobotPlanLayer,
     &super::localization::OdometryLayer,
+    &super::qt_map::QtLayer,
     &TruthLayer,
     &super::fleet::FleetLayer,
     &BelievedLayer,
