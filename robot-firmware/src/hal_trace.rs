@@ -35,6 +35,8 @@
 //!   closed u8.
 //! - `GAP` (24): n varint: n passes are missing here (the pass in progress included).
 
+pub mod playback;
+
 use heapless::Deque;
 use protocol::{HalTrace as TraceMsg, Message, MAX_HAL_TRACE_CHUNK};
 

@@ -34,6 +34,7 @@ pub mod params;
 pub mod plan;
 pub mod record;
 pub mod replay;
+pub mod retrace;
 pub mod terminal_text;
 pub mod transfer;
 pub mod tui;

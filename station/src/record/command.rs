@@ -46,6 +46,10 @@ pub struct RecordArgs {
     /// Ask the robot for this telemetry rate (Hz, 1..=50) at every handshake.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=50))]
     pub rate: Option<u8>,
+    /// Send this command (as `station send` takes it, e.g. "mode wander", "goto 1.2 0.8",
+    /// "param set hal_trace 1") once the robot first answers; repeat for several, sent in order.
+    #[arg(long = "send", value_name = "CMD")]
+    pub send: Vec<String>,
     /// Overwrite FILE if it exists (a device, FIFO or directory is never replaced).
     #[arg(long)]
     pub force: bool,
@@ -60,6 +64,11 @@ pub struct RecordArgs {
 
 /// Runs `station record`.
 pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
+    let mut to_send = args
+        .send
+        .iter()
+        .map(|s| parse_send(s))
+        .collect::<anyhow::Result<Vec<Command>>>()?;
     check_out(&args.out, args.force)?;
     let raw_key =
         crate::cli::load_key_bytes(args.key_file.as_deref()).map_err(anyhow::Error::msg)?;
@@ -139,6 +148,11 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
                     if let (Connection::Connected(_), Some(hz)) = (&c, args.rate) {
                         link.handle.submit(Command::SetTelemetryRate { hz });
                     }
+                    if matches!(c, Connection::Connected(_)) {
+                        for cmd in to_send.drain(..) {
+                            link.handle.submit(cmd);
+                        }
+                    }
                     rec.on_connection(&c)
                 }
                 _ => Ok(()),
@@ -180,6 +194,21 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// One `--send` command, parsed as `station send` parses its command.
+fn parse_send(s: &str) -> anyhow::Result<Command> {
+    #[derive(clap::Parser)]
+    #[command(no_binary_name = true)]
+    struct One {
+        #[command(subcommand)]
+        cmd: crate::cli::SendCmd,
+    }
+    let one = <One as clap::Parser>::try_parse_from(s.split_whitespace())
+        .map_err(|e| anyhow::anyhow!("--send {:?}: {}", crate::terminal_text::printable(s), e.render()))?;
+    one.cmd
+        .to_command()
+        .map_err(|e| anyhow::anyhow!("--send {:?}: {e}", crate::terminal_text::printable(s)))
 }
 
 /// Refuses an output that cannot be written, before a port is opened or a file created.
