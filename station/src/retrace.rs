@@ -138,7 +138,59 @@ struct Report {
     rotation: Option<Rotation>,
     events_only_recorded: Option<Vec<EventRow>>,
     events_only_retraced: Option<Vec<EventRow>>,
+    link: LinkUse,
     limit: &'static str,
+}
+
+/// The reference line: 115200 baud, 8N1, 11520 bytes a second.
+const LINE_BYTES_PER_S: f64 = 11_520.0;
+
+/// What the trace costs on the link, beside telemetry (from the retraced frames, which are the
+/// recorded ones when identical): bytes on the wire (COBS, delimiter and all).
+#[derive(Debug, Default, Serialize)]
+struct LinkUse {
+    cycle_ms: f64,
+    trace_bytes_per_cycle_mean: f64,
+    trace_bytes_per_cycle_max: u64,
+    trace_percent_of_115200: f64,
+    /// The cycle with the most trace bytes, as a share of the line during that cycle.
+    trace_worst_cycle_percent_of_115200: f64,
+    telemetry_percent_of_115200: f64,
+    all_frames_percent_of_115200: f64,
+}
+
+fn link_use(run: &Run) -> LinkUse {
+    use std::collections::BTreeMap;
+    let secs = f64::from(run.last_ms) / 1000.0;
+    if run.cycles == 0 || secs <= 0.0 {
+        return LinkUse::default();
+    }
+    let mut per_cycle: BTreeMap<u64, u64> = BTreeMap::new();
+    let (mut trace, mut telemetry, mut all) = (0u64, 0u64, 0u64);
+    for f in &run.frames {
+        let wire = f.raw.len() as u64 + 1;
+        all += wire;
+        match compare::kind_of(&f.raw) {
+            Some(protocol::Kind::HalTrace) => {
+                trace += wire;
+                *per_cycle.entry(f.cycle).or_default() += wire;
+            }
+            Some(protocol::Kind::Telemetry) => telemetry += wire,
+            _ => {}
+        }
+    }
+    let cycle_s = secs / run.cycles as f64;
+    let max = per_cycle.values().copied().max().unwrap_or(0);
+    let pct = |b: u64| 100.0 * b as f64 / secs / LINE_BYTES_PER_S;
+    LinkUse {
+        cycle_ms: cycle_s * 1000.0,
+        trace_bytes_per_cycle_mean: trace as f64 / run.cycles as f64,
+        trace_bytes_per_cycle_max: max,
+        trace_percent_of_115200: pct(trace),
+        trace_worst_cycle_percent_of_115200: 100.0 * max as f64 / cycle_s / LINE_BYTES_PER_S,
+        telemetry_percent_of_115200: pct(telemetry),
+        all_frames_percent_of_115200: pct(all),
+    }
 }
 
 /// The thesis's limit, for --help, README and every report.
@@ -188,6 +240,7 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
         rotation: None,
         events_only_recorded: None,
         events_only_retraced: None,
+        link: link_use(&base),
         limit: LIMIT,
     };
     if !params.is_empty() {
@@ -401,5 +454,17 @@ fn print_text(r: &Report) {
             println!("  + {:>9} ms {} {}", e.time_ms, e.code, e.value);
         }
     }
+    let l = &r.link;
+    println!(
+        "link: the trace takes {:.0} bytes a {:.0} ms cycle on average, {} at most ({:.1} % of a \
+         115200-baud line, {:.1} % in its worst cycle); telemetry {:.1} %, all frames {:.1} %",
+        l.trace_bytes_per_cycle_mean,
+        l.cycle_ms,
+        l.trace_bytes_per_cycle_max,
+        l.trace_percent_of_115200,
+        l.trace_worst_cycle_percent_of_115200,
+        l.telemetry_percent_of_115200,
+        l.all_frames_percent_of_115200
+    );
     println!("limit: {}", r.limit);
 }

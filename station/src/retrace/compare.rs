@@ -37,6 +37,17 @@ fn decode(raw: &[u8]) -> Option<String> {
     }
 }
 
+/// A frame's kind, from its header (COBS-decoded).
+pub fn kind_of(raw: &[u8]) -> Option<protocol::Kind> {
+    let mut bytes = raw.to_vec();
+    bytes.push(0);
+    let mut dec = FrameDecoder::new();
+    match dec.feed(&bytes) {
+        Feed::Frame { frame, .. } => Some(frame.header.kind),
+        _ => None,
+    }
+}
+
 /// The first frame of `retraced` unlike `recorded`'s, over the frames both have.
 pub fn compare_frames(recorded: &[RecFrame], retraced: &[OutFrame]) -> Option<FrameDivergence> {
     let (i, (a, b)) = recorded
