@@ -123,6 +123,9 @@ struct Report {
     steps: u64,
     cycles: u64,
     robot_time_s: f64,
+    /// The believed track with the recorded parameters: length and rotation.
+    believed_distance_m: f64,
+    believed_rotation_deg: f64,
     stopped: String,
     trace_bytes: usize,
     trace_complete_from_power_up: bool,
@@ -225,6 +228,12 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
         steps: base.steps,
         cycles: base.cycles,
         robot_time_s: f64::from(base.last_ms) / 1000.0,
+        believed_distance_m: base
+            .poses
+            .windows(2)
+            .map(|w| f64::from(w[1].1.x - w[0].1.x).hypot(f64::from(w[1].1.y - w[0].1.y)))
+            .sum(),
+        believed_rotation_deg: rotation_deg(&base.poses),
         stopped: stop_text(&base.stop),
         trace_bytes: loaded.trace.len(),
         trace_complete_from_power_up: base.steps_before == 0,
@@ -379,18 +388,41 @@ fn unwrapped(mut headings: impl Iterator<Item = f64>) -> f64 {
     total
 }
 
-/// The truth's rotation over the retraced span (its first to its last cycle).
+/// The truth's rotation over the retraced span (its first to its last control cycle), the
+/// truth's samples (one a telemetry frame) unwrapped and interpolated to those two times: a
+/// cycle's pose and the nearest truth sample can be 100 ms apart, degrees in a corner.
 fn truth_rotation_deg(truth: &[(u32, i32)], run: &Run) -> Option<f64> {
     let (t0, t1) = (run.poses.first()?.0, run.poses.last()?.0);
-    let span: Vec<f64> = truth
-        .iter()
-        .filter(|(t, _)| *t >= t0 && *t <= t1)
-        .map(|&(_, h)| f64::from(h) / 1000.0)
-        .collect();
-    if span.len() < 2 {
-        return None;
+    let mut track: Vec<(f64, f64)> = Vec::with_capacity(truth.len());
+    for &(t, h) in truth {
+        let h = f64::from(h) / 1000.0;
+        let total = match track.last() {
+            Some(&(_, prev)) => {
+                let d = (h - prev).rem_euclid(2.0 * std::f64::consts::PI);
+                let d = if d > std::f64::consts::PI {
+                    d - 2.0 * std::f64::consts::PI
+                } else {
+                    d
+                };
+                prev + d
+            }
+            None => h,
+        };
+        track.push((f64::from(t), total));
     }
-    Some(unwrapped(span.into_iter()).to_degrees())
+    let at = |t: f64| -> Option<f64> {
+        // Clamped to the truth's span (its first sample follows the first telemetry frame).
+        let i = track.partition_point(|&(s, _)| s <= t);
+        let (a, b) = match (i.checked_sub(1).and_then(|j| track.get(j)), track.get(i)) {
+            (Some(a), Some(b)) => (a, b),
+            (Some(a), None) => (a, a),
+            (None, Some(b)) => (b, b),
+            (None, None) => return None,
+        };
+        let f = if b.0 > a.0 { (t - a.0) / (b.0 - a.0) } else { 0.0 };
+        Some(a.1 + f * (b.1 - a.1))
+    };
+    Some((at(f64::from(t1))? - at(f64::from(t0))?).to_degrees())
 }
 
 fn print_text(r: &Report) {
