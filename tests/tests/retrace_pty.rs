@@ -289,7 +289,7 @@ fn changing_d_and_dl_in_a_retrace_reproduces_seed_000_tables_1_and_2() {
     }
     // The Tables scenario's tolerance is 0.75 deg, with 53.3 mm against the 53.33 that fits
     // the paper exactly and the robot's stop a few degrees off 720; here the retrace stops
-    // where the true rotation reaches 720 deg (telemetry's 100 ms steps: within a degree).
-    assert!(worst < 1.0, "worst |retraced - paper| = {worst:.2} deg");
+    // where the true rotation reaches 720 deg; measured 0.37 deg at worst (seed 3).
+    assert!(worst < 0.75, "worst |retraced - paper| = {worst:.2} deg");
     let _ = std::fs::remove_dir_all(&d);
 }
