@@ -91,9 +91,25 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
         };
         sim.robot_mut().apply(on, 0);
         let mut dev = emulator::power_on::PoweredByStation::new(sim);
-        return serve_device(&mut dev, args, &opts.serve, &stop, profile, &arena_name, link);
+        return serve_device(
+            &mut dev,
+            args,
+            &opts.serve,
+            &stop,
+            profile,
+            &arena_name,
+            link,
+        );
     }
-    serve_device(&mut sim, args, &opts.serve, &stop, profile, &arena_name, link)
+    serve_device(
+        &mut sim,
+        args,
+        &opts.serve,
+        &stop,
+        profile,
+        &arena_name,
+        link,
+    )
 }
 
 fn serve_device<D: emulator::link::Device>(

@@ -620,7 +620,7 @@ pub const MAX_HAL_TRACE_CHUNK: usize = 192;
 /// Robot -> station while parameter 34 `hal_trace` is on (PROTOCOL.md §6 kind 15): the next
 /// bytes of the robot's hardware trace, everything its hardware layer gave the firmware (clock,
 /// sensor reads, encoder counts, serial bytes in) and the motor commands it gave back, one
-/// entry a call, in the order of the calls (the entry format is PROTOCOL.md §18). A station
+/// entry a call, in the order of the calls (the entry format is PROTOCOL.md §17). A station
 /// concatenates `data` by `offset`; `station retrace` feeds it to the firmware again.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
 pub struct HalTrace<'a> {

@@ -5,7 +5,7 @@
 //! Layer: between `Robot::step` and its `Hal`. While parameter 34 `hal_trace` is on,
 //! `Robot::step` wraps the board's `Hal` in a [`Recorder`], which passes every call through
 //! and appends what came back (and the motor and gripper commands that went out) to the
-//! robot's [`HalTrace`] as entries (format below, PROTOCOL.md §18). The entries leave as
+//! robot's [`HalTrace`] as entries (format below, PROTOCOL.md §17). The entries leave as
 //! `HalTrace` frames (kind 15) at every control cycle. `no_std`, heap-free: the pending bytes
 //! live in a [`TRACE_BUFFER`]-byte queue.
 //!
@@ -573,7 +573,10 @@ impl<H: Hal> Hal for Recorder<'_, H> {
         if n < bytes.len() {
             self.trace.tx_short = true;
         }
-        self.trace.tx_taken = self.trace.tx_taken.saturating_add(n.min(bytes.len()) as u32);
+        self.trace.tx_taken = self
+            .trace
+            .tx_taken
+            .saturating_add(n.min(bytes.len()) as u32);
         n
     }
 }

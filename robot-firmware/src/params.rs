@@ -386,7 +386,7 @@ pub const PARAMS: [ParamInfo; 34] = [
         "",
         0.0,
         1.0,
-        "1: stream every hardware read as HalTrace frames, for `station retrace` (PROTOCOL.md §18)",
+        "1: stream every hardware read as HalTrace frames, for `station retrace` (PROTOCOL.md §17)",
     ),
 ];
 

@@ -29,8 +29,8 @@ use crate::deadreckon::{DeadReckonInput, DeadReckonParams, DeadReckoner, Degrade
 use crate::execute::{ExecuteParams, Executor};
 use crate::explore::{ExploreParams, Explorer};
 use crate::guided::{guided_step, GuidedParams, GuidedPhase};
-use crate::hal_trace::HalTrace;
 use crate::hal::{BeaconReading, GripperCommand, GripperState, Hal, MotorCommand};
+use crate::hal_trace::HalTrace;
 use crate::link::{Identity, Inbound, Link, LinkStatus, Reply, Response};
 use crate::odometry::{encoder_delta, wrap_angle, Odometry, OdometryParams, Point, Pose};
 use crate::params::{RobotConfig, Tunables};
@@ -233,9 +233,13 @@ impl<K: Kit> Robot<K> {
         }
         if trace.is_on() {
             let mut rec = crate::hal_trace::Recorder::new(hal, trace);
-            pass(link, core, identity, &mut rec, &mut |rec, link, now_ms, cycle| {
-                rec.trace().emit(link, now_ms, cycle)
-            });
+            pass(
+                link,
+                core,
+                identity,
+                &mut rec,
+                &mut |rec, link, now_ms, cycle| rec.trace().emit(link, now_ms, cycle),
+            );
             rec.finish();
         } else {
             pass(link, core, identity, hal, &mut |_, _, _, _| {});
@@ -252,7 +256,6 @@ impl<K: Kit> Robot<K> {
         self.core.pose()
     }
 }
-
 
 /// One pass of the main loop over the robot's parts; `emit_trace` hands the hardware trace to
 /// the link before the link's bytes go out (a no-op while tracing is off).
@@ -287,11 +290,11 @@ fn pass<K: Kit, H: Hal>(
 }
 
 fn receive<K: Kit, H: Hal>(
-link: &mut Link,
-core: &mut Core<K>,
-identity: &Identity,
-hal: &mut H,
-now_ms: u32,
+    link: &mut Link,
+    core: &mut Core<K>,
+    identity: &Identity,
+    hal: &mut H,
+    now_ms: u32,
 ) {
     let mut buf = [0u8; 128];
     let mut budget = RX_BUDGET;
@@ -306,10 +309,9 @@ now_ms: u32,
             telemetry_hz: core.config.telemetry_hz,
             failsafe_ms: core.config.failsafe_ms,
         };
-                link
-            .receive(&buf[..n], now_ms, identity, status, &mut |inbound| {
-                core.handle(inbound, now_ms)
-            });
+        link.receive(&buf[..n], now_ms, identity, status, &mut |inbound| {
+            core.handle(inbound, now_ms)
+        });
     }
 }
 
@@ -343,12 +345,10 @@ fn send_periodic<K: Kit>(link: &mut Link, core: &mut Core<K>, now_ms: u32) {
     if let Some(lc) = core.linecorr.get_mut() {
         if lc.report_due(now_ms) {
             let m = lc.report(now_ms);
-            link
-                .send_low_priority(&Message::Localization(m), now_ms);
+            link.send_low_priority(&Message::Localization(m), now_ms);
         }
     }
-    link
-        .heartbeat(now_ms, protocol::timing::HEARTBEAT_PERIOD_MS);
+    link.heartbeat(now_ms, protocol::timing::HEARTBEAT_PERIOD_MS);
 }
 
 impl<K: Kit> Core<K> {

@@ -303,9 +303,9 @@ fn stop_text(s: &Stop) -> String {
             "a gap at byte {file_offset}: the robot could not send {steps} passes of its trace \
              (the link could not keep up); nothing past it is retraced"
         ),
-        Stop::Restart { file_offset } => format!(
-            "tracing restarted at byte {file_offset}; the second stream is not retraced"
-        ),
+        Stop::Restart { file_offset } => {
+            format!("tracing restarted at byte {file_offset}; the second stream is not retraced")
+        }
     }
 }
 
@@ -381,7 +381,8 @@ fn unwrapped(mut headings: impl Iterator<Item = f64>) -> f64 {
     let (mut prev, mut total) = (first, 0.0);
     for h in headings {
         let mut d = h - prev;
-        d = (d + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI;
+        d = (d + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+            - std::f64::consts::PI;
         total += d;
         prev = h;
     }
@@ -419,7 +420,11 @@ fn truth_rotation_deg(truth: &[(u32, i32)], run: &Run) -> Option<f64> {
             (None, Some(b)) => (b, b),
             (None, None) => return None,
         };
-        let f = if b.0 > a.0 { (t - a.0) / (b.0 - a.0) } else { 0.0 };
+        let f = if b.0 > a.0 {
+            (t - a.0) / (b.0 - a.0)
+        } else {
+            0.0
+        };
         Some(a.1 + f * (b.1 - a.1))
     };
     Some((at(f64::from(t1))? - at(f64::from(t0))?).to_degrees())
@@ -478,7 +483,11 @@ fn print_text(r: &Report) {
         }
     }
     if let (Some(a), Some(b)) = (&r.events_only_recorded, &r.events_only_retraced) {
-        println!("events only in the recorded run: {}; only in the retrace: {}", a.len(), b.len());
+        println!(
+            "events only in the recorded run: {}; only in the retrace: {}",
+            a.len(),
+            b.len()
+        );
         for e in a.iter().take(20) {
             println!("  - {:>9} ms {} {}", e.time_ms, e.code, e.value);
         }

@@ -120,7 +120,10 @@ fn assert_identical(name: &str, rec: &Path) {
     assert_eq!(r["trace_dropped_steps"], 0, "{name}");
     assert!(r["cycles"].as_u64().unwrap() > 100, "{name}: {r:#}");
     // Telemetry, the trace's own frames, replies: many frames, all compared.
-    assert!(r["frames_compared"].as_u64().unwrap() > 150, "{name}: {r:#}");
+    assert!(
+        r["frames_compared"].as_u64().unwrap() > 150,
+        "{name}: {r:#}"
+    );
     // The task ran: the robot moved or turned.
     let moved = r["believed_distance_m"].as_f64().unwrap() > 0.05
         || r["believed_rotation_deg"].as_f64().unwrap().abs() > 45.0;
@@ -131,7 +134,13 @@ fn assert_identical(name: &str, rec: &Path) {
 fn runs_of_each_profile_retrace_bit_for_bit() {
     let d = dir("tasks");
     // Dom Dinis, Micro-Rato'99: the reactive search for the beacon (seed 004 §5).
-    let dd = record(&d, "dom-dinis-explore", &["--hal-trace", "--seed", "5"], &["explore"], 10.0);
+    let dd = record(
+        &d,
+        "dom-dinis-explore",
+        &["--hal-trace", "--seed", "5"],
+        &["explore"],
+        10.0,
+    );
     assert_identical("Dom Dinis reach-beacon", &dd);
     let khepera = ["--hal-trace", "--profile", "khepera", "--seed", "7"];
     let goto = record(&d, "khepera-goto", &khepera, &["goto 1.0 1.0"], 10.0);
@@ -159,7 +168,10 @@ fn a_trace_switched_on_mid_run_is_reported_and_its_first_divergence_named() {
     assert_eq!(r["trace_complete_from_power_up"], false, "{r:#}");
     assert_eq!(r["identical"], false, "{r:#}");
     let div = &r["first_divergence"];
-    assert!(div["step"].as_u64().is_some() && div["field"].is_string(), "{r:#}");
+    assert!(
+        div["step"].as_u64().is_some() && div["field"].is_string(),
+        "{r:#}"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -221,7 +233,8 @@ fn changing_d_and_dl_in_a_retrace_reproduces_seed_000_tables_1_and_2() {
     let d = dir("tables");
     // The paper's box, 75 x 60 cm inside, as an ASCII grid of 1 cm cells.
     let (w, h) = (75, 60);
-    let mut grid = String::from("# name Khepera box 75 x 60 cm\n# cell 0.01\n# origin -0.01 -0.01\n");
+    let mut grid =
+        String::from("# name Khepera box 75 x 60 cm\n# cell 0.01\n# origin -0.01 -0.01\n");
     grid.push_str(&"#".repeat(w + 2));
     grid.push('\n');
     for _ in 0..h {
@@ -283,7 +296,9 @@ fn changing_d_and_dl_in_a_retrace_reproduces_seed_000_tables_1_and_2() {
             let retraced = rot["retraced_deg"].as_f64().unwrap();
             // The paper's sign: how far the integrated rotation falls short of the true one.
             let ours = truth.abs() - retraced.abs();
-            println!("table {table} {name} {value}: paper {paper_deg:+.1} deg, retraced {ours:+.2}");
+            println!(
+                "table {table} {name} {value}: paper {paper_deg:+.1} deg, retraced {ours:+.2}"
+            );
             worst = worst.max((ours - paper_deg).abs());
         }
     }

@@ -32,17 +32,11 @@ pub enum TraceError {
     /// An entry tag the format does not have.
     UnknownTag { offset: usize, tag: u8 },
     /// A varint longer than its type, or a value out of its range.
-    BadValue {
-        offset: usize,
-        field: &'static str,
-    },
+    BadValue { offset: usize, field: &'static str },
     /// The stream does not begin with `START`, or has another format version.
     NoStart { offset: usize },
     /// More entries of one kind in a pass than a pass can make.
-    TooMany {
-        offset: usize,
-        what: &'static str,
-    },
+    TooMany { offset: usize, what: &'static str },
 }
 
 impl core::fmt::Display for TraceError {
@@ -385,7 +379,9 @@ impl<'a> Playback<'a> {
                 *slot = bytes;
                 s.n_reads += 1;
             }
-            tag::TX_SHORT => s.tx_short = Some(c.small("TX_SHORT count", u64::from(u32::MAX))? as u32),
+            tag::TX_SHORT => {
+                s.tx_short = Some(c.small("TX_SHORT count", u64::from(u32::MAX))? as u32)
+            }
             tag::IR => s.ir = Some(c.eight("IR reading")?),
             tag::AMBIENT => s.ambient = Some(c.eight("AMBIENT reading")?),
             tag::COMPASS => s.compass = Some(Some(c.f32()?)),
@@ -439,14 +435,20 @@ impl<'a> Playback<'a> {
                         field: "MOTORS",
                     });
                 };
-                let slot = s.motors.get_mut(s.n_motors).ok_or(too_many("motor commands"))?;
+                let slot = s
+                    .motors
+                    .get_mut(s.n_motors)
+                    .ok_or(too_many("motor commands"))?;
                 *slot = MotorCommand::new(left, right);
                 s.n_motors += 1;
             }
             tag::GRIP_CMD => {
                 let arm = c.u8()?;
                 let closed = c.flag("GRIP_CMD closed")?;
-                let slot = s.grips.get_mut(s.n_grips).ok_or(too_many("gripper commands"))?;
+                let slot = s
+                    .grips
+                    .get_mut(s.n_grips)
+                    .ok_or(too_many("gripper commands"))?;
                 *slot = GripperCommand { arm, closed };
                 s.n_grips += 1;
             }
@@ -476,7 +478,13 @@ impl<'a> Playback<'a> {
         }
     }
 
-    fn value<T: Copy>(&mut self, now: Option<T>, last: Option<T>, absent: T, what: &'static str) -> T {
+    fn value<T: Copy>(
+        &mut self,
+        now: Option<T>,
+        last: Option<T>,
+        absent: T,
+        what: &'static str,
+    ) -> T {
         match now {
             Some(v) => v,
             None => {
@@ -520,7 +528,12 @@ impl Hal for Playback<'_> {
         if i == 0 {
             return self.step.clock_us;
         }
-        match self.step.extra_clocks.get(i - 1).filter(|_| i - 1 < self.step.n_clocks) {
+        match self
+            .step
+            .extra_clocks
+            .get(i - 1)
+            .filter(|_| i - 1 < self.step.n_clocks)
+        {
             Some(&t) => t,
             None => {
                 self.miss("now_us");
@@ -604,7 +617,12 @@ impl Hal for Playback<'_> {
 
     fn serial_read(&mut self, buf: &mut [u8]) -> usize {
         // One recorded read per call, as the recorded port gave them.
-        let Some(&chunk) = self.step.reads.get(self.reads_used).filter(|_| self.reads_used < self.step.n_reads) else {
+        let Some(&chunk) = self
+            .step
+            .reads
+            .get(self.reads_used)
+            .filter(|_| self.reads_used < self.step.n_reads)
+        else {
             return 0;
         };
         let rest = chunk.get(self.read_off..).unwrap_or(&[]);

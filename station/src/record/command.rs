@@ -204,8 +204,13 @@ fn parse_send(s: &str) -> anyhow::Result<Command> {
         #[command(subcommand)]
         cmd: crate::cli::SendCmd,
     }
-    let one = <One as clap::Parser>::try_parse_from(s.split_whitespace())
-        .map_err(|e| anyhow::anyhow!("--send {:?}: {}", crate::terminal_text::printable(s), e.render()))?;
+    let one = <One as clap::Parser>::try_parse_from(s.split_whitespace()).map_err(|e| {
+        anyhow::anyhow!(
+            "--send {:?}: {}",
+            crate::terminal_text::printable(s),
+            e.render()
+        )
+    })?;
     one.cmd
         .to_command()
         .map_err(|e| anyhow::anyhow!("--send {:?}: {e}", crate::terminal_text::printable(s)))

@@ -146,11 +146,7 @@ pub fn diff_events(a: &[EventAt], b: &[EventAt]) -> (Vec<EventAt>, Vec<EventAt>)
     let mut used = vec![false; b.len()];
     let mut only_a = Vec::new();
     for e in a {
-        match b
-            .iter()
-            .enumerate()
-            .find(|(j, x)| !used[*j] && *x == e)
-        {
+        match b.iter().enumerate().find(|(j, x)| !used[*j] && *x == e) {
             Some((j, _)) => used[j] = true,
             None => only_a.push(e.clone()),
         }

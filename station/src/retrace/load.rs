@@ -23,7 +23,11 @@ pub struct RecFrame {
 #[derive(Clone, Debug, PartialEq)]
 pub enum TraceCut {
     /// A trace frame is missing (lost on the wire): the next one starts at `got`, not `want`.
-    Lost { want: u32, got: u32, file_offset: u64 },
+    Lost {
+        want: u32,
+        got: u32,
+        file_offset: u64,
+    },
     /// Tracing was switched off and on: a second stream starts here (not retraced).
     Restarted { file_offset: u64 },
 }

@@ -67,21 +67,22 @@ pub struct Run {
 }
 
 /// Retraces `loaded` with `params` (id, value) set before the first pass.
-pub fn retrace(loaded: &Loaded, params: &[(u16, f32)], until_ms: Option<u32>) -> Result<Run, String> {
+pub fn retrace(
+    loaded: &Loaded,
+    params: &[(u16, f32)],
+    until_ms: Option<u32>,
+) -> Result<Run, String> {
     let at_file = |at: usize| loaded.file_offset_of(at);
-    let mut play = Playback::new(&loaded.trace).map_err(|e| {
-        format!("byte {}: hardware trace: {e}", at_file(offset_of(&e)))
-    })?;
+    let mut play = Playback::new(&loaded.trace)
+        .map_err(|e| format!("byte {}: hardware trace: {e}", at_file(offset_of(&e))))?;
     let start = play.start;
     let profile = match start.profile {
         0 => &KHEPERA,
         1 => &MICRO_RATO,
-        p => {
-            return Err(format!(
-                "byte {}: hardware trace: START names profile {p}, which this station does not know",
-                at_file(0)
-            ))
-        }
+        p => return Err(format!(
+            "byte {}: hardware trace: START names profile {p}, which this station does not know",
+            at_file(0)
+        )),
     };
     // The HelloReply names the firmware's version; the retraced robot answers with the same.
     let version: &'static str = match &loaded.firmware_version {
@@ -115,7 +116,9 @@ pub fn retrace(loaded: &Loaded, params: &[(u16, f32)], until_ms: Option<u32>) ->
         );
         if let robot_firmware::link::Reply::Nack(r) = reply {
             let name = robot_firmware::params::info(id).map_or("?", |i| i.name);
-            return Err(format!("--param {name}={value}: the robot refuses it ({r:?})"));
+            return Err(format!(
+                "--param {name}={value}: the robot refuses it ({r:?})"
+            ));
         }
     }
 
@@ -178,11 +181,18 @@ pub fn retrace(loaded: &Loaded, params: &[(u16, f32)], until_ms: Option<u32>) ->
         if run.command_divergence.is_none() {
             let mine = &play.motors_out[..play.n_motors_out];
             let theirs = &rec.motors[..rec.n_motors];
-            let grips = (&play.grips_out[..play.n_grips_out], &rec.grips[..rec.n_grips]);
+            let grips = (
+                &play.grips_out[..play.n_grips_out],
+                &rec.grips[..rec.n_grips],
+            );
             let diverged = if mine != theirs {
                 Some(("motor command", format!("{theirs:?}"), format!("{mine:?}")))
             } else if grips.0 != grips.1 {
-                Some(("gripper command", format!("{:?}", grips.1), format!("{:?}", grips.0)))
+                Some((
+                    "gripper command",
+                    format!("{:?}", grips.1),
+                    format!("{:?}", grips.0),
+                ))
             } else {
                 None
             };
