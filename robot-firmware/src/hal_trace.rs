@@ -50,8 +50,9 @@ pub const TRACE_BUFFER: usize = 512;
 pub const FORMAT_VERSION: u8 = 1;
 /// Frames sent at most per pass, so a backlog cannot crowd out replies.
 const FRAMES_PER_STEP: usize = 2;
-/// Largest single entry (a `START`), for the room check after a gap.
+/// Room for the largest single entry (a `START`, 49 bytes) on the stack.
 const LARGEST_ENTRY: usize = 72;
+const _: () = assert!(TRACE_BUFFER / 2 >= LARGEST_ENTRY);
 
 /// Entry tags.
 pub mod tag {
@@ -320,7 +321,7 @@ impl HalTrace {
         self.step_mark = self.end_offset();
         if self.in_gap() {
             let free = self.pending.capacity() - self.pending.len();
-            if free >= TRACE_BUFFER / 2 && free >= LARGEST_ENTRY {
+            if free >= TRACE_BUFFER / 2 {
                 let n = self.gap_steps;
                 self.gap_steps = 0;
                 self.idle = (0, 0);

@@ -79,10 +79,12 @@ pub fn retrace(
     let profile = match start.profile {
         0 => &KHEPERA,
         1 => &MICRO_RATO,
-        p => return Err(format!(
+        p => {
+            return Err(format!(
             "byte {}: hardware trace: START names profile {p}, which this station does not know",
             at_file(0)
-        )),
+        ))
+        }
     };
     // The HelloReply names the firmware's version; the retraced robot answers with the same.
     let version: &'static str = match &loaded.firmware_version {
