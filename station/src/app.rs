@@ -196,6 +196,8 @@ pub struct AppOptions {
     /// What the header says the link is ("/dev/ttyUSB0", "built-in emulator on /dev/pts/3").
     pub port_label: String,
     pub arena: Option<ArenaOverlay>,
+    /// `station replay --retrace`: the retraced track and what differed, drawn over the map.
+    pub retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
 }
 
 /// The station's whole UI state.
@@ -224,6 +226,8 @@ pub struct App {
     pub true_track: Track,
     pub encoders: EncoderUnwrap,
     pub log: LogBuffer,
+    /// The retraced track (`station replay --retrace`), if any.
+    pub retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
     pub teleop: Teleop,
     pub map: MapState,
     pub params: ParamEditor,
@@ -290,6 +294,7 @@ impl App {
             true_track: Track::default(),
             encoders: EncoderUnwrap::default(),
             log: LogBuffer::default(),
+            retrace: opts.retrace.clone(),
             teleop: Teleop::default(),
             map: MapState {
                 arena: opts.arena,

@@ -17,6 +17,7 @@
 
 pub mod compare;
 pub mod load;
+pub mod overlay;
 pub mod run;
 
 use std::path::PathBuf;

@@ -212,9 +212,18 @@ fn view_action(app: &App, code: KeyCode) -> Option<Action> {
 
 /// The lines a replay's log starts with: what is replayed, and any damage.
 fn notes(app: &mut App, rec: &Recording, file: &str) {
+    // `--retrace`: what differed, first (robot text is not in it: names and numbers only).
+    let retrace_lines = app
+        .retrace
+        .as_ref()
+        .map(|r| r.lines.clone())
+        .unwrap_or_default();
     let mut note = |level, text: String| {
         app.log.push(LogLine::new(0, level, Source::Link, text));
     };
+    for line in retrace_lines {
+        note(Level::Info, line);
+    }
     note(
         Level::Info,
         format!(

@@ -53,7 +53,7 @@ pub struct BelievedLayer;
 pub struct GoalLayer;
 
 /// Layers in drawing order: the planner's grid and squares under the arena, plans above it.
-pub static LAYERS: [&dyn MapLayer; 15] = [
+pub static LAYERS: [&dyn MapLayer; 16] = [
     &map_layers::GridLayer,
     &map_layers::RegionsLayer,
     &super::localization::FloorLayer,
@@ -64,6 +64,7 @@ pub static LAYERS: [&dyn MapLayer; 15] = [
     &super::transfer::RobotPlanLayer,
     &super::localization::OdometryLayer,
     &TruthLayer,
+    &super::retrace_layer::RetraceLayer,
     &BelievedLayer,
     &super::localization::LinesLayer,
     &super::localization::PpdLayer,

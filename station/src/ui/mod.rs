@@ -17,6 +17,7 @@ pub mod map;
 pub mod map_layers;
 pub mod params;
 pub mod plan_panel;
+pub mod retrace_layer;
 pub mod sensors;
 pub mod transfer;
 
