@@ -196,8 +196,6 @@ pub struct AppOptions {
     /// What the header says the link is ("/dev/ttyUSB0", "built-in emulator on /dev/pts/3").
     pub port_label: String,
     pub arena: Option<ArenaOverlay>,
-    /// `station replay --retrace`: the retraced track and what differed, drawn over the map.
-    pub retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
 }
 
 /// The station's whole UI state.
@@ -294,7 +292,7 @@ impl App {
             true_track: Track::default(),
             encoders: EncoderUnwrap::default(),
             log: LogBuffer::default(),
-            retrace: opts.retrace.clone(),
+            retrace: None,
             teleop: Teleop::default(),
             map: MapState {
                 arena: opts.arena,

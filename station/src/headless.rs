@@ -164,7 +164,6 @@ async fn interactive(
     let mut app = App::new(AppOptions {
         port_label: label,
         arena,
-        retrace: None,
     });
     app.map.plan = plan;
     // The squares are busy on a small map panel: `r` shows them.

@@ -107,10 +107,10 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         AppOptions {
             port_label: label.clone(),
             arena,
-            retrace,
         },
         args.speed,
-    );
+    )
+    .with_retrace(retrace);
     super::tui::run(session).await?;
     Ok(ExitCode::SUCCESS)
 }

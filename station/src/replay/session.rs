@@ -34,6 +34,8 @@ pub struct ReplaySession {
     pub help: bool,
     pub quit: bool,
     actions: Vec<Action>,
+    /// `--retrace`: drawn over the map and noted in the log after every restart.
+    retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
 }
 
 impl ReplaySession {
@@ -54,7 +56,18 @@ impl ReplaySession {
             help: false,
             quit: false,
             actions: Vec::new(),
+            retrace: None,
         }
+    }
+
+    /// Draws `retrace` (`station replay --retrace`) over the replay.
+    pub fn with_retrace(
+        mut self,
+        retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
+    ) -> Self {
+        self.retrace = retrace;
+        self.restart();
+        self
     }
 
     pub fn recording(&self) -> &Recording {
@@ -88,6 +101,7 @@ impl ReplaySession {
     fn restart(&mut self) {
         let mut app = App::new(self.opts.clone());
         app.replaying = true;
+        app.retrace = self.retrace.clone();
         app.size = self.app.size;
         app.view = self.app.view;
         app.chart = self.app.chart;
