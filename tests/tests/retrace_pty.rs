@@ -308,3 +308,38 @@ fn changing_d_and_dl_in_a_retrace_reproduces_seed_000_tables_1_and_2() {
     assert!(worst < 0.75, "worst |retraced - paper| = {worst:.2} deg");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn the_replay_overlays_the_retraced_track_and_says_what_differed() {
+    if !e2e_tests::tmux::Tmux::available() {
+        println!("tmux is missing: not run");
+        return;
+    }
+    let d = dir("overlay");
+    let args = ["--hal-trace", "--profile", "khepera", "--seed", "7"];
+    let rec = record(&d, "goto", &args, &["goto 1.0 1.0"], 5.0);
+    let t = e2e_tests::tmux::Tmux::start(
+        "retrace-overlay",
+        200,
+        50,
+        &d,
+        &workspace_bin("station"),
+        &[
+            "replay",
+            rec.to_str().unwrap(),
+            "--retrace",
+            "--param",
+            "odo_wheel_distance_mm=40",
+            "--speed",
+            "16",
+        ],
+    );
+    // The log's first line: the retrace, its parameter, the thesis's limit.
+    t.wait_text(
+        "retrace (odo_wheel_distance_mm=40)",
+        Duration::from_secs(20),
+    );
+    // The retraced robot's marker on the map once the replay has run.
+    t.wait_text("◇", Duration::from_secs(20));
+    let _ = std::fs::remove_dir_all(&d);
+}
