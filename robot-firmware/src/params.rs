@@ -553,7 +553,12 @@ mod tests {
     fn every_listed_parameter_has_a_slot_and_ids_are_unique() {
         with_tunables(|t| {
             for (i, info) in PARAMS.iter().enumerate() {
-                assert_eq!(usize::from(info.id), i, "ids are dense and in order");
+                // Ascending and unique (ids are appended, never renumbered). Not dense: ids
+                // are assigned to work in progress ahead of time (33 robot_id, 34 hal_trace),
+                // so a branch may hold a later id before an earlier one has landed.
+                if let Some(prev) = i.checked_sub(1).and_then(|j| PARAMS.get(j)) {
+                    assert!(info.id > prev.id, "ids ascending and unique: {}", info.name);
+                }
                 let v = t.get(info.id).expect("slot exists");
                 assert!(
                     v >= info.min && v <= info.max,
