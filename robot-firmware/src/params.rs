@@ -568,7 +568,8 @@ mod tests {
                 // Setting the default back is always accepted and changes nothing.
                 assert_eq!(t.set(info.id, v), Ok(v));
             }
-            assert_eq!(t.get(PARAMS.len() as u16), Err(NackReason::UnknownParam));
+            let past = PARAMS.last().map_or(0, |p| p.id + 1);
+            assert_eq!(t.get(past), Err(NackReason::UnknownParam));
         });
     }
 
