@@ -226,6 +226,8 @@ pub struct App {
     pub true_track: Track,
     pub encoders: EncoderUnwrap,
     pub log: LogBuffer,
+    /// The retraced track (`station replay --retrace`), if any.
+    pub retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
     pub teleop: Teleop,
     pub map: MapState,
     pub params: ParamEditor,
@@ -296,6 +298,7 @@ impl App {
             true_track: Track::default(),
             encoders: EncoderUnwrap::default(),
             log: LogBuffer::default(),
+            retrace: None,
             teleop: Teleop::default(),
             map: MapState {
                 arena: opts.arena,

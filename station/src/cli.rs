@@ -218,6 +218,25 @@ pub enum Sub {
     ///   station export run.rec --csv run.csv --mcap run.mcap
     #[command(verbatim_doc_comment)]
     Export(crate::export::ExportArgs),
+    /// Re-run a recorded run through the firmware's own code (seed 001 retracing)
+    ///
+    /// The recording must hold the robot's hardware trace (parameter 34 hal_trace, message
+    /// kind 15; `robot-emulator --hal-trace` streams it from power-up). Every pass of the
+    /// robot's main loop is fed to the firmware crate's own Robot (the profile's composition)
+    /// through a Hal that plays the trace back. Without --param it checks that the outputs
+    /// (frames: telemetry, events, replies; motor and gripper commands) are the recorded ones
+    /// bit for bit, or reports the first divergence with its cycle and field (exit 1). With
+    /// --param it reports what the changed firmware would have done with the same readings:
+    /// the believed track's difference, the rotation, the events that differ.
+    ///
+    /// Limit (the thesis's): a changed algorithm would have moved the robot elsewhere; the
+    /// retraced sensor data stay the recorded ones.
+    ///
+    /// Examples:
+    ///   station retrace run.rec
+    ///   station retrace run.rec --param wheel_distance_mm=53 --json
+    #[command(verbatim_doc_comment)]
+    Retrace(crate::retrace::RetraceArgs),
     /// Train the light -> angle map (Khepera light calibration) from a recording of a calibrating robot
     ///
     /// Uses the telemetry recorded while a Khepera turned next to a light (mode

@@ -37,6 +37,7 @@ pub mod places;
 pub mod plan;
 pub mod record;
 pub mod replay;
+pub mod retrace;
 pub mod terminal_text;
 pub mod transfer;
 pub mod tui;

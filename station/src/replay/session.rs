@@ -36,6 +36,8 @@ pub struct ReplaySession {
     pub help: bool,
     pub quit: bool,
     actions: Vec<Action>,
+    /// `--retrace`: drawn over the map and noted in the log after every restart.
+    retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
 }
 
 impl ReplaySession {
@@ -61,7 +63,18 @@ impl ReplaySession {
             help: false,
             quit: false,
             actions: Vec::new(),
+            retrace: None,
         }
+    }
+
+    /// Draws `retrace` (`station replay --retrace`) over the replay.
+    pub fn with_retrace(
+        mut self,
+        retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
+    ) -> Self {
+        self.retrace = retrace;
+        self.restart();
+        self
     }
 
     pub fn recording(&self) -> &Recording {
@@ -95,6 +108,7 @@ impl ReplaySession {
     fn restart(&mut self) {
         let mut app = App::new(self.opts.clone());
         app.replaying = true;
+        app.retrace = self.retrace.clone();
         app.size = self.app.size;
         app.view = self.app.view;
         app.chart = self.app.chart;
@@ -220,9 +234,18 @@ fn view_action(app: &App, code: KeyCode) -> Option<Action> {
 /// The lines a replay's log starts with: what is replayed, how many robots the file holds,
 /// and any damage.
 fn notes(app: &mut App, rec: &Recording, file: &str, links: usize) {
+    // `--retrace`: what differed, first (robot text is not in it: names and numbers only).
+    let retrace_lines = app
+        .retrace
+        .as_ref()
+        .map(|r| r.lines.clone())
+        .unwrap_or_default();
     let mut note = |level, text: String| {
         app.log.push(LogLine::new(0, level, Source::Link, text));
     };
+    for line in retrace_lines {
+        note(Level::Info, line);
+    }
     note(
         Level::Info,
         format!(

@@ -53,7 +53,7 @@ pub struct BelievedLayer;
 pub struct GoalLayer;
 
 /// Layers in drawing order: the planner's grid and squares under the arena, plans above it.
-pub static LAYERS: [&dyn MapLayer; 17] = [
+pub static LAYERS: [&dyn MapLayer; 18] = [
     &map_layers::GridLayer,
     &map_layers::RegionsLayer,
     &super::localization::FloorLayer,
@@ -66,6 +66,7 @@ pub static LAYERS: [&dyn MapLayer; 17] = [
     &super::qt_map::QtLayer,
     &TruthLayer,
     &super::fleet::FleetLayer,
+    &super::retrace_layer::RetraceLayer,
     &BelievedLayer,
     &super::localization::LinesLayer,
     &super::localization::PpdLayer,

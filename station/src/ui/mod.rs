@@ -19,6 +19,7 @@ pub mod map_layers;
 pub mod params;
 pub mod plan_panel;
 pub mod qt_map;
+pub mod retrace_layer;
 pub mod sensors;
 pub mod transfer;
 
