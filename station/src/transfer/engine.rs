@@ -256,6 +256,15 @@ impl TransferEngine {
         })
     }
 
+    /// The running upload's sender counts (chunks, resends, probes, timer expiries), for
+    /// reports such as the goodput bench.
+    pub fn upload_stats(&self) -> Option<protocol::transfer::SenderStats> {
+        match &self.active.as_ref()?.phase {
+            Phase::Upload { sender, .. } => Some(sender.stats()),
+            _ => None,
+        }
+    }
+
     /// Ends the running job and every queued one with `Cancelled`.
     pub fn cancel_all(&mut self, now_ms: u64) {
         self.finish(now_ms, JobOutcome::Failed(TransferError::Cancelled), None);
