@@ -815,27 +815,10 @@ impl Sender {
         match self.phase {
             Phase::Begin => self.begin_due = true,
             _ => {
-                // Like QUIC's probe timeout: the unanswered run sent longest ago goes again
-                // first; the rest stays in flight (the timer may only have caught a queue).
-                let waiting = self.outstanding() & !self.sacked & !self.lost;
-                let seq_age = |i: u32| {
-                    let s = self.last_tx.get(i as usize).copied().unwrap_or(0);
-                    self.tx_seq.wrapping_sub(s)
-                };
-                let oldest = (0..SPAN_UNITS as u32)
-                    .filter(|&i| waiting >> i & 1 == 1)
-                    .max_by_key(|&i| (seq_age(i), u32::MAX - i));
-                if let Some(first) = oldest {
-                    let mut last = first + 1;
-                    while last - first < u32::from(self.chunk_units)
-                        && waiting.checked_shr(last).unwrap_or(0) & 1 == 1
-                        && seq_age(last) == seq_age(first)
-                    {
-                        last += 1;
-                    }
-                    self.lost |= units(first, last);
-                    self.suspect |= units(first, last);
-                }
+                // No answer for a whole timeout: everything unanswered is taken as lost
+                // (RFC 6298 §5.4), an earlier copy of it possibly still on the line.
+                self.lost = self.outstanding() & !self.sacked;
+                self.suspect = self.lost;
                 self.shrink();
                 self.timed_end = 0;
             }

@@ -86,6 +86,9 @@ fn run(seed: u64, drop_rate: f64) -> Run {
     let mut started = None;
     let mut chunk_bytes = 0u64;
     let mut stats = SenderStats::default();
+    // GOODPUT_TRACE=<seed>: that seed's link events and frames out, on stderr.
+    let trace =
+        std::env::var("GOODPUT_TRACE").is_ok_and(|t| t == seed.to_string() && drop_rate > 0.0);
     loop {
         sim.step();
         let now = sim.now_us() / 1000;
@@ -115,12 +118,18 @@ fn run(seed: u64, drop_rate: f64) -> Run {
             let mut busy = false;
             for ev in link.take_events() {
                 busy = true;
+                if trace {
+                    eprintln!("{now} ev {ev:?}");
+                }
                 engine.on_link_event(now, &ev);
             }
             for o in engine.take_output() {
                 busy = true;
                 match o {
                     EngineOut::Frame(f) => {
+                        if trace {
+                            eprintln!("{now} out {f:?}");
+                        }
                         if let TransferOut::Chunk { data, .. } = &f {
                             chunk_bytes += data.len() as u64;
                         }
