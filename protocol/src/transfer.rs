@@ -1186,6 +1186,18 @@ mod tests {
     /// Runs a sender against a receiver over a FIFO line that delivers in `delay_ms` and
     /// drops the chunks `drop` says (by transmission number); returns the time it completed.
     fn run_line(len: usize, delay_ms: u32, drop: impl Fn(usize, u32) -> bool) -> (u32, usize) {
+        let (t, n, _) = run_lossy(len, delay_ms, drop, |_| false);
+        (t, n)
+    }
+
+    /// `run_line`, also dropping the answers `drop_ack` says (by answer number, from 1);
+    /// returns the sender too, for its counts.
+    fn run_lossy(
+        len: usize,
+        delay_ms: u32,
+        drop: impl Fn(usize, u32) -> bool,
+        drop_ack: impl Fn(usize) -> bool,
+    ) -> (u32, usize, Sender) {
         let bytes: std::vec::Vec<u8> = (0..len).map(|i| i as u8).collect();
         let mut s = Sender::for_object(ObjectKind::Map, &bytes).expect("small");
         let mut rx = Receiver::new();
@@ -1193,6 +1205,7 @@ mod tests {
         let mut to_rx: std::collections::VecDeque<ToRx> = Default::default();
         let mut to_tx: std::collections::VecDeque<(u32, TransferAck)> = Default::default();
         let mut n = 0;
+        let mut answers = 0;
         for now in 0..20_000u32 {
             while to_tx.front().is_some_and(|(t, _)| *t <= now) {
                 let (_, a) = to_tx.pop_front().expect("front");
@@ -1200,7 +1213,7 @@ mod tests {
             }
             if let Some(o) = s.outcome() {
                 assert_eq!(o, Outcome::Complete);
-                return (now, n);
+                return (now, n, s);
             }
             s.poll(now, &bytes, |m| {
                 match m {
@@ -1228,7 +1241,10 @@ mod tests {
                         rx.on_chunk(&c, &mut staging, |v| v.bytes == &bytes[..])
                     }
                 };
-                to_tx.push_back((now + delay_ms, a));
+                answers += 1;
+                if !drop_ack(answers) {
+                    to_tx.push_back((now + delay_ms, a));
+                }
             }
         }
         panic!("never completed");
@@ -1252,6 +1268,61 @@ mod tests {
             lossy.0 < clean.0 + 100,
             "clean {clean:?}, one chunk and its resend lost {lossy:?}"
         );
+    }
+
+    /// The Begin's answer lost: the chunk sent right behind the Begin is answered too, and
+    /// that answer starts the transfer. Before, the sender sent nothing until the Begin was
+    /// answered and waited out the 400 ms retry timer (issue 15).
+    #[test]
+    fn a_lost_begin_answer_is_made_good_by_the_next_answer_without_a_timer_expiry() {
+        let (clean, ..) = run_lossy(1000, 5, |_, _| false, |_| false);
+        let (lossy, _, s) = run_lossy(1000, 5, |_, _| false, |k| k == 1);
+        assert_eq!(s.stats().timeouts, 0, "{:?}", s.stats());
+        assert_eq!(s.stats().resent, 0, "nothing sent twice: {:?}", s.stats());
+        assert!(
+            lossy <= clean + 1,
+            "clean {clean} ms, Begin's answer lost {lossy} ms"
+        );
+    }
+
+    /// Every answer to a window of chunks lost: the next answer proves each chunk arrived
+    /// (the acknowledgement is cumulative), so nothing goes again and no timer expires.
+    #[test]
+    fn lost_answers_to_chunks_cost_no_resend_and_no_timer_expiry() {
+        let (clean, ..) = run_lossy(3000, 5, |_, _| false, |_| false);
+        let (lossy, _, s) = run_lossy(3000, 5, |_, _| false, |k| (2..=4).contains(&k));
+        assert_eq!(
+            (s.stats().timeouts, s.stats().resent),
+            (0, 0),
+            "{:?}",
+            s.stats()
+        );
+        assert!(
+            lossy <= clean + 1,
+            "clean {clean} ms, three answers lost {lossy} ms"
+        );
+    }
+
+    /// A chunk lost, and its resend lost too: each loss is found from a later chunk's
+    /// answer, not from the timer.
+    #[test]
+    fn a_lost_resend_is_found_from_later_answers_and_no_timer_expires() {
+        let sent = core::cell::Cell::new(0);
+        let (_, _, s) = run_lossy(
+            3000,
+            5,
+            |_, offset| {
+                if offset == 448 {
+                    sent.set(sent.get() + 1);
+                    return sent.get() <= 2;
+                }
+                false
+            },
+            |_| false,
+        );
+        assert_eq!(s.stats().timeouts, 0, "{:?}", s.stats());
+        // The chunk's seven units, then the first three of them again (the chunk halved).
+        assert_eq!(s.stats().lost_units, 7 + 3, "{:?}", s.stats());
     }
 
     #[test]
