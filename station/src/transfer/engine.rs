@@ -88,7 +88,7 @@ pub struct Progress {
 
 enum Phase {
     Upload {
-        sender: Sender,
+        sender: Box<Sender>,
         bytes: Vec<u8>,
     },
     /// A `Download` is due at `not_before`.
@@ -347,7 +347,7 @@ impl TransferEngine {
         let phase = match spec {
             JobSpec::Upload { object, bytes } => match Sender::for_object(object, &bytes) {
                 Some(sender) => Phase::Upload {
-                    sender: self.sender(sender.begin()),
+                    sender: Box::new(self.sender(sender.begin())),
                     bytes,
                 },
                 None => {
@@ -464,7 +464,7 @@ impl TransferEngine {
         if sender.outcome() == Some(Outcome::TimedOut) && a.attempts < MAX_ATTEMPTS {
             // Begin again: the robot answers with the bytes it holds, so this resumes.
             if let Some(fresh) = fresh {
-                *sender = fresh;
+                **sender = fresh;
             }
             a.attempts += 1;
             poll(sender);
@@ -527,7 +527,7 @@ impl TransferEngine {
         match &mut a.phase {
             Phase::Upload { sender, .. } => {
                 if let Some(fresh) = fresh {
-                    *sender = fresh;
+                    **sender = fresh;
                 }
             }
             Phase::Receiving { have, .. } => {
