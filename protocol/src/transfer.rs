@@ -464,7 +464,7 @@ const MAX_CHUNK_UNITS: u8 = (MAX_CHUNK as u32 / UNIT) as u8;
 /// Units the window holds at least, whatever the chunk size: with small chunks on a lossy
 /// line, `TRANSFER_WINDOW` chunks would not cover a round trip with an ack queued behind a
 /// telemetry frame, and the line would idle.
-const MIN_WINDOW_UNITS: u32 = 8;
+pub const MIN_WINDOW_UNITS: u32 = 8;
 
 impl Sender {
     /// A transfer of `len` bytes whose CRC-32C the caller states as `crc` (normally

@@ -74,13 +74,20 @@ fn the_plan_made_on_the_robot_is_byte_identical_to_the_hosts() {
 }
 
 #[test]
-fn the_same_map_uploaded_again_is_already_held_and_nothing_is_resent() {
+fn the_same_map_uploaded_again_is_already_held_and_nothing_more_is_sent() {
     let (_, map, _, _) = micro_rato_map();
     let mut st = Station::new(&KHEPERA);
     assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
     let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &map).unwrap(), &map);
-    assert_eq!((outcome, sent), (Outcome::AlreadyHave, 0));
+    assert_eq!(outcome, Outcome::AlreadyHave);
+    // Only what went behind the Begin before its answer (PROTOCOL.md §8), never the object.
+    assert!(sent <= EAGER_MAX, "{sent} bytes sent to a robot that held the map");
+    assert!(sent < map.len());
+    assert_eq!(st.map_bytes(), map);
 }
+
+/// The most bytes a sender puts behind its Begin before the answer (PROTOCOL.md §8).
+const EAGER_MAX: usize = (protocol::transfer::MIN_WINDOW_UNITS * protocol::transfer::UNIT) as usize;
 
 #[test]
 fn an_interrupted_upload_resumes_from_the_robots_next() {
@@ -139,17 +146,21 @@ fn a_corrupted_object_is_a_crc_mismatch_and_the_old_map_stays() {
 }
 
 #[test]
-fn oversize_objects_and_uploaded_regions_are_rejected_before_any_chunk() {
+fn oversize_objects_and_uploaded_regions_are_rejected_at_the_begin() {
     let mut st = Station::new(&MICRO_RATO);
     let huge = vec![0u8; MAP_OBJECT_MAX + 1];
     let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &huge).unwrap(), &huge);
-    assert_eq!((outcome, sent), (Outcome::Rejected, 0));
+    // Refused by the Begin's answer: at most what went behind the Begin, and nothing held.
+    assert_eq!(outcome, Outcome::Rejected);
+    assert!(sent <= EAGER_MAX, "{sent} bytes of a refused object sent");
+    assert!(!st.robot.objects().has_map());
     let small = [1u8, 2, 0, 0];
     let (outcome, sent) = st.upload(
         Sender::for_object(ObjectKind::Regions, &small).unwrap(),
         &small,
     );
-    assert_eq!((outcome, sent), (Outcome::Rejected, 0));
+    assert_eq!(outcome, Outcome::Rejected);
+    assert!(sent <= EAGER_MAX);
     // A 100 x 10 map is small in bytes but wider than the robot's 64 x 64 grid: it travels,
     // then is refused at install.
     let g = Grid::new(100, 10, Geometry::SEED_004, vec![0; grid_bytes(100, 10)]).unwrap();
