@@ -431,6 +431,11 @@ pub struct ServeArgs {
     /// Serial line rate the robot's UART runs at (8N1).
     #[arg(long, default_value_t = 115_200)]
     pub baud: u32,
+    /// Stream the robot's hardware trace (parameter 34 hal_trace, message kind 15) from
+    /// power-up; the robot powers up at the station's first byte, so the whole trace reaches
+    /// it and `station retrace` can re-run the firmware over it (single robot).
+    #[arg(long)]
+    pub hal_trace: bool,
     /// Simulation speed: a factor (1 = real time) or `max`.
     #[arg(long, default_value = "1", value_parser = parse_speed)]
     pub speed: Speed,

@@ -16,6 +16,7 @@ pub mod line_correct;
 pub mod link;
 pub mod output_file;
 pub mod physics;
+pub mod power_on;
 pub mod pty;
 pub mod rng;
 pub mod scenario;

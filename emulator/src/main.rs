@@ -83,7 +83,29 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
         .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
     let link = opts.serve.link.clone();
     let mut sim = sim;
-    let stats = emulator::link::serve(&mut sim, &opts.serve, &stop, &mut |path| {
+    if args.hal_trace {
+        // As the station would set it, before the first pass of the main loop.
+        let on = protocol::Command::SetParam {
+            id: protocol::ParamId(robot_firmware::params::id::HAL_TRACE),
+            value: 1.0,
+        };
+        sim.robot_mut().apply(on, 0);
+        let mut dev = emulator::power_on::PoweredByStation::new(sim);
+        return serve_device(&mut dev, args, &opts.serve, &stop, profile, &arena_name, link);
+    }
+    serve_device(&mut sim, args, &opts.serve, &stop, profile, &arena_name, link)
+}
+
+fn serve_device<D: emulator::link::Device>(
+    dev: &mut D,
+    args: &ServeArgs,
+    serve: &emulator::link::ServeOptions,
+    stop: &AtomicBool,
+    profile: &str,
+    arena_name: &str,
+    link: Option<std::path::PathBuf>,
+) -> Result<(), String> {
+    let stats = emulator::link::serve(dev, serve, stop, &mut |path| {
         // The one line a script waits for: the port to open.
         println!("{}", path.display());
         if let Some(l) = &link {

@@ -613,6 +613,28 @@ pub struct Progress {
     pub give_up_ms: u32,
 }
 
+/// Largest `HalTrace::data`: a chunk leaves room for the offsets' varints and a signed
+/// frame's trailer inside `MAX_SIGNED_PAYLOAD`.
+pub const MAX_HAL_TRACE_CHUNK: usize = 192;
+
+/// Robot -> station while parameter 34 `hal_trace` is on (PROTOCOL.md §6 kind 15): the next
+/// bytes of the robot's hardware trace, everything its hardware layer gave the firmware (clock,
+/// sensor reads, encoder counts, serial bytes in) and the motor commands it gave back, one
+/// entry a call, in the order of the calls (the entry format is PROTOCOL.md §18). A station
+/// concatenates `data` by `offset`; `station retrace` feeds it to the firmware again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct HalTrace<'a> {
+    /// Position of `data[0]` in the trace stream: bytes since tracing was switched on,
+    /// wrapping. A jump means frames were lost on the wire.
+    pub offset: u32,
+    /// Passes of the main loop whose entries the robot could not send since tracing was
+    /// switched on (its buffer was full: the link could not keep up), wrapping; each loss is
+    /// also marked in the stream where it happened (a `GAP` entry).
+    pub dropped_steps: u32,
+    /// At most `MAX_HAL_TRACE_CHUNK` bytes of the stream.
+    pub data: &'a [u8],
+}
+
 /// Every message, in kind order: variant index == the header's kind byte.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Schema)]
 pub enum Message<'a> {
@@ -635,6 +657,8 @@ pub enum Message<'a> {
     EmuTruth(EmuTruth),
     Localization(Localization),
     Progress(Progress),
+    #[serde(borrow)]
+    HalTrace(HalTrace<'a>),
 }
 
 /// The header's kind byte for each message.
@@ -656,11 +680,12 @@ pub enum Kind {
     EmuTruth = 12,
     Localization = 13,
     Progress = 14,
+    HalTrace = 15,
 }
 
 impl Kind {
     /// Every kind, in numeric order.
-    pub const ALL: [Kind; 15] = [
+    pub const ALL: [Kind; 16] = [
         Kind::Hello,
         Kind::HelloReply,
         Kind::Heartbeat,
@@ -676,6 +701,7 @@ impl Kind {
         Kind::EmuTruth,
         Kind::Localization,
         Kind::Progress,
+        Kind::HalTrace,
     ];
 
     /// The kind for a header byte, or `None` for an unknown kind.
@@ -724,6 +750,7 @@ impl Message<'_> {
             Message::EmuTruth(_) => Kind::EmuTruth,
             Message::Localization(_) => Kind::Localization,
             Message::Progress(_) => Kind::Progress,
+            Message::HalTrace(_) => Kind::HalTrace,
         }
     }
 }

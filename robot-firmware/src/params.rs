@@ -26,6 +26,8 @@ pub struct RobotConfig {
     /// Battery voltage read as empty (level 0) and full (level 1), for the speed table.
     pub battery_empty_mv: u16,
     pub battery_full_mv: u16,
+    /// The hardware trace (`hal_trace`, message kind 15): 1 on, 0 off.
+    pub hal_trace: u8,
 }
 
 impl Default for RobotConfig {
@@ -36,6 +38,7 @@ impl Default for RobotConfig {
             teleop_max_mm_s: 300.0,
             battery_empty_mv: 7000,
             battery_full_mv: 9000,
+            hal_trace: 0,
         }
     }
 }
@@ -104,7 +107,7 @@ const fn needs(caps: u32, info: ParamInfo) -> ParamInfo {
 use protocol::caps::ENCODERS;
 
 /// Every parameter, by id.
-pub const PARAMS: [ParamInfo; 33] = [
+pub const PARAMS: [ParamInfo; 34] = [
     pi(
         0,
         "failsafe_ms",
@@ -377,6 +380,14 @@ pub const PARAMS: [ParamInfo; 33] = [
         2.0,
         "go-to and plan execution: getting this much nearer counts as progress",
     ),
+    pi(
+        34,
+        "hal_trace",
+        "",
+        0.0,
+        1.0,
+        "1: stream every hardware read as HalTrace frames, for `station retrace` (PROTOCOL.md §18)",
+    ),
 ];
 
 /// Decimals that show every value of `info` in its unit: none for an integer parameter, else
@@ -414,6 +425,7 @@ pub mod id {
     pub const ARENA_MIN_Y_M: u16 = 28;
     pub const ARENA_MAX_X_M: u16 = 29;
     pub const ARENA_MAX_Y_M: u16 = 30;
+    pub const HAL_TRACE: u16 = 34;
 }
 
 /// The description of parameter `id`.
@@ -480,6 +492,7 @@ impl Tunables<'_> {
             30 => Slot::F32(&mut self.dead_reckon.bounds.max.y),
             31 => Slot::F32(&mut self.progress.stuck_limit_s),
             32 => Slot::F32(&mut self.progress.stuck_progress_m),
+            34 => Slot::U8(&mut self.robot.hal_trace),
             _ => return None,
         })
     }
