@@ -13,6 +13,7 @@
 
 pub mod csv;
 pub mod mcap;
+pub mod qt;
 pub mod scene;
 
 use std::path::{Path, PathBuf};
@@ -34,7 +35,7 @@ pub struct ExportArgs {
     pub file: PathBuf,
     /// Write an MCAP file (JSON channels: /telemetry, /pose, /truth, /truth_pose, /events,
     /// /log, /link, /commands, /replies, and for the 3D panel /tf, /map, /regions, /plan,
-    /// /arena), for Foxglove.
+    /// /arena; /qt_model for an ALICE), for Foxglove.
     #[arg(long, value_name = "OUT")]
     pub mcap: Option<PathBuf>,
     /// Write the telemetry as CSV, one row per frame (columns in README.md, "Recordings").

@@ -10,6 +10,7 @@
 //! - `/events`: robot events; `/log`: robot log lines as `foxglove.Log` (the Log panel);
 //! - `/link`: connection changes, gap markers included;
 //! - `/tf`, `/map`, `/regions`, `/plan`, `/arena`: the scene for the 3D panel (`scene`);
+//! - `/qt_model`: the QT world model rebuilt from an ALICE's situations, once a second (`qt`);
 //! - `/commands`: the station's own commands (decoded from its recorded bytes), with their
 //!   sequence numbers; `/replies`: the robot's Acks and Nacks naming them.
 //!
@@ -119,6 +120,7 @@ fn channels() -> Vec<(&'static str, &'static str, Value)> {
         ),
     ];
     all.extend(super::scene::channels());
+    all.extend(super::qt::channels());
     all
 }
 
@@ -174,12 +176,14 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
     let mut count = 0u64;
     let mut failure = None;
     let mut scene = super::scene::Scene::new(rec);
+    let mut qt = super::qt::QtExport::default();
     walk(rec, |item| {
         if failure.is_some() {
             return;
         }
         let (t_us, mut messages) = messages(&item);
         scene.extend(&item, &mut messages);
+        qt.extend(&item, &mut messages);
         let ns = base_ns.saturating_add(t_us.saturating_mul(1000));
         for (topic, mut value) in messages {
             let Some(&channel_id) = ids.get(topic) else {
