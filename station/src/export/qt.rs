@@ -21,7 +21,8 @@ pub const SNAPSHOT_MS: u32 = 1000;
 #[derive(Default)]
 pub struct QtExport {
     qt: QtState,
-    last_ms: Option<u32>,
+    /// The robot-time period (`time_ms / SNAPSHOT_MS`) of the last snapshot.
+    last_period: Option<u32>,
 }
 
 impl QtExport {
@@ -36,11 +37,11 @@ impl QtExport {
             return;
         };
         self.qt.on_situation(s);
-        let due = self
-            .last_ms
-            .is_none_or(|t| s.time_ms.wrapping_sub(t) >= SNAPSHOT_MS);
-        if due && self.qt.model.is_some() {
-            self.last_ms = Some(s.time_ms);
+        // The first situation of each period of robot time: one a second whatever the
+        // situations' spacing (at 333 ms, waiting 1000 ms from the last would make it 1.33 s).
+        let period = s.time_ms / SNAPSHOT_MS;
+        if self.last_period != Some(period) && self.qt.model.is_some() {
+            self.last_period = Some(period);
             out.push(("/qt_model", snapshot(&self.qt, s.time_ms)));
         }
     }
