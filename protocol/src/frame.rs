@@ -336,9 +336,7 @@ pub fn decode_payload(kind: Kind, payload: &[u8]) -> Result<Message<'_>, Payload
         Kind::Localization => Message::Localization(de::<crate::msg::Localization>(payload)?),
         Kind::Progress => Message::Progress(de::<crate::msg::Progress>(payload)?),
         Kind::HalTrace => Message::HalTrace(de::<crate::msg::HalTrace>(payload)?),
-        Kind::AliceSituation => {
-            Message::AliceSituation(de::<crate::msg::AliceSituation>(payload)?)
-        }
+        Kind::AliceSituation => Message::AliceSituation(de::<crate::msg::AliceSituation>(payload)?),
     };
     msg.check_limits()
         .map_err(|(field, limit)| PayloadError::FieldTooLong { field, limit })?;

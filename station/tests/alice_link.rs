@@ -43,7 +43,10 @@ fn recording(sits: &[AliceSituation]) -> Vec<u8> {
     let mut s = Synth::new(&meta);
     s.handshake(demo_peer());
     for (i, sit) in sits.iter().enumerate() {
-        s.from_robot(10_000 + i as u64 * PERIOD_US, &Message::AliceSituation(*sit));
+        s.from_robot(
+            10_000 + i as u64 * PERIOD_US,
+            &Message::AliceSituation(*sit),
+        );
     }
     s.finish(20_000 + sits.len() as u64 * PERIOD_US, "end")
 }
@@ -81,9 +84,16 @@ fn the_stations_model_grows_from_the_emulators_stream() {
     let early = replayed(&sits[..60]);
     let app = replayed(&sits);
     let want = direct(&sits);
-    assert_eq!(app.qt.received, SITUATIONS as u64, "every situation arrived");
+    assert_eq!(
+        app.qt.received, SITUATIONS as u64,
+        "every situation arrived"
+    );
     assert_eq!((app.qt.lost, app.qt.refused), (0, 0));
-    let m = app.qt.model.as_ref().expect("a model from the first situation");
+    let m = app
+        .qt
+        .model
+        .as_ref()
+        .expect("a model from the first situation");
     let w = want.model.as_ref().unwrap();
     assert_eq!(m.stats().samples, SITUATIONS as u64);
     // The link loses nothing: the same network as a model fed directly.
@@ -179,7 +189,9 @@ fn mcap_export_has_the_model_with_its_counts() {
         assert_eq!(edges.len(), w.network().edges().count());
         assert_eq!(v["edge_count"].as_u64().unwrap() as usize, edges.len());
         assert_eq!(v["winner"].as_u64().map(|x| x as u32), w.winner());
-        assert!(edges.iter().all(|e| e["confidence"].as_f64().unwrap() > 0.0));
+        assert!(edges
+            .iter()
+            .all(|e| e["confidence"].as_f64().unwrap() > 0.0));
     }
     assert!(snaps.last().unwrap()["cell_count"].as_u64().unwrap() > 20);
 }

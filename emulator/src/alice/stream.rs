@@ -57,16 +57,13 @@ impl AliceStream {
         let dt = 1.0 / SAMPLES_PER_S / SUBSTEPS as f64;
         for _ in 0..SUBSTEPS {
             if self.pending_turn.abs() > 1e-9 {
-                let step = self
-                    .pending_turn
-                    .clamp(-TURN_RAD_S * dt, TURN_RAD_S * dt);
+                let step = self.pending_turn.clamp(-TURN_RAD_S * dt, TURN_RAD_S * dt);
                 self.body.turn(step);
                 self.pending_turn -= step;
             } else if !self.body.forward(&self.walls, SPEED_M_S * dt) {
                 // Blocked before a whisker told: turn away at random (the reflex layer).
-                self.pending_turn = super::wrap(
-                    std::f64::consts::PI + (2.0 * self.rng.uniform() - 1.0) * 1.2,
-                );
+                self.pending_turn =
+                    super::wrap(std::f64::consts::PI + (2.0 * self.rng.uniform() - 1.0) * 1.2);
             }
         }
         let touch = self

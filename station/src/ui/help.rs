@@ -53,7 +53,10 @@ pub const KEYS: &[(&str, &str)] = &[
         "S  y i v f",
         "survey the floor grid / odometry tracks, line events, PPD, grid",
     ),
-    ("T", "map: show or hide the QT world model (an ALICE's cells and edges)"),
+    (
+        "T",
+        "map: show or hide the QT world model (an ALICE's cells and edges)",
+    ),
     (
         "u  M",
         "upload a map/plan/calibration file / show the robot's map",
