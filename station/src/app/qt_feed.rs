@@ -70,7 +70,7 @@ mod tests {
             whiskers: 0b101,
             light,
             odometry: protocol::Pose {
-                x_mm: x_mm,
+                x_mm,
                 y_mm: -250,
                 heading_mrad: 1571,
             },
