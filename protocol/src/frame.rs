@@ -303,6 +303,7 @@ fn serialize_payload(msg: &Message<'_>, body: &mut [u8]) -> Result<usize, Encode
         Message::Localization(m) => ser(m, body),
         Message::Progress(m) => ser(m, body),
         Message::HalTrace(m) => ser(m, body),
+        Message::AliceSituation(m) => ser(m, body),
     }
 }
 
@@ -335,6 +336,7 @@ pub fn decode_payload(kind: Kind, payload: &[u8]) -> Result<Message<'_>, Payload
         Kind::Localization => Message::Localization(de::<crate::msg::Localization>(payload)?),
         Kind::Progress => Message::Progress(de::<crate::msg::Progress>(payload)?),
         Kind::HalTrace => Message::HalTrace(de::<crate::msg::HalTrace>(payload)?),
+        Kind::AliceSituation => Message::AliceSituation(de::<crate::msg::AliceSituation>(payload)?),
     };
     msg.check_limits()
         .map_err(|(field, limit)| PayloadError::FieldTooLong { field, limit })?;

@@ -703,6 +703,27 @@ pub struct HalTrace<'a> {
     pub data: &'a [u8],
 }
 
+/// Sensors of each kind on ALICE (seed 001 §3.1): whiskers and photoresistors, sensor `i`
+/// looking `i * 15` degrees anticlockwise from the robot's forward axis.
+pub const ALICE_SENSORS: usize = 24;
+
+/// Robot -> station every control cycle on an ALICE (PROTOCOL.md §6 kind 16): the situation
+/// the station's QT world model (seed 001 ch. 4-5) learns from. The model needs a heap and
+/// far more memory than the robot has, so the robot streams its raw situation and the
+/// station builds the network.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct AliceSituation {
+    pub time_ms: u32,
+    /// Situations sent since power-up, wrapping: a jump means frames were lost.
+    pub seq: u16,
+    /// Whisker contacts: bit `i` set when whisker `i` touches (bits 24..32 are zero).
+    pub whiskers: u32,
+    /// Photoresistor readings, 0 (dark) ..= 255 (saturated), uncalibrated.
+    pub light: [u8; ALICE_SENSORS],
+    /// The odometry's pose (uncorrected dead reckoning, as the model wants it).
+    pub odometry: Pose,
+}
+
 /// Every message, in kind order: variant index == the header's kind byte.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Schema)]
 pub enum Message<'a> {
@@ -727,6 +748,7 @@ pub enum Message<'a> {
     Progress(Progress),
     #[serde(borrow)]
     HalTrace(HalTrace<'a>),
+    AliceSituation(AliceSituation),
 }
 
 /// The header's kind byte for each message.
@@ -749,11 +771,12 @@ pub enum Kind {
     Localization = 13,
     Progress = 14,
     HalTrace = 15,
+    AliceSituation = 16,
 }
 
 impl Kind {
     /// Every kind, in numeric order.
-    pub const ALL: [Kind; 16] = [
+    pub const ALL: [Kind; 17] = [
         Kind::Hello,
         Kind::HelloReply,
         Kind::Heartbeat,
@@ -770,6 +793,7 @@ impl Kind {
         Kind::Localization,
         Kind::Progress,
         Kind::HalTrace,
+        Kind::AliceSituation,
     ];
 
     /// The kind for a header byte, or `None` for an unknown kind.
@@ -819,6 +843,7 @@ impl Message<'_> {
             Message::Localization(_) => Kind::Localization,
             Message::Progress(_) => Kind::Progress,
             Message::HalTrace(_) => Kind::HalTrace,
+            Message::AliceSituation(_) => Kind::AliceSituation,
         }
     }
 }

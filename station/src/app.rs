@@ -16,6 +16,7 @@ pub mod localization;
 pub mod log;
 pub mod params;
 pub mod plan_target;
+pub mod qt_feed;
 pub mod qt_state;
 pub mod transfers;
 
@@ -692,6 +693,7 @@ impl App {
             }
             LinkEvent::Localization(l) => self.localization.on_message(*l),
             LinkEvent::Progress(p) => self.on_progress(p),
+            LinkEvent::Situation(s) => self.qt.on_situation(&s),
             LinkEvent::Robot(e) => self.on_robot_event(e),
             LinkEvent::Log { level, text } => self.note(level.into(), Source::Robot, text),
             LinkEvent::CommandDone {

@@ -15,6 +15,7 @@ pub mod csv;
 pub mod mcap;
 pub mod robots;
 pub mod mcap_msg;
+pub mod qt;
 pub mod scene;
 
 use std::path::{Path, PathBuf};
@@ -36,8 +37,8 @@ pub struct ExportArgs {
     pub file: PathBuf,
     /// Write an MCAP file (JSON channels: /telemetry, /pose, /truth, /truth_pose, /events,
     /// /log, /link, /commands, /replies, and for the 3D panel /tf, /map, /regions, /plan,
-    /// /arena), for Foxglove; a recording of several robots puts each under its own prefix
-    /// (/robot1/telemetry, ...).
+    /// /arena; /qt_model for an ALICE), for Foxglove; a recording of several robots puts each
+    /// under its own prefix (/robot1/telemetry, ...).
     #[arg(long, value_name = "OUT")]
     pub mcap: Option<PathBuf>,
     /// Write the telemetry as CSV, one row per frame (columns in README.md, "Recordings"); a

@@ -224,6 +224,7 @@ fn global(k: &KeyEvent) -> Option<Action> {
         KeyCode::Char('i') => Some(Action::ToggleLayer(localization::LINES)),
         KeyCode::Char('v') => Some(Action::ToggleLayer(localization::PPD)),
         KeyCode::Char('f') => Some(Action::ToggleLayer(localization::FLOOR)),
+        KeyCode::Char('T') => Some(Action::ToggleLayer(crate::ui::qt_map::QT)),
         KeyCode::Char('S') => Some(Action::SetMode(Mode::Survey)),
         KeyCode::PageUp => Some(Action::LogScroll(5)),
         KeyCode::PageDown => Some(Action::LogScroll(-5)),

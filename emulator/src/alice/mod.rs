@@ -15,6 +15,7 @@ pub mod explore;
 pub mod metrics;
 pub mod scenario;
 pub mod sensors;
+pub mod stream;
 
 /// Angle wrapped to (-pi, pi].
 pub fn wrap(a: f64) -> f64 {

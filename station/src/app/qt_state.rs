@@ -4,7 +4,7 @@
 //! `qt` layer draws it.
 //!
 //! Layer: state only, no I/O. The feed from the wire (message kind 16, the robot's
-//! situation) is not there yet: `feed` is what it will call.
+//! situation) is `qt_feed`, which calls `feed`.
 
 use world_model::{ParamError, Params, Pose, QtModel, Sample};
 
@@ -17,6 +17,14 @@ pub struct QtState {
     pub refused: u64,
     /// Why the last one was refused.
     pub last_error: Option<String>,
+    /// The parameters a model is made with (`world_model::Params` defaults).
+    pub params: Params,
+    /// Situations received from the link (kind 16), fed or refused (`qt_feed`).
+    pub received: u64,
+    /// Situations lost on the wire, from the gaps in their sequence numbers.
+    pub lost: u64,
+    /// The last situation's sequence number.
+    pub last_seq: Option<u16>,
 }
 
 impl QtState {

@@ -10,6 +10,7 @@
 //! - `/events`: robot events; `/log`: robot log lines as `foxglove.Log` (the Log panel);
 //! - `/link`: connection changes, gap markers included;
 //! - `/tf`, `/map`, `/regions`, `/plan`, `/arena`: the scene for the 3D panel (`scene`);
+//! - `/qt_model`: the QT world model rebuilt from an ALICE's situations, once a second (`qt`);
 //! - `/commands`: the station's own commands (decoded from its recorded bytes), with their
 //!   sequence numbers; `/replies`: the robot's Acks and Nacks naming them.
 //!
@@ -120,6 +121,7 @@ fn channels() -> Vec<(&'static str, &'static str, Value)> {
         ),
     ];
     all.extend(super::scene::channels());
+    all.extend(super::qt::channels());
     all
 }
 
@@ -255,6 +257,7 @@ fn write_messages<W: Write + Seek>(
     let mut count = 0u64;
     let mut failure = None;
     let mut scene = super::scene::Scene::new(rec);
+    let mut qt = super::qt::QtExport::default();
     // Reused for every item: its messages, and one message's JSON.
     let mut messages = Vec::new();
     let mut data = Vec::with_capacity(4096);
@@ -265,6 +268,7 @@ fn write_messages<W: Write + Seek>(
         messages.clear();
         let t_us = item_messages(&item, &mut messages);
         scene.extend(&item, &mut messages);
+        qt.extend(&item, &mut messages);
         let ns = base_ns.saturating_add(t_us.saturating_mul(1000));
         for (topic, body) in &mut messages {
             // Every topic is in `channels()`; a linear look-up over 14 beats a map's.

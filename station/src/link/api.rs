@@ -63,6 +63,8 @@ pub enum LinkEvent {
     Localization(Box<protocol::Localization>),
     /// What the robot's mode is doing (waypoint k of n, distance left, time, stuck time).
     Progress(protocol::Progress),
+    /// An ALICE's situation (kind 16): the QT world model's input.
+    Situation(protocol::AliceSituation),
     /// An `Event` frame from the robot.
     Robot(Event),
     /// A `Log` line from the robot.

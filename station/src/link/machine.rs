@@ -528,6 +528,7 @@ impl LinkMachine {
             Owned::Heartbeat(time_ms) => self.observe_robot_clock(time_ms, now_ms),
             Owned::Localization(l) => self.events.push_back(LinkEvent::Localization(l)),
             Owned::Progress(p) => self.events.push_back(LinkEvent::Progress(p)),
+            Owned::Situation(s) => self.events.push_back(LinkEvent::Situation(s)),
             Owned::Ack(a) => match self.commands.answer(a.cmd_seq) {
                 Some(f) => {
                     let rtt_ms = now_ms.saturating_sub(f.last_sent_ms);
@@ -735,6 +736,7 @@ enum Owned {
     Truth(protocol::EmuTruth),
     Localization(Box<protocol::Localization>),
     Progress(protocol::Progress),
+    Situation(protocol::AliceSituation),
     Ack(protocol::Ack),
     Nack(protocol::Nack),
     Event(protocol::Event),
@@ -771,6 +773,7 @@ impl From<Message<'_>> for Owned {
             Message::EmuTruth(t) => Owned::Truth(t),
             Message::Localization(l) => Owned::Localization(Box::new(l)),
             Message::Progress(p) => Owned::Progress(p),
+            Message::AliceSituation(s) => Owned::Situation(s),
             Message::Ack(a) => Owned::Ack(a),
             Message::Nack(n) => Owned::Nack(n),
             Message::Event(e) => Owned::Event(e),

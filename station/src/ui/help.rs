@@ -36,7 +36,10 @@ pub const KEYS: &[(&str, &str)] = &[
         "+  -  c",
         "telemetry rate (0 1 2 5 10 20 50 Hz) / next chart",
     ),
-    ("t  x", "show or hide the true pose / clear the tracks"),
+    (
+        "t  T  x",
+        "show/hide the true pose / the QT world model; clear the tracks",
+    ),
     (
         "P",
         "plan on the station: robot (or map start) to the plan's target ◎",
