@@ -13,6 +13,7 @@ pub mod body;
 pub mod experiments;
 pub mod explore;
 pub mod metrics;
+pub mod navigation;
 pub mod scenario;
 pub mod sensors;
 
