@@ -297,15 +297,18 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
         r.options.static_drift_deg_per_m,
         r.wall_s
     );
-    println!("run  reached  samples  refinements  reversals");
+    println!("run  reached  samples  refinements  reversals  steps  failed  blocked");
     for (i, t) in r.runs.iter().enumerate() {
         println!(
-            "{:>3}  {:>7}  {:>7}  {:>11}  {:>9}",
+            "{:>3}  {:>7}  {:>7}  {:>11}  {:>9}  {:>5}  {:>6}  {:>7}",
             i + 1,
             t.legs.iter().filter(|l| l.reached).count(),
             t.samples,
             t.refinements,
-            t.reversals
+            t.reversals,
+            t.legs.iter().map(|l| l.steps).sum::<u32>(),
+            t.legs.iter().map(|l| l.failed).sum::<u32>(),
+            t.legs.iter().map(|l| l.blocked).sum::<u32>()
         );
     }
     let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));

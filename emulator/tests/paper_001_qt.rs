@@ -141,11 +141,11 @@ fn navigation_runs() -> Vec<NavReport> {
 /// weights moving to flooding, the reinforcement-trained memory of `world_model::execute`),
 /// first run over fifth: time 0.84, 0.92, 3.83, 1.14; refinements 0.83, 0.89, 4.50, 1.14;
 /// reversals 0.88, 1.00, 4.59, 1.09. NOT reproduced: nearly every failed step is a drive the
-/// body could not finish (reversals ~ refinements): the internal frame is only locally
-/// consistent (0.5-0.8 m absolute error, §4.5 rows), so commands aimed at a cell's internal
-/// position meet walls, and a memory that learns per edge cannot move a wall; legs that get
-/// stuck run to the 1500-sample cap and decide the factors. Tolerance: mean time factor
-/// >= 2 and mean refinement factor >= 3 over seeds 1-4.
+/// body could not finish (failed/blocked steps over the 20 runs 1576/1482): the internal
+/// frame is only locally consistent (0.5-0.8 m absolute error, §4.5 rows), so commands aimed
+/// at a cell's internal position meet walls, and a memory that learns per edge cannot move a
+/// wall; legs that get stuck run to the 1500-sample cap and decide the factors. Tolerance:
+/// mean time factor >= 2 and mean refinement factor >= 3 over seeds 1-4.
 #[test]
 #[ignore = "not reproduced: time 0.84/0.92/3.83/1.14x, refinements 0.83/0.89/4.50/1.14x (seeds 1-4); failed steps are blocked drives, see the doc comment"]
 fn navigation_improves_after_four_runs() {

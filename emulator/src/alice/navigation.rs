@@ -86,8 +86,14 @@ pub struct Leg {
     pub refinements: u32,
     /// Steps driven.
     pub steps: u32,
-    /// Steps that ended farther from their sub-goal than they started.
+    /// Steps reversed: blocked drives backed off, and drives that ended farther from their
+    /// sub-goal than they started.
     pub reversals: u32,
+    /// Steps whose drive the body could not finish (a wall or the pillar in the way).
+    pub blocked: u32,
+    /// Steps that failed (the winner after it was neither the sub-goal nor a later cell of
+    /// the plan).
+    pub failed: u32,
     /// Internal distance from the robot to the target cell at the end, metres (None: the
     /// cell is gone).
     pub final_gap_m: Option<f64>,
@@ -314,6 +320,7 @@ impl Robot {
                 if !free {
                     // Blocked: back off (the manoeuvre is reversed), as ALICE's reflexes do.
                     leg.reversals += 1;
+                    leg.blocked += 1;
                     let back = std::f64::consts::PI + (self.rng.uniform() - 0.5);
                     self.drive(back, BACK_OFF_M, started + cap)?;
                 }
@@ -336,6 +343,7 @@ impl Robot {
                 }
                 let ahead = now.is_some_and(|w| plan.path[i..].contains(&w));
                 if !ahead {
+                    leg.failed += 1;
                     planner.failed();
                     continue 'plan;
                 }
