@@ -564,6 +564,10 @@ pub enum TaskArg {
     AliceCorrelation,
     /// ALICE's QT model with a wall below the pillar removed at situation 3500 (§4.5.4).
     AliceDynamic,
+    /// ALICE's navigation (§5.3): map by exploring, then five test runs out and back with A*
+    /// planning, the reinforcement-trained path execution and 5 deg/m static drift; the first
+    /// run against the fifth.
+    AliceNavigation,
 }
 
 impl WorldArgs {
@@ -799,7 +803,8 @@ impl RunArgs {
             TaskArg::AliceEquilibrium
             | TaskArg::AliceEpsO
             | TaskArg::AliceCorrelation
-            | TaskArg::AliceDynamic => {
+            | TaskArg::AliceDynamic
+            | TaskArg::AliceNavigation => {
                 return Err("the alice-* tasks are run by `alice::experiments`".to_string())
             }
         };

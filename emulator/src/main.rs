@@ -207,6 +207,9 @@ fn run(args: &RunArgs) -> Result<(), String> {
     if args.task == emulator::cli::TaskArg::LineCorrect {
         return line_correct(args);
     }
+    if args.task == emulator::cli::TaskArg::AliceNavigation {
+        return alice_navigation(args);
+    }
     if let Some(run) = alice_experiment(args.task) {
         return alice(args, run);
     }
@@ -299,7 +302,8 @@ fn alice_experiment(task: emulator::cli::TaskArg) -> Option<AliceRun> {
     }
 }
 
-fn alice(args: &RunArgs, run: AliceRun) -> Result<(), String> {
+/// The QT parameters with the `--qt-param NAME=VALUE` changes.
+fn qt_params(args: &RunArgs) -> Result<world_model::Params, String> {
     let mut params = world_model::Params::default();
     for kv in &args.qt_param {
         let (k, v) = kv
@@ -309,6 +313,54 @@ fn alice(args: &RunArgs, run: AliceRun) -> Result<(), String> {
             .set(k, v)
             .map_err(|e| format!("--qt-param {kv:?}: {e}"))?;
     }
+    Ok(params)
+}
+
+fn alice_navigation(args: &RunArgs) -> Result<(), String> {
+    use emulator::alice::navigation::{navigation, NavOptions};
+    let r = navigation(&NavOptions::new(args.world.seed, qt_params(args)?))?;
+    if args.json {
+        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        return Ok(());
+    }
+    println!(
+        "ALICE navigation seed {}: map {} cells {} edges, test path cell {} -> {} ({:.2} m) and \
+         back, static drift {} deg/m ({:.1} s wall)",
+        r.options.seed,
+        r.cells,
+        r.edges,
+        r.start_cell,
+        r.target_cell,
+        r.path_m,
+        r.options.static_drift_deg_per_m,
+        r.wall_s
+    );
+    println!("run  reached  samples  refinements  reversals  steps  failed  blocked");
+    for (i, t) in r.runs.iter().enumerate() {
+        println!(
+            "{:>3}  {:>7}  {:>7}  {:>11}  {:>9}  {:>5}  {:>6}  {:>7}",
+            i + 1,
+            t.legs.iter().filter(|l| l.reached).count(),
+            t.samples,
+            t.refinements,
+            t.reversals,
+            t.legs.iter().map(|l| l.steps).sum::<u32>(),
+            t.legs.iter().map(|l| l.failed).sum::<u32>(),
+            t.legs.iter().map(|l| l.blocked).sum::<u32>()
+        );
+    }
+    let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
+    println!(
+        "first run / fifth: time {}x (thesis 2-3), refinements {}x (3-4), reversals {}x (about 5)",
+        f(r.time_factor),
+        f(r.refinement_factor),
+        f(r.reversal_factor)
+    );
+    Ok(())
+}
+
+fn alice(args: &RunArgs, run: AliceRun) -> Result<(), String> {
+    let params = qt_params(args)?;
     let r = run(args.world.seed, &params)?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);

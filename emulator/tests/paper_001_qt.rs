@@ -4,6 +4,7 @@
 //! What is not reproduced is `#[ignore]`d with the reason and the numbers.
 
 use emulator::alice::experiments::{correlation, dynamic, eps_o, equilibrium, ExperimentReport};
+use emulator::alice::navigation::{navigation, NavOptions, NavReport};
 use world_model::Params;
 
 const SEEDS: [u64; 4] = [1, 2, 3, 4];
@@ -126,13 +127,60 @@ fn a_removed_wall_leaves_a_gap_that_closes_within_1500_situations() {
     }
 }
 
-/// Thesis §5.3: after four runs, time to target 2-3x better, plan refinements 3-4x fewer.
-/// NOT reproduced: those gains come from the path execution's associative memory trained by
-/// reinforcement (§5.2), which is not built; the planner (A* with hill-climbing-to-flooding
-/// weights, `world_model::navigate`) is, and its unit tests check the two strategies.
+fn navigation_runs() -> Vec<NavReport> {
+    SEEDS
+        .iter()
+        .map(|&s| navigation(&NavOptions::new(s, Params::default())).expect("navigation runs"))
+        .collect()
+}
+
+/// Thesis §5.3 (simulation, static maps, static drift up to 5 deg/m): after four test runs
+/// the time to target is 2-3x better, plan refinements 3-4x fewer, reversed manoeuvres about
+/// 5x fewer. Ours (seeds 1-4, `--task alice-navigation`: 6000 situations of exploration,
+/// the map frozen, out and back between open cells 2.2-3.2 m apart, 5 deg/m, A* with the
+/// weights moving to flooding, the reinforcement-trained memory of `world_model::execute`),
+/// first run over fifth: time 0.84, 0.92, 3.83, 1.14; refinements 0.83, 0.89, 4.50, 1.14;
+/// reversals 0.88, 1.00, 4.59, 1.09. NOT reproduced: nearly every failed step is a drive the
+/// body could not finish (failed/blocked steps over the 20 runs 1576/1482): the internal
+/// frame is only locally consistent (0.5-0.8 m absolute error, §4.5 rows), so commands aimed
+/// at a cell's internal position meet walls, and a memory that learns per edge cannot move a
+/// wall; legs that get stuck run to the 1500-sample cap and decide the factors. Tolerance:
+/// mean time factor >= 2 and mean refinement factor >= 3 over seeds 1-4.
 #[test]
-#[ignore = "not reproduced: the reinforcement-trained path execution (§5.2) that gives the gains is not built"]
+#[ignore = "not reproduced: time 0.84/0.92/3.83/1.14x, refinements 0.83/0.89/4.50/1.14x (seeds 1-4); failed steps are blocked drives, see the doc comment"]
 fn navigation_improves_after_four_runs() {
-    let built = false; // no path execution learner: see the doc comment
-    assert!(built, "the §5.2 path execution is not built");
+    let r = navigation_runs();
+    let mean = |f: fn(&NavReport) -> Option<f64>| {
+        r.iter().map(|n| f(n).expect("five runs")).sum::<f64>() / r.len() as f64
+    };
+    let (time, refine) = (mean(|n| n.time_factor), mean(|n| n.refinement_factor));
+    assert!(
+        time >= 2.0,
+        "time factors: {:?}",
+        r.iter().map(|n| n.time_factor).collect::<Vec<_>>()
+    );
+    assert!(
+        refine >= 3.0,
+        "refinement factors: {:?}",
+        r.iter().map(|n| n.refinement_factor).collect::<Vec<_>>()
+    );
+}
+
+/// What the navigator does reach: planning over the QT map and executing step by step gets
+/// the robot to the target cell in 23 of the 40 legs of seeds 1-4 (cap 1500 situations, about
+/// 8 minutes, a leg); every leg plans at least once and drives. Tolerance: at least 16 legs.
+#[test]
+fn the_navigator_reaches_its_target_in_most_legs() {
+    let r = navigation_runs();
+    let legs: Vec<_> = r
+        .iter()
+        .flat_map(|n| n.runs.iter().flat_map(|t| t.legs.iter()))
+        .collect();
+    assert_eq!(legs.len(), 40);
+    assert!(legs.iter().all(|l| l.steps > 0), "a leg never drove");
+    let reached = legs.iter().filter(|l| l.reached).count();
+    assert!(reached >= 16, "reached {reached} of 40 legs");
+    for n in &r {
+        assert!(n.associations > 0 && n.cells > 50, "{} cells", n.cells);
+    }
 }

@@ -10,6 +10,7 @@
 //! holds a 50-value situation (400 bytes as f64) plus edges and index entries, and a 3 x 3 m
 //! arena takes a few hundred cells (ALICE carried 16 MB); the firmware stays heap-free.
 
+pub mod execute;
 pub mod index;
 pub mod model;
 pub mod navigate;

@@ -44,6 +44,10 @@ pub struct Body {
     pub trans_drift: f64,
     /// Rotational drift this run, rad/m.
     pub rot_drift: f64,
+    /// Static drift the odometry does not see, rad/m: the true path curves while the
+    /// odometry's heading stays (unequal wheels; §5.3's simulator "static drift model").
+    /// Zero unless a scenario sets it.
+    pub curve: f64,
     err: (f64, f64),
     rng: SimRng,
     /// Metres driven.
@@ -72,6 +76,7 @@ impl Body {
             odo: (at.x, at.y, heading),
             trans_drift,
             rot_drift,
+            curve: 0.0,
             err,
             rng,
             distance_m: 0.0,
@@ -99,6 +104,9 @@ impl Body {
         self.odo.0 += cs * fx - sn * fy;
         self.odo.1 += sn * fx + cs * fy;
         self.odo.2 = wrap(self.odo.2 + self.rot_drift * ds);
+        if self.curve != 0.0 {
+            self.heading = wrap(self.heading + self.curve * ds);
+        }
         true
     }
 

@@ -1,0 +1,474 @@
+//! §5.3's navigation experiment on the simulated ALICE: plan by A* over the QT map
+//! (`world_model::navigate`), execute the plan step by step with the reinforcement-trained
+//! path execution (`world_model::execute`), refine the plan when a step fails (the planner's
+//! weights move from hill climbing towards flooding as steps fail), and compare the first test
+//! run (pre-trained memory) with the run after four test runs.
+//!
+//! The run: the robot explores `explore_samples` situations as the §4.5 scenarios do, which
+//! builds the map; then §5.3's static drift (`static_drift_deg_per_m`, a curve of the true
+//! path the odometry does not see) is switched on and the robot drives the test path, from
+//! the start cell (the one nearest the start pose in the internal frame) to the cell farthest
+//! from it and back, `runs` times in a row. The robot decides from its own view only: the
+//! winner cell and the internal pose; the truth goes into the report only.
+//!
+//! A step: turn to the sub-goal's bearing plus the memory's offset, drive its distance times
+//! the memory's scale (as the odometry measures it; a front whisker or a blocked way stops
+//! it), stand still for l + 1 samples so the model's winner is the arrival's situation. The
+//! step succeeded when the winner is the sub-goal (or a later cell of the plan); otherwise it
+//! failed and the plan is refined from the winner. The reinforcement is the distance from the
+//! winner's cell to the sub-goal's before and after. A reversal is a step that ended farther
+//! from its sub-goal than it started.
+
+use serde::Serialize;
+use world_model::execute::Executor;
+use world_model::navigate::Planner;
+use world_model::{Params, Pose, QtModel, Sample};
+
+use super::arena::alice;
+use super::body::{Body, SPEED_M_S, SUBSTEPS, TURN_RAD_S};
+use super::explore::{decide, Move};
+use super::scenario::SAMPLES_PER_S;
+use super::sensors::{Sensors, COUNT};
+use crate::arena::Arena;
+use crate::geometry::{Point, SegmentSet};
+use crate::rng::SimRng;
+
+/// How far a blocked step backs off, metres (ours: half a body).
+pub const BACK_OFF_M: f64 = 0.2;
+
+/// A cell is in the open when each smoothed touch value of its situation (a touching whisker
+/// is 1 at its sensor, 0.14 two sensors away with sigma 1) is below this (ours).
+pub const OPEN_TOUCH: f64 = 0.05;
+
+/// What the experiment does.
+#[derive(Clone, Debug, Serialize)]
+pub struct NavOptions {
+    /// Seed: drift, sensors, exploration, the memory's choices.
+    pub seed: u64,
+    /// Situations of exploration before the test runs (the map; §4.5.4's equilibrium).
+    pub explore_samples: u64,
+    /// Test runs (the thesis compares the first with the one after four).
+    pub runs: usize,
+    /// §5.3's static drift during the test runs, degrees per metre ("up to 5").
+    pub static_drift_deg_per_m: f64,
+    /// §5.3's maps were static: after the exploration the cells stop moving and no cell is
+    /// inserted (edges are still refreshed by the drives, and the correlations still run).
+    pub static_map: bool,
+    /// Most samples one leg may take before it counts as failed.
+    pub leg_cap: u64,
+    /// The model's parameters.
+    pub params: Params,
+}
+
+impl NavOptions {
+    /// The thesis's experiment for `seed`.
+    pub fn new(seed: u64, params: Params) -> Self {
+        NavOptions {
+            seed,
+            explore_samples: 6000,
+            runs: 5,
+            static_drift_deg_per_m: 5.0,
+            leg_cap: 1500,
+            static_map: true,
+            params,
+        }
+    }
+}
+
+/// One leg (start to target, or back).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Leg {
+    /// Reached the target within the cap.
+    pub reached: bool,
+    /// Situations (1/3 s each) until the target's cell won.
+    pub samples: u64,
+    /// Plans after the first (each after a failed step or a vanished cell).
+    pub refinements: u32,
+    /// Steps driven.
+    pub steps: u32,
+    /// Steps reversed: blocked drives backed off, and drives that ended farther from their
+    /// sub-goal than they started.
+    pub reversals: u32,
+    /// Steps whose drive the body could not finish (a wall or the pillar in the way).
+    pub blocked: u32,
+    /// Steps that failed (the winner after it was neither the sub-goal nor a later cell of
+    /// the plan).
+    pub failed: u32,
+    /// Internal distance from the robot to the target cell at the end, metres (None: the
+    /// cell is gone).
+    pub final_gap_m: Option<f64>,
+}
+
+/// One test run: out and back.
+#[derive(Clone, Debug, Serialize)]
+pub struct TestRun {
+    /// The two legs.
+    pub legs: [Leg; 2],
+    /// Both legs' samples.
+    pub samples: u64,
+    /// Both legs' refinements.
+    pub refinements: u32,
+    /// Both legs' reversals.
+    pub reversals: u32,
+}
+
+/// The experiment's report.
+#[derive(Clone, Debug, Serialize)]
+pub struct NavReport {
+    /// The options.
+    pub options: NavOptions,
+    /// Cells and edges of the map when the test runs began.
+    pub cells: usize,
+    /// See `cells`.
+    pub edges: usize,
+    /// Start and target cells, and their internal distance, metres.
+    pub start_cell: u32,
+    /// See `start_cell`.
+    pub target_cell: u32,
+    /// See `start_cell`.
+    pub path_m: f64,
+    /// The test runs in order.
+    pub runs: Vec<TestRun>,
+    /// First run over the run after four (index 4): time, refinements, reversals
+    /// (thesis: 2-3, 3-4, about 5). None when the runs are too few.
+    pub time_factor: Option<f64>,
+    /// See `time_factor`.
+    pub refinement_factor: Option<f64>,
+    /// See `time_factor`.
+    pub reversal_factor: Option<f64>,
+    /// Associations the memory holds at the end.
+    pub associations: usize,
+    /// Wall-clock seconds.
+    pub wall_s: f64,
+}
+
+/// The simulated ALICE and its model.
+struct Robot {
+    arena: Arena,
+    walls: SegmentSet,
+    body: Body,
+    sensors: Sensors,
+    rng: SimRng,
+    model: QtModel,
+    /// The latest whiskers.
+    touch: [bool; COUNT],
+    samples: u64,
+}
+
+/// What the body does during one sample.
+enum Motion {
+    Still,
+    Wander(f64),
+    /// Turn this much, then drive this far (odometry metres).
+    Step(f64, f64),
+}
+
+impl Robot {
+    /// One sample: move for 1/3 s, read the sensors, feed the model. Returns false when the
+    /// drive was stopped (blocked body or a front whisker).
+    fn sample(&mut self, motion: &mut Motion) -> Result<bool, String> {
+        let dt = 1.0 / SAMPLES_PER_S / SUBSTEPS as f64;
+        let mut free = true;
+        for _ in 0..SUBSTEPS {
+            match motion {
+                Motion::Still => {}
+                Motion::Wander(turn) | Motion::Step(turn, _) if turn.abs() > 1e-9 => {
+                    let step = turn.clamp(-TURN_RAD_S * dt, TURN_RAD_S * dt);
+                    self.body.turn(step);
+                    *turn -= step;
+                }
+                Motion::Wander(turn) => {
+                    if !self.body.forward(&self.walls, SPEED_M_S * dt) {
+                        *turn = super::wrap(
+                            std::f64::consts::PI + (2.0 * self.rng.uniform() - 1.0) * 1.2,
+                        );
+                    }
+                }
+                Motion::Step(_, left) => {
+                    // Within a millimetre is there (a float residue would never end).
+                    if *left <= 1e-3 {
+                        *left = 0.0;
+                        break;
+                    }
+                    let before = self.body.odo;
+                    if !self.body.forward(&self.walls, (SPEED_M_S * dt).min(*left)) {
+                        free = false;
+                        *left = 0.0;
+                        break;
+                    }
+                    *left -= (self.body.odo.0 - before.0).hypot(self.body.odo.1 - before.1);
+                }
+            }
+        }
+        self.touch = self
+            .sensors
+            .whiskers(&self.walls, self.body.at, self.body.heading);
+        let light = self.sensors.light(
+            &self.walls,
+            &self.arena.lights,
+            self.body.at,
+            self.body.heading,
+        );
+        let odometry = Pose {
+            x: self.body.odo.0,
+            y: self.body.odo.1,
+            heading: self.body.odo.2,
+        };
+        self.model
+            .observe(&Sample {
+                light: &light,
+                touch: &self.touch,
+                odometry,
+            })
+            .map_err(|e| e.to_string())?;
+        self.samples += 1;
+        Ok(free)
+    }
+
+    fn explore(&mut self, samples: u64) -> Result<(), String> {
+        let mut m = Motion::Wander(0.0);
+        for _ in 0..samples {
+            self.sample(&mut m)?;
+            if let Motion::Wander(turn) = &mut m {
+                if turn.abs() <= 1e-9 {
+                    if let Move::Turn(a) = decide(&self.touch, &mut self.rng) {
+                        *turn = a;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Turn by `turn`, then drive `distance` metres by the odometry, until sample `until` at
+    /// the latest. False when the body was blocked.
+    fn drive(&mut self, turn: f64, distance: f64, until: u64) -> Result<bool, String> {
+        let mut m = Motion::Step(turn, distance);
+        let mut free = true;
+        while matches!(m, Motion::Step(t, l) if t.abs() > 1e-9 || l > 0.0) && self.samples < until {
+            free &= self.sample(&mut m)?;
+        }
+        Ok(free)
+    }
+
+    /// Where `cell` lies relative to the internal pose: (distance, bearing in the robot's
+    /// frame).
+    fn towards(&self, cell: u32) -> (f64, f64) {
+        let (x, y) = self.model.network().position(cell);
+        let p = self.model.pose();
+        let (dx, dy) = (x - p.x, y - p.y);
+        (dx.hypot(dy), super::wrap(dy.atan2(dx) - p.heading))
+    }
+
+    fn cell_gap(&self, a: Option<u32>, b: u32) -> f64 {
+        let net = self.model.network();
+        match a.filter(|&a| net.cell(a).is_some()) {
+            Some(a) => {
+                let (p, q) = (net.position(a), net.position(b));
+                (p.0 - q.0).hypot(p.1 - q.1)
+            }
+            None => self.towards(b).0,
+        }
+    }
+
+    /// Drive to `target`'s cell: plan, execute, refine on failure.
+    fn leg(&mut self, target: u32, exec: &mut Executor, cap: u64) -> Result<Leg, String> {
+        let started = self.samples;
+        let fail_per_m = self.model.params().nav_fail_per_m;
+        let mut planner = Planner::default();
+        let mut leg = Leg::default();
+        let settle = self.model.params().l as u64 + 1;
+        'plan: while self.samples - started < cap {
+            if self.model.network().cell(target).is_none() {
+                break;
+            }
+            let Some(at) = self.model.winner() else {
+                self.sample(&mut Motion::Still)?;
+                continue;
+            };
+            if at == target {
+                leg.reached = true;
+                break;
+            }
+            let Some(plan) = planner.plan(self.model.network(), at, target, fail_per_m) else {
+                // No path in the map from here: a failed step; a short wander finds another
+                // place to plan from.
+                planner.failed();
+                let mut m = Motion::Wander((self.rng.uniform() - 0.5) * 3.0);
+                for _ in 0..3 {
+                    self.sample(&mut m)?;
+                }
+                continue;
+            };
+            for (i, &sub) in plan.path.iter().enumerate().skip(1) {
+                let Some(from) = self.model.winner() else {
+                    continue 'plan;
+                };
+                if self.model.network().cell(sub).is_none() {
+                    planner.failed();
+                    continue 'plan;
+                }
+                let (dist, bearing) = self.towards(sub);
+                let before = self.cell_gap(Some(from), sub);
+                let c = exec.choose(from, sub, self.rng.uniform());
+                leg.steps += 1;
+                let free = self.drive(
+                    super::wrap(bearing + c.turn_offset),
+                    dist * c.distance_scale,
+                    started + cap,
+                )?;
+                if !free {
+                    // Blocked: back off (the manoeuvre is reversed), as ALICE's reflexes do.
+                    leg.reversals += 1;
+                    leg.blocked += 1;
+                    let back = std::f64::consts::PI + (self.rng.uniform() - 0.5);
+                    self.drive(back, BACK_OFF_M, started + cap)?;
+                }
+                for _ in 0..settle {
+                    self.sample(&mut Motion::Still)?;
+                }
+                let now = self.model.winner();
+                let after = if now == Some(sub) {
+                    0.0
+                } else {
+                    self.cell_gap(now, sub)
+                };
+                exec.reinforce(from, sub, c, before, after);
+                if after > before && free {
+                    leg.reversals += 1;
+                }
+                if now == Some(target) {
+                    leg.reached = true;
+                    break 'plan;
+                }
+                let ahead = now.is_some_and(|w| plan.path[i..].contains(&w));
+                if !ahead {
+                    leg.failed += 1;
+                    planner.failed();
+                    continue 'plan;
+                }
+                if now != Some(sub) {
+                    // Skipped ahead: go on from the cell reached.
+                    continue 'plan;
+                }
+            }
+        }
+        leg.samples = self.samples - started;
+        leg.refinements = planner.plans.saturating_sub(1);
+        Ok(leg)
+    }
+}
+
+/// Run §5.3's experiment for one seed.
+pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
+    let started = std::time::Instant::now();
+    let arena = alice();
+    let walls = arena.segment_set();
+    let start = arena.starts[0];
+    let start_pose = Pose {
+        x: start.x,
+        y: start.y,
+        heading: start.heading,
+    };
+    let mut r = Robot {
+        walls,
+        body: Body::new(
+            Point::new(start.x, start.y),
+            start.heading,
+            SimRng::new(o.seed, 101),
+            true,
+        ),
+        sensors: Sensors::new(SimRng::new(o.seed, 102)),
+        rng: SimRng::new(o.seed, 103),
+        model: QtModel::new(o.params.clone(), start_pose).map_err(|e| e.to_string())?,
+        arena,
+        touch: [false; COUNT],
+        samples: 0,
+    };
+    r.explore(o.explore_samples)?;
+    let net = r.model.network();
+    // The test path's ends are open places, as the thesis's (between the obstacles, the open
+    // space): cells whose situation has no whisker touching, judged from the map alone.
+    let p = &o.params;
+    let open: Vec<u32> = net
+        .cells()
+        .filter(|(_, c)| {
+            c.s[p.lights..p.lights + p.touches]
+                .iter()
+                .all(|&t| t.abs() < OPEN_TOUCH)
+        })
+        .map(|(id, _)| id)
+        .collect();
+    let gap = |id: u32, to: (f64, f64)| {
+        let q = net.position(id);
+        (q.0 - to.0).hypot(q.1 - to.1)
+    };
+    let home = open
+        .iter()
+        .copied()
+        .min_by(|&a, &b| gap(a, (start.x, start.y)).total_cmp(&gap(b, (start.x, start.y))))
+        .ok_or("the exploration made no cell in the open")?;
+    let hp = net.position(home);
+    let away = open
+        .iter()
+        .copied()
+        .max_by(|&a, &b| gap(a, hp).total_cmp(&gap(b, hp)))
+        .ok_or("the exploration made no cell in the open")?;
+    let path_m = gap(away, hp);
+    let (cells, edges) = (net.len(), net.edges().count());
+    r.body.curve = o.static_drift_deg_per_m.to_radians();
+    if o.static_map {
+        r.model
+            .set_params(frozen(&o.params))
+            .map_err(|e| e.to_string())?;
+    }
+    let mut exec = Executor::default();
+    // Get to the start of the test path first (not measured; the memory learns already, as
+    // it would on any drive).
+    r.leg(home, &mut exec, o.leg_cap)?;
+    let mut runs = Vec::new();
+    for _ in 0..o.runs {
+        let mut legs: [Leg; 2] = Default::default();
+        for (i, target) in [away, home].into_iter().enumerate() {
+            let mut leg = r.leg(target, &mut exec, o.leg_cap)?;
+            leg.final_gap_m = r.model.network().cell(target).map(|_| r.towards(target).0);
+            legs[i] = leg;
+        }
+        runs.push(TestRun {
+            samples: legs.iter().map(|l| l.samples).sum(),
+            refinements: legs.iter().map(|l| l.refinements).sum(),
+            reversals: legs.iter().map(|l| l.reversals).sum(),
+            legs,
+        });
+    }
+    let factor = |f: &dyn Fn(&TestRun) -> f64| {
+        let (a, b) = (runs.first()?, runs.get(4)?);
+        Some(f(a) / f(b).max(1.0))
+    };
+    Ok(NavReport {
+        cells,
+        edges,
+        start_cell: home,
+        target_cell: away,
+        path_m,
+        time_factor: factor(&|t| t.samples as f64),
+        refinement_factor: factor(&|t| t.refinements as f64),
+        reversal_factor: factor(&|t| t.reversals as f64),
+        associations: exec.associations(),
+        runs,
+        options: o.clone(),
+        wall_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// `p` with the map frozen: no adaptation, no insertion, edges all but never forgotten.
+fn frozen(p: &Params) -> Params {
+    Params {
+        eps_o: 0.0,
+        eps_n: 0.0,
+        rho_s: f64::MAX,
+        n_insert: u32::MAX,
+        a_red: 1e-9,
+        ..p.clone()
+    }
+}
