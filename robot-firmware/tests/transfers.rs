@@ -81,7 +81,10 @@ fn the_same_map_uploaded_again_is_already_held_and_nothing_more_is_sent() {
     let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &map).unwrap(), &map);
     assert_eq!(outcome, Outcome::AlreadyHave);
     // Only what went behind the Begin before its answer (PROTOCOL.md §8), never the object.
-    assert!(sent <= EAGER_MAX, "{sent} bytes sent to a robot that held the map");
+    assert!(
+        sent <= EAGER_MAX,
+        "{sent} bytes sent to a robot that held the map"
+    );
     assert!(sent < map.len());
     assert_eq!(st.map_bytes(), map);
 }

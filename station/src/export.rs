@@ -13,9 +13,9 @@
 
 pub mod csv;
 pub mod mcap;
-pub mod robots;
 pub mod mcap_msg;
 pub mod qt;
+pub mod robots;
 pub mod scene;
 
 use std::path::{Path, PathBuf};

@@ -213,7 +213,7 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
                         let first = sent.get_mut(usize::from(id)).is_some_and(|s| !std::mem::replace(s, true));
                         if let (true, Some(l)) = (first, links.get(usize::from(id))) {
                             for cmd in &to_send {
-                                l.handle.submit(cmd.clone());
+                                l.handle.submit(*cmd);
                             }
                         }
                     }

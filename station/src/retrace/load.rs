@@ -64,14 +64,20 @@ impl Loaded {
 
 /// Reads the recording's bytes. Err: what is wrong and the byte offset.
 pub fn load(bytes: &[u8]) -> Result<Loaded, String> {
-    let (_, mut at) = parse_header(bytes).map_err(|e| e.to_string())?;
+    let (header, mut at) = parse_header(bytes).map_err(|e| e.to_string())?;
+    let links = header.meta.link_ports().len();
     let mut out = Loaded::default();
     let mut frame: Vec<u8> = Vec::new();
     let mut stream_open = false;
     while at < bytes.len() {
-        let (rec, next) = parse_record(bytes, at).map_err(|e| e.to_string())?;
+        let (rec, next) =
+            parse_record(bytes, at, header.version, links).map_err(|e| e.to_string())?;
         let offset = at as u64;
         at = next;
+        // A recording of several robots: the first link's robot is retraced.
+        if rec.link != 0 {
+            continue;
+        }
         match rec.kind {
             RecordKind::FromRobot => {
                 for &b in &rec.data {
