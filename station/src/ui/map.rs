@@ -66,8 +66,9 @@ pub static LAYERS: [&dyn MapLayer; 18] = [
     &super::qt_map::QtLayer,
     &TruthLayer,
     &super::fleet::FleetLayer,
-    &super::retrace_layer::RetraceLayer,
     &BelievedLayer,
+    // Over the believed robot: the retraced track's marker stays visible where they agree.
+    &super::retrace_layer::RetraceLayer,
     &super::localization::LinesLayer,
     &super::localization::PpdLayer,
     &GoalLayer,
