@@ -144,7 +144,8 @@ impl Fleet {
                 self.select(i as usize);
             }
             Action::StopAll => self.stop_all(),
-            Action::Tick { .. } | Action::Resize { .. } => {
+            // The recording holds every robot's link: each robot's header shows it.
+            Action::Tick { .. } | Action::Resize { .. } | Action::Recording(_) => {
                 for m in &mut self.members {
                     m.app.update(action.clone());
                 }
@@ -308,8 +309,9 @@ fn warn_duplicates(fleet: &mut Fleet, ids: &[Option<u8>]) {
         .iter()
         .map(|m| crate::terminal_text::printable(&m.port).into_owned())
         .collect();
-    let dups =
-        crate::link::robot_ids::duplicates(ports.iter().map(String::as_str).zip(ids.iter().copied()));
+    let dups = crate::link::robot_ids::duplicates(
+        ports.iter().map(String::as_str).zip(ids.iter().copied()),
+    );
     for d in dups {
         if fleet.reported_duplicates.insert(d.robot_id) {
             fleet.app_mut().fleet_note(Level::Warn, d.warning());
