@@ -138,6 +138,10 @@ pub const KEYS: &[(&str, &str)] = &[
     ("+ -", "speed: 0.1× … 128×"),
     ("1 … 9", "speed 1× … 9×"),
     ("Tab F1-F7", "views, as live"),
+    (
+        "Tab Alt-1…9",
+        "several robots: pick whose panels (views on F1-F7)",
+    ),
     ("c t x", "chart series, truth layer, clear tracks"),
     ("PgUp PgDn", "scroll the log"),
     ("? Esc", "this help / close"),
