@@ -173,7 +173,7 @@ fn three_minutes_at_50_hz_keep_every_buffer_within_its_cap() {
         s.telemetry
     );
     // The charts' history filled up and stayed at its cap: the cap is what bounds it.
-    assert_eq!(s.app().history.series(Series::SpeedLeft).len(), HISTORY);
+    assert_eq!(s.app.history.series(Series::SpeedLeft).len(), HISTORY);
     check_bounded(&mut s);
 }
 
