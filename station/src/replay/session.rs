@@ -160,6 +160,7 @@ impl ReplaySession {
             help: self.help,
             damage_offset: self.links[0].damage.as_ref().map(|d| d.offset()),
             file: &self.file,
+            robots: self.links.len(),
         }
     }
 
