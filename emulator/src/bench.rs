@@ -19,7 +19,13 @@
 //!   generated), `setup_error` (the runner refused: start in a wall, a refused command, no
 //!   goal), `panic` (a bug; the run is caught so the others finish).
 //!
-//! Determinism: a run depends only on (arena, seed); rows come out in (arena, seed) order
+//! Seeds: every run gets its own emulator seed, [`run_seed`]`(--seed, arena index, draw)`, so
+//! each arena's run draws its own noise (wheel speed errors, IR gains, ...) and the success
+//! rate measures the noise's distribution, not one draw shared by every arena. `--seeds K`
+//! runs draws 1..=K of each arena. A row's `seed` is that emulator seed: `robot-emulator run
+//! --seed S` with the same arena repeats the run.
+//!
+//! Determinism: a run depends only on (arena, seed); rows come out in (arena, draw) order
 //! whatever the number of jobs. Only `wall_s` varies between runs of the benchmark.
 
 use std::io::IsTerminal as _;
@@ -35,6 +41,7 @@ use serde::Serialize;
 use crate::arena::{Arena, LoadOptions};
 use crate::arena_gen::{self, Kind};
 use crate::geometry::Point;
+use crate::rng::SimRng;
 use crate::scenario::{ScenarioOptions, Task};
 use crate::sensors::Noise;
 
@@ -110,6 +117,40 @@ impl ArenaSource {
             }
         }
     }
+}
+
+/// Stream of the benchmark's base seed from which each run's emulator seed is drawn (beyond
+/// the per-component streams of `rng::stream` and the fleet's).
+const BENCH_SEED_STREAM: u64 = 0x0042_656e_6368; // "Bench"
+
+/// The emulator seed of draw `draw` (1-based, `--seeds K` runs 1..=K) on the arena at
+/// `arena_index` (0-based, the order of `--arenas` after expansion: `generated:N` is
+/// arenas 1..N at indices 0..N-1) of a benchmark with base seed `base` (`--seed`): the
+/// `draw`-th value of the generator seeded with `base` on stream "Bench" + `arena_index`.
+/// Different arenas and draws get independent noise; the same triple always the same seed.
+pub fn run_seed(base: u64, arena_index: usize, draw: u64) -> u64 {
+    run_seeds(base, arena_index, draw)
+        .last()
+        .copied()
+        .unwrap_or_default()
+}
+
+/// Draws 1..=`draws` of [`run_seed`] for one arena.
+fn run_seeds(base: u64, arena_index: usize, draws: u64) -> Vec<u64> {
+    let mut rng = SimRng::new(base, BENCH_SEED_STREAM.wrapping_add(arena_index as u64));
+    (0..draws).map(|_| rng.next_u64()).collect()
+}
+
+/// Every (arena index, draw, emulator seed) of a benchmark, in report order.
+pub(crate) fn run_list(arenas: usize, base: u64, draws: u64) -> Vec<(usize, u64, u64)> {
+    (0..arenas)
+        .flat_map(|a| {
+            run_seeds(base, a, draws)
+                .into_iter()
+                .zip(1..)
+                .map(move |(seed, draw)| (a, draw, seed))
+        })
+        .collect()
 }
 
 /// Most arenas `generated:N` may ask for.
@@ -190,8 +231,10 @@ pub struct BenchOptions {
     pub profile: &'static Profile,
     /// The arenas.
     pub arenas: Vec<ArenaSource>,
-    /// Seeds 1..=seeds per arena.
+    /// Noise draws per arena (`--seeds`): draws 1..=seeds, each with its own [`run_seed`].
     pub seeds: u64,
+    /// The base seed (`--seed`) every run's emulator seed is derived from.
+    pub seed: u64,
     /// Worker threads.
     pub jobs: usize,
     /// Simulated seconds per run.
@@ -202,6 +245,10 @@ pub struct BenchOptions {
     pub progress: bool,
     /// Robots per contest; above 1 the benchmark is `crate::fleet_bench`'s.
     pub robots: usize,
+    /// Go-to: before each run, the same robot (same seed) calibrates its odometry in the same
+    /// arena ([`crate::scenario::calibrate_odometry`]) and the go-to run starts with the
+    /// result set, as an operator who calibrated once and loads the parameter file.
+    pub calibrate_odometry: bool,
 }
 
 /// Why a run failed.
@@ -255,8 +302,10 @@ impl Cause {
 pub struct Row {
     /// Arena label.
     pub arena: String,
-    /// Seed.
+    /// The emulator seed ([`run_seed`]; `robot-emulator run --seed` repeats the run).
     pub seed: u64,
+    /// Which draw of this arena, 1..=`--seeds`.
+    pub draw: u64,
     /// Succeeded (see the module text).
     pub success: bool,
     /// Why not, when it did not.
@@ -293,6 +342,8 @@ pub struct Row {
     pub firmware_delivered: Option<u16>,
     /// The error of an import or setup failure, or a panic's message.
     pub error: Option<String>,
+    /// The odometry calibration before the run (`--calibrate-odometry`).
+    pub calibration: Option<crate::scenario::calibrate_odometry::CalibrationReport>,
 }
 
 impl Row {
@@ -300,6 +351,7 @@ impl Row {
         Row {
             arena,
             seed,
+            draw: 0,
             success: false,
             cause: Some(cause),
             sim_s: None,
@@ -318,6 +370,7 @@ impl Row {
             delivered: None,
             firmware_delivered: None,
             error: Some(error),
+            calibration: None,
         }
     }
 }
@@ -397,6 +450,26 @@ pub struct Summary {
     pub plan: Option<PlanSummary>,
     /// Forage only.
     pub forage: Option<ForageSummary>,
+    /// `--calibrate-odometry` only.
+    pub calibration: Option<CalibrationSummary>,
+}
+
+/// The odometry calibrations' figures (`--calibrate-odometry`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct CalibrationSummary {
+    /// Calibrations run.
+    pub runs: usize,
+    /// Calibrations that gave parameters.
+    pub succeeded: usize,
+    /// Of those, both directions closed a lap.
+    pub both_directions: usize,
+    /// |true ratio error| before calibration, ppm (the emulator's truth; the robot never sees
+    /// it).
+    pub true_ratio_ppm: Option<Spread>,
+    /// |measured - true ratio error| of the successful calibrations, ppm.
+    pub residual_ppm: Option<Spread>,
+    /// Simulated seconds of the calibrations.
+    pub sim_s: Option<Spread>,
 }
 
 /// The benchmark's report (`--json` prints it whole).
@@ -408,8 +481,10 @@ pub struct BenchReport {
     pub profile: &'static str,
     /// Arenas run.
     pub arenas: usize,
-    /// Seeds per arena (1..=seeds).
+    /// Noise draws per arena (`--seeds`).
     pub seeds: u64,
+    /// The base seed (`--seed`) of every run's [`run_seed`].
+    pub seed: u64,
     /// Simulated seconds allowed per run.
     pub timeout_s: f64,
     /// Worker threads.
@@ -424,20 +499,21 @@ pub struct BenchReport {
 
 /// Runs the benchmark.
 pub fn run(opts: &BenchOptions) -> BenchReport {
-    let jobs: Vec<(usize, u64)> = (0..opts.arenas.len())
-        .flat_map(|a| (1..=opts.seeds).map(move |s| (a, s)))
-        .collect();
+    let jobs = run_list(opts.arenas.len(), opts.seed, opts.seeds);
     let started = Instant::now();
     let workers = opts.jobs.clamp(1, jobs.len().max(1));
     let rows = run_parallel(jobs.len(), workers, opts.progress, |i| {
-        let (a, seed) = jobs[i];
-        run_one(&opts.arenas[a], seed, opts)
+        let (a, draw, seed) = jobs[i];
+        let mut row = run_one(&opts.arenas[a], seed, opts);
+        row.draw = draw;
+        row
     });
     BenchReport {
         task: opts.task,
         profile: opts.profile.name,
         arenas: opts.arenas.len(),
         seeds: opts.seeds,
+        seed: opts.seed,
         timeout_s: opts.timeout_s,
         jobs: workers,
         wall_s: started.elapsed().as_secs_f64(),
@@ -543,6 +619,16 @@ fn run_checked(
     let setup = |e: crate::scenario::ScenarioError| (Cause::SetupError, e.to_string());
     let mut row = Row::failed(source.label(), seed, Cause::Timeout, String::new(), 0.0);
     row.error = None;
+    if opts.calibrate_odometry {
+        let c = crate::scenario::calibrate_odometry::run_calibration(
+            arena.clone(),
+            &so,
+            crate::scenario::calibrate_odometry::DEFAULT_TIMEOUT_S,
+        )
+        .map_err(setup)?;
+        so.params = c.params();
+        row.calibration = Some(c);
+    }
     if opts.task == BenchTask::Forage {
         let r = crate::scenario::forage::run_forage(arena, so).map_err(setup)?;
         row.success = r.all_delivered;
@@ -627,6 +713,28 @@ pub fn summarise(task: BenchTask, rows: &[Row]) -> Summary {
             run2_faster_rate: ratio(faster, both.len()),
         }
     });
+    let cals: Vec<&crate::scenario::calibrate_odometry::CalibrationReport> =
+        rows.iter().filter_map(|r| r.calibration.as_ref()).collect();
+    let calibration = (!cals.is_empty()).then(|| {
+        let ok: Vec<_> = cals
+            .iter()
+            .filter(|c| c.wheel_ratio_ppm.is_some())
+            .collect();
+        CalibrationSummary {
+            runs: cals.len(),
+            succeeded: ok.len(),
+            both_directions: ok.iter().filter(|c| c.both_directions).count(),
+            true_ratio_ppm: spread(cals.iter().map(|c| c.true_ratio_ppm.abs()).collect()),
+            residual_ppm: spread(
+                ok.iter()
+                    .filter_map(|c| c.wheel_ratio_ppm)
+                    .zip(ok.iter().map(|c| c.true_ratio_ppm))
+                    .map(|(m, t)| (f64::from(m) - t).abs())
+                    .collect(),
+            ),
+            sim_s: spread(cals.iter().map(|c| c.sim_s).collect()),
+        }
+    });
     let forage = (task == BenchTask::Forage).then(|| {
         let objects = rows.iter().filter_map(|r| r.objects).sum();
         let delivered = rows.iter().filter_map(|r| r.delivered).sum();
@@ -664,6 +772,7 @@ pub fn summarise(task: BenchTask, rows: &[Row]) -> Summary {
         failures,
         plan,
         forage,
+        calibration,
     }
 }
 
@@ -672,10 +781,11 @@ pub fn render(r: &BenchReport) -> String {
     let s = &r.summary;
     let pct = |x: f64| x * 100.0;
     let mut out = format!(
-        "bench {}: {} arenas x {} seeds = {} runs, {} robot, {:.0} s timeout ({} jobs, {:.1} s wall)\n",
+        "bench {}: {} arenas x {} noise draws (base seed {}) = {} runs, {} robot, {:.0} s timeout ({} jobs, {:.1} s wall)\n",
         task_name(r.task),
         r.arenas,
         r.seeds,
+        r.seed,
         s.runs,
         r.profile,
         r.timeout_s,
@@ -731,6 +841,21 @@ pub fn render(r: &BenchReport) -> String {
             pct(p.run2_faster_rate)
         );
     }
+    if let Some(c) = s.calibration {
+        let ppm = |x: Option<Spread>| match x {
+            Some(v) => format!("median {:.0} ppm, p90 {:.0} ppm", v.median, v.p90),
+            None => "none".to_string(),
+        };
+        out += &format!(
+            "  calibration    {} of {} gave parameters ({} both directions); wheel ratio error \
+             {} before, residual {}\n",
+            c.succeeded,
+            c.runs,
+            c.both_directions,
+            ppm(c.true_ratio_ppm),
+            ppm(c.residual_ppm)
+        );
+    }
     if let Some(f) = s.forage {
         out += &format!(
             "  forage         {} of {} objects delivered ({:.1} %); firmware count differs from \
@@ -762,6 +887,23 @@ mod tests {
         let s = spread((1..=10).map(f64::from).collect()).expect("values");
         assert_eq!((s.median, s.p90), (5.0, 9.0));
         assert!(spread(Vec::new()).is_none());
+    }
+
+    #[test]
+    fn every_arena_and_draw_gets_its_own_seed_and_the_same_base_the_same_ones() {
+        let list = run_list(3, 1, 2);
+        assert_eq!(list.len(), 6);
+        let seeds: std::collections::BTreeSet<u64> = list.iter().map(|x| x.2).collect();
+        assert_eq!(seeds.len(), 6, "{list:?}");
+        assert_eq!(
+            list.iter().map(|x| (x.0, x.1)).collect::<Vec<_>>(),
+            vec![(0, 1), (0, 2), (1, 1), (1, 2), (2, 1), (2, 2)]
+        );
+        assert_eq!(list, run_list(3, 1, 2));
+        assert_eq!(run_seed(1, 2, 2), list[5].2);
+        // More draws keep the first ones: --seeds 5 extends --seeds 2.
+        assert_eq!(run_list(3, 1, 5)[0..2], list[0..2]);
+        assert_ne!(run_list(3, 2, 2), list, "another base seed, other draws");
     }
 
     #[test]

@@ -146,6 +146,8 @@ pub fn load(name: &str, opts: &LoadOptions) -> Result<Arena, ArenaError> {
         Ok(floor_grid())
     } else if name == crate::forage::BUILTIN_FORAGE {
         forage()
+    } else if crate::alice::arena::is_builtin(name) {
+        Ok(crate::alice::arena::alice())
     } else {
         crate::arena::load(Path::new(name), opts)
     }

@@ -99,9 +99,14 @@ pub struct BenchArgs {
     /// Kind of generated arena [default: micro-rato for the search tasks, box otherwise].
     #[arg(long, value_enum)]
     pub kind: Option<crate::arena_gen::Kind>,
-    /// Seeds per arena: runs use seeds 1..=K.
+    /// Noise draws per arena: each run gets its own emulator seed, drawn from --seed and the
+    /// arena's index (`bench::run_seed`; a row's `seed` repeats it with `run --seed`), so the
+    /// rate measures the noise's distribution, not one draw shared by every arena.
     #[arg(long, default_value_t = 1, value_name = "K")]
     pub seeds: u64,
+    /// Base seed of the runs' emulator seeds.
+    #[arg(long, default_value_t = 1, value_name = "S")]
+    pub seed: u64,
     /// Runs in parallel [default: the number of cores].
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -122,6 +127,11 @@ pub struct BenchArgs {
     /// against alone, and the collisions between robots.
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub robots: usize,
+    /// Go-to only: before each run the same robot calibrates its odometry in the arena (two
+    /// wall-following laps, `station calibrate odometry`'s manoeuvre) and starts the go-to
+    /// with the measured wheel distance and ratio set.
+    #[arg(long)]
+    pub calibrate_odometry: bool,
 }
 
 /// Most seeds per arena `bench --seeds` takes.
@@ -182,6 +192,15 @@ impl BenchArgs {
                 self.robots
             ));
         }
+        if self.calibrate_odometry
+            && (self.task != BenchTask::Goto || !profile.has(protocol::caps::ENCODERS))
+        {
+            return Err(
+                "--calibrate-odometry: the odometry calibration is the Khepera go-to's; use \
+                 --task goto --profile khepera"
+                    .to_string(),
+            );
+        }
         let kind = self.kind.unwrap_or_else(|| self.task.default_kind());
         let arenas = crate::bench::resolve_arenas(&self.arenas, kind)?;
         Ok(crate::bench::BenchOptions {
@@ -189,6 +208,7 @@ impl BenchArgs {
             profile,
             arenas,
             seeds: self.seeds,
+            seed: self.seed,
             jobs,
             timeout_s,
             noise: if self.no_noise {
@@ -198,6 +218,7 @@ impl BenchArgs {
             },
             progress: !self.json,
             robots: self.robots,
+            calibrate_odometry: self.calibrate_odometry,
         })
     }
 }
@@ -431,6 +452,11 @@ pub struct ServeArgs {
     /// Serial line rate the robot's UART runs at (8N1).
     #[arg(long, default_value_t = 115_200)]
     pub baud: u32,
+    /// Stream the robot's hardware trace (parameter 34 hal_trace, message kind 15) from
+    /// power-up; the robot powers up at the station's first byte, so the whole trace reaches
+    /// it and `station retrace` can re-run the firmware over it (single robot).
+    #[arg(long)]
+    pub hal_trace: bool,
     /// Simulation speed: a factor (1 = real time) or `max`.
     #[arg(long, default_value = "1", value_parser = parse_speed)]
     pub speed: Speed,
@@ -492,6 +518,9 @@ pub struct RunArgs {
     /// line-correct: true distance to drive, metres.
     #[arg(long, default_value_t = 40.0, value_name = "M")]
     pub distance: f64,
+    /// alice-*: set a QT world-model parameter (repeatable), e.g. `--qt-param eps_o=0.05`.
+    #[arg(long = "qt-param", value_name = "NAME=VALUE")]
+    pub qt_param: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -525,6 +554,16 @@ pub enum TaskArg {
     /// resets its odometry on landmark matches; reports corrected vs plain odometry error in
     /// robot diameters. --timeout is the run length [default 1200 s].
     UnsupervisedPlaces,
+    /// ALICE's QT world model (seed 001 §4.5.4): one 8000-situation run in builtin:alice;
+    /// when the cell count settles (thesis: about 5000). Own arena and robot; --seed.
+    AliceEquilibrium,
+    /// ALICE's QT model, eps_o at 0.1 / 0.03 / 0.005 (§4.5.1).
+    AliceEpsO,
+    /// ALICE's QT model with both correlations, without position, without orientation
+    /// (§4.5.3).
+    AliceCorrelation,
+    /// ALICE's QT model with a wall below the pillar removed at situation 3500 (§4.5.4).
+    AliceDynamic,
 }
 
 impl WorldArgs {
@@ -756,6 +795,12 @@ impl RunArgs {
             }
             TaskArg::LineCorrect => {
                 return Err("--task line-correct is run by `line_correct_options`".to_string())
+            }
+            TaskArg::AliceEquilibrium
+            | TaskArg::AliceEpsO
+            | TaskArg::AliceCorrelation
+            | TaskArg::AliceDynamic => {
+                return Err("the alice-* tasks are run by `alice::experiments`".to_string())
             }
         };
         let profile = if task == Task::Forage {

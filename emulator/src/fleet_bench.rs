@@ -127,8 +127,10 @@ pub struct FleetBenchReport {
 
 /// Runs the contest benchmark.
 pub fn run(opts: &BenchOptions) -> FleetBenchReport {
-    let jobs: Vec<(usize, u64)> = (0..opts.arenas.len())
-        .flat_map(|a| (1..=opts.seeds).map(move |s| (a, s)))
+    // The same seeds as the one-robot bench, so robot 1 alone is exactly its run.
+    let jobs: Vec<(usize, u64)> = crate::bench::run_list(opts.arenas.len(), opts.seed, opts.seeds)
+        .into_iter()
+        .map(|(a, _, seed)| (a, seed))
         .collect();
     let started = Instant::now();
     let workers = opts.jobs.clamp(1, jobs.len().max(1));

@@ -1,6 +1,7 @@
 //! The robot emulator: the unchanged robot firmware driven by a simulated world.
 #![deny(unsafe_code)]
 
+pub mod alice;
 pub mod arena;
 pub mod arena_gen;
 pub mod bench;
@@ -15,6 +16,7 @@ pub mod line_correct;
 pub mod link;
 pub mod output_file;
 pub mod physics;
+pub mod power_on;
 pub mod pty;
 pub mod rng;
 pub mod scenario;

@@ -83,7 +83,45 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
         .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
     let link = opts.serve.link.clone();
     let mut sim = sim;
-    let stats = emulator::link::serve(&mut sim, &opts.serve, &stop, &mut |path| {
+    if args.hal_trace {
+        // As the station would set it, before the first pass of the main loop.
+        let on = protocol::Command::SetParam {
+            id: protocol::ParamId(robot_firmware::params::id::HAL_TRACE),
+            value: 1.0,
+        };
+        sim.robot_mut().apply(on, 0);
+        let mut dev = emulator::power_on::PoweredByStation::new(sim);
+        return serve_device(
+            &mut dev,
+            args,
+            &opts.serve,
+            &stop,
+            profile,
+            &arena_name,
+            link,
+        );
+    }
+    serve_device(
+        &mut sim,
+        args,
+        &opts.serve,
+        &stop,
+        profile,
+        &arena_name,
+        link,
+    )
+}
+
+fn serve_device<D: emulator::link::Device>(
+    dev: &mut D,
+    args: &ServeArgs,
+    serve: &emulator::link::ServeOptions,
+    stop: &AtomicBool,
+    profile: &str,
+    arena_name: &str,
+    link: Option<std::path::PathBuf>,
+) -> Result<(), String> {
+    let stats = emulator::link::serve(dev, serve, stop, &mut |path| {
         // The one line a script waits for: the port to open.
         println!("{}", path.display());
         if let Some(l) = &link {
@@ -169,6 +207,9 @@ fn run(args: &RunArgs) -> Result<(), String> {
     if args.task == emulator::cli::TaskArg::LineCorrect {
         return line_correct(args);
     }
+    if let Some(run) = alice_experiment(args.task) {
+        return alice(args, run);
+    }
     if args.task == emulator::cli::TaskArg::UnsupervisedPlaces {
         return unsupervised_places(args);
     }
@@ -238,6 +279,66 @@ fn forage(args: &RunArgs) -> Result<(), String> {
             h.pose_error_m,
             h.heading_error_deg
         );
+    }
+    Ok(())
+}
+
+type AliceRun =
+    fn(u64, &world_model::Params) -> Result<emulator::alice::experiments::ExperimentReport, String>;
+
+/// The ALICE experiment a task names.
+fn alice_experiment(task: emulator::cli::TaskArg) -> Option<AliceRun> {
+    use emulator::alice::experiments as x;
+    use emulator::cli::TaskArg;
+    match task {
+        TaskArg::AliceEquilibrium => Some(x::equilibrium),
+        TaskArg::AliceEpsO => Some(x::eps_o),
+        TaskArg::AliceCorrelation => Some(x::correlation),
+        TaskArg::AliceDynamic => Some(x::dynamic),
+        _ => None,
+    }
+}
+
+fn alice(args: &RunArgs, run: AliceRun) -> Result<(), String> {
+    let mut params = world_model::Params::default();
+    for kv in &args.qt_param {
+        let (k, v) = kv
+            .split_once('=')
+            .ok_or_else(|| format!("--qt-param {kv:?}: expected NAME=VALUE"))?;
+        params
+            .set(k, v)
+            .map_err(|e| format!("--qt-param {kv:?}: {e}"))?;
+    }
+    let r = run(args.world.seed, &params)?;
+    if args.json {
+        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+    } else {
+        println!(
+            "ALICE {} seed {} ({:.1} s wall)",
+            r.experiment, r.seed, r.wall_s
+        );
+        println!(
+            "variant                  cells  edges  settled  abs err m  odometry m  crossings/edge"
+        );
+        for s in &r.runs {
+            println!(
+                "{:<24} {:>5} {:>6} {:>8} {:>10.2} {:>11.2} {:>15.3}",
+                s.variant,
+                s.cells,
+                s.edges,
+                s.equilibrium_at.map_or("-".to_string(), |v| v.to_string()),
+                s.late_absolute_error_m,
+                s.late_odometry_error_m,
+                s.crossings_per_edge
+            );
+        }
+        if let Some(g) = r.gap_edges_at_removal {
+            println!(
+                "edges across the wall at its removal: {g}; gap closed after {}",
+                r.gap_closed_after
+                    .map_or("never".to_string(), |v| format!("{v} samples"))
+            );
+        }
     }
     Ok(())
 }

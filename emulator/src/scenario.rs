@@ -43,6 +43,7 @@ use crate::arena::{Arena, Pose};
 use crate::sensors::Noise;
 use crate::sim::{Sim, SimConfig, SimError};
 
+pub mod calibrate_odometry;
 pub mod contest;
 pub mod forage;
 pub mod lightmap;
@@ -138,6 +139,9 @@ pub struct ScenarioOptions {
     pub wheel_bias: Option<[f64; 2]>,
     /// Slip (default none).
     pub slip: f64,
+    /// Parameters set before the task, as an operator loads a saved parameter file (e.g. the
+    /// odometry calibration's wheel distance and ratio); id and value.
+    pub params: Vec<(u16, f32)>,
 }
 
 impl ScenarioOptions {
@@ -155,6 +159,7 @@ impl ScenarioOptions {
             true_wheel_distance_m: None,
             wheel_bias: None,
             slip: 0.0,
+            params: Vec::new(),
         }
     }
 
@@ -341,6 +346,7 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
             (s.x - t.centre.x).hypot(s.y - t.centre.y) <= t.radius_m
         });
     set_arrival(&mut sim, opts.arrival_m, tolerance_m)?;
+    set_params(&mut sim, &opts.params)?;
     let started = Instant::now();
     let timeout_ms = (opts.timeout_s * 1000.0).ceil() as u64;
     // A beacon search sent to a target's centre ends well in any goal target (CiberRato: the
@@ -538,6 +544,18 @@ pub(crate) fn set_arrival(
         value: value as f32,
     };
     apply(sim, cmd, "SetParam(arrival radius)")
+}
+
+/// Sets each (id, value) as `SetParam`, as a station loading a parameter file does.
+pub(crate) fn set_params(sim: &mut Sim, params: &[(u16, f32)]) -> Result<(), ScenarioError> {
+    for &(id, value) in params {
+        let cmd = Command::SetParam {
+            id: ParamId(id),
+            value,
+        };
+        apply(sim, cmd, "SetParam(saved parameter)")?;
+    }
+    Ok(())
 }
 
 pub(crate) fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), ScenarioError> {

@@ -20,12 +20,15 @@
 //!
 //! Heading: the thesis's "odometry module" integrates the wheels, whose constant speed bias
 //! makes the heading drift without bound; the plain odometry here is exactly that. A landmark
-//! match resets the position to the stored one (§3.15.1) and, because a stored position says
-//! nothing about heading, the heading to the robot's compass (`reset_heading_to_compass`, a
-//! choice: the thesis does not say how the heading was kept). The report also gives a third
-//! estimate, wheels plus compass heading at every step and no landmarks, because in an arena
-//! this small a drift-free heading alone bounds the error by bias x arena size: that baseline
-//! shows how much of the correction the compass does.
+//! match resets the position to the stored one (§3.15.1); the heading goes to the robot's
+//! compass by default ([`HeadingReset`]: a landmark also stores its heading, §3.6 "position,
+//! time, direction", and resetting to that is an option, measured worse because landmarks
+//! made after some drift carry a drifted heading). The report also gives a third estimate,
+//! wheels plus compass heading at every step and no landmarks, because in an arena this small
+//! a drift-free heading alone bounds the error by bias x arena size: that baseline shows how
+//! much of the correction the compass does. [`RevisitDiagnosis`] judges every landmark
+//! resolution against the truth (report only): whether the robot was back at a stored
+//! landmark, how far the odometry had drifted, how different the contexts were.
 
 use std::time::Instant;
 
@@ -35,7 +38,7 @@ use robot_firmware::unsupervised::landmarks::{
     Event, LandmarkParams, LandmarkStore, PrototypeMetric, LANDMARK_BYTES, STORE_BYTES,
 };
 use robot_firmware::unsupervised::places::{PlaceEvent, PlaceParams, Places};
-use robot_firmware::unsupervised::{MAX_LANDMARKS, STREAMS};
+use robot_firmware::unsupervised::{CONTEXT, MAX_LANDMARKS, STREAMS};
 use robot_firmware::KHEPERA;
 use serde::Serialize;
 
@@ -101,8 +104,9 @@ pub struct PlacesOptions {
     pub speed_mps: f64,
     /// Noise levels (IR, light, compass, wheel bias).
     pub noise: Noise,
-    /// On a landmark match, also set the heading to the compass reading (default true).
-    pub reset_heading_to_compass: bool,
+    /// What a landmark match does to the heading (default: the compass; the stored heading
+    /// measured worse, README).
+    pub heading_reset: HeadingReset,
     /// Lamps per arena. Default 3.
     pub lamps: usize,
     /// Vigilances: growing K-means (Euclidean distance), ART-1, Fuzzy ART (match).
@@ -115,6 +119,12 @@ pub struct PlacesOptions {
     pub places: PlaceParams,
     /// Seconds between series samples in the report.
     pub series_every_s: f64,
+    /// Leave a followed wall now and then to cross open space (default true); false: follow
+    /// the first wall met, always on the same side.
+    pub excursions: bool,
+    /// Keep every step's class labels in the report (`class_streams`; default false: they
+    /// are 3 bytes a step, for the station's view).
+    pub record_labels: bool,
 }
 
 impl PlacesOptions {
@@ -127,7 +137,7 @@ impl PlacesOptions {
             period_s: 0.04,
             speed_mps: 0.06,
             noise: Noise::default(),
-            reset_heading_to_compass: true,
+            heading_reset: HeadingReset::Compass,
             lamps: 3,
             vigilance: [1.2, 0.3, 0.6],
             beta: 0.5,
@@ -135,13 +145,28 @@ impl PlacesOptions {
                 diameter_m: DIAMETER_M as f32,
                 max_share: 0.03,
                 max_mean_run: 3.0,
-                lev_scale: 0.03,
                 ..LandmarkParams::default()
             },
             places: PlaceParams::default(),
             series_every_s: 2.0,
+            excursions: true,
+            record_labels: false,
         }
     }
+}
+
+/// What a landmark match does to the odometry's heading.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum HeadingReset {
+    /// The landmark's stored heading (carried over the steps since its kernel): the thesis's
+    /// reset to the stored pose (§3.6: a landmark holds position and direction).
+    Stored,
+    /// The compass reading (a drift-free heading the thesis's robot has; not the thesis's
+    /// reset, kept for comparison).
+    Compass,
+    /// Unchanged: position only.
+    Keep,
 }
 
 /// A generated arena.
@@ -371,6 +396,8 @@ struct Wander {
     lost: u32,
     /// Steps left backing off after a stall.
     backing: u32,
+    /// Whether it leaves walls at all.
+    excursions: bool,
 }
 
 impl Wander {
@@ -392,7 +419,11 @@ impl Wander {
         let (fwd, turn) = if ahead > 0.3 || diag > 0.6 {
             if self.crossing {
                 self.crossing = false;
-                self.right = rng.chance(0.5);
+                self.right = if self.excursions {
+                    rng.chance(0.5)
+                } else {
+                    true
+                };
                 self.follow_left = 300 + (rng.next_u64() % 900) as u32;
             }
             (0.0, 0.7)
@@ -400,8 +431,10 @@ impl Wander {
             (1.0, 0.0)
         } else if side > 0.02 {
             self.lost = 0;
-            self.follow_left = self.follow_left.saturating_sub(1);
-            if self.follow_left == 0 {
+            if self.excursions {
+                self.follow_left = self.follow_left.saturating_sub(1);
+            }
+            if self.excursions && self.follow_left == 0 {
                 self.crossing = true;
             }
             // Keep the side reading near 0.3.
@@ -474,6 +507,10 @@ pub struct MatchRecord {
     pub err_before: f64,
     /// See `err_before`.
     pub err_after: f64,
+    /// Corrected position before and after the reset, metres.
+    pub from: [f64; 2],
+    /// See `from`.
+    pub to: [f64; 2],
 }
 
 /// [`robot_firmware::unsupervised::landmarks::MatchStats`] for the report.
@@ -489,6 +526,45 @@ pub struct MatchStatsReport {
     pub dissimilar: u32,
     /// Mean scaled d_lev of the best near candidate.
     pub mean_near_lev: f32,
+}
+
+/// Why landmarks are (not) met again, judged with the truth (report only; the robot never
+/// sees it). A *revisit* is a resolved kernel whose true position lies within half a diameter
+/// of the true position of a stored landmark with the same kernel (the same significant class
+/// of the same stream): the robot is back at that landmark.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct RevisitDiagnosis {
+    /// Kernels resolved.
+    pub kernels: u32,
+    /// Kernels whose true position is within half a diameter of any stored landmark.
+    pub near_any_landmark: u32,
+    /// ... of those, the nearest such landmark has the same kernel (a revisit).
+    pub revisits: u32,
+    /// Revisits that matched (some landmark).
+    pub revisits_matched: u32,
+    /// Revisits whose odometric distance to the revisited landmark exceeded one diameter.
+    pub revisits_too_far: u32,
+    /// Revisits where the robot travelled within 45 degrees of the landmark's direction.
+    pub revisits_same_direction: u32,
+    /// Mean weighted Levenshtein distance per stream (label costs, of 31 labels) between a
+    /// revisit's context and the revisited landmark's.
+    pub revisit_lev: [f32; STREAMS],
+    /// The same for same-direction revisits only.
+    pub revisit_lev_same_direction: [f32; STREAMS],
+    /// Mean odometric distance of a revisit to its landmark, diameters.
+    pub revisit_odo_dist: f32,
+    /// Impostors: same-kernel landmarks within one diameter by odometry but more than one
+    /// diameter away in truth (a match with one would be wrong); how many were compared.
+    pub impostors: u32,
+    /// Their mean per-stream distance (label costs, as `revisit_lev`).
+    pub impostor_lev: [f32; STREAMS],
+    /// Matches, and how far (truth) the kernel was from the matched landmark's true place:
+    /// mean, diameters, and how many were more than half a diameter off.
+    pub matches: u32,
+    /// See `matches`.
+    pub match_offset_mean: f32,
+    /// See `matches`.
+    pub match_offset_over_half: u32,
 }
 
 /// The run's report.
@@ -538,6 +614,8 @@ pub struct PlacesReport {
     pub corrected_peak_after_60s: f64,
     /// Why kernels did not match.
     pub match_stats: MatchStatsReport,
+    /// Why landmarks are (not) met again, against the truth.
+    pub revisit: RevisitDiagnosis,
     /// Collisions (stalled steps).
     pub stalls: u32,
     /// Wall-clock seconds.
@@ -548,6 +626,14 @@ pub struct PlacesReport {
     pub match_log: Vec<MatchRecord>,
     /// Landmark positions as stored (metres) with their kernel stream.
     pub landmark_positions: Vec<[f64; 3]>,
+    /// Each landmark's true position when it was made (metres; report only).
+    pub landmark_truth: Vec<[f64; 2]>,
+    /// Control period, seconds (the time step of `class_streams`).
+    pub period_s: f64,
+    /// Every step's label per stream (ART-1, growing K-means, Fuzzy ART), when
+    /// `record_labels`; empty otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub class_streams: Vec<[u8; STREAMS]>,
 }
 
 /// Run the scenario.
@@ -595,6 +681,7 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
     let series_every = ((opts.series_every_s / opts.period_s).round() as u64).max(1);
     let mut behaviour = Wander {
         crossing: true,
+        excursions: opts.excursions,
         ..Wander::default()
     };
     let mut report = PlacesReport {
@@ -620,17 +707,31 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
         compass_mean: 0.0,
         corrected_peak_after_60s: 0.0,
         match_stats: MatchStatsReport::default(),
+        revisit: RevisitDiagnosis::default(),
         stalls: 0,
         wall_s: 0.0,
         series: Vec::new(),
         match_log: Vec::new(),
         landmark_positions: Vec::new(),
+        landmark_truth: Vec::new(),
+        period_s: opts.period_s,
+        class_streams: Vec::new(),
     };
     let err =
         |p: &FwPose, t: &Pose| ((f64::from(p.x) - t.x).hypot(f64::from(p.y) - t.y)) / DIAMETER_M;
     let (mut sum_c, mut sum_p, mut sum_q) = (0.0, 0.0, 0.0);
+    // The truth and the corrected position of the last CONTEXT + 1 steps: a kernel resolves
+    // CONTEXT steps after it happened (report only).
+    let mut ring: std::collections::VecDeque<(Pose, [f32; 2])> =
+        std::collections::VecDeque::with_capacity(CONTEXT + 2);
+    let mut lm_truth: Vec<Pose> = Vec::new();
+    let mut diag = Diagnoser::default();
     for step in 0..steps {
         let t_s = step as f64 * opts.period_s;
+        ring.push_back((truth, [corrected.x, corrected.y]));
+        if ring.len() > CONTEXT + 1 {
+            ring.pop_front();
+        }
         // Sense.
         let irs = ir.read(&world.walls, truth);
         let amb = light.read(&world.walls, &world.lights, truth);
@@ -663,13 +764,29 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
             cls.fuzzy.classify(&v2).unwrap_or(0),
         ];
         // Landmarks: kernel-time position is the corrected odometry.
-        match store.step(labels, corrected.x, corrected.y, &cls) {
-            Some(Event::Matched { index, dx, dy, d }) => {
+        if opts.record_labels {
+            report.class_streams.push(labels);
+        }
+        let event = store.step(labels, (corrected.x, corrected.y, corrected.heading), &cls);
+        if let (Some(e), Some(&(kt, ko))) = (event, ring.front()) {
+            diag.resolved(e, kt, ko, &store, &cls, &mut lm_truth);
+        }
+        match event {
+            Some(Event::Matched {
+                index,
+                dx,
+                dy,
+                dheading,
+                d,
+            }) => {
                 let before = err(&corrected, &truth);
+                let from = [f64::from(corrected.x), f64::from(corrected.y)];
                 corrected.x += dx;
                 corrected.y += dy;
-                if opts.reset_heading_to_compass {
-                    corrected.heading = compass as f32;
+                match opts.heading_reset {
+                    HeadingReset::Stored => corrected.heading += dheading,
+                    HeadingReset::Compass => corrected.heading = compass as f32,
+                    HeadingReset::Keep => {}
                 }
                 let after = err(&corrected, &truth);
                 report.matches += 1;
@@ -683,6 +800,8 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
                     correction: f64::from(dx.hypot(dy)) / DIAMETER_M,
                     err_before: before,
                     err_after: after,
+                    from,
+                    to: [f64::from(corrected.x), f64::from(corrected.y)],
                 });
                 if let Some(PlaceEvent::Recognised { .. }) = places.push(index) {
                     report.places_recognised += 1;
@@ -782,6 +901,126 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
             0.0
         },
     };
+    report.revisit = diag.finish();
+    report.landmark_truth = lm_truth.iter().map(|p| [p.x, p.y]).collect();
     report.wall_s = started.elapsed().as_secs_f64();
     report
+}
+
+/// Accumulates [`RevisitDiagnosis`].
+#[derive(Default)]
+struct Diagnoser {
+    d: RevisitDiagnosis,
+    lev: [f64; STREAMS],
+    lev_same: [f64; STREAMS],
+    odo: f64,
+    imp: [f64; STREAMS],
+    off: f64,
+}
+
+impl Diagnoser {
+    /// A kernel resolved as `e`; it happened at true pose `kt`, corrected position `ko`.
+    fn resolved(
+        &mut self,
+        e: Event,
+        kt: Pose,
+        ko: [f32; 2],
+        store: &LandmarkStore,
+        cls: &Classifiers,
+        lm_truth: &mut Vec<Pose>,
+    ) {
+        let lms = store.landmarks();
+        let (me, matched) = match e {
+            Event::Created(i) => (Some(usize::from(i)), false),
+            Event::Matched { .. } => (None, true),
+            Event::Full => (None, false),
+        };
+        // The kernel: the created landmark's, or re-read from the store's statistics of a
+        // match (the matched landmark has the same kernel).
+        let kernel = match e {
+            Event::Created(i) => lms.get(usize::from(i)).map(|l| (l.stream, l.class)),
+            Event::Matched { index, .. } => {
+                lms.get(usize::from(index)).map(|l| (l.stream, l.class))
+            }
+            Event::Full => None,
+        };
+        self.d.kernels += 1;
+        if let Event::Matched { index, .. } = e {
+            if let Some(t) = lm_truth.get(usize::from(index)) {
+                let off = (t.x - kt.x).hypot(t.y - kt.y) / DIAMETER_M;
+                self.d.matches += 1;
+                self.off += off;
+                if off > 0.5 {
+                    self.d.match_offset_over_half += 1;
+                }
+            }
+        }
+        let limit = 0.5 * DIAMETER_M;
+        let nearest = lms
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| Some(*i) != me && *i < lm_truth.len())
+            .map(|(i, l)| (i, l, (lm_truth[i].x - kt.x).hypot(lm_truth[i].y - kt.y)))
+            .filter(|(_, _, d)| *d < limit)
+            .min_by(|a, b| a.2.total_cmp(&b.2));
+        if let Some((i, l, _)) = nearest {
+            self.d.near_any_landmark += 1;
+            if kernel == Some((l.stream, l.class)) {
+                self.d.revisits += 1;
+                if matched {
+                    self.d.revisits_matched += 1;
+                }
+                let odo = f64::from((l.x - ko[0]).hypot(l.y - ko[1])) / DIAMETER_M;
+                self.odo += odo;
+                if odo > 1.0 {
+                    self.d.revisits_too_far += 1;
+                }
+                let dh = (lm_truth[i].heading - kt.heading + std::f64::consts::PI)
+                    .rem_euclid(std::f64::consts::TAU)
+                    - std::f64::consts::PI;
+                let lev = store.stream_distances(&store.window(), l, cls);
+                let same = dh.abs() < std::f64::consts::FRAC_PI_4;
+                if same {
+                    self.d.revisits_same_direction += 1;
+                }
+                for ((all, same_dir), v) in self.lev.iter_mut().zip(&mut self.lev_same).zip(lev) {
+                    *all += f64::from(v);
+                    if same {
+                        *same_dir += f64::from(v);
+                    }
+                }
+            }
+        }
+        for (i, l) in lms.iter().enumerate() {
+            if Some(i) == me || i >= lm_truth.len() || kernel != Some((l.stream, l.class)) {
+                continue;
+            }
+            let odo = f64::from((l.x - ko[0]).hypot(l.y - ko[1])) / DIAMETER_M;
+            let tru = (lm_truth[i].x - kt.x).hypot(lm_truth[i].y - kt.y) / DIAMETER_M;
+            if odo <= 1.0 && tru > 1.0 {
+                self.d.impostors += 1;
+                let lev = store.stream_distances(&store.window(), l, cls);
+                for (a, v) in self.imp.iter_mut().zip(lev) {
+                    *a += f64::from(v);
+                }
+            }
+        }
+        if let Some(i) = me {
+            if lm_truth.len() == i {
+                lm_truth.push(kt);
+            }
+        }
+    }
+
+    fn finish(mut self) -> RevisitDiagnosis {
+        let n = f64::from(self.d.revisits.max(1));
+        let m = f64::from(self.d.revisits_same_direction.max(1));
+        self.d.revisit_lev = self.lev.map(|v| (v / n) as f32);
+        self.d.revisit_lev_same_direction = self.lev_same.map(|v| (v / m) as f32);
+        self.d.revisit_odo_dist = (self.odo / n) as f32;
+        let k = f64::from(self.d.impostors.max(1));
+        self.d.impostor_lev = self.imp.map(|v| (v / k) as f32);
+        self.d.match_offset_mean = (self.off / f64::from(self.d.matches.max(1))) as f32;
+        self.d
+    }
 }

@@ -59,7 +59,7 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// Paper: about 150 landmarks. Ours (seeds 1-10): 115-320, median about 230. Tolerance:
+/// Paper: about 150 landmarks. Ours (seeds 1-10): 106-286, median about 177. Tolerance:
 /// the median within 75-300 (a factor of two; the thesis gives one arena, one run).
 #[test]
 fn unstructured_landmark_count_is_near_150() {
@@ -69,7 +69,7 @@ fn unstructured_landmark_count_is_near_150() {
 }
 
 /// Paper: plain odometry drifts (Fig. 3-34's reference). Ours: plain odometry's peak error
-/// 5.7-28 diameters on every seed (wheel-bias heading drift). Asserted: > 1/2 diameter on
+/// 6.6-28 diameters on every seed (wheel-bias heading drift). Asserted: > 1/2 diameter on
 /// every seed.
 #[test]
 fn plain_odometry_drifts_past_half_a_diameter() {
@@ -79,12 +79,16 @@ fn plain_odometry_drifts_past_half_a_diameter() {
 }
 
 /// Paper: corrected error peak about 1/3 diameter, bound about 1/2 (Fig. 3-34).
-/// Ours: NOT reproduced: almost no landmark is matched (0-1 matches per run; the near
-/// candidates' context differs in most labels), so the corrected error is the plain one
-/// (5.7-28 diameters). Asserted (when run with --ignored): peak <= 1/2 on every seed and at
-/// least one match per run.
+/// Ours: NOT reproduced. Landmarks are now met again (6-129 matches a run, the matched
+/// kernel on average 0.07-0.17 diameters from the landmark's true place, none over 1/2), but
+/// the corrected peak is 2.1-25 diameters (median 11.6; plain 6.6-28, median 18.5): with the
+/// thesis's wheel bias (sigma 0.5 %) the odometry is a diameter off within about 0.9 m of
+/// travel, before the robot is back at a landmark, so landmarks are stored already drifted
+/// and most revisits lie beyond the one-diameter gate; with perfect wheels the matches alone
+/// still walk the error to 0.6-3.5 diameters (README). Asserted (when run with --ignored):
+/// peak <= 1/2 on every seed and at least one match per run.
 #[test]
-#[ignore = "not reproduced: landmarks are rarely re-matched, corrected error = plain (README)"]
+#[ignore = "not reproduced: drift outruns revisits, matches random-walk the error (README)"]
 fn unstructured_corrected_error_stays_below_half_a_diameter() {
     for r in reports(ArenaKind::Unstructured) {
         assert!(r.matches > 0, "seed {}: no match", r.seed);
@@ -98,9 +102,29 @@ fn unstructured_corrected_error_stays_below_half_a_diameter() {
     }
 }
 
+/// Paper: "Every time the robot rediscovers a landmark on a plausible position, it corrects
+/// its odometry" (§3.15.1), mostly right, sometimes wrong (Fig. 3-34's negative peaks).
+/// Ours: 6-129 matches a run (median 41); judged with the truth, the matched kernel lies on
+/// average 0.07-0.17 diameters from the landmark's true place and none more than 1/2 away.
+/// Before the landmark comparison took the worst stream's share of its window (§3.7.7) it
+/// matched 0-1 times a run. Asserted: a median of at least 10 matches a run, and at most 5 %
+/// of all matches more than half a diameter from the true place.
+#[test]
+fn unstructured_landmarks_are_met_again_at_the_right_place() {
+    let r = reports(ArenaKind::Unstructured);
+    let m = median(r.iter().map(|r| f64::from(r.matches)).collect());
+    assert!(m >= 10.0, "median matches {m}");
+    let all: u32 = r.iter().map(|r| r.revisit.matches).sum();
+    let off: u32 = r.iter().map(|r| r.revisit.match_offset_over_half).sum();
+    assert!(
+        f64::from(off) <= 0.05 * f64::from(all),
+        "{off} of {all} matches more than half a diameter off"
+    );
+}
+
 /// Paper: the structured arena gives fewer usable landmarks and the error passes one
-/// diameter (Fig. 3-36, 3-37). Ours: median landmarks about 45 against about 230 unstructured;
-/// corrected peak 7-22 diameters. Asserted: fewer landmarks (median) than the unstructured
+/// diameter (Fig. 3-36, 3-37). Ours: median landmarks about 43 against about 177 unstructured,
+/// 0-14 matches a run against 6-129; corrected peak 6.8-38 diameters. Asserted: fewer landmarks (median) than the unstructured
 /// arena, and the corrected error passes one diameter on at least 8 of 10 seeds. Caveat: with
 /// the unstructured claim unreproduced, "lost" here holds for the same reason as there.
 #[test]

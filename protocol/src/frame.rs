@@ -302,6 +302,7 @@ fn serialize_payload(msg: &Message<'_>, body: &mut [u8]) -> Result<usize, Encode
         Message::EmuTruth(m) => ser(m, body),
         Message::Localization(m) => ser(m, body),
         Message::Progress(m) => ser(m, body),
+        Message::HalTrace(m) => ser(m, body),
     }
 }
 
@@ -333,6 +334,7 @@ pub fn decode_payload(kind: Kind, payload: &[u8]) -> Result<Message<'_>, Payload
         Kind::EmuTruth => Message::EmuTruth(de::<EmuTruth>(payload)?),
         Kind::Localization => Message::Localization(de::<crate::msg::Localization>(payload)?),
         Kind::Progress => Message::Progress(de::<crate::msg::Progress>(payload)?),
+        Kind::HalTrace => Message::HalTrace(de::<crate::msg::HalTrace>(payload)?),
     };
     msg.check_limits()
         .map_err(|(field, limit)| PayloadError::FieldTooLong { field, limit })?;

@@ -8,6 +8,7 @@
 //! - `frame`: header, CRC-32C, COBS framing, the streaming `FrameDecoder`.
 //! - `seq`: loss and duplicate accounting from sequence numbers.
 //! - `packed`: eight 10-bit sensor readings in 10 bytes.
+//! - `telemetry_range`: the ranges that bound a telemetry frame to 80 bytes on the wire.
 //! - `fingerprint`: the schema hash exchanged at handshake.
 //! - `sign`: optional link authentication, HMAC-SHA256 signatures and replay windows (§13).
 //! - `transfer`: the chunked-transfer sender and receiver state machines (§8).
@@ -21,6 +22,7 @@ pub mod object;
 pub mod packed;
 pub mod seq;
 pub mod sign;
+pub mod telemetry_range;
 pub mod transfer;
 pub mod units;
 

@@ -233,8 +233,9 @@ pub struct CycleTiming {
 }
 
 /// Robot -> station at the rate the station sets. Fields a profile lacks are zero; the
-/// `HelloReply` capabilities say which are meaningful.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, Schema)]
+/// `HelloReply` capabilities say which are meaningful. It is serialised within the ranges of
+/// `telemetry_range` (80 bytes on the wire at most), by the `Serialize` impl below.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Schema)]
 pub struct Telemetry {
     pub time_ms: u32,
     pub mode: Mode,
@@ -255,6 +256,66 @@ pub struct Telemetry {
     pub battery_mv: u16,
     pub behaviour: BehaviourOut,
     pub cycle: CycleTiming,
+}
+
+/// `Telemetry`'s fields in the same order, serialised as derived: what `Telemetry` writes after
+/// bringing each field into its range, so that no encoding path can send a wider frame.
+#[derive(Serialize)]
+#[serde(rename = "Telemetry")]
+struct TelemetryFields {
+    time_ms: u32,
+    mode: Mode,
+    pose: Pose,
+    sigma: PoseSigma,
+    wheels: Wheels,
+    ir: Packed10x8,
+    light: Packed10x8,
+    compass_ddeg: u16,
+    flags: u8,
+    line_events: u8,
+    beacon: Beacon,
+    battery_mv: u16,
+    behaviour: BehaviourOut,
+    cycle: CycleTiming,
+}
+
+impl Serialize for Telemetry {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        // Destructured so that a field added to `Telemetry` but not here fails to compile.
+        let Telemetry {
+            time_ms,
+            mode,
+            pose,
+            sigma,
+            wheels,
+            ir,
+            light,
+            compass_ddeg,
+            flags,
+            line_events,
+            beacon,
+            battery_mv,
+            behaviour,
+            cycle,
+        } = self.bounded();
+        TelemetryFields {
+            time_ms,
+            mode,
+            pose,
+            sigma,
+            wheels,
+            ir,
+            light,
+            compass_ddeg,
+            flags,
+            line_events,
+            beacon,
+            battery_mv,
+            behaviour,
+            cycle,
+        }
+        .serialize(s)
+    }
 }
 
 /// Parameters settable over the link. Values travel as f32 in the parameter's unit.
@@ -620,6 +681,28 @@ pub struct Progress {
     pub give_up_ms: u32,
 }
 
+/// Largest `HalTrace::data`: a chunk leaves room for the offsets' varints and a signed
+/// frame's trailer inside `MAX_SIGNED_PAYLOAD`.
+pub const MAX_HAL_TRACE_CHUNK: usize = 192;
+
+/// Robot -> station while parameter 34 `hal_trace` is on (PROTOCOL.md §6 kind 15): the next
+/// bytes of the robot's hardware trace, everything its hardware layer gave the firmware (clock,
+/// sensor reads, encoder counts, serial bytes in) and the motor commands it gave back, one
+/// entry a call, in the order of the calls (the entry format is PROTOCOL.md §17). A station
+/// concatenates `data` by `offset`; `station retrace` feeds it to the firmware again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
+pub struct HalTrace<'a> {
+    /// Position of `data[0]` in the trace stream: bytes since tracing was switched on,
+    /// wrapping. A jump means frames were lost on the wire.
+    pub offset: u32,
+    /// Passes of the main loop whose entries the robot could not send since tracing was
+    /// switched on (its buffer was full: the link could not keep up), wrapping; each loss is
+    /// also marked in the stream where it happened (a `GAP` entry).
+    pub dropped_steps: u32,
+    /// At most `MAX_HAL_TRACE_CHUNK` bytes of the stream.
+    pub data: &'a [u8],
+}
+
 /// Every message, in kind order: variant index == the header's kind byte.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Schema)]
 pub enum Message<'a> {
@@ -642,6 +725,8 @@ pub enum Message<'a> {
     EmuTruth(EmuTruth),
     Localization(Localization),
     Progress(Progress),
+    #[serde(borrow)]
+    HalTrace(HalTrace<'a>),
 }
 
 /// The header's kind byte for each message.
@@ -663,11 +748,12 @@ pub enum Kind {
     EmuTruth = 12,
     Localization = 13,
     Progress = 14,
+    HalTrace = 15,
 }
 
 impl Kind {
     /// Every kind, in numeric order.
-    pub const ALL: [Kind; 15] = [
+    pub const ALL: [Kind; 16] = [
         Kind::Hello,
         Kind::HelloReply,
         Kind::Heartbeat,
@@ -683,6 +769,7 @@ impl Kind {
         Kind::EmuTruth,
         Kind::Localization,
         Kind::Progress,
+        Kind::HalTrace,
     ];
 
     /// The kind for a header byte, or `None` for an unknown kind.
@@ -731,6 +818,7 @@ impl Message<'_> {
             Message::EmuTruth(_) => Kind::EmuTruth,
             Message::Localization(_) => Kind::Localization,
             Message::Progress(_) => Kind::Progress,
+            Message::HalTrace(_) => Kind::HalTrace,
         }
     }
 }

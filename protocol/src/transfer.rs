@@ -372,9 +372,31 @@ enum Phase {
     Done(Outcome),
 }
 
+/// What a sender did, for reports and for tests that count instead of timing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SenderStats {
+    /// Chunk frames sent.
+    pub chunks: u32,
+    /// Of which carried units sent before (known lost, probes, or after a timer expiry).
+    pub resent: u32,
+    /// Units found lost from the receiver's answers (a unit sent later is held).
+    pub lost_units: u32,
+    /// Chunks sent as probes: an unanswered unit sent again when nothing else could go.
+    pub probes: u32,
+    /// Retransmission timer expiries.
+    pub timeouts: u32,
+}
+
+/// Units past `acked` a sender tracks: the span a `sack` bitmap names.
+const SPAN_UNITS: usize = 32;
+
 /// The sending side of one transfer. Holds no bytes: `poll` borrows them each time.
 ///
-/// Unit bitmaps (`sacked`, `lost`) count [`UNIT`]s from `acked`, like the receiver's `sack`.
+/// Unit bitmaps (`sacked`, `lost`) and the per-unit arrays count [`UNIT`]s from `acked`,
+/// like the receiver's `sack`. Every chunk sent gets a transmission number; the line is a
+/// FIFO, so a unit held whose every copy was sent after a missing unit's last copy proves
+/// that copy lost (QUIC's packet threshold, RFC 9002 §6.1.1, with a threshold of one on a
+/// line that never reorders).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Sender {
     begin: TransferBegin,
@@ -385,11 +407,20 @@ pub struct Sender {
     sacked: u32,
     /// Units past `acked` known lost and not yet sent again.
     lost: u32,
+    /// Of those, the ones the timer gave up on: an earlier copy may still be on the line.
+    suspect: u32,
     /// The next byte never sent.
     sent: u32,
-    /// `sent` when the last loss round began: a unit held at or past it was sent after that
-    /// round's resends, so (the line being a FIFO) every hole below it is lost again.
-    recover: u32,
+    /// Per unit: the transmission number of its latest copy, of its earliest copy that may
+    /// still be on the line, and when its latest copy went out (ms, wrapping).
+    last_tx: [u16; SPAN_UNITS],
+    first_tx: [u16; SPAN_UNITS],
+    sent_at: [u16; SPAN_UNITS],
+    /// The next transmission number.
+    tx_seq: u16,
+    /// `tx_seq` when the chunk size last shrank: a loss of a unit sent before it is one the
+    /// shrinking already answered.
+    shrunk_at: u16,
     /// The chunk whose round trip is timed: its end offset (0: none) and when it went out.
     /// Only chunks sent once are timed (Karn).
     timed_end: u32,
@@ -403,15 +434,23 @@ pub struct Sender {
     /// The clocks above are set (at the first `poll`).
     started: bool,
     begin_due: bool,
+    /// When the `TransferBegin` went out, and whether only once (its answer then times a
+    /// round trip, Karn); when the receiver last answered.
+    begin_at: u32,
+    begin_once: bool,
+    last_ack_ms: u32,
     /// Timer expiries in a row: the timeout doubles with each (backoff).
     timeouts: u8,
     restarts: u8,
+    /// `UnknownId` answers still expected for chunks sent before the last restart.
+    unknown_echoes: u8,
     /// Chunk size in units: on a noisy line a long frame is the likeliest to be hit (with 1 %
     /// of bytes dropped a 224-byte chunk arrives about 1 time in 12, a 32-byte one about
-    /// 3 times in 5), so each loss round halves it and loss-free progress grows it back.
+    /// 3 times in 5), so a loss halves it and loss-free progress grows it back.
     chunk_units: u8,
     /// Chunks acknowledged since the last loss or growth.
     clean: u8,
+    stats: SenderStats,
 }
 
 /// Whether wrapping time `now` has reached `deadline`.
@@ -421,6 +460,11 @@ fn due(now: u32, deadline: u32) -> bool {
 
 /// Units a chunk of the largest size spans.
 const MAX_CHUNK_UNITS: u8 = (MAX_CHUNK as u32 / UNIT) as u8;
+
+/// Units the window holds at least, whatever the chunk size: with small chunks on a lossy
+/// line, `TRANSFER_WINDOW` chunks would not cover a round trip with an ack queued behind a
+/// telemetry frame, and the line would idle.
+const MIN_WINDOW_UNITS: u32 = 8;
 
 impl Sender {
     /// A transfer of `len` bytes whose CRC-32C the caller states as `crc` (normally
@@ -437,8 +481,13 @@ impl Sender {
             acked: 0,
             sacked: 0,
             lost: 0,
+            suspect: 0,
             sent: 0,
-            recover: 0,
+            last_tx: [0; SPAN_UNITS],
+            first_tx: [0; SPAN_UNITS],
+            sent_at: [0; SPAN_UNITS],
+            tx_seq: 0,
+            shrunk_at: 0,
             timed_end: 0,
             timed_at: 0,
             srtt_ms: 0,
@@ -447,10 +496,21 @@ impl Sender {
             progress_ms: 0,
             started: false,
             begin_due: true,
+            begin_at: 0,
+            begin_once: true,
+            last_ack_ms: 0,
             timeouts: 0,
             restarts: 0,
+            unknown_echoes: 0,
             chunk_units: MAX_CHUNK_UNITS,
             clean: 0,
+            stats: SenderStats {
+                chunks: 0,
+                resent: 0,
+                lost_units: 0,
+                probes: 0,
+                timeouts: 0,
+            },
         }
     }
 
@@ -481,6 +541,11 @@ impl Sender {
     /// Bytes acknowledged and total bytes (for a progress bar).
     pub const fn progress(&self) -> (u32, u32) {
         (self.acked, self.begin.len)
+    }
+
+    /// What the sender did so far.
+    pub const fn stats(&self) -> SenderStats {
+        self.stats
     }
 
     /// How the transfer ended, once it has.
@@ -517,6 +582,13 @@ impl Sender {
             .min(TRANSFER_RETRY_MS)
     }
 
+    /// How long an unanswered unit waits before it may go again as a probe, ms: a round
+    /// trip and its deviation (QUIC's probe timeout without the backoff, RFC 9002 §6.2; a
+    /// probe only uses line time nothing else wanted). `None` before the first sample.
+    fn probe_after(&self) -> Option<u32> {
+        (self.srtt_ms != 0).then(|| u32::from(self.srtt_ms) + 2 * u32::from(self.rttvar_ms).max(1))
+    }
+
     /// Units from `acked` up to `sent`, as a bitmap.
     fn outstanding(&self) -> u32 {
         units(0, (self.sent - self.acked).div_ceil(UNIT))
@@ -527,9 +599,18 @@ impl Sender {
         (self.outstanding() & !self.sacked & !self.lost).count_ones()
     }
 
-    /// Sends what is due at `now_ms`: the `TransferBegin` (first time and after timeouts),
-    /// then lost units again and new chunks of `bytes` within the window. `send` returns
-    /// whether it queued the frame; a frame it could not take is offered again later.
+    /// The window, units: `TRANSFER_WINDOW` chunks, at least `MIN_WINDOW_UNITS`, at most the
+    /// span a `sack` names.
+    fn window(&self) -> u32 {
+        (TRANSFER_WINDOW * u32::from(self.chunk_units))
+            .max(MIN_WINDOW_UNITS)
+            .min(SPAN_UNITS as u32)
+    }
+
+    /// Sends what is due at `now_ms`: the `TransferBegin` (first time and after timeouts)
+    /// with one chunk behind it, then lost units again, new chunks of `bytes` within the
+    /// window, and probes when nothing else can go. `send` returns whether it queued the
+    /// frame; a frame it could not take is offered again later.
     pub fn poll<F>(&mut self, now_ms: u32, bytes: &[u8], mut send: F)
     where
         F: FnMut(&Message<'_>) -> bool,
@@ -559,17 +640,37 @@ impl Sender {
                 return;
             }
             self.begin_due = false;
+            self.begin_once = self.begin_at == 0 && self.begin_once;
+            self.begin_at = now_ms.max(1);
+            self.last_ack_ms = now_ms;
         }
-        if self.phase != Phase::Sending {
+        // While the Begin's answer is awaited, new chunks go right behind it (at most
+        // `MIN_WINDOW_UNITS` units, or one chunk), so the line is not idle for its round trip
+        // and a lost answer is made good by the chunks' answers. The receiver takes them
+        // once the Begin has set up the transfer (the line keeps order); a resumed or
+        // already-held object costs these bytes of line time.
+        let eager = self.phase == Phase::Begin;
+        if !eager && self.phase != Phase::Sending {
             return;
         }
-        let window = TRANSFER_WINDOW * u32::from(self.chunk_units);
+        let window = self.window();
         let chunk = u32::from(self.chunk_units);
         loop {
-            let Some((start, end, resend)) = self.next_chunk(chunk) else {
+            let Some((start, end, kind)) = self.next_chunk(chunk, now_ms) else {
                 return;
             };
-            if self.in_flight() + (end - start).div_ceil(UNIT) > window {
+            if eager && (kind != Sent::Fresh || (start > 0 && end > MIN_WINDOW_UNITS * UNIT)) {
+                return;
+            }
+            let added = match kind {
+                // A probe's units are counted in flight already.
+                Sent::Probe => 0,
+                _ => (end - start).div_ceil(UNIT),
+            };
+            if added > 0 && self.in_flight() + added > window {
+                return;
+            }
+            if kind == Sent::Probe && self.in_flight() >= window {
                 return;
             }
             let Some(data) = bytes.get(start as usize..end as usize) else {
@@ -583,78 +684,152 @@ impl Sender {
             if !send(&Message::TransferChunk(frame)) {
                 return;
             }
-            let (first, last) = (
-                (start - self.acked) / UNIT,
-                (end - self.acked).div_ceil(UNIT),
-            );
-            if resend {
-                self.lost &= !units(first, last);
-            } else {
+            if kind == Sent::Fresh {
+                self.sent = end;
+            }
+            self.record(start, end, kind, now_ms);
+        }
+    }
+
+    /// Notes a chunk `start..end` sent as `kind` at `now_ms` (offsets at or past `acked`).
+    fn record(&mut self, start: u32, end: u32, kind: Sent, now_ms: u32) {
+        let seq = self.tx_seq;
+        self.tx_seq = seq.wrapping_add(1);
+        self.stats.chunks = self.stats.chunks.saturating_add(1);
+        let (first, last) = (
+            (start - self.acked) / UNIT,
+            (end - self.acked).div_ceil(UNIT),
+        );
+        for i in first..last.min(SPAN_UNITS as u32) {
+            let i = i as usize;
+            if let (Some(l), Some(f), Some(t)) = (
+                self.last_tx.get_mut(i),
+                self.first_tx.get_mut(i),
+                self.sent_at.get_mut(i),
+            ) {
+                *l = seq;
+                *t = now_ms as u16;
+                // A probe, or a resend the timer asked for, leaves the earlier copy possibly
+                // on the line; a unit known lost, or new, has no other copy.
+                if kind != Sent::Probe && self.suspect >> i & 1 == 0 {
+                    *f = seq;
+                }
+            }
+        }
+        match kind {
+            Sent::Fresh => {
                 if self.timed_end == 0 {
                     (self.timed_end, self.timed_at) = (end, now_ms);
                 }
-                self.sent = end;
+            }
+            Sent::Lost | Sent::Probe => {
+                self.lost &= !units(first, last);
+                self.suspect &= !units(first, last);
+                self.stats.resent = self.stats.resent.saturating_add(1);
+                if kind == Sent::Probe {
+                    self.stats.probes = self.stats.probes.saturating_add(1);
+                }
+                // The timed chunk may be this one again: its round trip is ambiguous (Karn).
+                if self.timed_end > start && self.timed_end <= end {
+                    self.timed_end = 0;
+                }
             }
         }
     }
 
-    /// The next chunk to send, `(start, end, is a resend)`: lost units first (a run of them,
-    /// at most `chunk` units), then new bytes from `sent` up to the first unit the receiver
-    /// already holds, inside the span its `sack` can name.
-    fn next_chunk(&mut self, chunk: u32) -> Option<(u32, u32, bool)> {
+    /// The next chunk to send, `(start, end, kind)`: lost units first (a run of them, at
+    /// most `chunk` units), then new bytes from `sent` up to the first unit the receiver
+    /// already holds, inside the span its `sack` can name; when neither can go, a probe.
+    fn next_chunk(&mut self, chunk: u32, now_ms: u32) -> Option<(u32, u32, Sent)> {
         let len = self.begin.len;
         if self.lost != 0 {
             let first = self.lost.trailing_zeros();
             let run = (self.lost >> first).trailing_ones().min(chunk);
             let start = self.acked + first * UNIT;
             let end = (start + run * UNIT).min(len);
-            return Some((start, end, false)).map(|(s, e, _)| (s, e, true));
+            return Some((start, end, Sent::Lost));
         }
         // Skip units the receiver holds already (a resumed transfer).
-        while self.sent < len && self.sacked & units(0, 32) != 0 {
+        while self.sent < len {
             let i = (self.sent - self.acked) / UNIT;
             if i >= 32 || self.sacked & (1 << i) == 0 {
                 break;
             }
             self.sent = (self.sent + UNIT).min(len);
         }
-        if self.sent >= len {
+        if self.sent < len {
+            let i = (self.sent - self.acked) / UNIT;
+            // The first held unit past `sent` bounds the chunk.
+            let held = self.sacked.checked_shr(i).unwrap_or(0);
+            let room = if held == 0 {
+                chunk
+            } else {
+                held.trailing_zeros().min(chunk)
+            };
+            let end = len
+                .min(self.sent + room * UNIT)
+                .min(self.acked.saturating_add(SACK_SPAN));
+            if end > self.sent {
+                return Some((self.sent, end, Sent::Fresh));
+            }
+        }
+        self.probe(chunk, now_ms)
+    }
+
+    /// The unanswered run to send again as a probe: starting at the unit whose latest copy
+    /// is oldest, if that copy went out `probe_after` ago; then the units after it that are
+    /// as old.
+    fn probe(&self, chunk: u32, now_ms: u32) -> Option<(u32, u32, Sent)> {
+        let wait = self.probe_after()?;
+        // Answers still coming mean the line is still delivering what was queued.
+        if now_ms.wrapping_sub(self.last_ack_ms) < wait {
             return None;
         }
-        let i = (self.sent - self.acked) / UNIT;
-        // The first held unit past `sent` bounds the chunk.
-        let held = self.sacked.checked_shr(i).unwrap_or(0);
-        let room = if held == 0 {
-            chunk
-        } else {
-            held.trailing_zeros().min(chunk)
+        let waiting = self.outstanding() & !self.sacked & !self.lost;
+        let age = |i: u32| {
+            let at = self.sent_at.get(i as usize).copied().unwrap_or(0);
+            u32::from((now_ms as u16).wrapping_sub(at))
         };
-        let end = len
-            .min(self.sent + room * UNIT)
-            .min(self.acked.saturating_add(SACK_SPAN));
-        (end > self.sent).then_some((self.sent, end, false))
+        let seq_age = |i: u32| {
+            let s = self.last_tx.get(i as usize).copied().unwrap_or(0);
+            self.tx_seq.wrapping_sub(s)
+        };
+        let old = |i: u32| waiting.checked_shr(i).unwrap_or(0) & 1 == 1 && age(i) >= wait;
+        let first = (0..SPAN_UNITS as u32)
+            .filter(|&i| old(i))
+            .max_by_key(|&i| (seq_age(i), u32::MAX - i))?;
+        let mut last = first + 1;
+        while last - first < chunk && old(last) {
+            last += 1;
+        }
+        let start = self.acked + first * UNIT;
+        let end = (self.acked + last * UNIT).min(self.begin.len);
+        (end > start).then_some((start, end, Sent::Probe))
     }
 
     /// The retransmission timer fired: the Begin again, or every unit not held again.
     fn on_timeout(&mut self, now_ms: u32) {
         self.timeouts = self.timeouts.saturating_add(1);
+        self.stats.timeouts = self.stats.timeouts.saturating_add(1);
         self.deadline_ms = now_ms.wrapping_add(self.rto());
         match self.phase {
             Phase::Begin => self.begin_due = true,
             _ => {
+                // No answer for a whole timeout: everything unanswered is taken as lost
+                // (RFC 6298 §5.4), an earlier copy of it possibly still on the line.
                 self.lost = self.outstanding() & !self.sacked;
-                self.loss_round();
+                self.suspect = self.lost;
+                self.shrink();
+                self.timed_end = 0;
             }
         }
     }
 
-    /// Units were found lost: the next round starts at `sent`, the chunk shrinks, and the
-    /// timed chunk may be resent, so its round trip would be ambiguous (Karn).
-    fn loss_round(&mut self) {
-        self.recover = self.sent;
+    /// A loss of a unit sent since the chunk size last changed: halve it.
+    fn shrink(&mut self) {
         self.chunk_units = (self.chunk_units / 2).max(1);
         self.clean = 0;
-        self.timed_end = 0;
+        self.shrunk_at = self.tx_seq;
     }
 
     fn progressed(&mut self, now_ms: u32) {
@@ -689,11 +864,20 @@ impl Sender {
             TransferStatus::Rejected => Outcome::Rejected,
             TransferStatus::Busy => Outcome::Busy,
             TransferStatus::UnknownId => {
+                // Answers to chunks sent before the restart's Begin say the same again: each
+                // chunk on the line then gets one (a lost Begin followed by chunks, too).
+                if self.unknown_echoes > 0 {
+                    self.unknown_echoes -= 1;
+                    return;
+                }
                 // The receiver lost the transfer (restarted, or took another): begin again.
+                self.unknown_echoes = self.outstanding().count_ones().saturating_sub(1) as u8;
                 self.restarts = self.restarts.saturating_add(1);
                 if self.restarts <= MAX_RESTARTS {
                     self.phase = Phase::Begin;
                     self.begin_due = true;
+                    (self.acked, self.sent, self.sacked, self.lost, self.suspect) = (0, 0, 0, 0, 0);
+                    (self.begin_at, self.begin_once) = (0, true);
                     self.timed_end = 0;
                     self.progressed(now_ms);
                     return;
@@ -707,27 +891,67 @@ impl Sender {
         self.phase = Phase::Done(outcome);
     }
 
+    /// Moves the per-unit arrays down by `k` units (`acked` moved on by them).
+    fn slide(&mut self, k: u32) {
+        let k = (k as usize).min(SPAN_UNITS);
+        for a in [&mut self.last_tx, &mut self.first_tx, &mut self.sent_at] {
+            a.copy_within(k.., 0);
+        }
+    }
+
     fn on_receiving(&mut self, next: u32, sack: u32, now_ms: u32) {
-        if next > self.begin.len {
-            return; // Not an answer to this object: ignore rather than trust it.
+        if next > self.begin.len || next < self.acked {
+            // Not an answer to this object, or older than one already taken.
+            return;
         }
         if self.phase == Phase::Begin {
+            // The Begin's answer (or, that lost, the eager chunk's): `next` and `sack` say
+            // what the receiver holds already.
             self.phase = Phase::Sending;
-            (self.acked, self.sent, self.recover) = (next, next, next);
-            (self.sacked, self.lost) = (sack, 0);
+            self.slide(next.div_ceil(UNIT));
+            (self.acked, self.sent) = (next, self.sent.max(next));
+            (self.sacked, self.lost, self.suspect) = (sack, 0, 0);
+            self.last_ack_ms = now_ms;
             self.progressed(now_ms);
             return;
         }
-        if next < self.acked {
-            return; // An answer older than one already taken.
-        }
+        self.last_ack_ms = now_ms;
         let moved = next - self.acked;
-        let sacked = shift(self.sacked, moved) | sack;
-        let progress = moved > 0 || sacked != shift(self.sacked, moved);
+        let k = moved.div_ceil(UNIT);
+        let was_outstanding = self.outstanding();
+        // The latest transmission the receiver's new holdings prove arrived (every copy of a
+        // newly held unit was sent at or after its `first_tx`).
+        let mut proof: Option<u16> = None;
+        let mut prove = |s: &Self, i: u32| {
+            let f = s.first_tx.get(i as usize).copied().unwrap_or(0);
+            let newer = |a: u16, b: u16| s.tx_seq.wrapping_sub(a) < s.tx_seq.wrapping_sub(b);
+            if proof.is_none_or(|p| newer(f, p)) {
+                proof = Some(f);
+            }
+        };
+        let newly_below = units(0, k) & was_outstanding & !self.sacked;
+        for i in 0..k.min(SPAN_UNITS as u32) {
+            if newly_below >> i & 1 == 1 {
+                prove(self, i);
+            }
+        }
+        let old_sacked = shift(self.sacked, moved);
+        self.slide(k);
         self.acked = next;
         self.sent = self.sent.max(next);
+        let outstanding = self.outstanding();
+        // Units past `sent` held are a resumed transfer's: `next_chunk` skips them.
+        let sacked = old_sacked | sack;
+        let newly = sacked & !old_sacked & outstanding;
+        for i in 0..SPAN_UNITS as u32 {
+            if newly >> i & 1 == 1 {
+                prove(self, i);
+            }
+        }
+        let progress = moved > 0 || newly != 0;
         self.sacked = sacked;
-        self.lost = shift(self.lost, moved) & !sacked & self.outstanding();
+        self.lost = shift(self.lost, moved) & !sacked & outstanding;
+        self.suspect = shift(self.suspect, moved) & self.lost;
         let timed = self.timed_end;
         let held = |end: u32| {
             end <= next || sacked.checked_shr((end - 1 - next) / UNIT).unwrap_or(0) & 1 == 1
@@ -736,14 +960,26 @@ impl Sender {
             self.sample(now_ms.wrapping_sub(self.timed_at));
             self.timed_end = 0;
         }
-        // The highest unit held is evidence that every hole below it sent earlier is lost.
-        let top = 32 - sacked.leading_zeros();
-        let evidence = next.saturating_add(top * UNIT).min(self.begin.len);
-        let holes = units(0, top) & !sacked & !self.lost;
-        let loss = top > 0 && evidence > self.recover && holes != 0;
-        if loss {
-            self.lost |= holes;
-            self.loss_round();
+        // Every unit not held whose latest copy went out before the proven one is lost.
+        let mut loss = false;
+        if let Some(p) = proof {
+            let holes = outstanding & !sacked & !self.lost;
+            let before = |s: u16| self.tx_seq.wrapping_sub(s) > self.tx_seq.wrapping_sub(p);
+            let mut shrink = false;
+            for i in 0..SPAN_UNITS as u32 {
+                let last = self.last_tx.get(i as usize).copied().unwrap_or(0);
+                if holes >> i & 1 == 1 && before(last) {
+                    self.lost |= 1 << i;
+                    self.stats.lost_units = self.stats.lost_units.saturating_add(1);
+                    loss = true;
+                    // A loss the last shrinking did not already answer.
+                    shrink |=
+                        self.tx_seq.wrapping_sub(last) <= self.tx_seq.wrapping_sub(self.shrunk_at);
+                }
+            }
+            if shrink {
+                self.shrink();
+            }
         }
         if progress {
             self.progressed(now_ms);
@@ -756,6 +992,18 @@ impl Sender {
             }
         }
     }
+}
+
+/// How a chunk's units were sent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Sent {
+    /// For the first time.
+    Fresh,
+    /// Again, known lost (no copy of them is on the line).
+    Lost,
+    /// Again, unanswered for a round trip and nothing else could go (a copy may still be on
+    /// the line).
+    Probe,
 }
 
 #[cfg(test)]
@@ -783,13 +1031,19 @@ mod tests {
     fn the_sender_waits_for_the_begin_answer_then_fills_the_window() {
         let bytes = [7u8; 1000];
         let mut s = Sender::for_object(ObjectKind::Map, &bytes).expect("small");
-        let (n, _) = frames(&mut s, 0, &bytes);
-        assert_eq!(n, 1, "only TransferBegin before the receiver answers");
+        let (n, offs) = frames(&mut s, 0, &bytes);
+        assert_eq!(
+            (n, offs[1]),
+            (2, 0),
+            "TransferBegin and one chunk behind it before the receiver answers"
+        );
+        let (n, _) = frames(&mut s, 1, &bytes);
+        assert_eq!(n, 0, "nothing more until the answer");
         let id = s.begin().id;
         s.on_ack(&ack(id, 0, TransferStatus::Receiving), 1);
         let (n, offs) = frames(&mut s, 1, &bytes);
-        assert_eq!(n, 4);
-        assert_eq!(offs[..4], [0, 224, 448, 672]);
+        assert_eq!(n, 3);
+        assert_eq!(offs[..3], [224, 448, 672]);
         s.on_ack(&ack(id, 224, TransferStatus::Receiving), 2);
         let (n, offs) = frames(&mut s, 2, &bytes);
         assert_eq!((n, offs[0]), (1, 896));
@@ -801,8 +1055,8 @@ mod tests {
         let mut s = Sender::for_object(ObjectKind::Plan, &bytes).expect("small");
         let mut begins = 0;
         for t in (0..10_000).step_by(10) {
-            s.poll(t, &bytes, |_| {
-                begins += 1;
+            s.poll(t, &bytes, |m| {
+                begins += usize::from(matches!(m, Message::TransferBegin(_)));
                 true
             });
         }
@@ -932,6 +1186,18 @@ mod tests {
     /// Runs a sender against a receiver over a FIFO line that delivers in `delay_ms` and
     /// drops the chunks `drop` says (by transmission number); returns the time it completed.
     fn run_line(len: usize, delay_ms: u32, drop: impl Fn(usize, u32) -> bool) -> (u32, usize) {
+        let (t, n, _) = run_lossy(len, delay_ms, drop, |_| false);
+        (t, n)
+    }
+
+    /// `run_line`, also dropping the answers `drop_ack` says (by answer number, from 1);
+    /// returns the sender too, for its counts.
+    fn run_lossy(
+        len: usize,
+        delay_ms: u32,
+        drop: impl Fn(usize, u32) -> bool,
+        drop_ack: impl Fn(usize) -> bool,
+    ) -> (u32, usize, Sender) {
         let bytes: std::vec::Vec<u8> = (0..len).map(|i| i as u8).collect();
         let mut s = Sender::for_object(ObjectKind::Map, &bytes).expect("small");
         let mut rx = Receiver::new();
@@ -939,6 +1205,7 @@ mod tests {
         let mut to_rx: std::collections::VecDeque<ToRx> = Default::default();
         let mut to_tx: std::collections::VecDeque<(u32, TransferAck)> = Default::default();
         let mut n = 0;
+        let mut answers = 0;
         for now in 0..20_000u32 {
             while to_tx.front().is_some_and(|(t, _)| *t <= now) {
                 let (_, a) = to_tx.pop_front().expect("front");
@@ -946,7 +1213,7 @@ mod tests {
             }
             if let Some(o) = s.outcome() {
                 assert_eq!(o, Outcome::Complete);
-                return (now, n);
+                return (now, n, s);
             }
             s.poll(now, &bytes, |m| {
                 match m {
@@ -974,7 +1241,10 @@ mod tests {
                         rx.on_chunk(&c, &mut staging, |v| v.bytes == &bytes[..])
                     }
                 };
-                to_tx.push_back((now + delay_ms, a));
+                answers += 1;
+                if !drop_ack(answers) {
+                    to_tx.push_back((now + delay_ms, a));
+                }
             }
         }
         panic!("never completed");
@@ -998,6 +1268,61 @@ mod tests {
             lossy.0 < clean.0 + 100,
             "clean {clean:?}, one chunk and its resend lost {lossy:?}"
         );
+    }
+
+    /// The Begin's answer lost: the chunk sent right behind the Begin is answered too, and
+    /// that answer starts the transfer. Before, the sender sent nothing until the Begin was
+    /// answered and waited out the 400 ms retry timer (issue 15).
+    #[test]
+    fn a_lost_begin_answer_is_made_good_by_the_next_answer_without_a_timer_expiry() {
+        let (clean, ..) = run_lossy(1000, 5, |_, _| false, |_| false);
+        let (lossy, _, s) = run_lossy(1000, 5, |_, _| false, |k| k == 1);
+        assert_eq!(s.stats().timeouts, 0, "{:?}", s.stats());
+        assert_eq!(s.stats().resent, 0, "nothing sent twice: {:?}", s.stats());
+        assert!(
+            lossy <= clean + 1,
+            "clean {clean} ms, Begin's answer lost {lossy} ms"
+        );
+    }
+
+    /// Every answer to a window of chunks lost: the next answer proves each chunk arrived
+    /// (the acknowledgement is cumulative), so nothing goes again and no timer expires.
+    #[test]
+    fn lost_answers_to_chunks_cost_no_resend_and_no_timer_expiry() {
+        let (clean, ..) = run_lossy(3000, 5, |_, _| false, |_| false);
+        let (lossy, _, s) = run_lossy(3000, 5, |_, _| false, |k| (2..=4).contains(&k));
+        assert_eq!(
+            (s.stats().timeouts, s.stats().resent),
+            (0, 0),
+            "{:?}",
+            s.stats()
+        );
+        assert!(
+            lossy <= clean + 1,
+            "clean {clean} ms, three answers lost {lossy} ms"
+        );
+    }
+
+    /// A chunk lost, and its resend lost too: each loss is found from a later chunk's
+    /// answer, not from the timer.
+    #[test]
+    fn a_lost_resend_is_found_from_later_answers_and_no_timer_expires() {
+        let sent = core::cell::Cell::new(0);
+        let (_, _, s) = run_lossy(
+            3000,
+            5,
+            |_, offset| {
+                if offset == 448 {
+                    sent.set(sent.get() + 1);
+                    return sent.get() <= 2;
+                }
+                false
+            },
+            |_| false,
+        );
+        assert_eq!(s.stats().timeouts, 0, "{:?}", s.stats());
+        // The chunk's seven units, then the first three of them again (the chunk halved).
+        assert_eq!(s.stats().lost_units, 7 + 3, "{:?}", s.stats());
     }
 
     #[test]

@@ -200,6 +200,16 @@ fn vectors() -> Vec<(&'static str, u16, Message<'static>)> {
             }),
         ),
         (
+            "hal-trace",
+            14,
+            // STEP 50 ms after the last pass, MOTORS (8, 8): PROTOCOL.md §17.
+            Message::HalTrace(HalTrace {
+                offset: 384,
+                dropped_steps: 0,
+                data: &[0x03, 0xd0, 0x86, 0x03, 0x16, 0x10, 0x10],
+            }),
+        ),
+        (
             "log",
             11,
             Message::Log(Log {

@@ -7,6 +7,7 @@
 //! - `robot`: `Robot::step`, the main loop over a `Hal`; `robot::kit`, which capabilities'
 //!   state each profile's robot carries.
 //! - `hal`, `profile`: the hardware boundary and the two robots of the papers.
+//! - `hal_trace`: the hardware trace, recorded at that boundary, for retracing a run.
 //! - `link`, `telemetry`, `params`: the robot's side of the protocol.
 //! - `transfer`: the robot's map, plan and regions objects, their uploads and downloads.
 //! - `odometry`, `deadreckon`: position (seed 000 §3; seed 004 §4).
@@ -22,11 +23,13 @@ pub mod execute;
 pub mod explore;
 pub mod guided;
 pub mod hal;
+pub mod hal_trace;
 pub mod landmarks;
 pub mod link;
 pub mod localize;
 pub mod nav;
 pub mod odometry;
+pub mod odometry_calibration;
 pub mod params;
 pub mod profile;
 pub mod robot;

@@ -96,6 +96,13 @@ pub struct OdometryParams {
     /// covariance model. seed 000 §3.2 assumes an error of 1 pulse per encoder and cycle
     /// (`F_nL = F_nR = 1`); it uses it as a worst-case bound, we use it as 1 sigma.
     pub encoder_sigma_pulses: f32,
+    /// The right wheel's travel per pulse over the left's, minus 1, in parts per million
+    /// (UMBmark's E_d - 1, Borenstein & Feng 1996; ppm so the link's f32 and a parameter
+    /// file's decimals keep it exact): 0 = equal wheels. Not in seed 000, which takes the
+    /// wheels as equal; measured by [`crate::odometry_calibration`]. With r = 1 + ppm / 1e6
+    /// the mean of the two stays `mm_per_pulse`: the left wheel's is `2 / (1 + r)` times it,
+    /// the right's `2 r / (1 + r)`.
+    pub wheel_ratio_error_ppm: f32,
 }
 
 impl Default for OdometryParams {
@@ -107,6 +114,8 @@ impl Default for OdometryParams {
             mm_per_pulse: 0.08,
             // seed 000 §3.2: F_nL = F_nR = 1 pulse per update cycle
             encoder_sigma_pulses: 1.0,
+            // Equal wheels until calibrated.
+            wheel_ratio_error_ppm: 0.0,
         }
     }
 }
@@ -245,6 +254,8 @@ pub struct Odometry {
     worst_case_m: f32,
     worst_case_rad: f32,
     cycles: u32,
+    // Fractions of a pulse the wheel-ratio scaling has not yet passed on (left, right).
+    carry: [f32; 2],
 }
 
 impl Odometry {
@@ -258,11 +269,36 @@ impl Odometry {
             worst_case_m: 0.0,
             worst_case_rad: 0.0,
             cycles: 0,
+            carry: [0.0; 2],
         }
+    }
+
+    /// One cycle's counts in equal-wheel pulses: scaled by the calibrated wheel ratio, the
+    /// fraction carried to the next cycle so that nothing is lost however long the run. With
+    /// the ratio 1 (uncalibrated) the counts pass unchanged, so the paper's Eqs 1-10 see
+    /// exactly the encoders, as before.
+    fn scaled_counts(&mut self, n_l: i32, n_r: i32) -> (i32, i32) {
+        let ppm = self.params.wheel_ratio_error_ppm;
+        let r = 1.0 + ppm * 1e-6;
+        if ppm == 0.0 || !(r.is_finite() && r > 0.0) {
+            return (n_l, n_r);
+        }
+        let factor = [2.0 / (1.0 + r), 2.0 * r / (1.0 + r)];
+        let mut out = [n_l, n_r];
+        for ((n, c), f) in out.iter_mut().zip(self.carry.iter_mut()).zip(factor) {
+            let want = *n as f32 * f + *c;
+            let whole = libm::roundf(want);
+            *c = want - whole;
+            // |want| <= 2 |n| + 1 for ratios in the parameter's range: fits i32 whenever n
+            // does (per-cycle counts are hundreds).
+            *n = whole as i32;
+        }
+        (out[0], out[1])
     }
 
     /// Integrates one control cycle's encoder deltas and returns the new pose.
     pub fn step(&mut self, n_l: i32, n_r: i32) -> Pose {
+        let (n_l, n_r) = self.scaled_counts(n_l, n_r);
         let p = self.params;
         let old = self.pose;
         let (new, turn) = integrate_with_turn(old, n_l, n_r, &p);
@@ -626,6 +662,44 @@ mod tests {
             nr,
             true_rotation_rad: state(total_time).1,
         }
+    }
+
+    /// A calibrated wheel ratio straightens the path of a robot whose right wheel truly
+    /// travels 0.4 % more per pulse: driven truly straight (its encoders then count fewer
+    /// right pulses), the uncalibrated odometry turns right, the calibrated one does not.
+    #[test]
+    fn the_wheel_ratio_straightens_a_truly_straight_path() {
+        let ratio = 1.004_f32;
+        let run = |r: f32| {
+            let p = OdometryParams {
+                wheel_ratio_error_ppm: (r - 1.0) * 1e6,
+                ..OdometryParams::default()
+            };
+            let mut odo = Odometry::new(p, Pose::default());
+            // True: both wheels travel the same ground distance d per cycle; the left pulse
+            // length is 2/(1+ratio) dl, the right's 2 ratio/(1+ratio) dl.
+            let (mut cl, mut cr) = (0.0f64, 0.0f64);
+            for _ in 0..1000 {
+                let d = 8.0f64; // mm of ground per cycle
+                let dl = 0.08f64;
+                cl += d / (dl * 2.0 / (1.0 + f64::from(ratio)));
+                cr += d / (dl * 2.0 * f64::from(ratio) / (1.0 + f64::from(ratio)));
+                let (nl, nr) = (cl.floor(), cr.floor());
+                cl -= nl;
+                cr -= nr;
+                odo.step(nl as i32, nr as i32);
+            }
+            odo.pose()
+        };
+        let raw = run(1.0);
+        let cal = run(ratio);
+        // 8 m truly straight along +x.
+        assert!(raw.heading < -0.05, "uncalibrated bends right: {raw:?}");
+        assert!(
+            cal.heading.abs() < 0.002,
+            "calibrated stays straight: {cal:?}"
+        );
+        assert!(cal.y.abs() < 0.01 && (cal.x - 8.0).abs() < 0.01, "{cal:?}");
     }
 
     fn reintegrate(run: &Run, d: f32, dl: f32) -> Odometry {

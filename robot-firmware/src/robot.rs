@@ -30,6 +30,7 @@ use crate::execute::{ExecuteParams, Executor};
 use crate::explore::{ExploreParams, Explorer};
 use crate::guided::{guided_step, GuidedParams, GuidedPhase};
 use crate::hal::{BeaconReading, GripperCommand, GripperState, Hal, MotorCommand};
+use crate::hal_trace::HalTrace;
 use crate::link::{Identity, Inbound, Link, LinkStatus, Reply, Response};
 use crate::odometry::{encoder_delta, wrap_angle, Odometry, OdometryParams, Point, Pose};
 use crate::params::{RobotConfig, Tunables};
@@ -169,6 +170,8 @@ pub struct Robot<K: Kit> {
     pub link: Link,
     pub core: Core<K>,
     identity: Identity,
+    /// The hardware trace (parameter 34 `hal_trace`, `hal_trace`).
+    pub trace: HalTrace,
 }
 
 impl<K: Kit> Robot<K> {
@@ -205,95 +208,42 @@ impl<K: Kit> Robot<K> {
                 capabilities,
                 map_capacity: profile.map_capacity(),
             });
+            addr_of_mut!((*p).trace).write(HalTrace::new(opts.seed, opts.start));
             Core::init(addr_of_mut!((*p).core), &opts);
             slot.assume_init_mut()
         }
     }
 
-    /// One pass of the main loop.
+    /// One pass of the main loop. While `hal_trace` is on, the board's `Hal` is wrapped in
+    /// the trace's `Recorder` (the one place the trace is captured, `hal_trace`).
     pub fn step<H: Hal>(&mut self, hal: &mut H) {
-        let now_us = hal.now_us();
-        let now_ms = ms(now_us);
-        self.receive(hal, now_ms);
-        self.link.expire(now_ms, protocol::timing::LINK_TIMEOUT_MS);
-        self.core.check_failsafe(self.link.last_rx_ms(), now_ms);
-        if self.core.must_stop_now() {
-            self.core.motor = MotorCommand::STOP;
-            hal.set_motors(MotorCommand::STOP);
+        let on = self.core.config.hal_trace != 0;
+        let Robot {
+            link,
+            core,
+            identity,
+            trace,
+        } = self;
+        if on || trace.is_on() {
+            let d = &core.dead.params;
+            let told = [d.beacon, d.bounds.min, d.bounds.max];
+            trace.switch(on, core.profile.id as u8, core.emulated, told);
+        } else {
+            trace.count_untraced();
         }
-        if now_us >= self.core.timing.next_cycle_us {
-            self.core.control_cycle(hal, now_us);
+        if trace.is_on() {
+            let mut rec = crate::hal_trace::Recorder::new(hal, trace);
+            pass(
+                link,
+                core,
+                identity,
+                &mut rec,
+                &mut |rec, link, now_ms, cycle| rec.trace().emit(link, now_ms, cycle),
+            );
+            rec.finish();
+        } else {
+            pass(link, core, identity, hal, &mut |_, _, _, _| {});
         }
-        self.send_periodic(now_ms);
-        if self.link.connected() {
-            // Download chunks yield to replies and events, like telemetry.
-            let link = &mut self.link;
-            self.core
-                .objects
-                .poll(now_ms, &mut |m| link.send_low_priority(m, now_ms));
-        }
-        self.link.flush(&mut |bytes| hal.serial_write(bytes));
-    }
-
-    fn receive<H: Hal>(&mut self, hal: &mut H, now_ms: u32) {
-        let mut buf = [0u8; 128];
-        let mut budget = RX_BUDGET;
-        while budget > 0 {
-            let want = buf.len().min(budget);
-            let n = hal.serial_read(&mut buf[..want]).min(want);
-            if n == 0 {
-                break;
-            }
-            budget -= n;
-            let status = LinkStatus {
-                telemetry_hz: self.core.config.telemetry_hz,
-                failsafe_ms: self.core.config.failsafe_ms,
-                robot_id: self.core.config.robot_id,
-            };
-            let core = &mut self.core;
-            self.link
-                .receive(&buf[..n], now_ms, &self.identity, status, &mut |inbound| {
-                    core.handle(inbound, now_ms)
-                });
-        }
-    }
-
-    fn send_periodic(&mut self, now_ms: u32) {
-        while let Some(ev) = self.core.events.pop_front() {
-            if !self.link.connected() {
-                continue;
-            }
-            self.link.send(&Message::Event(ev), now_ms);
-        }
-        if !self.link.connected() {
-            return;
-        }
-        let hz = self.core.config.telemetry_hz;
-        if hz > 0 && due(now_ms, self.core.next_telemetry_ms) {
-            let t = telemetry::build(&self.core, now_ms);
-            self.link.send_low_priority(&Message::Telemetry(t), now_ms);
-            let period = 1000 / u32::from(hz);
-            let next = self.core.next_telemetry_ms.wrapping_add(period);
-            // Fell behind by more than a period (a stall): restart the schedule from now.
-            self.core.next_telemetry_ms = if due(now_ms, next.wrapping_add(period)) {
-                now_ms.wrapping_add(period)
-            } else {
-                next
-            };
-        }
-        let plan = self.core.plan_position();
-        if let Some(p) = self.core.progress.report_due(self.core.mode, now_ms, plan) {
-            self.link.send_low_priority(&Message::Progress(p), now_ms);
-        }
-        if let Some(lc) = self.core.linecorr.get_mut() {
-            if lc.report_due(now_ms) {
-                let m = lc.report(now_ms);
-                self.link
-                    .send_low_priority(&Message::Localization(m), now_ms);
-            }
-        }
-        self.link
-            .heartbeat(now_ms, protocol::timing::HEARTBEAT_PERIOD_MS);
     }
 
     /// Whether the robot declared itself emulated.
@@ -305,6 +255,101 @@ impl<K: Kit> Robot<K> {
     pub fn pose(&self) -> Pose {
         self.core.pose()
     }
+}
+
+/// One pass of the main loop over the robot's parts; `emit_trace` hands the hardware trace to
+/// the link before the link's bytes go out (a no-op while tracing is off).
+fn pass<K: Kit, H: Hal>(
+    link: &mut Link,
+    core: &mut Core<K>,
+    identity: &Identity,
+    hal: &mut H,
+    emit_trace: &mut dyn FnMut(&mut H, &mut Link, u32, bool),
+) {
+    let now_us = hal.now_us();
+    let now_ms = ms(now_us);
+    receive(link, core, identity, hal, now_ms);
+    link.expire(now_ms, protocol::timing::LINK_TIMEOUT_MS);
+    core.check_failsafe(link.last_rx_ms(), now_ms);
+    if core.must_stop_now() {
+        core.motor = MotorCommand::STOP;
+        hal.set_motors(MotorCommand::STOP);
+    }
+    let cycles = core.timing.cycles;
+    if now_us >= core.timing.next_cycle_us {
+        core.control_cycle(hal, now_us);
+    }
+    send_periodic(link, core, now_ms);
+    if link.connected() {
+        // Download chunks yield to replies and events, like telemetry.
+        core.objects
+            .poll(now_ms, &mut |m| link.send_low_priority(m, now_ms));
+    }
+    emit_trace(hal, link, now_ms, cycles != core.timing.cycles);
+    link.flush(&mut |bytes| hal.serial_write(bytes));
+}
+
+fn receive<K: Kit, H: Hal>(
+    link: &mut Link,
+    core: &mut Core<K>,
+    identity: &Identity,
+    hal: &mut H,
+    now_ms: u32,
+) {
+    let mut buf = [0u8; 128];
+    let mut budget = RX_BUDGET;
+    while budget > 0 {
+        let want = buf.len().min(budget);
+        let n = hal.serial_read(&mut buf[..want]).min(want);
+        if n == 0 {
+            break;
+        }
+        budget -= n;
+        let status = LinkStatus {
+            telemetry_hz: core.config.telemetry_hz,
+            failsafe_ms: core.config.failsafe_ms,
+            robot_id: core.config.robot_id,
+        };
+        link.receive(&buf[..n], now_ms, identity, status, &mut |inbound| {
+            core.handle(inbound, now_ms)
+        });
+    }
+}
+
+fn send_periodic<K: Kit>(link: &mut Link, core: &mut Core<K>, now_ms: u32) {
+    while let Some(ev) = core.events.pop_front() {
+        if !link.connected() {
+            continue;
+        }
+        link.send(&Message::Event(ev), now_ms);
+    }
+    if !link.connected() {
+        return;
+    }
+    let hz = core.config.telemetry_hz;
+    if hz > 0 && due(now_ms, core.next_telemetry_ms) {
+        let t = telemetry::build(core, now_ms);
+        link.send_low_priority(&Message::Telemetry(t), now_ms);
+        let period = 1000 / u32::from(hz);
+        let next = core.next_telemetry_ms.wrapping_add(period);
+        // Fell behind by more than a period (a stall): restart the schedule from now.
+        core.next_telemetry_ms = if due(now_ms, next.wrapping_add(period)) {
+            now_ms.wrapping_add(period)
+        } else {
+            next
+        };
+    }
+    let plan = core.plan_position();
+    if let Some(p) = core.progress.report_due(core.mode, now_ms, plan) {
+        link.send_low_priority(&Message::Progress(p), now_ms);
+    }
+    if let Some(lc) = core.linecorr.get_mut() {
+        if lc.report_due(now_ms) {
+            let m = lc.report(now_ms);
+            link.send_low_priority(&Message::Localization(m), now_ms);
+        }
+    }
+    link.heartbeat(now_ms, protocol::timing::HEARTBEAT_PERIOD_MS);
 }
 
 impl<K: Kit> Core<K> {

@@ -19,6 +19,7 @@
 
 use emulator::fault::{FaultConfig, FaultInjector};
 use emulator::sim::{Sim, SimConfig};
+use protocol::transfer::SenderStats;
 use protocol::ObjectKind;
 use robot_firmware::nav::{grid_bytes, Cell, Geometry, Grid};
 use robot_firmware::transfer::{encode_map_object, MAP_OBJECT_MAX};
@@ -37,6 +38,8 @@ struct Run {
     elapsed_ms: u64,
     /// Chunk data bytes the station put on the wire (retransmissions included).
     chunk_bytes: u64,
+    /// The sender's counts when it finished.
+    stats: SenderStats,
 }
 
 /// A 64 x 64 map of mixed cells, distinct for each seed.
@@ -82,6 +85,10 @@ fn run(seed: u64, drop_rate: f64) -> Run {
     let mut connected_at = None;
     let mut started = None;
     let mut chunk_bytes = 0u64;
+    let mut stats = SenderStats::default();
+    // GOODPUT_TRACE=<seed>: that seed's link events and frames out, on stderr.
+    let trace =
+        std::env::var("GOODPUT_TRACE").is_ok_and(|t| t == seed.to_string() && drop_rate > 0.0);
     loop {
         sim.step();
         let now = sim.now_us() / 1000;
@@ -111,12 +118,18 @@ fn run(seed: u64, drop_rate: f64) -> Run {
             let mut busy = false;
             for ev in link.take_events() {
                 busy = true;
+                if trace {
+                    eprintln!("{now} ev {ev:?}");
+                }
                 engine.on_link_event(now, &ev);
             }
             for o in engine.take_output() {
                 busy = true;
                 match o {
                     EngineOut::Frame(f) => {
+                        if trace {
+                            eprintln!("{now} out {f:?}");
+                        }
                         if let TransferOut::Chunk { data, .. } = &f {
                             chunk_bytes += data.len() as u64;
                         }
@@ -125,6 +138,9 @@ fn run(seed: u64, drop_rate: f64) -> Run {
                     EngineOut::Command { id, command } => link.submit(now, id, command),
                 }
             }
+            if let Some(s) = engine.upload_stats() {
+                stats = s;
+            }
             for ev in engine.take_events() {
                 if let TransferEvent::Finished(r) = ev {
                     let ok = matches!(r.outcome, JobOutcome::Complete);
@@ -132,6 +148,7 @@ fn run(seed: u64, drop_rate: f64) -> Run {
                         ok,
                         elapsed_ms: r.elapsed_ms,
                         chunk_bytes,
+                        stats,
                     };
                 }
             }
@@ -150,6 +167,7 @@ fn run(seed: u64, drop_rate: f64) -> Run {
                 ok: false,
                 elapsed_ms: GIVE_UP_MS,
                 chunk_bytes,
+                stats,
             };
         }
     }
@@ -162,6 +180,29 @@ fn quantile(sorted: &[f64], q: f64) -> f64 {
     }
     let i = ((sorted.len() - 1) as f64 * q).round() as usize;
     sorted[i.min(sorted.len() - 1)]
+}
+
+/// The five slowest uploads: seed, time and the sender's counts (where a tail comes from).
+fn slowest(runs: &[Run]) -> serde_json::Value {
+    let mut by_time: Vec<(u64, &Run)> = (1..).zip(runs).collect();
+    by_time.sort_by_key(|(_, r)| std::cmp::Reverse(r.elapsed_ms));
+    by_time
+        .iter()
+        .take(5)
+        .map(|(seed, r)| {
+            let s = &r.stats;
+            serde_json::json!({
+                "seed": seed, "elapsed_ms": r.elapsed_ms, "chunks": s.chunks,
+                "resent_chunks": s.resent, "units_found_lost": s.lost_units,
+                "probes": s.probes, "timer_expiries": s.timeouts,
+            })
+        })
+        .collect()
+}
+
+/// The mean of one sender count over the runs.
+fn mean(runs: &[Run], f: impl Fn(&SenderStats) -> u32) -> f64 {
+    runs.iter().map(|r| f64::from(f(&r.stats))).sum::<f64>() / runs.len().max(1) as f64
 }
 
 fn condition(name: &str, drop_rate: f64, seeds: u64) -> serde_json::Value {
@@ -202,6 +243,14 @@ fn condition(name: &str, drop_rate: f64, seeds: u64) -> serde_json::Value {
         "elapsed_ms": {"median": quantile(&ms, 0.5), "p90": quantile(&ms, 0.9),
                        "max": quantile(&ms, 1.0)},
         "chunk_bytes_sent_per_object_byte": sent / len,
+        "slowest": slowest(&runs),
+        "per_upload_mean": {
+            "chunks": mean(&runs, |s| s.chunks),
+            "resent_chunks": mean(&runs, |s| s.resent),
+            "units_found_lost": mean(&runs, |s| s.lost_units),
+            "probes": mean(&runs, |s| s.probes),
+            "timer_expiries": mean(&runs, |s| s.timeouts),
+        },
     })
 }
 
@@ -228,7 +277,7 @@ fn main() {
         let g = &c["goodput_pct_of_line_rate"];
         println!(
             "{:<10} {}/{} complete; goodput % of line rate: median {:.1}, p10 {:.1}, p90 {:.1}; \
-             median {:.0} ms; {:.2} chunk bytes sent per object byte",
+             median {:.0} ms; {:.2} chunk bytes sent per object byte; per upload {}",
             c["condition"].as_str().unwrap(),
             c["completed"],
             c["seeds"],
@@ -237,6 +286,7 @@ fn main() {
             g["p90"].as_f64().unwrap(),
             c["elapsed_ms"]["median"].as_f64().unwrap(),
             c["chunk_bytes_sent_per_object_byte"].as_f64().unwrap(),
+            c["per_upload_mean"],
         );
     }
 }

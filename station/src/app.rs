@@ -16,6 +16,7 @@ pub mod localization;
 pub mod log;
 pub mod params;
 pub mod plan_target;
+pub mod qt_state;
 pub mod transfers;
 
 use std::collections::HashMap;
@@ -225,6 +226,8 @@ pub struct App {
     pub true_track: Track,
     pub encoders: EncoderUnwrap,
     pub log: LogBuffer,
+    /// The retraced track (`station replay --retrace`), if any.
+    pub retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
     pub teleop: Teleop,
     pub map: MapState,
     pub params: ParamEditor,
@@ -238,6 +241,8 @@ pub struct App {
     pub transfers: transfers::Transfers,
     /// Floor-grid line correction (seed 003): tracks, line events, PPD, errors.
     pub localization: localization::LocalizationState,
+    /// The QT world model (seed 001), fed by the robot's situations.
+    pub qt: qt_state::QtState,
     /// Foraging (seed 000 §7): objects gripped and delivered, which were taken.
     pub forage: forage::ForageProgress,
     /// The robot's last `Progress` report: what its mode is doing.
@@ -293,6 +298,7 @@ impl App {
             true_track: Track::default(),
             encoders: EncoderUnwrap::default(),
             log: LogBuffer::default(),
+            retrace: None,
             teleop: Teleop::default(),
             map: MapState {
                 arena: opts.arena,
@@ -304,6 +310,7 @@ impl App {
             recording: None,
             transfers: transfers::Transfers::default(),
             localization: localization::LocalizationState::default(),
+            qt: qt_state::QtState::default(),
             forage: forage::ForageProgress::default(),
             progress: None,
             fleet: None,

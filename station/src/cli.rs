@@ -218,6 +218,25 @@ pub enum Sub {
     ///   station export run.rec --csv run.csv --mcap run.mcap
     #[command(verbatim_doc_comment)]
     Export(crate::export::ExportArgs),
+    /// Re-run a recorded run through the firmware's own code (seed 001 retracing)
+    ///
+    /// The recording must hold the robot's hardware trace (parameter 34 hal_trace, message
+    /// kind 15; `robot-emulator --hal-trace` streams it from power-up). Every pass of the
+    /// robot's main loop is fed to the firmware crate's own Robot (the profile's composition)
+    /// through a Hal that plays the trace back. Without --param it checks that the outputs
+    /// (frames: telemetry, events, replies; motor and gripper commands) are the recorded ones
+    /// bit for bit, or reports the first divergence with its cycle and field (exit 1). With
+    /// --param it reports what the changed firmware would have done with the same readings:
+    /// the believed track's difference, the rotation, the events that differ.
+    ///
+    /// Limit (the thesis's): a changed algorithm would have moved the robot elsewhere; the
+    /// retraced sensor data stay the recorded ones.
+    ///
+    /// Examples:
+    ///   station retrace run.rec
+    ///   station retrace run.rec --param wheel_distance_mm=53 --json
+    #[command(verbatim_doc_comment)]
+    Retrace(crate::retrace::RetraceArgs),
     /// Train the light -> angle map (Khepera light calibration) from a recording of a calibrating robot
     ///
     /// Uses the telemetry recorded while a Khepera turned next to a light (mode
@@ -254,6 +273,18 @@ pub enum Sub {
     ///   station download-calibration --port /dev/ttyUSB0 --out som.bin
     #[command(verbatim_doc_comment)]
     DownloadCalibration(crate::transfer::calibration::DownloadCalibrationArgs),
+    /// Mächler's unsupervised landmarks and places (seed 003 ch. 3), run and played back here
+    ///
+    /// Runs the unsupervised-places scenario on the station with the firmware's own code and
+    /// plays it back: landmarks on the map, the class streams, matches as they happen,
+    /// corrected vs plain odometry vs truth, the error over time. Keys: space pause, left/right
+    /// 10 s, Home/End, +/- speed, q quit.
+    ///
+    /// Examples:
+    ///   station places --arena unstructured --seed 4
+    ///   station places --arena structured --seed 2 --duration 600 --json
+    #[command(verbatim_doc_comment)]
+    Places(crate::places::PlacesArgs),
 }
 
 /// The ports `station stats` watches: one, or several at once (`--port A --port B`), each

@@ -13,6 +13,7 @@
 
 pub mod csv;
 pub mod mcap;
+pub mod mcap_msg;
 pub mod robots;
 pub mod scene;
 

@@ -191,7 +191,9 @@ async fn transfers_complete_byte_identical_while_frames_are_dropped_both_ways() 
         }
     };
     tokio::pin!(faults);
-    for seed in [3usize, 5, 11, 13] {
+    // Six objects: faster transfers cross fewer armed milliseconds each, and the check
+    // below wants the losses this test is about.
+    for seed in [3usize, 5, 11, 13, 17, 19] {
         let bytes = big_map(seed);
         let up = tokio::select! {
             r = client.upload(ObjectKind::Map, bytes.clone()) => r,

@@ -10,10 +10,11 @@
 //!    "empirically" and does not print them: they are [`LandmarkParams`];
 //! 2. a significant class becomes the kernel of a pending landmark; `CONTEXT` steps later the
 //!    `WINDOW` labels of every stream around it are known (15 before, 15 after) and it is
-//!    compared with the stored landmarks that have the same kernel: d_lev is the weighted
-//!    Levenshtein distance summed over streams (substitution = prototype distance,
-//!    insertion/deletion = `indel_cost`), divided by `STREAMS * WINDOW * indel_cost` and by
-//!    `lev_scale`; d_dist is the distance of the kernel-time position to the stored one in
+//!    compared with the stored landmarks that have the same kernel: d_lev is the largest over
+//!    the streams of the weighted Levenshtein distance (substitution = prototype distance,
+//!    insertion/deletion = `indel_cost`) divided by `WINDOW * indel_cost` (the share of the
+//!    window that differs; §3.7.7: a landmark is the same only if every stream is similar),
+//!    then by `lev_scale`; d_dist is the distance of the kernel-time position to the stored one in
 //!    robot diameters. Candidates farther than one diameter are ignored (§3.15.2); the best
 //!    candidate with D = sqrt(d_lev^2 + d_dist^2) < `match_threshold` is a match and the caller
 //!    moves its position by (stored - kernel-time position). No match: a new landmark.
@@ -44,7 +45,8 @@ pub struct LandmarkParams {
     pub min_kernel_gap: u32,
     /// Insertion/deletion cost of the Levenshtein distance.
     pub indel_cost: f32,
-    /// Normalised label cost that counts as much as one diameter of position difference.
+    /// Share of a stream's window (its distance / (`WINDOW` x `indel_cost`)) that counts as
+    /// much as one diameter of position difference.
     pub lev_scale: f32,
     /// D must be below this to match.
     pub match_threshold: f32,
@@ -61,7 +63,7 @@ impl Default for LandmarkParams {
             warmup_steps: 600,
             min_kernel_gap: 5,
             indel_cost: 1.0,
-            lev_scale: 0.15,
+            lev_scale: 0.5,
             match_threshold: 1.0,
             diameter_m: 0.055,
         }
@@ -81,6 +83,9 @@ pub struct Landmark {
     pub x: f32,
     /// See `x`.
     pub y: f32,
+    /// Odometric heading when it was made, radians (§3.6: a landmark holds "the estimated
+    /// robot position, time, direction"; a match resets the pose, heading included).
+    pub heading: f32,
     /// Times it was matched.
     pub matches: u16,
 }
@@ -90,7 +95,8 @@ pub struct Landmark {
 pub enum Event {
     /// A new landmark was stored at this index.
     Created(u16),
-    /// Landmark `index` matched: move the position by (dx, dy) metres.
+    /// Landmark `index` matched: move the position by (dx, dy) metres and turn the heading
+    /// by `dheading` (the stored pose minus the pose at the kernel).
     Matched {
         /// The landmark.
         index: u16,
@@ -98,6 +104,8 @@ pub enum Event {
         dx: f32,
         /// Correction, metres.
         dy: f32,
+        /// Heading correction, radians, in (-pi, pi].
+        dheading: f32,
         /// Its D.
         d: f32,
     },
@@ -129,6 +137,7 @@ struct Pending {
     due: u32,
     x: f32,
     y: f32,
+    heading: f32,
 }
 
 const PENDING: usize = 4;
@@ -189,6 +198,7 @@ impl LandmarkStore {
             labels: [[0; WINDOW]; STREAMS],
             x: 0.0,
             y: 0.0,
+            heading: 0.0,
             matches: 0,
         };
         Self {
@@ -230,12 +240,12 @@ impl LandmarkStore {
     }
 
     /// One control step: `labels` (one per stream, each < `MAX_CLASSES`) and the odometric
-    /// position (x, y) in metres. Returns what happened to the landmark store, if anything.
+    /// pose (x, y in metres, heading in radians). Returns what happened to the landmark store,
+    /// if anything.
     pub fn step<M: PrototypeMetric>(
         &mut self,
         labels: [u8; STREAMS],
-        x: f32,
-        y: f32,
+        (x, y, heading): (f32, f32, f32),
         metric: &M,
     ) -> Option<Event> {
         self.step = self.step.wrapping_add(1);
@@ -269,6 +279,7 @@ impl LandmarkStore {
                         due: self.step.wrapping_add(CONTEXT as u32),
                         x,
                         y,
+                        heading,
                     });
                     self.last_kernel = Some(self.step);
                 }
@@ -282,15 +293,44 @@ impl LandmarkStore {
         Some(self.resolve(p, metric))
     }
 
-    fn resolve<M: PrototypeMetric>(&mut self, p: Pending, metric: &M) -> Event {
+    /// The last `WINDOW` labels of every stream, oldest first (at a resolution: the window
+    /// around the kernel just resolved).
+    pub fn window(&self) -> [[u8; WINDOW]; STREAMS] {
         let mut window = [[0u8; WINDOW]; STREAMS];
         for (k, row) in self.history.iter().enumerate() {
             for (w, &l) in window.iter_mut().zip(row) {
                 w[k] = l;
             }
         }
+        window
+    }
+
+    /// The weighted Levenshtein distance of `window` to landmark `lm`, per stream, in label
+    /// costs (not normalised).
+    pub fn stream_distances<M: PrototypeMetric>(
+        &self,
+        window: &[[u8; WINDOW]; STREAMS],
+        lm: &Landmark,
+        metric: &M,
+    ) -> [f32; STREAMS] {
+        let mut out = [0.0; STREAMS];
+        for (s, ((ours, theirs), o)) in window.iter().zip(&lm.labels).zip(&mut out).enumerate() {
+            let costs = StreamCosts {
+                metric,
+                stream: s,
+                indel: self.params.indel_cost,
+            };
+            *o = weighted(ours, theirs, &costs).unwrap_or(f32::INFINITY);
+        }
+        out
+    }
+
+    fn resolve<M: PrototypeMetric>(&mut self, p: Pending, metric: &M) -> Event {
+        let window = self.window();
         let prm = self.params;
-        let norm = (STREAMS * WINDOW) as f32 * prm.indel_cost * prm.lev_scale;
+        // Each stream's distance as a share of its window (§3.7.7: a landmark is the same
+        // only if *all* class streams are similar enough, so the worst stream counts).
+        let norm = WINDOW as f32 * prm.indel_cost * prm.lev_scale;
         let mut best: Option<(usize, f32)> = None;
         let (mut same_kernel, mut near) = (false, false);
         let mut best_lev = f32::INFINITY;
@@ -305,17 +345,10 @@ impl LandmarkStore {
                 continue; // §3.15.2: too far to be the same place.
             }
             near = true;
-            let mut lev = 0.0;
-            for (s, (ours, theirs)) in window.iter().zip(&lm.labels).enumerate() {
-                let costs = StreamCosts {
-                    metric,
-                    stream: s,
-                    indel: prm.indel_cost,
-                };
-                lev += weighted(ours, theirs, &costs).unwrap_or(f32::INFINITY);
-            }
-            best_lev = best_lev.min(lev / norm);
-            let d = libm::hypotf(lev / norm, dd);
+            let per = self.stream_distances(&window, lm, metric);
+            let lev = per.iter().fold(0.0f32, |a, &b| a.max(b)) / norm;
+            best_lev = best_lev.min(lev);
+            let d = libm::hypotf(lev, dd);
             if d < prm.match_threshold && best.is_none_or(|(_, b)| d < b) {
                 best = Some((i, d));
             }
@@ -339,6 +372,7 @@ impl LandmarkStore {
                 index: i as u16,
                 dx: lm.x - p.x,
                 dy: lm.y - p.y,
+                dheading: wrap_pi(lm.heading - p.heading),
                 d,
             };
         }
@@ -351,10 +385,22 @@ impl LandmarkStore {
             labels: window,
             x: p.x,
             y: p.y,
+            heading: p.heading,
             matches: 0,
         };
         self.used += 1;
         Event::Created((self.used - 1) as u16)
+    }
+}
+
+/// `a` folded into (-pi, pi].
+fn wrap_pi(a: f32) -> f32 {
+    use core::f32::consts::{PI, TAU};
+    let r = a - TAU * libm::floorf((a + PI) / TAU);
+    if r <= -PI {
+        r + TAU
+    } else {
+        r
     }
 }
 
@@ -391,10 +437,21 @@ mod tests {
     /// A lap of 60 steps: background class 0 with a one-step blip of class 9 at step 20 of
     /// stream 0 (a rare, short event: significant once seen twice).
     fn lap(store: &mut LandmarkStore, x0: f32, out: &mut [Option<Event>; 4], n: &mut usize) {
+        lap_with(store, x0, |_| 2, out, n);
+    }
+
+    /// [`lap`] with stream 2's label at step k given by `s2`.
+    fn lap_with(
+        store: &mut LandmarkStore,
+        x0: f32,
+        s2: impl Fn(u32) -> u8,
+        out: &mut [Option<Event>; 4],
+        n: &mut usize,
+    ) {
         for k in 0..60u32 {
             let l0 = if k == 20 { 9 } else { (k / 10) as u8 };
             let x = x0 + k as f32 * 0.001;
-            if let Some(e) = store.step([l0, 1, 2], x, 0.0, &Same) {
+            if let Some(e) = store.step([l0, 1, s2(k)], (x, 0.0, 0.0), &Same) {
                 if *n < out.len() {
                     out[*n] = Some(e);
                 }
@@ -431,6 +488,55 @@ mod tests {
         assert_eq!(ev[2], Some(Event::Created(1)));
     }
 
+    /// §3.7.7: a landmark is the same only if *every* class stream is similar. Here streams 0
+    /// and 1 repeat exactly and stream 2 differs in 20 of its 31 labels: no match. (Summing
+    /// the streams' distances over all 93 labels, as before, called it the same landmark.)
+    #[test]
+    fn one_dissimilar_stream_prevents_a_match() {
+        let mut store = LandmarkStore::new(LandmarkParams {
+            lev_scale: 0.5,
+            ..params()
+        });
+        let mut ev = [None; 4];
+        let mut n = 0;
+        for _ in 0..3 {
+            lap(&mut store, 0.0, &mut ev, &mut n);
+        }
+        assert_eq!(ev[0], Some(Event::Created(0)));
+        // Stream 2 runs class 3 through steps 10..30 (one long run: never a kernel itself).
+        let odd = |k: u32| if (10..30).contains(&k) { 3 } else { 2 };
+        lap_with(&mut store, 0.02, odd, &mut ev, &mut n);
+        assert_eq!(ev[1], Some(Event::Created(1)), "{ev:?}");
+        // The same lap with stream 2 as stored matches again.
+        lap(&mut store, 0.02, &mut ev, &mut n);
+        assert!(
+            matches!(ev[2], Some(Event::Matched { index: 0, .. })),
+            "{ev:?}"
+        );
+    }
+
+    /// A match turns the heading by the stored heading minus the heading at the kernel.
+    #[test]
+    fn a_match_carries_the_stored_heading() {
+        let mut store = LandmarkStore::new(params());
+        let mut seen = None;
+        for lap_no in 0..4 {
+            // Heading 0.1 rad when the landmark is made (lap 3), 0.4 rad when it is met again.
+            let h = if lap_no < 3 { 0.1 } else { 0.4 };
+            for k in 0..60u32 {
+                let l0 = if k == 20 { 9 } else { (k / 10) as u8 };
+                if let Some(Event::Matched { dheading, .. }) =
+                    store.step([l0, 1, 2], (k as f32 * 0.001, 0.0, h), &Same)
+                {
+                    seen = Some(dheading);
+                }
+            }
+        }
+        assert_eq!(store.landmarks()[0].heading, 0.1);
+        let d = seen.expect("matched");
+        assert!((d + 0.3).abs() < 1e-5, "{d}");
+    }
+
     #[test]
     fn frequent_or_long_classes_are_not_significant() {
         let mut store = LandmarkStore::new(params());
@@ -438,7 +544,7 @@ mod tests {
         for k in 0..400u32 {
             let a = if k % 2 == 0 { 5 } else { 6 };
             let b = if (k / 50) % 2 == 0 { 7 } else { 8 };
-            assert_eq!(store.step([a, b, 0], 0.0, 0.0, &Same), None);
+            assert_eq!(store.step([a, b, 0], (0.0, 0.0, 0.0), &Same), None);
         }
         assert!(store.landmarks().is_empty());
     }

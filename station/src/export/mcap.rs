@@ -23,10 +23,11 @@ use std::path::Path;
 
 use mcap::records::MessageHeader;
 use mcap::{WriteOptions, Writer};
-use protocol::{LogLevel, Message, Pose};
+use protocol::{LogLevel, Message};
 use serde_json::{json, Value};
 
 use super::csv::TelemetryRow;
+use super::mcap_msg::{Body, PoseInFrame, Truth};
 use super::{walk, Direction, ExportError, Item};
 use crate::link::api::command_text;
 use crate::record::Recording;
@@ -198,7 +199,8 @@ fn write_robot<W: Write + Seek>(
         path: path.to_path_buf(),
         message: e.to_string(),
     };
-    let mut ids = BTreeMap::new();
+    // Channel ids and per-channel sequence numbers, in `channels()` order.
+    let mut topics = Vec::new();
     for (topic, name, schema) in channels() {
         let schema_id = match schemas.get(name) {
             Some(&id) => id,
@@ -217,32 +219,31 @@ fn write_robot<W: Write + Seek>(
                 &BTreeMap::new(),
             )
             .map_err(err)?;
-        ids.insert(topic, id);
+        topics.push((topic, id, 0u32));
     }
-    let Some(file_meta) = file_meta else {
-        return write_messages(out, &ids, rec, path);
-    };
-    let meta = serde_json::to_value(file_meta).unwrap_or(Value::Null);
-    let meta: BTreeMap<String, String> = meta
-        .as_object()
-        .map(|m| {
-            m.iter()
-                .map(|(k, v)| (k.clone(), v.as_str().map_or(v.to_string(), str::to_string)))
-                .collect()
+    if let Some(file_meta) = file_meta {
+        let meta = serde_json::to_value(file_meta).unwrap_or(Value::Null);
+        let meta: BTreeMap<String, String> = meta
+            .as_object()
+            .map(|m| {
+                m.iter()
+                    .map(|(k, v)| (k.clone(), v.as_str().map_or(v.to_string(), str::to_string)))
+                    .collect()
+            })
+            .unwrap_or_default();
+        out.write_metadata(&mcap::records::Metadata {
+            name: "recording".into(),
+            metadata: meta,
         })
-        .unwrap_or_default();
-    out.write_metadata(&mcap::records::Metadata {
-        name: "recording".into(),
-        metadata: meta,
-    })
-    .map_err(err)?;
-    write_messages(out, &ids, rec, path)
+        .map_err(err)?;
+    }
+    write_messages(out, &mut topics, rec, path)
 }
 
-/// Every message of `rec` on its channel (`ids`, by topic).
+/// Every message of `rec` on its channel (`topics`: topic, channel id, messages so far).
 fn write_messages<W: Write + Seek>(
     out: &mut Writer<W>,
-    ids: &BTreeMap<&'static str, u16>,
+    topics: &mut [(&'static str, u16, u32)],
     rec: &Recording,
     path: &Path,
 ) -> Result<u64, ExportError> {
@@ -251,31 +252,35 @@ fn write_messages<W: Write + Seek>(
         message: e.to_string(),
     };
     let base_ns = rec.meta.created_unix_ms.saturating_mul(1_000_000);
-    let mut seq: BTreeMap<u16, u32> = BTreeMap::new();
     let mut count = 0u64;
     let mut failure = None;
     let mut scene = super::scene::Scene::new(rec);
+    // Reused for every item: its messages, and one message's JSON.
+    let mut messages = Vec::new();
+    let mut data = Vec::with_capacity(4096);
     walk(rec, |item| {
         if failure.is_some() {
             return;
         }
-        let (t_us, mut messages) = messages(&item);
+        messages.clear();
+        let t_us = item_messages(&item, &mut messages);
         scene.extend(&item, &mut messages);
         let ns = base_ns.saturating_add(t_us.saturating_mul(1000));
-        for (topic, mut value) in messages {
-            let Some(&channel_id) = ids.get(topic) else {
+        for (topic, body) in &mut messages {
+            // Every topic is in `channels()`; a linear look-up over 14 beats a map's.
+            let Some((_, channel_id, n)) = topics.iter_mut().find(|(t, ..)| t == topic) else {
                 continue;
             };
-            stamp(&mut value, ns);
-            let n = seq.entry(channel_id).or_insert(0);
+            body.stamp(ns);
             *n += 1;
             let header = MessageHeader {
-                channel_id,
+                channel_id: *channel_id,
                 sequence: *n,
                 log_time: ns,
                 publish_time: ns,
             };
-            let data = serde_json::to_vec(&value).unwrap_or_default();
+            data.clear();
+            body.write_json(&mut data);
             if let Err(e) = out.write_to_known_channel(&header, &data) {
                 failure = Some(err(e));
                 return;
@@ -289,54 +294,31 @@ fn write_messages<W: Write + Seek>(
     Ok(count)
 }
 
-/// Fills in `timestamp` fields (foxglove schemas) with the log time.
-fn stamp(v: &mut Value, ns: u64) {
-    let time = json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000});
-    if let Some(t) = v.get_mut("timestamp") {
-        *t = time.clone();
-    }
-    // foxglove.SceneUpdate stamps each entity.
-    if let Some(Value::Array(entities)) = v.get_mut("entities") {
-        for e in entities {
-            if let Some(t) = e.get_mut("timestamp") {
-                *t = time.clone();
-            }
-        }
-    }
-}
-
-fn pose_in_frame(p: &Pose) -> Value {
-    let h = f64::from(p.heading_mrad) / 1000.0;
-    json!({
-        "timestamp": null,
-        "frame_id": "map",
-        "pose": {
-            "position": {"x": f64::from(p.x_mm) / 1000.0, "y": f64::from(p.y_mm) / 1000.0, "z": 0.0},
-            "orientation": {"x": 0.0, "y": 0.0, "z": (h / 2.0).sin(), "w": (h / 2.0).cos()},
-        },
-    })
-}
-
-/// The messages one walk item becomes, and its time.
-fn messages(item: &Item<'_>) -> (u64, Vec<(&'static str, Value)>) {
+/// Adds the messages one walk item becomes to `out`; returns its time.
+fn item_messages(item: &Item<'_>, out: &mut Vec<(&'static str, Body)>) -> u64 {
     match item {
-        Item::Link { t_us, state, text } => (
-            *t_us,
-            vec![("/link", json!({"state": state, "text": text}))],
-        ),
-        Item::BadFrame { t_us, dir, error } => (
-            *t_us,
-            vec![(
+        Item::Link { t_us, state, text } => {
+            out.push(("/link", Body::Json(json!({"state": state, "text": text}))));
+            *t_us
+        }
+        Item::BadFrame { t_us, dir, error } => {
+            out.push((
                 "/link",
-                json!({"state": "bad_frame", "text": format!("{}: {error}", dir_name(*dir))}),
-            )],
-        ),
+                Body::Json(
+                    json!({"state": "bad_frame", "text": format!("{}: {error}", dir_name(*dir))}),
+                ),
+            ));
+            *t_us
+        }
         Item::Frame {
             t_us,
             dir,
             seq,
             msg,
-        } => (*t_us, frame_messages(*t_us, *dir, *seq, msg)),
+        } => {
+            frame_messages(*t_us, *dir, *seq, msg, out);
+            *t_us
+        }
     }
 }
 
@@ -352,32 +334,37 @@ fn frame_messages(
     dir: Direction,
     seq: u16,
     msg: &Message<'_>,
-) -> Vec<(&'static str, Value)> {
+    out: &mut Vec<(&'static str, Body)>,
+) {
+    let json = |topic, v| (topic, Body::Json(v));
     match (dir, msg) {
-        (Direction::FromRobot, Message::Telemetry(t)) => vec![
-            (
+        (Direction::FromRobot, Message::Telemetry(t)) => {
+            out.push((
                 "/telemetry",
-                serde_json::to_value(TelemetryRow::new(t_us, t)).unwrap_or(Value::Null),
-            ),
-            ("/pose", pose_in_frame(&t.pose)),
-        ],
-        (Direction::FromRobot, Message::EmuTruth(t)) => vec![
-            (
+                Body::Telemetry {
+                    row: Box::new(TelemetryRow::new(t_us, t)),
+                    caps: None,
+                },
+            ));
+            out.push(("/pose", Body::Pose(PoseInFrame::map(&t.pose))));
+        }
+        (Direction::FromRobot, Message::EmuTruth(t)) => {
+            out.push((
                 "/truth",
-                json!({
-                    "robot_time_s": f64::from(t.time_ms) / 1000.0,
-                    "x_m": f64::from(t.pose.x_mm) / 1000.0,
-                    "y_m": f64::from(t.pose.y_mm) / 1000.0,
-                    "heading_rad": f64::from(t.pose.heading_mrad) / 1000.0,
-                    "collisions": t.collisions,
+                Body::Truth(Truth {
+                    robot_time_s: f64::from(t.time_ms) / 1000.0,
+                    x_m: f64::from(t.pose.x_mm) / 1000.0,
+                    y_m: f64::from(t.pose.y_mm) / 1000.0,
+                    heading_rad: f64::from(t.pose.heading_mrad) / 1000.0,
+                    collisions: t.collisions,
                 }),
-            ),
-            ("/truth_pose", pose_in_frame(&t.pose)),
-        ],
-        (Direction::FromRobot, Message::Event(e)) => vec![(
+            ));
+            out.push(("/truth_pose", Body::Pose(PoseInFrame::map(&t.pose))));
+        }
+        (Direction::FromRobot, Message::Event(e)) => out.push(json(
             "/events",
             json!({"code": format!("{:?}", e.code), "value": e.value}),
-        )],
+        )),
         (Direction::FromRobot, Message::Log(l)) => {
             // foxglove.Log levels: 1 debug, 2 info, 3 warning, 4 error, 5 fatal.
             let level = match l.level {
@@ -386,33 +373,33 @@ fn frame_messages(
                 LogLevel::Warn => 3,
                 LogLevel::Error => 4,
             };
-            vec![(
+            out.push(json(
                 "/log",
                 json!({"timestamp": null, "level": level, "message": l.text,
                        "name": "robot", "file": "", "line": 0}),
-            )]
+            ));
         }
-        (Direction::FromRobot, Message::Ack(a)) => vec![(
+        (Direction::FromRobot, Message::Ack(a)) => out.push(json(
             "/replies",
             json!({"cmd_seq": a.cmd_seq, "outcome": "ack", "detail": a.info}),
-        )],
-        (Direction::FromRobot, Message::Nack(n)) => vec![(
+        )),
+        (Direction::FromRobot, Message::Nack(n)) => out.push(json(
             "/replies",
             json!({"cmd_seq": n.cmd_seq, "outcome": "nack", "detail": n.reason}),
-        )],
-        (Direction::FromRobot, Message::HelloReply(r)) => vec![(
+        )),
+        (Direction::FromRobot, Message::HelloReply(r)) => out.push(json(
             "/link",
             json!({"state": "hello_reply", "text": format!(
                 "{} {} {:?}, accepted {}", r.firmware, r.firmware_version, r.profile, r.accepted)}),
-        )],
-        (Direction::ToRobot, Message::Command(c)) => vec![(
+        )),
+        (Direction::ToRobot, Message::Command(c)) => out.push(json(
             "/commands",
             json!({"seq": seq, "text": command_text(c), "command": c}),
-        )],
-        (Direction::ToRobot, Message::Hello(h)) => vec![(
+        )),
+        (Direction::ToRobot, Message::Hello(h)) => out.push(json(
             "/link",
             json!({"state": "hello", "text": format!("session {:#010x} from {}", h.session, h.station)}),
-        )],
-        _ => Vec::new(),
+        )),
+        _ => {}
     }
 }

@@ -21,9 +21,10 @@
 use std::collections::BTreeMap;
 
 use protocol::object::{MapView, PlanView, RegionsView};
-use protocol::{caps, Message, ObjectKind, Pose};
+use protocol::{caps, Message, ObjectKind};
 use serde_json::{json, Value};
 
+use super::mcap_msg::{Body, FrameTransform};
 use super::{Direction, Item};
 use crate::record::Recording;
 
@@ -86,9 +87,9 @@ impl Scene {
     }
 
     /// Adds this item's scene messages to `out` and marks sensors the robot lacks as null.
-    pub fn extend(&mut self, item: &Item<'_>, out: &mut Vec<(&'static str, Value)>) {
+    pub fn extend(&mut self, item: &Item<'_>, out: &mut Vec<(&'static str, Body)>) {
         if let Some(a) = self.arena.take() {
-            out.push(("/arena", a));
+            out.push(("/arena", Body::Json(a)));
         }
         let Item::Frame { dir, msg, .. } = item else {
             return;
@@ -98,16 +99,21 @@ impl Scene {
                 self.caps = Some(r.capabilities);
             }
             (Direction::FromRobot, Message::Telemetry(t)) => {
-                if let (Some(caps), Some((_, row))) = (
-                    self.caps,
-                    out.iter_mut().find(|(topic, _)| *topic == "/telemetry"),
-                ) {
-                    null_absent(row, caps);
+                for (_, body) in out.iter_mut() {
+                    if let Body::Telemetry { caps, .. } = body {
+                        *caps = self.caps;
+                    }
                 }
-                out.push(("/tf", transform("base_link", &t.pose)));
+                out.push((
+                    "/tf",
+                    Body::Transform(FrameTransform::from_map("base_link", &t.pose)),
+                ));
             }
             (Direction::FromRobot, Message::EmuTruth(t)) => {
-                out.push(("/tf", transform("truth", &t.pose)));
+                out.push((
+                    "/tf",
+                    Body::Transform(FrameTransform::from_map("truth", &t.pose)),
+                ));
             }
             (_, Message::TransferBegin(b)) => self.begin(b.id, b.object, b.len, b.crc),
             (_, Message::TransferChunk(c)) => {
@@ -166,7 +172,7 @@ impl Scene {
         (protocol::crc32c(&p.bytes) == p.crc).then_some(p.bytes)
     }
 
-    fn publish(&mut self, bytes: &[u8], out: &mut Vec<(&'static str, Value)>) {
+    fn publish(&mut self, bytes: &[u8], out: &mut Vec<(&'static str, Body)>) {
         if let Ok(m) = MapView::parse(bytes) {
             let h = m.header;
             let placement = Placement {
@@ -174,13 +180,13 @@ impl Scene {
                 cell_m: f64::from(h.cell_mm) / 1000.0,
             };
             self.placement = Some(placement);
-            out.push(("/map", grid(&m, placement)));
+            out.push(("/map", Body::Json(grid(&m, placement))));
         } else if let Ok(r) = RegionsView::parse(bytes) {
             if let Some(at) = self.placement {
-                out.push(("/regions", regions(&r, at)));
+                out.push(("/regions", Body::Json(regions(&r, at))));
             }
         } else if let Ok(p) = PlanView::parse(bytes) {
-            out.push(("/plan", plan(&p)));
+            out.push(("/plan", Body::Json(plan(&p))));
         }
     }
 }
@@ -209,18 +215,13 @@ pub fn nullable(field: &str) -> bool {
     SENSOR_FIELDS.iter().any(|(f, _)| *f == field)
 }
 
-/// A robot without a sensor sends 0 in its field (PROTOCOL.md §6): that is no reading.
-fn null_absent(row: &mut Value, robot_caps: u32) {
-    let Some(obj) = row.as_object_mut() else {
-        return;
-    };
-    for &(field, need) in SENSOR_FIELDS {
-        if robot_caps & need != need {
-            if let Some(v) = obj.get_mut(field) {
-                *v = Value::Null;
-            }
-        }
-    }
+/// Whether a robot with `robot_caps` has the sensor behind `/telemetry` field `field`. A robot
+/// without a sensor sends 0 in its field (PROTOCOL.md §6): that is no reading, exported as null.
+pub fn robot_has(field: &str, robot_caps: u32) -> bool {
+    SENSOR_FIELDS
+        .iter()
+        .find(|(f, _)| *f == field)
+        .is_none_or(|&(_, need)| robot_caps & need == need)
 }
 
 fn quaternion(heading: f64) -> Value {
@@ -229,16 +230,6 @@ fn quaternion(heading: f64) -> Value {
 
 fn origin_pose(x: f64, y: f64) -> Value {
     json!({"position": {"x": x, "y": y, "z": 0.0}, "orientation": quaternion(0.0)})
-}
-
-fn transform(child: &str, p: &Pose) -> Value {
-    json!({
-        "timestamp": null,
-        "parent_frame_id": "map",
-        "child_frame_id": child,
-        "translation": {"x": mm(p.x_mm), "y": mm(p.y_mm), "z": 0.0},
-        "rotation": quaternion(f64::from(p.heading_mrad) / 1000.0),
-    })
 }
 
 /// foxglove.NumericType INT8.

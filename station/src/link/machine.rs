@@ -786,7 +786,9 @@ impl From<Message<'_>> for Owned {
             }),
             Message::TransferAck(a) => Owned::Transfer(TransferIn::Ack(a)),
             Message::Heartbeat(h) => Owned::Heartbeat(h.time_ms),
-            Message::Hello(_) | Message::Command(_) => Owned::Other,
+            // The hardware trace is kept with the link's bytes by a recording and read by
+            // `station retrace`; the live views have no use for it.
+            Message::Hello(_) | Message::Command(_) | Message::HalTrace(_) => Owned::Other,
         }
     }
 }

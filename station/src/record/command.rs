@@ -48,6 +48,10 @@ pub struct RecordArgs {
     /// Ask the robot for this telemetry rate (Hz, 1..=50) at every handshake.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=50))]
     pub rate: Option<u8>,
+    /// Send this command (as `station send` takes it, e.g. "mode wander", "goto 1.2 0.8",
+    /// "param set hal_trace 1") once the robot first answers; repeat for several, sent in order.
+    #[arg(long = "send", value_name = "CMD")]
+    pub send: Vec<String>,
     /// Overwrite FILE if it exists (a device, FIFO or directory is never replaced).
     #[arg(long)]
     pub force: bool,
@@ -68,6 +72,11 @@ enum FromLink {
 
 /// Runs `station record`.
 pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
+    let to_send = args
+        .send
+        .iter()
+        .map(|s| parse_send(s))
+        .collect::<anyhow::Result<Vec<Command>>>()?;
     check_out(&args.out, args.force)?;
     if args.port.len() > MAX_LINKS {
         bail!(
@@ -176,6 +185,7 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
     let mut failure: Option<anyhow::Error> = None;
     let mut ids: Vec<Option<u8>> = vec![None; links.len()];
     let mut warned = Vec::new();
+    let mut sent = vec![false; links.len()];
     let reason = loop {
         let until = async {
             match deadline {
@@ -197,6 +207,15 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
                             *slot = Some(p.robot_id);
                         }
                         warn_duplicates(&labels, &ids, &mut warned);
+                    }
+                    if matches!(c, Connection::Connected(_)) {
+                        // `--send`: once per link, on its first handshake.
+                        let first = sent.get_mut(usize::from(id)).is_some_and(|s| !std::mem::replace(s, true));
+                        if let (true, Some(l)) = (first, links.get(usize::from(id))) {
+                            for cmd in &to_send {
+                                l.handle.submit(cmd.clone());
+                            }
+                        }
                     }
                     rec.on_link_connection(id, &c)
                 }
@@ -269,6 +288,26 @@ fn warn_duplicates(labels: &[String], ids: &[Option<u8>], warned: &mut Vec<u8>) 
             );
         }
     }
+}
+
+/// One `--send` command, parsed as `station send` parses its command.
+fn parse_send(s: &str) -> anyhow::Result<Command> {
+    #[derive(clap::Parser)]
+    #[command(no_binary_name = true)]
+    struct One {
+        #[command(subcommand)]
+        cmd: crate::cli::SendCmd,
+    }
+    let one = <One as clap::Parser>::try_parse_from(s.split_whitespace()).map_err(|e| {
+        anyhow::anyhow!(
+            "--send {:?}: {}",
+            crate::terminal_text::printable(s),
+            e.render()
+        )
+    })?;
+    one.cmd
+        .to_command()
+        .map_err(|e| anyhow::anyhow!("--send {:?}: {e}", crate::terminal_text::printable(s)))
 }
 
 /// Refuses an output that cannot be written, before a port is opened or a file created.

@@ -38,6 +38,15 @@ pub struct ReplayArgs {
     /// An arena file to draw under the map (default: the one recorded, when it can be found).
     #[arg(long, value_name = "FILE")]
     pub arena: Option<PathBuf>,
+    /// Overlay the run retraced through the firmware's own code over its hardware trace (see
+    /// `station retrace`): its track in yellow, the events that differ in the log.
+    #[arg(long)]
+    pub retrace: bool,
+    /// With --retrace: retrace with this parameter changed (NAME=VALUE; repeat for several).
+    /// The sensor data stay the recorded ones: a changed algorithm would have moved the robot
+    /// elsewhere.
+    #[arg(long = "param", value_name = "NAME=VALUE", requires = "retrace")]
+    pub params: Vec<String>,
 }
 
 fn parse_speed(s: &str) -> Result<f64, String> {
@@ -103,6 +112,20 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         .file_name()
         .map_or(file.clone(), |n| n.to_string_lossy().into_owned());
     let label = format!("replay {name}");
+    let retrace = if args.retrace {
+        let params = args
+            .params
+            .iter()
+            .map(|s| crate::retrace::parse_param(s))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(anyhow::Error::msg)?;
+        let bytes = std::fs::read(&args.file).with_context(|| format!("cannot read {file}"))?;
+        let o = crate::retrace::overlay::overlay(&bytes, &params)
+            .map_err(|e| anyhow::anyhow!("cannot retrace: {file}: {e}"))?;
+        Some(std::sync::Arc::new(o))
+    } else {
+        None
+    };
     let session = ReplaySession::new(
         rec,
         &name,
@@ -111,7 +134,8 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
             arena,
         },
         args.speed,
-    );
+    )
+    .with_retrace(retrace);
     super::tui::run(session).await?;
     Ok(ExitCode::SUCCESS)
 }

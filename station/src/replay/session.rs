@@ -40,6 +40,8 @@ pub struct ReplaySession {
     pub help: bool,
     pub quit: bool,
     actions: Vec<Action>,
+    /// `--retrace`: drawn over the map and noted in the log after every restart.
+    retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
 }
 
 impl ReplaySession {
@@ -55,7 +57,7 @@ impl ReplaySession {
         let player = Player::new(duration_us, speed);
         ReplaySession {
             feeds: fresh_feeds(&links),
-            fleet: fresh_fleet(&links, &opts, file, &mut []),
+            fleet: fresh_fleet(&links, &opts, file, None, &mut []),
             links,
             file: file.to_string(),
             opts,
@@ -63,7 +65,18 @@ impl ReplaySession {
             help: false,
             quit: false,
             actions: Vec::new(),
+            retrace: None,
         }
+    }
+
+    /// Draws `retrace` (`station replay --retrace`) over the replay.
+    pub fn with_retrace(
+        mut self,
+        retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
+    ) -> Self {
+        self.retrace = retrace;
+        self.restart();
+        self
     }
 
     /// The recording replayed: the file itself, or with several links, link 0's.
@@ -128,7 +141,13 @@ impl ReplaySession {
     fn restart(&mut self) {
         let mut kept: Vec<App> = self.fleet.members.drain(..).map(|m| m.app).collect();
         let selected = self.fleet.selected();
-        let mut fleet = fresh_fleet(&self.links, &self.opts, &self.file, &mut kept);
+        let mut fleet = fresh_fleet(
+            &self.links,
+            &self.opts,
+            &self.file,
+            self.retrace.as_ref(),
+            &mut kept,
+        );
         fleet.restore_selection(selected);
         self.fleet = fleet;
         self.feeds = fresh_feeds(&self.links);
@@ -252,7 +271,15 @@ impl ReplaySession {
 }
 
 /// One app per link at time 0; `old[i]`, when there, gives robot `i`'s view state.
-fn fresh_fleet(links: &[Recording], opts: &AppOptions, file: &str, old: &mut [App]) -> Fleet {
+/// `retrace` is drawn on robot 1's (link 0's) screen: the retrace reads the file as one
+/// robot's.
+fn fresh_fleet(
+    links: &[Recording],
+    opts: &AppOptions,
+    file: &str,
+    retrace: Option<&std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
+    old: &mut [App],
+) -> Fleet {
     let n = links.len();
     let members = links
         .iter()
@@ -260,6 +287,7 @@ fn fresh_fleet(links: &[Recording], opts: &AppOptions, file: &str, old: &mut [Ap
         .map(|(i, rec)| {
             let mut app = App::new(opts.clone());
             app.replaying = true;
+            app.retrace = retrace.filter(|_| i == 0).cloned();
             if let Some(o) = old.get_mut(i) {
                 app.size = o.size;
                 app.view = o.view;
@@ -305,9 +333,18 @@ fn view_action(app: &App, code: KeyCode) -> Option<Action> {
 /// The lines a replay's log starts with: what is replayed, which of the file's robots this
 /// is when it holds several, and any damage.
 fn notes(app: &mut App, rec: &Recording, file: &str, link: usize, links: usize) {
+    // `--retrace`: what differed, first (robot text is not in it: names and numbers only).
+    let retrace_lines = app
+        .retrace
+        .as_ref()
+        .map(|r| r.lines.clone())
+        .unwrap_or_default();
     let mut note = |level, text: String| {
         app.log.push(LogLine::new(0, level, Source::Link, text));
     };
+    for line in retrace_lines {
+        note(Level::Info, line);
+    }
     note(
         Level::Info,
         format!(

@@ -88,7 +88,7 @@ pub struct Progress {
 
 enum Phase {
     Upload {
-        sender: Sender,
+        sender: Box<Sender>,
         bytes: Vec<u8>,
     },
     /// A `Download` is due at `not_before`.
@@ -256,6 +256,15 @@ impl TransferEngine {
         })
     }
 
+    /// The running upload's sender counts (chunks, resends, probes, timer expiries), for
+    /// reports such as the goodput bench.
+    pub fn upload_stats(&self) -> Option<protocol::transfer::SenderStats> {
+        match &self.active.as_ref()?.phase {
+            Phase::Upload { sender, .. } => Some(sender.stats()),
+            _ => None,
+        }
+    }
+
     /// Ends the running job and every queued one with `Cancelled`.
     pub fn cancel_all(&mut self, now_ms: u64) {
         self.finish(now_ms, JobOutcome::Failed(TransferError::Cancelled), None);
@@ -338,7 +347,7 @@ impl TransferEngine {
         let phase = match spec {
             JobSpec::Upload { object, bytes } => match Sender::for_object(object, &bytes) {
                 Some(sender) => Phase::Upload {
-                    sender: self.sender(sender.begin()),
+                    sender: Box::new(self.sender(sender.begin())),
                     bytes,
                 },
                 None => {
@@ -455,7 +464,7 @@ impl TransferEngine {
         if sender.outcome() == Some(Outcome::TimedOut) && a.attempts < MAX_ATTEMPTS {
             // Begin again: the robot answers with the bytes it holds, so this resumes.
             if let Some(fresh) = fresh {
-                *sender = fresh;
+                **sender = fresh;
             }
             a.attempts += 1;
             poll(sender);
@@ -518,7 +527,7 @@ impl TransferEngine {
         match &mut a.phase {
             Phase::Upload { sender, .. } => {
                 if let Some(fresh) = fresh {
-                    *sender = fresh;
+                    **sender = fresh;
                 }
             }
             Phase::Receiving { have, .. } => {

@@ -53,7 +53,7 @@ pub struct BelievedLayer;
 pub struct GoalLayer;
 
 /// Layers in drawing order: the planner's grid and squares under the arena, plans above it.
-pub static LAYERS: [&dyn MapLayer; 16] = [
+pub static LAYERS: [&dyn MapLayer; 18] = [
     &map_layers::GridLayer,
     &map_layers::RegionsLayer,
     &super::localization::FloorLayer,
@@ -63,8 +63,10 @@ pub static LAYERS: [&dyn MapLayer; 16] = [
     &map_layers::SmoothedLayer,
     &super::transfer::RobotPlanLayer,
     &super::localization::OdometryLayer,
+    &super::qt_map::QtLayer,
     &TruthLayer,
     &super::fleet::FleetLayer,
+    &super::retrace_layer::RetraceLayer,
     &BelievedLayer,
     &super::localization::LinesLayer,
     &super::localization::PpdLayer,

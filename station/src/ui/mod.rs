@@ -18,6 +18,8 @@ pub mod map;
 pub mod map_layers;
 pub mod params;
 pub mod plan_panel;
+pub mod qt_map;
+pub mod retrace_layer;
 pub mod sensors;
 pub mod transfer;
 

@@ -1,0 +1,65 @@
+//! Seed 003 ch. 3 over seeds: one summary line per run and the medians, for measuring what
+//! a change does (`cargo run --release -p emulator --example places_sweep -- structured 1 10`).
+#![allow(clippy::unwrap_used)]
+
+use emulator::unsupervised_places::{run, ArenaKind, PlacesOptions};
+
+fn main() {
+    let a: Vec<String> = std::env::args().collect();
+    let kind = ArenaKind::parse(a.get(1).map_or("unstructured", String::as_str)).unwrap();
+    let lo: u64 = a.get(2).map_or(1, |s| s.parse().unwrap());
+    let hi: u64 = a.get(3).map_or(10, |s| s.parse().unwrap());
+    let dur: f64 = a.get(4).map_or(1200.0, |s| s.parse().unwrap());
+    let mut peaks = Vec::new();
+    for seed in lo..=hi {
+        let mut o = PlacesOptions::new(kind, seed);
+        o.duration_s = dur;
+        if let Ok(v) = std::env::var("LEV_SCALE") {
+            o.landmarks.lev_scale = v.parse().unwrap();
+        }
+        if let Ok(v) = std::env::var("THRESH") {
+            o.landmarks.match_threshold = v.parse().unwrap();
+        }
+        if let Ok(v) = std::env::var("MOTORS") {
+            o.noise.motors = v.parse().unwrap();
+        }
+        if std::env::var("NOEXC").is_ok_and(|v| !v.is_empty()) {
+            o.excursions = false;
+        }
+        if let Ok(v) = std::env::var("HEADING") {
+            o.heading_reset = match v.as_str() {
+                "compass" => emulator::unsupervised_places::HeadingReset::Compass,
+                "keep" => emulator::unsupervised_places::HeadingReset::Keep,
+                _ => emulator::unsupervised_places::HeadingReset::Stored,
+            };
+        }
+        let r = run(&o);
+        let d = r.revisit;
+        println!(
+            "seed {seed:>2}: lm {:>3} match {:>4} worse {:>3} | peak corr {:5.2} (after60 {:5.2}) plain {:5.2} compass {:4.2} mean corr {:4.2} | kernels {:>4} near {:>4} revisit {:>4} matched {:>3} toofar {:>3} samedir {:>4} lev {:?} levsame {:?} odo {:.2} | stats {:?}",
+            r.landmarks, r.matches, r.worsening_matches, r.corrected_peak, r.corrected_peak_after_60s,
+            r.plain_peak, r.compass_peak, r.corrected_mean, d.kernels, d.near_any_landmark, d.revisits,
+            d.revisits_matched, d.revisits_too_far, d.revisits_same_direction,
+            d.revisit_lev.map(|x| (x * 10.0).round() / 10.0),
+            d.revisit_lev_same_direction.map(|x| (x * 10.0).round() / 10.0),
+            d.revisit_odo_dist, r.match_stats
+        );
+        println!(
+            "         impostors {} lev {:?} | matches {} offset mean {:.2} over half {}",
+            d.impostors,
+            d.impostor_lev.map(|x| (x * 10.0).round() / 10.0),
+            d.matches,
+            d.match_offset_mean,
+            d.match_offset_over_half
+        );
+        peaks.push((r.corrected_peak, r.landmarks));
+    }
+    peaks.sort_by(|a, b| a.0.total_cmp(&b.0));
+    println!(
+        "corrected peaks sorted: {:?}",
+        peaks
+            .iter()
+            .map(|p| (p.0 * 100.0).round() / 100.0)
+            .collect::<Vec<_>>()
+    );
+}

@@ -1,0 +1,203 @@
+//! The odometry calibration run (`robot_firmware::odometry_calibration`), as an operator runs
+//! it before a go-to: the Khepera follows the wall counter-clockwise (`EdgeFollowRight`) until
+//! its recogniser closes a lap, then clockwise (`EdgeFollowLeft`) until it closes another; the
+//! solution becomes the parameters `odo_wheel_distance_mm` and `odo_wheel_ratio_ppm`, which a
+//! later run sets before its task (`ScenarioOptions::params`), as a station loads a saved
+//! parameter file.
+//!
+//! What the recogniser sees is what the robot sees: its encoder counts, its believed heading
+//! and its side IR sensor, sampled at 25 Hz (the telemetry rate a station would use). The
+//! emulator's true wheel parameters are NOT given to it; they appear in the report only, to
+//! say how close the calibration came.
+//!
+//! Layer: std, a scenario runner beside `run_scenario`. What can fail: the set-up
+//! ([`ScenarioError`]); laps that do not close in time or a solution out of range are a
+//! report with `error` set and no parameters.
+
+use protocol::{Command, Mode};
+use robot_firmware::behaviour::edge::EdgeParams;
+use robot_firmware::behaviour::{S_LEFT, S_RIGHT};
+use robot_firmware::odometry_calibration::{
+    Calibration, CalibrationParams, LapCalibrator, Next, Sample, WallSide,
+};
+use robot_firmware::params::id as param;
+use serde::Serialize;
+
+use super::{apply, ScenarioError, ScenarioOptions};
+use crate::arena::Arena;
+use crate::sim::Sim;
+
+/// Sampling period, ms (25 Hz telemetry).
+const SAMPLE_MS: u64 = 40;
+/// Simulated seconds the two laps may take by default: a lap of a 1.2 x 1 m box with dead
+/// ends is about 5 m, 100 s at the edge follower's 50 mm/s; two laps and the turn between
+/// them fit in 600 s with room for a detour round a block.
+pub const DEFAULT_TIMEOUT_S: f64 = 600.0;
+
+/// One calibration run's report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CalibrationReport {
+    /// The measured wheel ratio error, ppm (`odo_wheel_ratio_ppm`), if it succeeded.
+    pub wheel_ratio_ppm: Option<f32>,
+    /// The measured effective wheel distance, mm (`odo_wheel_distance_mm`).
+    pub wheel_distance_mm: Option<f32>,
+    /// Both directions closed a lap (else the mean wheel factor was taken as nominal).
+    pub both_directions: bool,
+    /// Each closed lap's drift before calibration, degrees (counter-clockwise, clockwise).
+    pub lap_drift_deg: Vec<f64>,
+    /// Each closed lap's wheel travel, metres (mean of the two wheels).
+    pub lap_length_m: Vec<f64>,
+    /// The emulator's true ratio error, ppm: (1 + right bias) / (1 + left bias) - 1. The
+    /// robot never sees it; it is here to judge the measurement.
+    pub true_ratio_ppm: f64,
+    /// Simulated seconds the calibration took.
+    pub sim_s: f64,
+    /// Why there is no result.
+    pub error: Option<String>,
+}
+
+impl CalibrationReport {
+    /// The parameters to set before a later run, empty if the calibration failed.
+    pub fn params(&self) -> Vec<(u16, f32)> {
+        match (self.wheel_distance_mm, self.wheel_ratio_ppm) {
+            (Some(d), Some(r)) => vec![
+                (param::ODO_WHEEL_DISTANCE_MM, d),
+                (param::ODO_WHEEL_RATIO_PPM, r),
+            ],
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// Runs the calibration in `arena` with `opts`' robot, seed and noise, for at most
+/// `timeout_s` simulated seconds.
+pub fn run_calibration(
+    arena: Arena,
+    opts: &ScenarioOptions,
+    timeout_s: f64,
+) -> Result<CalibrationReport, ScenarioError> {
+    if !(timeout_s.is_finite() && timeout_s > 0.0) {
+        return Err(ScenarioError::BadTimeout(timeout_s));
+    }
+    let mut sim = Sim::new(arena, opts.sim_config())?;
+    let bias = sim.wheel_bias();
+    let true_ratio_ppm = ((1.0 + bias[1]) / (1.0 + bias[0]) - 1.0) * 1e6;
+    let profile = opts.profile;
+    let mut cal = LapCalibrator::new(
+        CalibrationParams::default(),
+        profile.pulse_m * 1000.0,
+        profile.wheel_distance_m * 1000.0,
+    );
+    // A wall is beside when the side sensor reads what the edge follower counts as found.
+    let wall_level = EdgeParams::default().found_level;
+    let mut side = cal.side();
+    apply(&mut sim, follow(side), "SetMode(EdgeFollowRight)")?;
+    let end_ms = (timeout_s * 1000.0).ceil() as u64;
+    let mut outcome = None;
+    while sim.now_us() / 1000 < end_ms {
+        sim.run_for(SAMPLE_MS);
+        let core = sim.robot();
+        let Some(enc) = core.sensors().encoders else {
+            return Err(ScenarioError::Refused {
+                what: "calibration (the robot has no encoders)",
+                reason: protocol::NackReason::Unsupported,
+            });
+        };
+        let sensor = match side {
+            WallSide::Right => S_RIGHT,
+            WallSide::Left => S_LEFT,
+        };
+        let sample = Sample {
+            pulses: [i64::from(enc[0]), i64::from(enc[1])],
+            heading_rad: core.pose().heading,
+            wall_beside: core.sensors().ir[sensor] >= wall_level,
+        };
+        match cal.observe(sample) {
+            Next::Follow(s) if s != side => {
+                side = s;
+                // Turn round on the spot (half a turn by the robot's own heading), so the
+                // wall it was following is now on its other side: the laps go the other way.
+                turn_round(&mut sim, end_ms)?;
+                apply(&mut sim, follow(side), "SetMode(EdgeFollowLeft)")?;
+            }
+            Next::Follow(_) => {}
+            Next::Done(r) => {
+                outcome = Some(r);
+                break;
+            }
+        }
+    }
+    // Out of time: whatever laps closed (one direction is still a wheel ratio).
+    let outcome = outcome.unwrap_or_else(|| cal.finish());
+    let _ = apply(&mut sim, Command::SetMode(Mode::Idle), "SetMode(Idle)");
+    let sim_s = sim.now_us() as f64 * 1e-6;
+    let mut report = CalibrationReport {
+        wheel_ratio_ppm: None,
+        wheel_distance_mm: None,
+        both_directions: false,
+        lap_drift_deg: Vec::new(),
+        lap_length_m: Vec::new(),
+        true_ratio_ppm,
+        sim_s,
+        error: None,
+    };
+    match outcome {
+        Ok(c) => fill(&mut report, &c),
+        Err(e) => report.error = Some(format!("{e:?} after {sim_s:.0} s")),
+    }
+    Ok(report)
+}
+
+/// Turn rate of the turn round, mrad/s (about 0.6 rad/s: 16 mm/s a wheel on a Khepera).
+const TURN_MRAD_S: i16 = 600;
+
+/// Turns the robot half a turn on the spot by its believed heading (Manual mode, a teleop
+/// command every sample as a station's joystick would), then stops.
+fn turn_round(sim: &mut Sim, end_ms: u64) -> Result<(), ScenarioError> {
+    apply(sim, Command::SetMode(Mode::Manual), "SetMode(Manual)")?;
+    let mut last = sim.robot().pose().heading;
+    let mut turned = 0.0f32;
+    while turned < core::f32::consts::PI && sim.now_us() / 1000 < end_ms {
+        apply(
+            sim,
+            Command::Teleop {
+                v_mm_s: 0,
+                w_mrad_s: TURN_MRAD_S,
+            },
+            "Teleop(turn round)",
+        )?;
+        sim.run_for(SAMPLE_MS);
+        let h = sim.robot().pose().heading;
+        turned += robot_firmware::odometry::wrap_angle(h - last);
+        last = h;
+    }
+    apply(
+        sim,
+        Command::Teleop {
+            v_mm_s: 0,
+            w_mrad_s: 0,
+        },
+        "Teleop(stop)",
+    )
+}
+
+fn follow(side: WallSide) -> Command {
+    Command::SetMode(match side {
+        WallSide::Right => Mode::EdgeFollowRight,
+        WallSide::Left => Mode::EdgeFollowLeft,
+    })
+}
+
+fn fill(report: &mut CalibrationReport, c: &Calibration) {
+    report.wheel_ratio_ppm = Some((c.wheel_ratio - 1.0) * 1e6);
+    report.wheel_distance_mm = Some(c.wheel_distance_mm);
+    report.both_directions = c.both_directions;
+    for lap in &c.laps {
+        report
+            .lap_drift_deg
+            .push(f64::from(lap.drift_rad).to_degrees());
+        report
+            .lap_length_m
+            .push(f64::from(lap.left_mm.abs() + lap.right_mm.abs()) / 2000.0);
+    }
+}

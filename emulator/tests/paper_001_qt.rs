@@ -1,0 +1,138 @@
+//! Seed 001 (ALICE) §4.5 reproduced with the QT world model in the simulated test scene, over
+//! seeds 1..=4. Each test states the thesis's figure, ours (as measured when the test was
+//! written, `robot-emulator run --task alice-... --seed N`), the tolerance and the seeds.
+//! What is not reproduced is `#[ignore]`d with the reason and the numbers.
+
+use emulator::alice::experiments::{correlation, dynamic, eps_o, equilibrium, ExperimentReport};
+use world_model::Params;
+
+const SEEDS: [u64; 4] = [1, 2, 3, 4];
+
+fn each(f: fn(u64, &Params) -> Result<ExperimentReport, String>) -> Vec<ExperimentReport> {
+    SEEDS
+        .iter()
+        .map(|&s| f(s, &Params::default()).expect("experiment runs"))
+        .collect()
+}
+
+/// Thesis §4.5.4: "reaches an equilibrium state ... after gathering 5000 sensor situations".
+/// Ours (seeds 1-4): settled (cell count within 10 % of the 8000-sample count from then on)
+/// at 4750, 6500, 6500, 7000; about 130-190 cells. Tolerance: the mean within 5000 +- 1500,
+/// every seed settled by 7500 (the run is 8000).
+#[test]
+fn the_network_reaches_equilibrium_after_about_5000_situations() {
+    let r = each(equilibrium);
+    let at: Vec<u64> = r
+        .iter()
+        .map(|e| e.runs[0].equilibrium_at.expect("settles"))
+        .collect();
+    let mean = at.iter().sum::<u64>() as f64 / at.len() as f64;
+    assert!((3500.0..=6500.0).contains(&mean), "settled at {at:?}");
+    assert!(at.iter().all(|&a| a <= 7500), "settled at {at:?}");
+}
+
+/// Thesis §4.5.1: eps_o = 0.1 gives "only a small number of cells" and muddled connections;
+/// eps_o = 0.005 (one sixth of 0.03) "a huge amount of cells". Ours (seeds 1-4), cells at
+/// 8000: 130/157/262, 123/136/206, 144/182/270, 130/154/222; crossings per edge 0.138/0.049,
+/// 0.102/0.107, 0.072/0.040, 0.094/0.038 (0.1 against 0.03). Tolerance: the ordering of the
+/// cell counts in every seed, 0.005 at least 1.3x the base; the mean crossings at 0.1 above
+/// the base's.
+#[test]
+fn eps_o_large_gives_few_cells_and_muddled_edges_small_gives_many_cells() {
+    let r = each(eps_o);
+    let mut cross = [0.0; 2];
+    for e in &r {
+        let c: Vec<usize> = e.runs.iter().map(|s| s.cells).collect();
+        assert!(c[0] < c[1] && c[1] < c[2], "seed {}: cells {c:?}", e.seed);
+        assert!(
+            c[2] as f64 >= 1.3 * c[1] as f64,
+            "seed {}: cells {c:?}",
+            e.seed
+        );
+        cross[0] += e.runs[0].crossings_per_edge;
+        cross[1] += e.runs[1].crossings_per_edge;
+    }
+    assert!(cross[0] > cross[1], "crossings per edge summed: {cross:?}");
+}
+
+/// Thesis §4.5.1: at eps_o = 0.005 "even the position and orientation correlation fails".
+/// NOT reproduced: late absolute position error (m) at 0.005 against 0.03, seeds 1-4:
+/// 1.13/0.78, 0.80/0.80, 1.54/1.47, 0.77/0.86 (mean 1.06 against 0.98); the tolerance, 1.5x
+/// the base's error in the mean, is not met.
+#[test]
+#[ignore = "not reproduced: eps_o = 0.005 costs cells but not the correlation (mean late error 1.06 m against 0.98 m, seeds 1-4)"]
+fn eps_o_small_makes_the_correlation_fail() {
+    let r = each(eps_o);
+    let (mut small, mut base) = (0.0, 0.0);
+    for e in &r {
+        base += e.runs[1].late_absolute_error_m;
+        small += e.runs[2].late_absolute_error_m;
+    }
+    assert!(
+        small >= 1.5 * base,
+        "late error 0.005 {small} against base {base}"
+    );
+}
+
+/// Thesis §4.5.3: without position or without orientation correlation "none of these
+/// test-runs could be completed without a total loss of consistency". Ours (seeds 1-4), mean
+/// absolute position error over samples 5000-8000, metres, both / no position / no
+/// orientation / plain odometry: 0.78/4.15/1.60/3.56, 0.80/3.45/1.98/3.54,
+/// 1.47/1.96/1.97/2.80, 0.86/3.10/1.90/3.01. Tolerance: each ablation at least 1.25x the
+/// error with both in every seed, and 1.8x in the mean; with both, the mean below 1.5 m.
+#[test]
+fn turning_either_correlation_off_loses_consistency_under_the_drift() {
+    let r = each(correlation);
+    let mut sum = [0.0; 3];
+    for e in &r {
+        let v: Vec<f64> = e.runs.iter().map(|s| s.late_absolute_error_m).collect();
+        assert!(
+            v[1] >= 1.25 * v[0] && v[2] >= 1.25 * v[0],
+            "seed {}: {v:?}",
+            e.seed
+        );
+        for i in 0..3 {
+            sum[i] += v[i];
+        }
+    }
+    let n = r.len() as f64;
+    assert!(sum[0] / n < 1.5, "{sum:?}");
+    assert!(sum[1] >= 1.8 * sum[0] && sum[2] >= 1.8 * sum[0], "{sum:?}");
+}
+
+/// Thesis §4.5.4 dynamic: a wall cut the circle round the pillar until situation 3500 ("a
+/// clear gap"); the gap closed within about 1500 more. NOT reproduced in every seed: edges
+/// across the wall's line (cells placed where they truly win) at removal, seeds 1-4: 8, 0,
+/// 6, 0, so two seeds show no clear gap while the wall stands (our internal position is off
+/// by 0.5-0.8 m, more than the 4 cm wall's two sides need); the closing, 2 edges across,
+/// came 0, 250, 0, 750 samples after removal. Tolerance: at most 1 edge across at removal,
+/// closed within 1500.
+#[test]
+#[ignore = "not reproduced: the gap is not clear while the wall stands in seeds 1 and 3 (8 and 6 edges across at removal)"]
+fn a_removed_wall_leaves_a_gap_that_closes_within_1500_situations() {
+    for e in each(dynamic) {
+        assert!(
+            e.gap_edges_at_removal.unwrap_or(99) <= 1,
+            "seed {}: {:?}",
+            e.seed,
+            e.gap_edges_at_removal
+        );
+        assert!(
+            e.gap_closed_after.is_some_and(|a| a <= 1500),
+            "seed {}: {:?}",
+            e.seed,
+            e.gap_closed_after
+        );
+    }
+}
+
+/// Thesis §5.3: after four runs, time to target 2-3x better, plan refinements 3-4x fewer.
+/// NOT reproduced: those gains come from the path execution's associative memory trained by
+/// reinforcement (§5.2), which is not built; the planner (A* with hill-climbing-to-flooding
+/// weights, `world_model::navigate`) is, and its unit tests check the two strategies.
+#[test]
+#[ignore = "not reproduced: the reinforcement-trained path execution (§5.2) that gives the gains is not built"]
+fn navigation_improves_after_four_runs() {
+    let built = false; // no path execution learner: see the doc comment
+    assert!(built, "the §5.2 path execution is not built");
+}

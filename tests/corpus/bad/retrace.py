@@ -1,0 +1,62 @@
+"""Writes retrace/: recordings whose hardware trace (PROTOCOL.md §6 kind 15, §17) is
+malformed, for `station retrace` (MANIFEST.tsv rows). Needs nothing else:
+    python3 retrace.py
+"""
+import json
+import struct
+
+from generate import crc32c, header, record, varint, write
+
+
+def cobs(raw):
+    out, block = bytearray(), bytearray()
+    for b in raw:
+        if b == 0:
+            out.append(len(block) + 1)
+            out += block
+            block = bytearray()
+        else:
+            block.append(b)
+            if len(block) == 254:
+                out.append(255)
+                out += block
+                block = bytearray()
+    out.append(len(block) + 1)
+    out += block
+    return bytes(out)
+
+
+def frame(kind, seq, payload):
+    raw = bytes([1, kind]) + struct.pack("<H", seq) + payload
+    return cobs(raw + struct.pack("<I", crc32c(raw))) + b"\x00"
+
+
+def hal_trace(offset, data, dropped=0):
+    return frame(15, 1, varint(offset) + varint(dropped) + varint(len(data)) + data)
+
+
+# START: format 1, Khepera, seed 42, start (0.5, 0.5, 0), from power-up, emulated, beacon and
+# bounds.
+START = (bytes([1, 1, 0]) + struct.pack("<I", 42) + struct.pack("<3f", 0.5, 0.5, 0.0)
+         + varint(0) + b"\x01" + struct.pack("<6f", 2.5, 2.5, 0.0, 0.0, 5.0, 5.0))
+META = json.dumps({"created_unix_ms": 0, "writer": "retrace.py", "port": "corpus",
+                   "baud": 115200}).encode()
+
+
+def rec(*traces):
+    body = record(0, 2, b"\x02corpus")
+    for i, data in enumerate(traces):
+        body += record(1000 * (i + 1), 0, data)
+    return header(META) + body + record(10_000, 3, b"stopped")
+
+
+if __name__ == "__main__":
+    write("retrace/01-no-trace.rec", rec())
+    write("retrace/02-no-start.rec", rec(hal_trace(0, b"\x03\x00\x07" + bytes(8))))
+    # A pass whose entry has a tag the format lacks, after a good START and STEP.
+    write("retrace/03-unknown-tag.rec", rec(hal_trace(0, START + b"\x03\x00\x63\x03\x00")))
+    # A serial read claiming a gigabyte.
+    write("retrace/04-huge-rx.rec", rec(hal_trace(0, START + b"\x03\x00\x05" + varint(1 << 30)
+                                                     + b"\x03\x00")))
+    good = rec(hal_trace(0, START + b"\x03\x00\x16\x00\x00\x03\x00"))
+    write("retrace/05-torn-tail.rec", good[:-3])

@@ -1,0 +1,474 @@
+//! The QT model's learning loop (§4.2): one call per sensor sample ([`QtModel::observe`]).
+//!
+//! Per sample:
+//! 1. dead reckoning: the odometry's motion since the last sample (in the odometry's own robot
+//!    frame) is applied to the internal pose, which is the corrected one;
+//! 2. correlation (§4.2.4) against the network built so far: the internal position moves by
+//!    eps_pos towards an estimate from the winner's topological neighbourhood (weighted by
+//!    update counts and inverse situation distances), the heading by eps_or towards the
+//!    orientation that makes the light pattern's principal axis match the geometrically
+//!    nearest cell's (eq. 9-10);
+//! 3. the situation at the corrected pose joins the learning set, and the situations `l` to
+//!    `l + k - 1` samples old are each presented once, so every situation is presented `k`
+//!    times, the first time `l` samples after it was taken (the delay keeps a situation from
+//!    correlating the pose it was taken at). Edges follow the sequence of first presentations
+//!    only: a winner change between two re-presentations of different ages is not a move
+//!    of the robot.
+
+use std::collections::VecDeque;
+
+use serde::Serialize;
+
+use crate::network::Network;
+use crate::params::{OrMethod, ParamError, Params};
+use crate::situation::{axis_difference, principal_axis, ring_shift, situation, Pose, Weights};
+
+/// One sensor sample as the robot gives it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample<'a> {
+    /// Light readings, robot frame, sensor `i` at `i * 360/n` degrees from forward.
+    pub light: &'a [f64],
+    /// Binary touches, same layout.
+    pub touch: &'a [bool],
+    /// The robot's odometry pose (uncorrected, any frame: only its changes are used).
+    pub odometry: Pose,
+}
+
+/// Counters since the model started.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Stats {
+    /// Samples observed.
+    pub samples: u64,
+    /// Adaptation steps (k per sample once the delay is filled).
+    pub adaptations: u64,
+    /// Spontaneous insertions (d_opt > rho_s).
+    pub spontaneous: u64,
+    /// Statistical insertions (every n_insert misses).
+    pub statistical: u64,
+    /// Cells removed because they lost their last edge.
+    pub removed: u64,
+    /// Misses (d_opt > d_acc), n_miss.
+    pub misses: u64,
+    /// Position corrections applied.
+    pub pos_corrections: u64,
+    /// Orientation corrections applied.
+    pub or_corrections: u64,
+}
+
+/// The model: network, internal pose, learning state.
+#[derive(Clone, Debug)]
+pub struct QtModel {
+    params: Params,
+    net: Network,
+    eps_o: f64,
+    eps_n: f64,
+    pose: Pose,
+    last_odometry: Option<Pose>,
+    learning: VecDeque<Vec<f64>>,
+    last_seq_winner: Option<u32>,
+    winner: Option<u32>,
+    stats: Stats,
+    scratch: Vec<u32>,
+    buf: Vec<f64>,
+}
+
+impl QtModel {
+    /// A model with an empty network and the internal pose `start`.
+    pub fn new(params: Params, start: Pose) -> Result<Self, ParamError> {
+        params.validate()?;
+        let net = Network::new(Weights::new(&params), params.g_search, params.max_cells);
+        Ok(QtModel {
+            eps_o: params.eps_o,
+            eps_n: params.eps_n,
+            params,
+            net,
+            pose: start,
+            last_odometry: None,
+            learning: VecDeque::new(),
+            last_seq_winner: None,
+            winner: None,
+            stats: Stats::default(),
+            scratch: Vec::new(),
+            buf: Vec::new(),
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// The network.
+    pub fn network(&self) -> &Network {
+        &self.net
+    }
+
+    /// The internal (corrected) pose.
+    pub fn pose(&self) -> Pose {
+        self.pose
+    }
+
+    /// The winner of the latest first presentation (the cell the robot is "at").
+    pub fn winner(&self) -> Option<u32> {
+        self.winner
+    }
+
+    /// Counters.
+    pub fn stats(&self) -> &Stats {
+        &self.stats
+    }
+
+    /// Switch the correlations (the §4.5.3 ablation) or change any parameter that keeps the
+    /// network's layout (`lights`, `touches` and `g_search` are fixed at creation).
+    pub fn set_params(&mut self, p: Params) -> Result<(), ParamError> {
+        p.validate()?;
+        if p.lights != self.params.lights
+            || p.touches != self.params.touches
+            || p.g_search != self.params.g_search
+        {
+            return Err(ParamError(
+                "lights, touches and g_search are fixed when the model is made".into(),
+            ));
+        }
+        self.params = p;
+        Ok(())
+    }
+
+    /// Integrate one sample. Samples whose reading counts do not match the parameters are
+    /// refused with the reason (untrusted input: a message may be malformed).
+    pub fn observe(&mut self, sample: &Sample) -> Result<(), ParamError> {
+        if sample.light.len() != self.params.lights || sample.touch.len() != self.params.touches {
+            return Err(ParamError(format!(
+                "sample has {} light and {} touch readings; the model expects {} and {}",
+                sample.light.len(),
+                sample.touch.len(),
+                self.params.lights,
+                self.params.touches
+            )));
+        }
+        let o = sample.odometry;
+        if !(o.x.is_finite() && o.y.is_finite() && o.heading.is_finite())
+            || sample.light.iter().any(|v| !v.is_finite())
+        {
+            return Err(ParamError("sample has a non-finite reading or pose".into()));
+        }
+        self.dead_reckon(o);
+        self.correlate(sample);
+        let mut s = Vec::new();
+        situation(&self.params, sample.light, sample.touch, self.pose, &mut s);
+        self.learning.push_back(s);
+        let keep = self.params.l + self.params.k;
+        while self.learning.len() > keep {
+            self.learning.pop_front();
+        }
+        self.stats.samples += 1;
+        // Oldest first; the situation exactly l samples old is the first presentation.
+        let n = self.learning.len();
+        if n > self.params.l {
+            let first = n - 1 - self.params.l;
+            let oldest = (first + 1).saturating_sub(self.params.k);
+            for i in oldest..=first {
+                let s = self.learning[i].clone();
+                self.adapt(&s, i == first);
+            }
+        }
+        Ok(())
+    }
+
+    fn dead_reckon(&mut self, o: Pose) {
+        if let Some(last) = self.last_odometry {
+            let (dx, dy) = (o.x - last.x, o.y - last.y);
+            let (s, c) = last.heading.sin_cos();
+            // The motion in the odometry's robot frame, applied in the internal frame.
+            let (fx, fy) = (c * dx + s * dy, -s * dx + c * dy);
+            let (s, c) = self.pose.heading.sin_cos();
+            self.pose.x += c * fx - s * fy;
+            self.pose.y += s * fx + c * fy;
+            self.pose.heading += wrap(o.heading - last.heading);
+            self.pose.heading = wrap(self.pose.heading);
+        }
+        self.last_odometry = Some(o);
+    }
+
+    fn correlate(&mut self, sample: &Sample) {
+        if self.net.is_empty() {
+            return;
+        }
+        let p = self.params.clone();
+        let at = (self.pose.x, self.pose.y);
+        if p.eps_pos > 0.0 {
+            let mut s = std::mem::take(&mut self.buf);
+            situation(&p, sample.light, sample.touch, self.pose, &mut s);
+            if let Some((w, d)) = self.net.winner(&s, at, p.g_search, &mut self.scratch) {
+                let _ = d;
+                let mut members = vec![w];
+                if let Some(c) = self.net.cell(w) {
+                    members.extend(c.edges.iter().map(|e| e.0));
+                }
+                // Weights from the sensor part only: the position part of the distance was
+                // measured from the very position being corrected, and would vote for it.
+                let sensor = p.lights + p.touches;
+                let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
+                for id in members {
+                    let Some(c) = self.net.cell(id) else { continue };
+                    let d = self.net.distance_part(&c.s, &s, sensor);
+                    let u = c.updates as f64;
+                    let wt = (1.0 + u).ln_1p() * (-(d * d) / (p.d_acc * p.d_acc)).exp();
+                    let (x, y) = self.net.position(id);
+                    sx += wt * x;
+                    sy += wt * y;
+                    sw += wt;
+                }
+                if sw > 0.0 {
+                    self.pose.x += p.eps_pos * (sx / sw - self.pose.x);
+                    self.pose.y += p.eps_pos * (sy / sw - self.pose.y);
+                    self.stats.pos_corrections += 1;
+                }
+            }
+            self.buf = s;
+        }
+        if p.eps_or > 0.0 {
+            let at = (self.pose.x, self.pose.y);
+            if let Some((near, _)) = self.net.nearest(at, p.or_radius, &mut self.scratch) {
+                let mut light = std::mem::take(&mut self.buf);
+                crate::situation::rotate_to_world(sample.light, self.pose.heading, &mut light);
+                let error = match p.or_method {
+                    OrMethod::Axis => {
+                        let cur = principal_axis(&light);
+                        let stored = self
+                            .net
+                            .cell(near)
+                            .and_then(|c| principal_axis(&c.s[..p.lights]));
+                        match (cur, stored) {
+                            (Some((oc, rc)), Some((on, rn)))
+                                if rc >= p.or_min_anisotropy && rn >= p.or_min_anisotropy =>
+                            {
+                                Some(axis_difference(oc, on))
+                            }
+                            _ => None,
+                        }
+                    }
+                    OrMethod::Shift => self.net.cell(near).and_then(|c| {
+                        ring_shift(&light, &c.s[..p.lights], p.or_max_shift, p.or_max_residual)
+                    }),
+                };
+                if let Some(e) = error {
+                    // The world-frame pattern turns with the heading error: undo part of it.
+                    self.pose.heading = wrap(self.pose.heading - p.eps_or * e);
+                    self.stats.or_corrections += 1;
+                }
+                self.buf = light;
+            }
+        }
+    }
+
+    fn adapt(&mut self, s: &[f64], first: bool) {
+        let p = &self.params;
+        self.stats.adaptations += 1;
+        let at = Network::pos_of(s);
+        let found = self.net.winner(s, at, p.g_search, &mut self.scratch);
+        let (winner, d_opt) = match found {
+            Some((w, d)) if d <= p.rho_s => {
+                let slow = |u: u32| if u >= p.n_fix { p.fix_slowdown } else { 1.0 };
+                let u = self.net.cell(w).map_or(0, |c| c.updates);
+                self.net.move_toward(w, s, self.eps_o * slow(u));
+                if self.eps_n > 0.0 {
+                    let ns: Vec<u32> = self
+                        .net
+                        .cell(w)
+                        .map_or(Vec::new(), |c| c.edges.iter().map(|e| e.0).collect());
+                    for n in ns {
+                        let u = self.net.cell(n).map_or(0, |c| c.updates);
+                        self.net.move_toward(n, s, self.eps_n * slow(u));
+                    }
+                }
+                (w, d)
+            }
+            _ => {
+                // Spontaneous insertion: the situation itself becomes a cell, joined to the
+                // cell it was nearest to (so a newborn cell is never isolated).
+                let d = found.map_or(f64::INFINITY, |f| f.1);
+                let Some(id) = self.net.insert(s.to_vec(), 0.0) else {
+                    return;
+                };
+                self.stats.spontaneous += 1;
+                if let Some((w, _)) = found {
+                    self.net.set_edge(id, w, 1.0);
+                }
+                (id, d)
+            }
+        };
+        let p = &self.params;
+        let miss = d_opt > p.d_acc;
+        if let Some(c) = self.net.cell_mut(winner) {
+            if d_opt.is_finite() {
+                c.d_total += d_opt;
+            }
+            c.updates = c.updates.saturating_add(1);
+        }
+        if miss {
+            self.eps_o = p.eps_o;
+            self.eps_n = p.eps_n;
+            self.stats.misses += 1;
+            if self.stats.misses % p.n_insert as u64 == 0 {
+                self.statistical_insert();
+            }
+        } else {
+            self.eps_o *= p.eps_delta;
+            self.eps_n = 0.0;
+        }
+        if first {
+            if let Some(old) = self.last_seq_winner {
+                if old != winner && self.net.cell(winner).is_some() {
+                    let removed = self.net.winner_changed(winner, old, self.params.a_red);
+                    self.stats.removed += removed.len() as u64;
+                }
+            }
+            self.last_seq_winner = Some(winner);
+            self.winner = Some(winner);
+        }
+    }
+
+    /// Insert between the cell with the largest accumulated error and its (situation-)
+    /// farthest neighbour: mean light and position, minimal (zero) touch (§4.2.3).
+    fn statistical_insert(&mut self) {
+        let Some((runner, _)) = self
+            .net
+            .cells()
+            .filter(|(_, c)| !c.edges.is_empty())
+            .max_by(|a, b| a.1.d_total.total_cmp(&b.1.d_total))
+            .map(|(id, c)| (id, c.d_total))
+        else {
+            return;
+        };
+        let Some(rc) = self.net.cell(runner) else {
+            return;
+        };
+        let far = rc
+            .edges
+            .iter()
+            .filter_map(|&(n, _)| {
+                self.net
+                    .cell(n)
+                    .map(|c| (n, self.net.distance(&c.s, &rc.s)))
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(n, _)| n);
+        let Some(far) = far else { return };
+        let (Some(a), Some(b)) = (self.net.cell(runner), self.net.cell(far)) else {
+            return;
+        };
+        let l = self.params.lights;
+        let t = self.params.touches;
+        let mut s: Vec<f64> = a.s.iter().zip(&b.s).map(|(x, y)| 0.5 * (x + y)).collect();
+        for v in &mut s[l..l + t] {
+            *v = 0.0;
+        }
+        let half = 0.5 * a.d_total;
+        let Some(id) = self.net.insert(s, half) else {
+            return;
+        };
+        self.stats.statistical += 1;
+        if let Some(c) = self.net.cell_mut(runner) {
+            c.d_total = half;
+        }
+        if let Some(c) = self.net.cell_mut(far) {
+            c.d_total *= 0.5;
+        }
+        self.net.set_edge(runner, far, 0.0);
+        self.net.set_edge(id, runner, 1.0);
+        self.net.set_edge(id, far, 1.0);
+    }
+}
+
+/// Angle wrapped to (-pi, pi].
+pub fn wrap(a: f64) -> f64 {
+    let t = std::f64::consts::TAU;
+    let r = a.rem_euclid(t);
+    if r > std::f64::consts::PI {
+        r - t
+    } else {
+        r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ring(x: f64, y: f64) -> Vec<f64> {
+        // A lamp north-east: brighter nearer to it, seen in its direction.
+        let (lx, ly) = (3.0, 3.0);
+        let bearing = (ly - y).atan2(lx - x);
+        let d2 = (lx - x).powi(2) + (ly - y).powi(2);
+        (0..24)
+            .map(|i| {
+                let a = i as f64 * std::f64::consts::TAU / 24.0;
+                let off = wrap(bearing - a);
+                (2.0 / d2) * (-(off * off) / 0.1).exp()
+            })
+            .collect()
+    }
+
+    /// With exact odometry the model grows cells along the way and joins consecutive winners;
+    /// malformed samples are refused with the reason.
+    #[test]
+    fn a_walk_builds_a_connected_chain_and_bad_samples_are_refused() {
+        let mut m = QtModel::new(Params::default(), Pose::default()).expect("valid");
+        let touch = vec![false; 24];
+        for i in 0..60 {
+            let x = 0.05 * f64::from(i);
+            let light = ring(x, 0.0);
+            let s = Sample {
+                light: &light,
+                touch: &touch,
+                odometry: Pose {
+                    x,
+                    y: 0.0,
+                    heading: 0.0,
+                },
+            };
+            m.observe(&s).expect("valid sample");
+        }
+        let net = m.network();
+        assert!(net.len() >= 5, "{} cells", net.len());
+        assert!(
+            net.cells().all(|(_, c)| !c.edges.is_empty()),
+            "no isolated cell"
+        );
+        assert_eq!(m.stats().samples, 60);
+        let light = ring(0.0, 0.0);
+        let short = Sample {
+            light: &light[..10],
+            touch: &touch,
+            odometry: Pose::default(),
+        };
+        assert!(m.observe(&short).is_err());
+        let nan = Sample {
+            light: &light,
+            touch: &touch,
+            odometry: Pose {
+                x: f64::NAN,
+                y: 0.0,
+                heading: 0.0,
+            },
+        };
+        assert!(m.observe(&nan).is_err());
+        assert_eq!(m.stats().samples, 60, "refused samples change nothing");
+    }
+
+    /// Every named parameter can be set by name and is range-checked.
+    #[test]
+    fn parameters_are_settable_by_name_and_checked() {
+        let mut p = Params::default();
+        p.set("eps_o", "0.05").expect("in range");
+        assert_eq!(p.eps_o, 0.05);
+        assert!(p.set("a_red", "0").is_err());
+        assert!(p.set("eps_delta", "1").is_err());
+        assert!(p.set("nope", "1").is_err());
+        // A refused value leaves the parameters as they were (it used to stay, invalid).
+        assert_eq!(p.a_red, Params::default().a_red);
+        p.validate().expect("still valid");
+        assert!(p.set("or_method", "axis").is_ok());
+    }
+}
