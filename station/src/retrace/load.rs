@@ -70,7 +70,8 @@ pub fn load(bytes: &[u8]) -> Result<Loaded, String> {
     let mut frame: Vec<u8> = Vec::new();
     let mut stream_open = false;
     while at < bytes.len() {
-        let (rec, next) = parse_record(bytes, at, header.version, links).map_err(|e| e.to_string())?;
+        let (rec, next) =
+            parse_record(bytes, at, header.version, links).map_err(|e| e.to_string())?;
         let offset = at as u64;
         at = next;
         match rec.kind {
