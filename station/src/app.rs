@@ -1008,9 +1008,14 @@ impl App {
     fn on_recording(&mut self, note: crate::record::live::RecordingNote) {
         use crate::record::live::RecordingNote;
         let (level, text) = match note {
-            RecordingNote::Started { file } => {
+            RecordingNote::Started { file, links } => {
                 self.recording = Some((file.clone(), self.now_ms));
-                (Level::Info, format!("recording to {file} (R stops)"))
+                let what = if links > 1 {
+                    format!("recording all {links} robots' links to {file}")
+                } else {
+                    format!("recording to {file}")
+                };
+                (Level::Info, format!("{what} (R stops)"))
             }
             RecordingNote::Stopped {
                 file,

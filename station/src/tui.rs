@@ -62,8 +62,8 @@ pub async fn run(app: App, link: RunningLink, recorder: TuiRecorder) -> io::Resu
 }
 
 /// `run` for several robots: `links[i]` is robot `i`'s link (`fleet`: one link task per
-/// port; one robot's link going down leaves the others' alone). `recorder` records the first
-/// link's tap.
+/// port; one robot's link going down leaves the others' alone). `recorder` records every
+/// link's tap (`R`), all into one file.
 pub async fn run_fleet(
     mut fleet: Fleet,
     mut links: Vec<RunningLink>,
@@ -288,13 +288,11 @@ async fn event_loop(
     result
 }
 
-/// One link event from robot `i`: to the recorder (connection changes of the link it
-/// records, the first), then to the fleet.
+/// One link event from robot `i`: to the recorder (connection changes of every link it
+/// records: all of them), then to the fleet.
 fn on_link(fleet: &mut Fleet, recorder: &mut TuiRecorder, i: usize, ev: crate::link::LinkEvent) {
-    if i == 0 {
-        if let Some(note) = recorder.on_link_event(&ev) {
-            fleet.update(Action::Recording(note));
-        }
+    if let Some(note) = recorder.on_event_of(i, &ev) {
+        fleet.update(Action::Recording(note));
     }
     fleet.on_link(i, ev);
 }

@@ -22,7 +22,7 @@ fn session() -> ReplaySession {
         },
         1.0,
     );
-    s.app.update(Action::Resize {
+    s.app_mut().update(Action::Resize {
         width: 100,
         height: 30,
     });
@@ -62,7 +62,7 @@ fn replay_link_view_with_help_at_100x30() {
     let mut s = session();
     s.sync(10_500_000);
     key(&mut s, 10_500_000, KeyCode::F(5));
-    assert_eq!(s.app.view, View::Link);
+    assert_eq!(s.app().view, View::Link);
     key(&mut s, 10_500_000, KeyCode::Char('?'));
     assert!(s.help);
     insta::assert_snapshot!(screen(&s, 10_500_000));
@@ -72,25 +72,29 @@ fn replay_link_view_with_help_at_100x30() {
 fn keys_pause_seek_both_ways_and_change_speed() {
     let mut s = session();
     s.sync(3_000_000);
-    let at_3 = s.app.telemetry.unwrap();
+    let at_3 = s.app().telemetry.unwrap();
     key(&mut s, 3_000_000, KeyCode::Char(' '));
     assert!(s.player.paused());
     s.sync(9_000_000);
-    assert_eq!(s.app.telemetry.unwrap(), at_3, "paused: nothing moves");
+    assert_eq!(s.app().telemetry.unwrap(), at_3, "paused: nothing moves");
     key(&mut s, 9_000_000, KeyCode::Right);
     assert_eq!(s.player.position(9_000_000), 8_000_000);
-    let log_at_8 = s.app.log.len();
+    let log_at_8 = s.app().log.len();
     key(&mut s, 9_000_000, KeyCode::Left);
     key(&mut s, 9_000_000, KeyCode::Left);
     assert_eq!(s.player.position(9_000_000), 0);
     key(&mut s, 9_000_000, KeyCode::Right);
     assert_eq!(
-        s.app.telemetry.unwrap().time_ms,
+        s.app().telemetry.unwrap().time_ms,
         at_3.time_ms + 2000,
         "seeking back replays from the start to the same state"
     );
     key(&mut s, 9_000_000, KeyCode::End);
-    assert_eq!(s.app.log.len(), log_at_8, "the log is rebuilt, not doubled");
+    assert_eq!(
+        s.app().log.len(),
+        log_at_8,
+        "the log is rebuilt, not doubled"
+    );
     key(&mut s, 9_000_000, KeyCode::Home);
     key(&mut s, 9_000_000, KeyCode::Char('+'));
     assert_eq!(s.player.speed(), 2.0);
@@ -105,8 +109,8 @@ fn keys_pause_seek_both_ways_and_change_speed() {
     }
     key(&mut s, 10_000_000, KeyCode::Up);
     key(&mut s, 10_000_000, KeyCode::Enter);
-    assert!(s.app.take_outbox().is_empty());
-    assert!(!s.app.teleop.driving);
+    assert!(s.app_mut().take_outbox().is_empty());
+    assert!(!s.app().teleop.driving);
     key(&mut s, 10_000_000, KeyCode::Char('q'));
     assert!(s.quit);
 }

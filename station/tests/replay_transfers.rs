@@ -52,6 +52,6 @@ fn a_replayed_download_leaves_no_answers_behind() {
         s.sync(0);
     }
     assert_eq!(s.player.position(0), end);
-    assert!(s.app.take_outbox().is_empty());
-    assert_eq!(s.app.transfers.take_frames().len(), 0);
+    assert!(s.app_mut().take_outbox().is_empty());
+    assert_eq!(s.app_mut().transfers.take_frames().len(), 0);
 }

@@ -78,7 +78,10 @@ fn fleet_line(screen: &[String], k: usize) -> String {
     screen
         .iter()
         .find(|r| {
-            r.contains(&format!("{k} micro-rato {k} ")) || r.contains(&format!("{k} robot {k} "))
+            // Labelled by the id the robot states ("micro-rato #2"), or by its place before.
+            r.contains(&format!("{k} micro-rato #"))
+                || r.contains(&format!("{k} micro-rato {k} "))
+                || r.contains(&format!("{k} robot {k} "))
         })
         .cloned()
         .unwrap_or_default()

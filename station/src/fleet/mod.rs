@@ -112,6 +112,15 @@ impl Fleet {
     }
 
     /// The selected robot's app: what the screen shows and the keys drive.
+    /// Selects robot `i` as it was before the fleet was rebuilt (a replay seeking back):
+    /// no log line, no teleop to stop.
+    pub fn restore_selection(&mut self, i: usize) {
+        if i < self.len() {
+            self.selected = i;
+            self.sync_overlay();
+        }
+    }
+
     pub fn app(&self) -> &App {
         &self.members[self.selected].app
     }
@@ -144,7 +153,8 @@ impl Fleet {
                 self.select(i as usize);
             }
             Action::StopAll => self.stop_all(),
-            Action::Tick { .. } | Action::Resize { .. } => {
+            // The recording holds every robot's link: each robot's header shows it.
+            Action::Tick { .. } | Action::Resize { .. } | Action::Recording(_) => {
                 for m in &mut self.members {
                     m.app.update(action.clone());
                 }

@@ -100,25 +100,25 @@ pub async fn interactive(
             .map(|p| (p.clone(), p.display().to_string()))
             .collect()
     };
-    // The `R` key records the first robot's link (recording several links in one file is
-    // the recorder's own work).
-    let (tap, taps) = tokio::sync::mpsc::unbounded_channel();
-    let first = targets.first().map(|(_, l)| l.clone()).unwrap_or_default();
-    let mut meta = crate::record::Meta::now(&first, baud);
+    // The `R` key records every robot's link into one file (link id `i` = robot `i`): each
+    // link its own tap and clock origin, taken just before it is spawned.
+    let ports: Vec<String> = targets.iter().map(|(_, l)| l.clone()).collect();
+    let mut meta = crate::record::Meta::now_links(&ports, baud);
     meta.arena = match (arena, &builtin) {
         (Some(p), _) => p.display().to_string(),
         (None, Some(_)) => emulator::builtin::MICRO_RATO_99.to_string(),
         (None, None) => String::new(),
     };
-    let epoch = tokio::time::Instant::now();
-    let mut tap = Some(tap);
+    let mut taps = Vec::with_capacity(targets.len());
     let mut links = Vec::with_capacity(targets.len());
     let mut members = Vec::with_capacity(targets.len());
     for (path, label) in &targets {
+        let (tap, tapped) = tokio::sync::mpsc::unbounded_channel();
+        taps.push((tapped, tokio::time::Instant::now()));
         links.push(spawn_link(
             SerialConnector::new(path, baud).paced(true),
             LinkOptions {
-                tap: tap.take(),
+                tap: Some(tap),
                 paced: true,
                 key: key.map(|k| protocol::LinkKey::new(&k)),
                 ..LinkOptions::default()
@@ -135,7 +135,7 @@ pub async fn interactive(
             port: path.display().to_string(),
         });
     }
-    let recorder = crate::record::live::TuiRecorder::new(taps, epoch, meta);
+    let recorder = crate::record::live::TuiRecorder::new_links(taps, meta);
     crate::tui::run_fleet(Fleet::new(members), links, recorder).await?;
     drop(builtin);
     Ok(ExitCode::SUCCESS)

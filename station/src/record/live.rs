@@ -285,8 +285,8 @@ impl PeerRecord {
 /// What the TUI's recorder tells the app.
 #[derive(Clone, Debug, PartialEq)]
 pub enum RecordingNote {
-    /// Recording to `file` started.
-    Started { file: String },
+    /// Recording to `file` started, of `links` links (a fleet's robots all in one file).
+    Started { file: String, links: usize },
     /// The recording was finished and renamed to `file`.
     Stopped {
         file: String,
@@ -297,18 +297,25 @@ pub enum RecordingNote {
     Failed { why: String },
 }
 
-/// The TUI's record key: the link's tap, always drained, written to a file while recording.
+/// The TUI's record key: the links' taps, always drained, written to one file while recording
+/// (a fleet's links all into one, link `i` as link id `i`).
 ///
 /// Layer: I/O, owned by the TUI loop (the I/O edge); the app only hears `RecordingNote`s. The
-/// loop drains the tap whenever it wakes (link events come with every read, ticks 20 times a
-/// second), so the channel stays short; taps arriving while not recording are dropped.
+/// loop drains the taps whenever it wakes (link events come with every read, ticks 20 times a
+/// second), so the channels stay short; taps arriving while not recording are dropped.
 pub struct TuiRecorder {
-    tap: Option<tokio::sync::mpsc::UnboundedReceiver<TapRecord>>,
-    epoch: Instant,
+    links: Vec<TapLink>,
     meta: Meta,
     dir: std::path::PathBuf,
-    connection: Connection,
     active: Option<LiveRecorder>,
+}
+
+/// One recorded link: its tap, its clock origin, its connection state now (so a recording
+/// started mid-session knows the robot).
+struct TapLink {
+    tap: tokio::sync::mpsc::UnboundedReceiver<TapRecord>,
+    epoch: Instant,
+    connection: Connection,
 }
 
 impl TuiRecorder {
@@ -318,30 +325,35 @@ impl TuiRecorder {
         epoch: Instant,
         meta: Meta,
     ) -> TuiRecorder {
+        TuiRecorder::new_links(vec![(tap, epoch)], meta)
+    }
+
+    /// A recorder over several links, by link id: each one's tap and clock origin. `meta`
+    /// names them (`Meta::now_links`).
+    pub fn new_links(
+        taps: Vec<(tokio::sync::mpsc::UnboundedReceiver<TapRecord>, Instant)>,
+        meta: Meta,
+    ) -> TuiRecorder {
         TuiRecorder {
-            tap: Some(tap),
-            epoch,
+            links: taps
+                .into_iter()
+                .map(|(tap, epoch)| TapLink {
+                    tap,
+                    epoch,
+                    connection: Connection::Closed {
+                        reason: "starting".into(),
+                    },
+                })
+                .collect(),
             meta,
             dir: std::path::PathBuf::from("."),
-            connection: Connection::Closed {
-                reason: "starting".into(),
-            },
             active: None,
         }
     }
 
     /// A recorder that cannot record (no tap).
     pub fn disabled() -> TuiRecorder {
-        TuiRecorder {
-            tap: None,
-            epoch: Instant::now(),
-            meta: Meta::default(),
-            dir: std::path::PathBuf::from("."),
-            connection: Connection::Closed {
-                reason: "starting".into(),
-            },
-            active: None,
-        }
+        TuiRecorder::new_links(Vec::new(), Meta::default())
     }
 
     /// Records into `dir` instead of the current directory.
@@ -354,31 +366,46 @@ impl TuiRecorder {
         self.active.is_some()
     }
 
-    /// Takes every tapped record waiting (recording them if recording, dropping them if
-    /// not); call whenever the loop wakes. The records carry their own times.
+    /// Takes every tapped record waiting on every link (recording them if recording,
+    /// dropping them if not); call whenever the loop wakes. The records carry their own times.
     pub fn drain_taps(&mut self) -> Option<RecordingNote> {
         let mut note = None;
-        while let Some(t) = self.tap.as_mut().and_then(|r| r.try_recv().ok()) {
-            if let Some(n) = self.on_tap(&t) {
-                note = Some(n);
+        for i in 0..self.links.len() {
+            while let Some(t) = self.links.get_mut(i).and_then(|l| l.tap.try_recv().ok()) {
+                if let Some(n) = self.on_link_tap(i, &t) {
+                    note = Some(n);
+                }
             }
         }
         note
     }
 
-    /// Records tapped bytes if recording.
+    /// Records bytes tapped from link 0 if recording.
     pub fn on_tap(&mut self, t: &TapRecord) -> Option<RecordingNote> {
-        let r = self.active.as_mut()?.on_tap(t);
+        self.on_link_tap(0, t)
+    }
+
+    fn on_link_tap(&mut self, link: usize, t: &TapRecord) -> Option<RecordingNote> {
+        let r = self.active.as_mut()?.on_link_tap(link_id(link), t);
         self.check(r)
     }
 
-    /// Notes a link event: connection changes are recorded.
+    /// Notes a link event of link 0: connection changes are recorded.
     pub fn on_link_event(&mut self, ev: &crate::link::LinkEvent) -> Option<RecordingNote> {
+        self.on_event_of(0, ev)
+    }
+
+    /// Notes a link event of link `link`: connection changes are recorded.
+    pub fn on_event_of(
+        &mut self,
+        link: usize,
+        ev: &crate::link::LinkEvent,
+    ) -> Option<RecordingNote> {
         let crate::link::LinkEvent::Connection(c) = ev else {
             return None;
         };
-        self.connection = c.clone();
-        let r = self.active.as_mut()?.on_connection(c);
+        self.links.get_mut(link)?.connection = c.clone();
+        let r = self.active.as_mut()?.on_link_connection(link_id(link), c);
         self.check(r)
     }
 
@@ -409,7 +436,7 @@ impl TuiRecorder {
     }
 
     fn start(&mut self) -> RecordingNote {
-        if self.tap.is_none() {
+        if self.links.is_empty() {
             return RecordingNote::Failed {
                 why: "this link has no tap to record".into(),
             };
@@ -418,11 +445,17 @@ impl TuiRecorder {
         let now = Meta::now(&meta.port, meta.baud);
         meta.created_unix_ms = now.created_unix_ms;
         let path = free_name(&self.dir, meta.created_unix_ms);
-        match LiveRecorder::start(&path, &meta, false, self.epoch, &self.connection) {
+        let links: Vec<(Instant, Connection)> = self
+            .links
+            .iter()
+            .map(|l| (l.epoch, l.connection.clone()))
+            .collect();
+        match LiveRecorder::start_links(&path, &meta, false, &links) {
             Ok(r) => {
                 self.active = Some(r);
                 RecordingNote::Started {
                     file: path.display().to_string(),
+                    links: links.len(),
                 }
             }
             Err(e) => RecordingNote::Failed {

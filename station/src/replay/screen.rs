@@ -25,6 +25,8 @@ pub struct ReplayStatus<'a> {
     /// Where the recording is damaged, if it is (shown in red).
     pub damage_offset: Option<u64>,
     pub file: &'a str,
+    /// Robots (links) in the file: with several, the picker's keys are listed too.
+    pub robots: usize,
 }
 
 /// Draws the whole replay screen.
@@ -130,6 +132,12 @@ pub fn progress_line(st: &ReplayStatus<'_>, width: u16) -> Line<'static> {
     Line::from(spans)
 }
 
+/// The picker's keys in the replay of several robots (`fleet::input`, less "stop all").
+pub const FLEET_KEYS: &[(&str, &str)] = &[
+    ("Tab Alt-1…9", "pick the robot whose panels are shown"),
+    ("F1-F7", "views (Tab picks robots here)"),
+];
+
 /// The replay keys.
 pub const KEYS: &[(&str, &str)] = &[
     ("space", "pause / resume (at the end: from the start)"),
@@ -146,14 +154,19 @@ pub const KEYS: &[(&str, &str)] = &[
 
 fn help(frame: &mut Frame, area: Rect, st: &ReplayStatus<'_>) {
     let width = 64.min(area.width);
-    let height = (KEYS.len() as u16 + 4).min(area.height);
+    let keys: Vec<(&str, &str)> = if st.robots > 1 {
+        KEYS.iter().chain(FLEET_KEYS).copied().collect()
+    } else {
+        KEYS.to_vec()
+    };
+    let height = (keys.len() as u16 + 4).min(area.height);
     let r = Rect {
         x: area.x + (area.width - width) / 2,
         y: area.y + (area.height - height) / 2,
         width,
         height,
     };
-    let mut lines: Vec<Line> = KEYS
+    let mut lines: Vec<Line> = keys
         .iter()
         .map(|(k, what)| {
             Line::from(vec![
@@ -197,6 +210,7 @@ mod tests {
             help: false,
             damage_offset: Some(1234),
             file: "x.rec",
+            robots: 1,
         };
         for w in [0u16, 10, 40, 80, 200] {
             let line = progress_line(&st, w);

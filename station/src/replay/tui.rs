@@ -15,7 +15,6 @@ use tokio::sync::mpsc;
 use tokio::time::Instant;
 
 use super::session::ReplaySession;
-use crate::action::Action;
 
 /// Most frames drawn per second.
 pub const MAX_FPS: u64 = 30;
@@ -39,10 +38,10 @@ async fn event_loop(
     signals: &mut crate::tui::StopSignals,
 ) -> io::Result<()> {
     let size = terminal.size()?;
-    s.app.update(Action::Resize {
-        width: size.width,
-        height: size.height,
-    });
+    s.event(
+        0,
+        &ratatui::crossterm::event::Event::Resize(size.width, size.height),
+    );
     let (input_tx, mut input_rx) = mpsc::unbounded_channel();
     let reader = crate::tui::spawn_reader(input_tx);
     let t0 = Instant::now();

@@ -114,11 +114,19 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         })
         .collect();
     let n = f.robots.len();
-    let title = format!(
-        " Fleet: {} of {n} — Tab/Alt-1..{n}/click picks, {} stops all ",
-        f.selected + 1,
-        crate::fleet::input::STOP_ALL_KEY
-    );
+    // A replay sends nothing: no "stop all" there.
+    let title = if app.replaying {
+        format!(
+            " Fleet: {} of {n} — Tab/Alt-1..{n}/click picks ",
+            f.selected + 1
+        )
+    } else {
+        format!(
+            " Fleet: {} of {n} — Tab/Alt-1..{n}/click picks, {} stops all ",
+            f.selected + 1,
+            crate::fleet::input::STOP_ALL_KEY
+        )
+    };
     frame.render_widget(
         Paragraph::new(lines).block(Block::bordered().title(title)),
         area,

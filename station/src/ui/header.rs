@@ -115,10 +115,15 @@ fn header_line(app: &App, d: Detail) -> Line<'static> {
         let name = std::path::Path::new(file)
             .file_name()
             .map_or_else(|| file.clone(), |n| n.to_string_lossy().into_owned());
+        // A fleet's recording holds every robot's link (`R` records them all).
+        let rec = match app.fleet.as_ref().filter(|_| app.in_fleet()) {
+            Some(f) => format!("● REC {} robots", f.robots.len()),
+            None => "● REC".to_string(),
+        };
         let text = if d >= Detail::ShortRec {
-            format!("● REC {}:{:02}", s / 60, s % 60)
+            format!("{rec} {}:{:02}", s / 60, s % 60)
         } else {
-            format!("● REC {name} {}:{:02}", s / 60, s % 60)
+            format!("{rec} {name} {}:{:02}", s / 60, s % 60)
         };
         spans.push(sep());
         spans.push(Span::styled(text, Style::new().fg(Color::Red).bold()));

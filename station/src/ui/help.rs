@@ -72,7 +72,10 @@ pub const KEYS: &[(&str, &str)] = &[
         "L  /",
         "log: minimum severity (all info warn error) / text filter",
     ),
-    ("R", "record the link to a file here; R again saves it"),
+    (
+        "R",
+        "record the link (a fleet: every robot's) to a file here; R again saves it",
+    ),
 ];
 
 /// With several robots, these come first (`fleet::input`).
