@@ -53,7 +53,7 @@ pub struct BelievedLayer;
 pub struct GoalLayer;
 
 /// Layers in drawing order: the planner's grid and squares under the arena, plans above it.
-pub static LAYERS: [&dyn MapLayer; 16] = [
+pub static LAYERS: [&dyn MapLayer; 17] = [
     &map_layers::GridLayer,
     &map_layers::RegionsLayer,
     &super::localization::FloorLayer,
