@@ -83,6 +83,8 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
         .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
     let link = opts.serve.link.clone();
     let mut sim = sim;
+    // The truth a calibration is judged against (never sent to the station).
+    let bias = sim.wheel_bias();
     let stats = emulator::link::serve(&mut sim, &opts.serve, &stop, &mut |path| {
         // The one line a script waits for: the port to open.
         println!("{}", path.display());
@@ -101,10 +103,15 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
     })
     .map_err(|e| e.to_string())?;
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string(&stats).map_err(|e| e.to_string())?
-        );
+        let mut v = serde_json::to_value(&stats).map_err(|e| e.to_string())?;
+        if let Some(o) = v.as_object_mut() {
+            o.insert("wheel_bias".into(), serde_json::json!(bias));
+            o.insert(
+                "true_ratio_ppm".into(),
+                serde_json::json!(((1.0 + bias[1]) / (1.0 + bias[0]) - 1.0) * 1e6),
+            );
+        }
+        println!("{v}");
     }
     Ok(())
 }

@@ -13,8 +13,8 @@
 
 pub mod csv;
 pub mod mcap;
-pub mod robots;
 pub mod mcap_msg;
+pub mod robots;
 pub mod scene;
 
 use std::path::{Path, PathBuf};

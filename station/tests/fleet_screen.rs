@@ -65,7 +65,10 @@ fn fleet() -> Fleet {
     let mut f = Fleet::new(members);
     f.update(Action::Tick { now_ms: 100 });
     for i in [0, 2] {
-        f.on_link(i, LinkEvent::Connection(Connection::Connected(peer(i as u8 + 1))));
+        f.on_link(
+            i,
+            LinkEvent::Connection(Connection::Connected(peer(i as u8 + 1))),
+        );
     }
     f.on_link(
         1,

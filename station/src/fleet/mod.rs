@@ -308,8 +308,9 @@ fn warn_duplicates(fleet: &mut Fleet, ids: &[Option<u8>]) {
         .iter()
         .map(|m| crate::terminal_text::printable(&m.port).into_owned())
         .collect();
-    let dups =
-        crate::link::robot_ids::duplicates(ports.iter().map(String::as_str).zip(ids.iter().copied()));
+    let dups = crate::link::robot_ids::duplicates(
+        ports.iter().map(String::as_str).zip(ids.iter().copied()),
+    );
     for d in dups {
         if fleet.reported_duplicates.insert(d.robot_id) {
             fleet.app_mut().fleet_note(Level::Warn, d.warning());
