@@ -189,3 +189,128 @@ fn turn() -> Command {
         w_mrad_s: TURN_MRAD_S,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use core::f32::consts::PI;
+    use std::vec::Vec;
+
+    /// A synthetic robot obeying the manoeuvre's commands: edge following drives a 700 x 550
+    /// mm rectangle (2 mm steps, corners on the spot, the side by the mode), Manual turns by
+    /// the last teleop's rate over one 40 ms observation. Wheels 0.37 % apart, so the belief
+    /// drifts as a real one does.
+    #[test]
+    fn follows_right_turns_round_by_half_a_turn_follows_left_and_stops() {
+        let (kr, kl, b) = (1.0037_f32, 0.9990_f32, 52.0_f32);
+        let mut m = Manoeuvre::new(CalibrationParams::default(), 0.08, b);
+        let mut mode = match m.start() {
+            Command::SetMode(mode) => mode,
+            c => panic!("{c:?}"),
+        };
+        assert_eq!(mode, Mode::EdgeFollowRight);
+        let mut w = 0i16;
+        let mut pulses = [0.0f64; 2];
+        let mut believed = 0.3f32;
+        let mut sent: Vec<Command> = Vec::new();
+        let mut turn_at = None;
+        let mut turned_seen = None;
+        let (mut side_k, mut along) = (0usize, 0.0f32);
+        let mut done = None;
+        for _ in 0..2_000_000 {
+            let ir = match mode {
+                Mode::EdgeFollowRight => [0, 0, 0, 0, 0, 1023, 0, 0],
+                _ => [1023, 0, 0, 0, 0, 0, 0, 0],
+            };
+            let step = m.step(Observation {
+                pulses: [pulses[0] as i64, pulses[1] as i64],
+                heading_rad: believed,
+                ir: if along < 0.0 { [0; 8] } else { ir },
+            });
+            if let Some(s) = step.turned_to {
+                turned_seen = Some(s);
+                turn_at = Some(believed);
+            }
+            for c in step.commands() {
+                sent.push(c);
+                match c {
+                    Command::SetMode(x) => mode = x,
+                    Command::Teleop { w_mrad_s, .. } => w = w_mrad_s,
+                    _ => {}
+                }
+            }
+            if let Some(r) = step.done {
+                done = Some(r);
+                break;
+            }
+            // The world answers.
+            let sgn = if mode == Mode::EdgeFollowLeft {
+                -1.0
+            } else {
+                1.0
+            };
+            match mode {
+                Mode::EdgeFollowRight | Mode::EdgeFollowLeft if along >= 0.0 => {
+                    pulses[0] += f64::from(2.0 / kl / 0.08);
+                    pulses[1] += f64::from(2.0 / kr / 0.08);
+                    believed += (2.0 / kr - 2.0 / kl) / b;
+                    along += 2.0;
+                    let len = if side_k % 2 == 0 { 700.0 } else { 550.0 };
+                    if along >= len {
+                        // A corner: 90 one-degree steps, the side sensor off.
+                        along = -90.0;
+                        side_k += 1;
+                    }
+                }
+                Mode::EdgeFollowRight | Mode::EdgeFollowLeft => {
+                    let arc = (PI / 180.0) * b / 2.0;
+                    pulses[0] -= f64::from(sgn * arc / kl / 0.08);
+                    pulses[1] += f64::from(sgn * arc / kr / 0.08);
+                    believed += sgn * (arc / kr + arc / kl) / b;
+                    along += 1.0;
+                }
+                Mode::Manual => {
+                    let arc = f32::from(w) * 0.04 * b / 2.0 / 1000.0;
+                    pulses[0] -= f64::from(arc / kl / 0.08);
+                    pulses[1] += f64::from(arc / kr / 0.08);
+                    believed += (arc / kr + arc / kl) / b;
+                }
+                _ => {}
+            }
+        }
+        let c = done.expect("done").expect("solves");
+        assert!(c.both_directions, "{c:?}");
+        assert!((c.wheel_ratio - kr / kl).abs() < 5e-4, "{c:?}");
+        assert_eq!(turned_seen, Some(WallSide::Left));
+        assert!(turn_at.is_some());
+        // The order: right, (Manual, turn x n, stop, left), idle.
+        assert_eq!(sent.first(), Some(&Command::SetMode(Mode::Manual)));
+        let turns = sent
+            .iter()
+            .filter(|c| {
+                matches!(
+                    c,
+                    Command::Teleop {
+                        w_mrad_s: TURN_MRAD_S,
+                        ..
+                    }
+                )
+            })
+            .count();
+        // Half a turn at 0.024 rad an observation (believed: the wheels' mean factor ~1).
+        assert!((130..=133).contains(&turns), "{turns}");
+        let k = sent.len();
+        assert_eq!(sent[k - 1], STOP);
+        let left = sent.iter().position(|c| *c == follow(WallSide::Left));
+        let left = left.expect("follows left");
+        assert_eq!(
+            sent[left - 1],
+            Command::Teleop {
+                v_mm_s: 0,
+                w_mrad_s: 0
+            }
+        );
+        assert_eq!(left, turns + 2);
+    }
+}
