@@ -197,3 +197,52 @@ fn dry_run_measures_but_sets_nothing_and_a_robot_without_encoders_is_refused() {
     assert!(text(&o).contains("no wheel encoders"), "{}", text(&o));
     drop(emu);
 }
+
+/// Ctrl-C mid-lap: the robot is stopped, nothing is set, exit status 1.
+#[test]
+fn ctrl_c_stops_and_sets_nothing() {
+    let d = dir("ctrlc");
+    let arena = d.join("box1Lab.xml");
+    let o = Command::new(workspace_bin("robot-emulator"))
+        .args(["arena", "generate", "--kind", "box", "--seed", "1", "--out"])
+        .arg(&arena)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    let (emu, pty) = Emulator::start(&arena, 1);
+    let port = pty.to_str().unwrap();
+    let mut child = Command::new(workspace_bin("station"))
+        .args(["calibrate", "odometry", "--port", port])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut line = String::new();
+    out.read_line(&mut line).unwrap();
+    assert!(line.contains("following the wall"), "{line:?}");
+    // Let it drive a little first.
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    assert!(Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success());
+    let status = child.wait().unwrap();
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    assert_eq!(status.code(), Some(1), "{err}");
+    assert!(err.contains("interrupted (Ctrl-C): nothing set"), "{err}");
+    assert!(
+        !err.contains("warning: stop"),
+        "the stop was not acknowledged: {err}"
+    );
+    assert_eq!(get(port, "odo_wheel_ratio_ppm"), 0.0);
+    drop(emu);
+}
