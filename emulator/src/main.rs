@@ -83,6 +83,7 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
         .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
     let link = opts.serve.link.clone();
     let mut sim = sim;
+    let bias = sim.wheel_bias();
     if args.hal_trace {
         // As the station would set it, before the first pass of the main loop.
         let on = protocol::Command::SetParam {
@@ -91,7 +92,7 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
         };
         sim.robot_mut().apply(on, 0);
         let mut dev = emulator::power_on::PoweredByStation::new(sim);
-        return serve_device(
+        let stats = serve_device(
             &mut dev,
             args,
             &opts.serve,
@@ -99,9 +100,10 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
             profile,
             &arena_name,
             link,
-        );
+        )?;
+        return print_stats(args, stats, bias);
     }
-    serve_device(
+    let stats = serve_device(
         &mut sim,
         args,
         &opts.serve,
@@ -109,7 +111,25 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
         profile,
         &arena_name,
         link,
-    )
+    )?;
+    print_stats(args, stats, bias)
+}
+
+/// `--json`: the link's counters, and the truth a calibration is judged against (never sent
+/// to the station).
+fn print_stats(args: &ServeArgs, stats: serde_json::Value, bias: [f64; 2]) -> Result<(), String> {
+    if args.json {
+        let mut v = stats;
+        if let Some(o) = v.as_object_mut() {
+            o.insert("wheel_bias".into(), serde_json::json!(bias));
+            o.insert(
+                "true_ratio_ppm".into(),
+                serde_json::json!(((1.0 + bias[1]) / (1.0 + bias[0]) - 1.0) * 1e6),
+            );
+        }
+        println!("{v}");
+    }
+    Ok(())
 }
 
 fn serve_device<D: emulator::link::Device>(
@@ -120,7 +140,7 @@ fn serve_device<D: emulator::link::Device>(
     profile: &str,
     arena_name: &str,
     link: Option<std::path::PathBuf>,
-) -> Result<(), String> {
+) -> Result<serde_json::Value, String> {
     let stats = emulator::link::serve(dev, serve, stop, &mut |path| {
         // The one line a script waits for: the port to open.
         println!("{}", path.display());
@@ -138,13 +158,7 @@ fn serve_device<D: emulator::link::Device>(
         }
     })
     .map_err(|e| e.to_string())?;
-    if args.json {
-        println!(
-            "{}",
-            serde_json::to_string(&stats).map_err(|e| e.to_string())?
-        );
-    }
-    Ok(())
+    serde_json::to_value(&stats).map_err(|e| e.to_string())
 }
 
 /// Several robots, one pty each: prints each robot's pty path on its own line, in robot

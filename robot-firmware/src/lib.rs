@@ -30,6 +30,7 @@ pub mod localize;
 pub mod nav;
 pub mod odometry;
 pub mod odometry_calibration;
+pub mod odometry_manoeuvre;
 pub mod params;
 pub mod profile;
 pub mod robot;

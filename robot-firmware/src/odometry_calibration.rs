@@ -281,6 +281,11 @@ impl LapCalibrator {
         }
     }
 
+    /// Every lap closed so far, in order (for a caller's progress report).
+    pub fn closed_laps(&self) -> &[Lap] {
+        &self.each[..self.count]
+    }
+
     /// The side to follow now.
     pub fn side(&self) -> WallSide {
         self.side

@@ -58,7 +58,47 @@ const FORMAT: &str = "robot-station light-som";
 const FILE_VERSION: u16 = 1;
 const NEURONS: usize = 60;
 
-/// Arguments of `station calibrate`.
+/// `station calibrate`: the light map from a recording (`RECORDING --out FILE`), or a
+/// calibration run on a robot (`odometry --port P`, [`crate::calibrate_odometry`]).
+#[derive(Debug, Args, Clone)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct CalibrateCommand {
+    #[command(subcommand)]
+    pub what: Option<CalibrateWhat>,
+    #[command(flatten)]
+    pub light: Option<CalibrateArgs>,
+}
+
+/// What `station calibrate` calibrates on a robot.
+#[derive(Debug, clap::Subcommand, Clone)]
+pub enum CalibrateWhat {
+    /// Calibrate the Khepera's odometry on the robot: wall-following laps both ways, then set
+    /// odo_wheel_ratio_ppm and odo_wheel_distance_mm
+    ///
+    /// The robot follows the wall with it on its right until a lap closes, turns round and
+    /// follows it the other way; the laps' drift gives the wheel ratio (and, both ways, the
+    /// effective wheel distance). Put it next to a wall of a closed arena. Prints each lap,
+    /// then each parameter before -> after. The robot is stopped at the end, on Ctrl-C and
+    /// on --timeout (which still uses the laps closed so far).
+    ///
+    /// Examples:
+    ///   station calibrate odometry --port /dev/ttyUSB0
+    ///   station calibrate odometry --port /dev/ttyUSB0 --dry-run --json
+    #[command(verbatim_doc_comment)]
+    Odometry(crate::calibrate_odometry::OdometryArgs),
+}
+
+/// Runs `station calibrate`.
+pub async fn dispatch(cmd: &CalibrateCommand) -> anyhow::Result<ExitCode> {
+    match (&cmd.what, &cmd.light) {
+        (Some(CalibrateWhat::Odometry(a)), _) => crate::calibrate_odometry::run(a).await,
+        (None, Some(light)) => run(light),
+        // clap requires RECORDING and --out without a subcommand.
+        (None, None) => bail!("station calibrate: give RECORDING --out FILE, or `odometry`"),
+    }
+}
+
+/// Arguments of `station calibrate RECORDING --out FILE`.
 #[derive(Debug, Args, Clone)]
 pub struct CalibrateArgs {
     /// The recording (`station record`) of a Khepera calibrating next to a light.

@@ -247,8 +247,9 @@ pub enum Sub {
     /// Examples:
     ///   station calibrate cal.rec --out som.json
     ///   station calibrate cal.rec --out som.bin --light 0.40,0.30 --json
+    ///   station calibrate odometry --port /dev/ttyUSB0   (odometry laps on the robot)
     #[command(verbatim_doc_comment)]
-    Calibrate(crate::calibrate::CalibrateArgs),
+    Calibrate(crate::calibrate::CalibrateCommand),
     /// Upload a light -> angle calibration to the robot (Khepera light calibration)
     ///
     /// The file is what `station calibrate --out` or `station download-calibration --out`

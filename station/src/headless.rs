@@ -82,7 +82,7 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Sub::Replay(args)) => crate::replay::command::run(&args).await,
         Some(Sub::Export(args)) => crate::export::run(&args),
         Some(Sub::Retrace(args)) => crate::retrace::run(&args),
-        Some(Sub::Calibrate(args)) => crate::calibrate::run(&args),
+        Some(Sub::Calibrate(args)) => crate::calibrate::dispatch(&args).await,
         Some(Sub::UploadCalibration(args)) => crate::transfer::calibration::upload(&args).await,
         Some(Sub::DownloadCalibration(args)) => crate::transfer::calibration::download(&args).await,
         Some(Sub::Places(args)) => crate::places::command(&args),

@@ -23,6 +23,7 @@ pub mod action;
 pub mod app;
 pub mod builtin;
 pub mod calibrate;
+pub mod calibrate_odometry;
 pub mod cli;
 pub mod export;
 pub mod fleet;

@@ -14,12 +14,8 @@
 //! ([`ScenarioError`]); laps that do not close in time or a solution out of range are a
 //! report with `error` set and no parameters.
 
-use protocol::{Command, Mode};
-use robot_firmware::behaviour::edge::EdgeParams;
-use robot_firmware::behaviour::{S_LEFT, S_RIGHT};
-use robot_firmware::odometry_calibration::{
-    Calibration, CalibrationParams, LapCalibrator, Next, Sample, WallSide,
-};
+use robot_firmware::odometry_calibration::{Calibration, CalibrationParams};
+use robot_firmware::odometry_manoeuvre::{Manoeuvre, Observation, STOP};
 use robot_firmware::params::id as param;
 use serde::Serialize;
 
@@ -83,15 +79,14 @@ pub fn run_calibration(
     let bias = sim.wheel_bias();
     let true_ratio_ppm = ((1.0 + bias[1]) / (1.0 + bias[0]) - 1.0) * 1e6;
     let profile = opts.profile;
-    let mut cal = LapCalibrator::new(
+    // The driving sequence is the one a station runs over the link (`station calibrate
+    // odometry`): one state machine for both.
+    let mut m = Manoeuvre::new(
         CalibrationParams::default(),
         profile.pulse_m * 1000.0,
         profile.wheel_distance_m * 1000.0,
     );
-    // A wall is beside when the side sensor reads what the edge follower counts as found.
-    let wall_level = EdgeParams::default().found_level;
-    let mut side = cal.side();
-    apply(&mut sim, follow(side), "SetMode(EdgeFollowRight)")?;
+    apply(&mut sim, m.start(), "SetMode(EdgeFollowRight)")?;
     let end_ms = (timeout_s * 1000.0).ceil() as u64;
     let mut outcome = None;
     while sim.now_us() / 1000 < end_ms {
@@ -103,33 +98,22 @@ pub fn run_calibration(
                 reason: protocol::NackReason::Unsupported,
             });
         };
-        let sensor = match side {
-            WallSide::Right => S_RIGHT,
-            WallSide::Left => S_LEFT,
-        };
-        let sample = Sample {
+        let step = m.step(Observation {
             pulses: [i64::from(enc[0]), i64::from(enc[1])],
             heading_rad: core.pose().heading,
-            wall_beside: core.sensors().ir[sensor] >= wall_level,
-        };
-        match cal.observe(sample) {
-            Next::Follow(s) if s != side => {
-                side = s;
-                // Turn round on the spot (half a turn by the robot's own heading), so the
-                // wall it was following is now on its other side: the laps go the other way.
-                turn_round(&mut sim, end_ms)?;
-                apply(&mut sim, follow(side), "SetMode(EdgeFollowLeft)")?;
-            }
-            Next::Follow(_) => {}
-            Next::Done(r) => {
-                outcome = Some(r);
-                break;
-            }
+            ir: core.sensors().ir,
+        });
+        for c in step.commands() {
+            apply(&mut sim, c, "calibration manoeuvre")?;
+        }
+        if let Some(r) = step.done {
+            outcome = Some(r);
+            break;
         }
     }
     // Out of time: whatever laps closed (one direction is still a wheel ratio).
-    let outcome = outcome.unwrap_or_else(|| cal.finish());
-    let _ = apply(&mut sim, Command::SetMode(Mode::Idle), "SetMode(Idle)");
+    let outcome = outcome.unwrap_or_else(|| m.finish());
+    let _ = apply(&mut sim, STOP, "SetMode(Idle)");
     let sim_s = sim.now_us() as f64 * 1e-6;
     let mut report = CalibrationReport {
         wheel_ratio_ppm: None,
@@ -146,46 +130,6 @@ pub fn run_calibration(
         Err(e) => report.error = Some(format!("{e:?} after {sim_s:.0} s")),
     }
     Ok(report)
-}
-
-/// Turn rate of the turn round, mrad/s (about 0.6 rad/s: 16 mm/s a wheel on a Khepera).
-const TURN_MRAD_S: i16 = 600;
-
-/// Turns the robot half a turn on the spot by its believed heading (Manual mode, a teleop
-/// command every sample as a station's joystick would), then stops.
-fn turn_round(sim: &mut Sim, end_ms: u64) -> Result<(), ScenarioError> {
-    apply(sim, Command::SetMode(Mode::Manual), "SetMode(Manual)")?;
-    let mut last = sim.robot().pose().heading;
-    let mut turned = 0.0f32;
-    while turned < core::f32::consts::PI && sim.now_us() / 1000 < end_ms {
-        apply(
-            sim,
-            Command::Teleop {
-                v_mm_s: 0,
-                w_mrad_s: TURN_MRAD_S,
-            },
-            "Teleop(turn round)",
-        )?;
-        sim.run_for(SAMPLE_MS);
-        let h = sim.robot().pose().heading;
-        turned += robot_firmware::odometry::wrap_angle(h - last);
-        last = h;
-    }
-    apply(
-        sim,
-        Command::Teleop {
-            v_mm_s: 0,
-            w_mrad_s: 0,
-        },
-        "Teleop(stop)",
-    )
-}
-
-fn follow(side: WallSide) -> Command {
-    Command::SetMode(match side {
-        WallSide::Right => Mode::EdgeFollowRight,
-        WallSide::Left => Mode::EdgeFollowLeft,
-    })
 }
 
 fn fill(report: &mut CalibrationReport, c: &Calibration) {

@@ -1,0 +1,316 @@
+//! The odometry calibration's manoeuvre as a pure state machine: which command to send the
+//! robot after each observation, feeding [`LapCalibrator`] on the way. One place for the
+//! driving sequence, used by whoever commands the robot: the emulator's scenario
+//! (`bench --calibrate-odometry`, observing the simulated robot every 40 ms) and the
+//! station's `station calibrate odometry` (observing the robot's telemetry).
+//!
+//! The sequence: follow the wall with it on the right (`EdgeFollowRight`) until the
+//! calibrator asks for the other side; then turn round on the spot by half a turn of the
+//! believed heading (Manual mode, a teleop command each observation, as a station's joystick
+//! would, so the link failsafe keeps working), stop, and follow with the wall on the left;
+//! until the calibrator is done. The caller sends [`Manoeuvre::start`]'s command first, then
+//! each [`Step`]'s commands in order, and on `done` (or its own timeout, with
+//! [`Manoeuvre::finish`]) stops the robot.
+//!
+//! Layer: pure, no I/O, no clock, no heap (`#![no_std]`).
+
+use protocol::{Command, Mode};
+
+use crate::behaviour::edge::EdgeParams;
+use crate::behaviour::{S_LEFT, S_RIGHT};
+use crate::odometry_calibration::{
+    Calibration, CalibrationError, CalibrationParams, LapCalibrator, Next, Sample, WallSide,
+};
+
+/// Turn rate of the turn round, mrad/s (about 0.6 rad/s: 16 mm/s a wheel on a Khepera).
+pub const TURN_MRAD_S: i16 = 600;
+
+/// What the robot reports, once per observation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Observation {
+    /// Left and right encoder pulses since any fixed origin, unwrapped.
+    pub pulses: [i64; 2],
+    /// Believed heading, radians (any wrap).
+    pub heading_rad: f32,
+    /// IR proximity S0..S7.
+    pub ir: [u16; 8],
+}
+
+/// The commands to send now (at most two, in order), and the result once done.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Step {
+    commands: [Option<Command>; 2],
+    /// The calibration ended: stop the robot; the result.
+    pub done: Option<Result<Calibration, CalibrationError>>,
+    /// The calibrator now follows this side (a turn round has just begun) — for progress.
+    pub turned_to: Option<WallSide>,
+}
+
+impl Step {
+    const NONE: Step = Step {
+        commands: [None, None],
+        done: None,
+        turned_to: None,
+    };
+
+    /// The commands to send, in order.
+    pub fn commands(&self) -> impl Iterator<Item = Command> + '_ {
+        self.commands.iter().flatten().copied()
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Phase {
+    Following,
+    /// Turning round: the heading last seen and the turn so far, radians.
+    Turning {
+        last: f32,
+        turned: f32,
+    },
+    Finished,
+}
+
+/// The manoeuvre (see the module text).
+#[derive(Clone, Debug)]
+pub struct Manoeuvre {
+    cal: LapCalibrator,
+    phase: Phase,
+    side: WallSide,
+    wall_level: u16,
+}
+
+/// The edge-following mode for a wall side.
+pub fn follow(side: WallSide) -> Command {
+    Command::SetMode(match side {
+        WallSide::Right => Mode::EdgeFollowRight,
+        WallSide::Left => Mode::EdgeFollowLeft,
+    })
+}
+
+/// The command that stops the robot at the end, on a timeout or an interruption.
+pub const STOP: Command = Command::SetMode(Mode::Idle);
+
+impl Manoeuvre {
+    /// A manoeuvre for a robot with this pulse length and nominal wheel distance.
+    pub fn new(params: CalibrationParams, mm_per_pulse: f32, nominal_distance_mm: f32) -> Self {
+        let cal = LapCalibrator::new(params, mm_per_pulse, nominal_distance_mm);
+        Manoeuvre {
+            side: cal.side(),
+            cal,
+            phase: Phase::Following,
+            // A wall is beside when the side sensor reads what the edge follower counts as
+            // found.
+            wall_level: EdgeParams::default().found_level,
+        }
+    }
+
+    /// The first command: follow the first side.
+    pub fn start(&self) -> Command {
+        follow(self.side)
+    }
+
+    /// The calibrator (laps closed so far, for progress).
+    pub fn calibrator(&self) -> &LapCalibrator {
+        &self.cal
+    }
+
+    /// The side being followed.
+    pub fn side(&self) -> WallSide {
+        self.side
+    }
+
+    /// Feeds one observation; returns what to send next.
+    pub fn step(&mut self, o: Observation) -> Step {
+        let mut out = Step::NONE;
+        match self.phase {
+            Phase::Finished => {}
+            Phase::Following => {
+                let sensor = match self.side {
+                    WallSide::Right => S_RIGHT,
+                    WallSide::Left => S_LEFT,
+                };
+                let sample = Sample {
+                    pulses: o.pulses,
+                    heading_rad: o.heading_rad,
+                    wall_beside: o.ir[sensor] >= self.wall_level,
+                };
+                match self.cal.observe(sample) {
+                    Next::Follow(s) if s != self.side => {
+                        // Turn round on the spot, so the wall it was following is now on its
+                        // other side: the laps go the other way.
+                        self.side = s;
+                        out.turned_to = Some(s);
+                        self.phase = Phase::Turning {
+                            last: o.heading_rad,
+                            turned: 0.0,
+                        };
+                        out.commands = [Some(Command::SetMode(Mode::Manual)), Some(turn())];
+                    }
+                    Next::Follow(_) => {}
+                    Next::Done(r) => {
+                        self.phase = Phase::Finished;
+                        out.done = Some(r);
+                        out.commands = [Some(STOP), None];
+                    }
+                }
+            }
+            Phase::Turning { last, turned } => {
+                let turned = turned + crate::odometry::wrap_angle(o.heading_rad - last);
+                if turned < core::f32::consts::PI {
+                    self.phase = Phase::Turning {
+                        last: o.heading_rad,
+                        turned,
+                    };
+                    out.commands = [Some(turn()), None];
+                } else {
+                    self.phase = Phase::Following;
+                    out.commands = [
+                        Some(Command::Teleop {
+                            v_mm_s: 0,
+                            w_mrad_s: 0,
+                        }),
+                        Some(follow(self.side)),
+                    ];
+                }
+            }
+        }
+        out
+    }
+
+    /// The result with the laps closed so far (the caller's time is up).
+    pub fn finish(&self) -> Result<Calibration, CalibrationError> {
+        self.cal.finish()
+    }
+}
+
+fn turn() -> Command {
+    Command::Teleop {
+        v_mm_s: 0,
+        w_mrad_s: TURN_MRAD_S,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use core::f32::consts::PI;
+    use std::vec::Vec;
+
+    /// A synthetic robot obeying the manoeuvre's commands: edge following drives a 700 x 550
+    /// mm rectangle (2 mm steps, corners on the spot, the side by the mode), Manual turns by
+    /// the last teleop's rate over one 40 ms observation. Wheels 0.37 % apart, so the belief
+    /// drifts as a real one does.
+    #[test]
+    fn follows_right_turns_round_by_half_a_turn_follows_left_and_stops() {
+        let (kr, kl, b) = (1.0037_f32, 0.9990_f32, 52.0_f32);
+        let mut m = Manoeuvre::new(CalibrationParams::default(), 0.08, b);
+        let mut mode = match m.start() {
+            Command::SetMode(mode) => mode,
+            c => panic!("{c:?}"),
+        };
+        assert_eq!(mode, Mode::EdgeFollowRight);
+        let mut w = 0i16;
+        let mut pulses = [0.0f64; 2];
+        let mut believed = 0.3f32;
+        let mut sent: Vec<Command> = Vec::new();
+        let mut turn_at = None;
+        let mut turned_seen = None;
+        let (mut side_k, mut along) = (0usize, 0.0f32);
+        let mut done = None;
+        for _ in 0..2_000_000 {
+            let ir = match mode {
+                Mode::EdgeFollowRight => [0, 0, 0, 0, 0, 1023, 0, 0],
+                _ => [1023, 0, 0, 0, 0, 0, 0, 0],
+            };
+            let step = m.step(Observation {
+                pulses: [pulses[0] as i64, pulses[1] as i64],
+                heading_rad: believed,
+                ir: if along < 0.0 { [0; 8] } else { ir },
+            });
+            if let Some(s) = step.turned_to {
+                turned_seen = Some(s);
+                turn_at = Some(believed);
+            }
+            for c in step.commands() {
+                sent.push(c);
+                match c {
+                    Command::SetMode(x) => mode = x,
+                    Command::Teleop { w_mrad_s, .. } => w = w_mrad_s,
+                    _ => {}
+                }
+            }
+            if let Some(r) = step.done {
+                done = Some(r);
+                break;
+            }
+            // The world answers.
+            let sgn = if mode == Mode::EdgeFollowLeft {
+                -1.0
+            } else {
+                1.0
+            };
+            match mode {
+                Mode::EdgeFollowRight | Mode::EdgeFollowLeft if along >= 0.0 => {
+                    pulses[0] += f64::from(2.0 / kl / 0.08);
+                    pulses[1] += f64::from(2.0 / kr / 0.08);
+                    believed += (2.0 / kr - 2.0 / kl) / b;
+                    along += 2.0;
+                    let len = if side_k % 2 == 0 { 700.0 } else { 550.0 };
+                    if along >= len {
+                        // A corner: 90 one-degree steps, the side sensor off.
+                        along = -90.0;
+                        side_k += 1;
+                    }
+                }
+                Mode::EdgeFollowRight | Mode::EdgeFollowLeft => {
+                    let arc = (PI / 180.0) * b / 2.0;
+                    pulses[0] -= f64::from(sgn * arc / kl / 0.08);
+                    pulses[1] += f64::from(sgn * arc / kr / 0.08);
+                    believed += sgn * (arc / kr + arc / kl) / b;
+                    along += 1.0;
+                }
+                Mode::Manual => {
+                    let arc = f32::from(w) * 0.04 * b / 2.0 / 1000.0;
+                    pulses[0] -= f64::from(arc / kl / 0.08);
+                    pulses[1] += f64::from(arc / kr / 0.08);
+                    believed += (arc / kr + arc / kl) / b;
+                }
+                _ => {}
+            }
+        }
+        let c = done.expect("done").expect("solves");
+        assert!(c.both_directions, "{c:?}");
+        assert!((c.wheel_ratio - kr / kl).abs() < 5e-4, "{c:?}");
+        assert_eq!(turned_seen, Some(WallSide::Left));
+        assert!(turn_at.is_some());
+        // The order: right, (Manual, turn x n, stop, left), idle.
+        assert_eq!(sent.first(), Some(&Command::SetMode(Mode::Manual)));
+        let turns = sent
+            .iter()
+            .filter(|c| {
+                matches!(
+                    c,
+                    Command::Teleop {
+                        w_mrad_s: TURN_MRAD_S,
+                        ..
+                    }
+                )
+            })
+            .count();
+        // Half a turn at 0.024 rad an observation (believed: the wheels' mean factor ~1).
+        assert!((130..=133).contains(&turns), "{turns}");
+        let k = sent.len();
+        assert_eq!(sent[k - 1], STOP);
+        let left = sent.iter().position(|c| *c == follow(WallSide::Left));
+        let left = left.expect("follows left");
+        assert_eq!(
+            sent[left - 1],
+            Command::Teleop {
+                v_mm_s: 0,
+                w_mrad_s: 0
+            }
+        );
+        assert_eq!(left, turns + 2);
+    }
+}
