@@ -92,26 +92,10 @@ fn serve(args: &ServeArgs) -> Result<(), String> {
         };
         sim.robot_mut().apply(on, 0);
         let mut dev = emulator::power_on::PoweredByStation::new(sim);
-        let stats = serve_device(
-            &mut dev,
-            args,
-            &opts.serve,
-            &stop,
-            profile,
-            &arena_name,
-            link,
-        )?;
+        let stats = serve_device(&mut dev, &opts.serve, &stop, profile, &arena_name, link)?;
         return print_stats(args, stats, bias);
     }
-    let stats = serve_device(
-        &mut sim,
-        args,
-        &opts.serve,
-        &stop,
-        profile,
-        &arena_name,
-        link,
-    )?;
+    let stats = serve_device(&mut sim, &opts.serve, &stop, profile, &arena_name, link)?;
     print_stats(args, stats, bias)
 }
 
@@ -134,7 +118,6 @@ fn print_stats(args: &ServeArgs, stats: serde_json::Value, bias: [f64; 2]) -> Re
 
 fn serve_device<D: emulator::link::Device>(
     dev: &mut D,
-    args: &ServeArgs,
     serve: &emulator::link::ServeOptions,
     stop: &AtomicBool,
     profile: &str,

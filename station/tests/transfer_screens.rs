@@ -185,10 +185,14 @@ fn the_map_grows_on_screen_while_the_robot_explores() {
     let (free, obstacle, unknown) = shown.counts();
     println!("after 40 s of exploring: {free} free, {obstacle} obstacle, {unknown} unknown");
     assert!(free > 0 && unknown > 0, "partially known");
-    // A second later the map is asked for again; unchanged, nothing travels.
+    // A second later the map is asked for again; unchanged, nothing travels but the one chunk
+    // the robot puts behind its Begin before the answer says the station holds it (§8).
     now += 1_000;
     app.update(Action::Tick { now_ms: now });
-    assert_eq!(serve_download(&mut app, &mut now, &map), 0, "already held");
+    assert!(
+        serve_download(&mut app, &mut now, &map) <= 1,
+        "already held"
+    );
     // The robot kept reporting meanwhile (else the header rightly calls its mode stale).
     telemetry(&mut app, Mode::Explore, pose);
     insta::assert_snapshot!(screen(&app, 100, 30));

