@@ -332,6 +332,24 @@ pub struct RequiredPort {
     pub key_file: Option<PathBuf>,
 }
 
+/// Refuses a port named twice among several `--port`s (two link tasks would fight over one
+/// device); the one check for `station`, `record` and `stats`.
+pub fn distinct_ports<'a>(
+    ports: impl IntoIterator<Item = &'a std::path::Path>,
+) -> Result<(), String> {
+    let mut seen: Vec<&std::path::Path> = Vec::new();
+    for p in ports {
+        if seen.contains(&p) {
+            return Err(format!(
+                "--port {} is given twice; each link needs its own port",
+                crate::terminal_text::printable(&p.display().to_string())
+            ));
+        }
+        seen.push(p);
+    }
+    Ok(())
+}
+
 /// The key in a `--key-file`, if one was given; the error names the file and the fault.
 pub fn load_key(path: Option<&std::path::Path>) -> Result<Option<protocol::LinkKey>, String> {
     Ok(load_key_bytes(path)?.map(|k| protocol::LinkKey::new(&k)))

@@ -528,11 +528,8 @@ async fn stats(
         }
         return Ok(ExitCode::SUCCESS);
     }
-    for (i, p) in each.iter().enumerate() {
-        if each.iter().take(i).any(|q| q.port == p.port) {
-            bail!("--port {} is given twice", p.port.display());
-        }
-    }
+    crate::cli::distinct_ports(each.iter().map(|p| p.port.as_path()))
+        .map_err(anyhow::Error::msg)?;
     let tasks: Vec<_> = each
         .into_iter()
         .map(|p| tokio::spawn(async move { (p.port.clone(), watch(&p, seconds, timeout).await) }))

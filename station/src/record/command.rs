@@ -84,14 +84,8 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
             args.port.len()
         );
     }
-    for (i, p) in args.port.iter().enumerate() {
-        if args.port.iter().take(i).any(|q| q == p) {
-            bail!(
-                "--port {} is given twice; each link needs its own port",
-                p.display()
-            );
-        }
-    }
+    crate::cli::distinct_ports(args.port.iter().map(PathBuf::as_path))
+        .map_err(anyhow::Error::msg)?;
     let raw_key =
         crate::cli::load_key_bytes(args.key_file.as_deref()).map_err(anyhow::Error::msg)?;
     let key = raw_key.map(|k| protocol::LinkKey::new(&k));
