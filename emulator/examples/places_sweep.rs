@@ -33,7 +33,34 @@ fn main() {
                 _ => emulator::unsupervised_places::HeadingReset::Stored,
             };
         }
+        if let Ok(v) = std::env::var("COMPASS_DEG") {
+            o.noise.compass_deg = v.parse().unwrap();
+        }
+        if std::env::var("FUSION").is_ok_and(|v| v == "off") {
+            o.fusion = None;
+        }
+        if std::env::var("REFINE").is_ok_and(|v| v == "on") {
+            o.landmarks.refine = o.fusion;
+        }
+        if std::env::var("WHEEL_HEADING").is_ok_and(|v| !v.is_empty()) {
+            o.compass_heading = false;
+        }
+        if let Ok(v) = std::env::var("MATCH_SIGMA") {
+            if let Some(f) = o.fusion.as_mut() {
+                f.match_sigma_m = v.parse::<f32>().unwrap() * 0.055;
+            }
+        }
         let r = run(&o);
+        let n = r.match_log.len().max(1) as f64;
+        println!(
+            "seed {seed:>2}: three estimates, peak/mean diameters: plain {:5.2}/{:5.2} compass {:4.2}/{:4.2} compass+landmarks {:4.2}/{:4.2} | matches {} mean gain {:.2} landmark err mean {:.2} max {:.2} worse {}",
+            r.plain_peak, r.plain_mean, r.compass_peak, r.compass_mean, r.corrected_peak, r.corrected_mean,
+            r.matches,
+            r.match_log.iter().map(|m| m.gain).sum::<f64>() / n,
+            r.match_log.iter().map(|m| m.landmark_err).sum::<f64>() / n,
+            r.match_log.iter().map(|m| m.landmark_err).fold(0.0, f64::max),
+            r.worsening_matches
+        );
         let d = r.revisit;
         println!(
             "seed {seed:>2}: lm {:>3} match {:>4} worse {:>3} | peak corr {:5.2} (after60 {:5.2}) plain {:5.2} compass {:4.2} mean corr {:4.2} | kernels {:>4} near {:>4} revisit {:>4} matched {:>3} toofar {:>3} samedir {:>4} lev {:?} levsame {:?} odo {:.2} | stats {:?}",

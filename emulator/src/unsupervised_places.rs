@@ -34,6 +34,7 @@ use std::time::Instant;
 
 use robot_firmware::odometry::{integrate, OdometryParams, Pose as FwPose};
 use robot_firmware::unsupervised::classify::{Art1, Classifier, FuzzyArt, GrowingKMeans};
+use robot_firmware::unsupervised::fusion::{FusionParams, Uncertainty};
 use robot_firmware::unsupervised::landmarks::{
     Event, LandmarkParams, LandmarkStore, PrototypeMetric, LANDMARK_BYTES, STORE_BYTES,
 };
@@ -59,6 +60,11 @@ pub const BINARY_THRESHOLD: u16 = 300;
 pub const CAMERA_PIXELS: usize = 64;
 /// See [`CAMERA_PIXELS`].
 pub const CAMERA_FOV_DEG: f64 = 36.0;
+
+/// Sigma of a kernel's place about its landmark's, in diameters (the robot's assumption for
+/// [`FusionParams::match_sigma_m`]; judged with the truth, matched kernels lie 0.07-0.17
+/// diameters from the landmark's true place on average).
+pub const MATCH_SIGMA_DIAMETERS: f32 = 0.15;
 
 /// Longest run accepted, simulated seconds (the report's series grows with it).
 pub const MAX_DURATION_S: f64 = 36_000.0;
@@ -104,9 +110,17 @@ pub struct PlacesOptions {
     pub speed_mps: f64,
     /// Noise levels (IR, light, compass, wheel bias).
     pub noise: Noise,
-    /// What a landmark match does to the heading (default: the compass; the stored heading
-    /// measured worse, README).
+    /// What a landmark match does to the heading when the heading comes from the wheels
+    /// (`compass_heading` false; the stored heading measured worse, README).
     pub heading_reset: HeadingReset,
+    /// The corrected estimate takes its heading from the compass at every step (default
+    /// true: the usual fusion of odometry with a continuous sensor, thesis ch. 1); false: from
+    /// the wheels, the heading touched only by `heading_reset` at matches.
+    pub compass_heading: bool,
+    /// How a match moves the position: Some = by the variance-weighted gain
+    /// ([`robot_firmware::unsupervised::fusion`]; default); None = the thesis's reset to the
+    /// stored position (gain 1).
+    pub fusion: Option<FusionParams>,
     /// Lamps per arena. Default 3.
     pub lamps: usize,
     /// Vigilances: growing K-means (Euclidean distance), ART-1, Fuzzy ART (match).
@@ -138,6 +152,12 @@ impl PlacesOptions {
             speed_mps: 0.06,
             noise: Noise::default(),
             heading_reset: HeadingReset::Compass,
+            compass_heading: true,
+            fusion: Some(FusionParams {
+                compass_sigma_rad: (Noise::default().compass_deg as f32).to_radians(),
+                mean_bias_sigma: Noise::default().motors as f32 / core::f32::consts::SQRT_2,
+                match_sigma_m: MATCH_SIGMA_DIAMETERS * DIAMETER_M as f32,
+            }),
             lamps: 3,
             vigilance: [1.2, 0.3, 0.6],
             beta: 0.5,
@@ -482,10 +502,17 @@ pub struct SeriesPoint {
     pub corrected: [f64; 2],
     /// Plain odometry.
     pub plain: [f64; 2],
+    /// Wheels plus compass heading, no landmarks (the baseline).
+    pub compass: [f64; 2],
     /// |corrected - truth| / diameter.
     pub corrected_err: f64,
     /// |plain - truth| / diameter.
     pub plain_err: f64,
+    /// |compass - truth| / diameter.
+    pub compass_err: f64,
+    /// The robot's own sigma of its corrected position (per axis), diameters (0 without
+    /// fusion).
+    pub corrected_sigma: f64,
     /// Landmarks so far.
     pub landmarks: usize,
     /// Matches so far.
@@ -501,8 +528,15 @@ pub struct MatchRecord {
     pub landmark: u16,
     /// Its D.
     pub d: f32,
-    /// Correction length, diameters.
+    /// Correction length (the move made), diameters.
     pub correction: f64,
+    /// Share of the way to the stored position moved (1: the thesis's reset).
+    pub gain: f64,
+    /// The landmark's sigma as the robot holds it, diameters.
+    pub landmark_sigma: f64,
+    /// How far the landmark's stored position (after what it learnt from this match, if
+    /// `refine`) is from the true place where it was made, diameters (truth, report only).
+    pub landmark_err: f64,
     /// Error before and after the correction, diameters (truth, for the report only).
     pub err_before: f64,
     /// See `err_before`.
@@ -676,6 +710,8 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
     let mut corrected = fw(truth);
     let mut plain = fw(truth);
     let mut compass_odo = fw(truth);
+    // The corrected estimate's variance (the robot's own model, from its sensors' specs).
+    let mut unc = Uncertainty::at(corrected.x, corrected.y);
     let mut acc = [0.0f64; 2]; // fractional encoder pulses
     let steps = (opts.duration_s / opts.period_s).ceil() as u64;
     let series_every = ((opts.series_every_s / opts.period_s).round() as u64).max(1);
@@ -767,7 +803,15 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
         if opts.record_labels {
             report.class_streams.push(labels);
         }
-        let event = store.step(labels, (corrected.x, corrected.y, corrected.heading), &cls);
+        let var = opts
+            .fusion
+            .map_or(0.0, |f| unc.variance((corrected.x, corrected.y), &f));
+        let event = store.step(
+            labels,
+            (corrected.x, corrected.y, corrected.heading),
+            var,
+            &cls,
+        );
         if let (Some(e), Some(&(kt, ko))) = (event, ring.front()) {
             diag.resolved(e, kt, ko, &store, &cls, &mut lm_truth);
         }
@@ -778,15 +822,22 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
                 dy,
                 dheading,
                 d,
+                var: lm_var,
             }) => {
                 let before = err(&corrected, &truth);
                 let from = [f64::from(corrected.x), f64::from(corrected.y)];
-                corrected.x += dx;
-                corrected.y += dy;
-                match opts.heading_reset {
-                    HeadingReset::Stored => corrected.heading += dheading,
-                    HeadingReset::Compass => corrected.heading = compass as f32,
-                    HeadingReset::Keep => {}
+                let (cx, cy) = (corrected.x, corrected.y);
+                let gain = opts.fusion.map_or(1.0, |f| {
+                    unc.fuse((cx, cy), |k| (cx + k * dx, cy + k * dy), lm_var, &f)
+                });
+                corrected.x += gain * dx;
+                corrected.y += gain * dy;
+                if !opts.compass_heading {
+                    match opts.heading_reset {
+                        HeadingReset::Stored => corrected.heading += dheading,
+                        HeadingReset::Compass => corrected.heading = compass as f32,
+                        HeadingReset::Keep => {}
+                    }
                 }
                 let after = err(&corrected, &truth);
                 report.matches += 1;
@@ -797,7 +848,13 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
                     t_s,
                     landmark: index,
                     d,
-                    correction: f64::from(dx.hypot(dy)) / DIAMETER_M,
+                    correction: f64::from(gain * dx.hypot(dy)) / DIAMETER_M,
+                    gain: f64::from(gain),
+                    landmark_sigma: f64::from(lm_var.max(0.0).sqrt()) / DIAMETER_M,
+                    landmark_err: lm_truth.get(usize::from(index)).map_or(0.0, |t| {
+                        let l = &store.landmarks()[usize::from(index)];
+                        (f64::from(l.x) - t.x).hypot(f64::from(l.y) - t.y) / DIAMETER_M
+                    }),
                     err_before: before,
                     err_after: after,
                     from,
@@ -850,8 +907,15 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
             }
         }
         compass_odo.heading = compass as f32;
+        if opts.compass_heading {
+            corrected.heading = compass as f32;
+        }
+        let before = (corrected.x, corrected.y);
         for est in [&mut corrected, &mut plain, &mut compass_odo] {
             *est = integrate(*est, pulses[0], pulses[1], &odo);
+        }
+        if let Some(f) = &opts.fusion {
+            unc.advance((corrected.x - before.0).hypot(corrected.y - before.1), f);
         }
         let (ec, ep) = (err(&corrected, &truth), err(&plain, &truth));
         let eq = err(&compass_odo, &truth);
@@ -870,8 +934,13 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
                 truth: [truth.x, truth.y],
                 corrected: [f64::from(corrected.x), f64::from(corrected.y)],
                 plain: [f64::from(plain.x), f64::from(plain.y)],
+                compass: [f64::from(compass_odo.x), f64::from(compass_odo.y)],
                 corrected_err: ec,
                 plain_err: ep,
+                compass_err: eq,
+                corrected_sigma: opts.fusion.map_or(0.0, |f| {
+                    f64::from(unc.variance((corrected.x, corrected.y), &f).sqrt()) / DIAMETER_M
+                }),
                 landmarks: store.landmarks().len(),
                 matches: report.matches,
             });

@@ -21,6 +21,7 @@
 //!
 //! Fixed capacity `MAX_LANDMARKS`; a full store still matches but creates nothing more.
 
+use super::fusion::{refine, FusionParams};
 use super::levenshtein::{weighted, EditCosts};
 use super::{CONTEXT, MAX_CLASSES, MAX_LANDMARKS, STREAMS, WINDOW};
 
@@ -52,6 +53,10 @@ pub struct LandmarkParams {
     pub match_threshold: f32,
     /// Robot diameter, metres (unit of d_dist; candidates beyond one are ignored).
     pub diameter_m: f32,
+    /// When set, a matched landmark also learns from the robot's estimate, weighted by the
+    /// two variances ([`super::fusion`]); None: a landmark keeps the position it was made
+    /// with (the thesis).
+    pub refine: Option<FusionParams>,
 }
 
 impl Default for LandmarkParams {
@@ -66,6 +71,7 @@ impl Default for LandmarkParams {
             lev_scale: 0.5,
             match_threshold: 1.0,
             diameter_m: 0.055,
+            refine: None,
         }
     }
 }
@@ -86,6 +92,9 @@ pub struct Landmark {
     /// Odometric heading when it was made, radians (§3.6: a landmark holds "the estimated
     /// robot position, time, direction"; a match resets the pose, heading included).
     pub heading: f32,
+    /// Variance (per axis, metres squared) of the position when it was made, or after the
+    /// matches it learnt from ([`LandmarkParams::refine`]).
+    pub var: f32,
     /// Times it was matched.
     pub matches: u16,
 }
@@ -108,6 +117,8 @@ pub enum Event {
         dheading: f32,
         /// Its D.
         d: f32,
+        /// The landmark's position variance (per axis, m^2) before this match.
+        var: f32,
     },
     /// No match and the store is full.
     Full,
@@ -138,6 +149,7 @@ struct Pending {
     x: f32,
     y: f32,
     heading: f32,
+    var: f32,
 }
 
 const PENDING: usize = 4;
@@ -199,6 +211,7 @@ impl LandmarkStore {
             x: 0.0,
             y: 0.0,
             heading: 0.0,
+            var: 0.0,
             matches: 0,
         };
         Self {
@@ -239,13 +252,14 @@ impl LandmarkStore {
             && (s.samples as f32) <= p.max_mean_run * s.runs as f32
     }
 
-    /// One control step: `labels` (one per stream, each < `MAX_CLASSES`) and the odometric
-    /// pose (x, y in metres, heading in radians). Returns what happened to the landmark store,
-    /// if anything.
+    /// One control step: `labels` (one per stream, each < `MAX_CLASSES`), the odometric
+    /// pose (x, y in metres, heading in radians) and its position variance (per axis, m^2;
+    /// 0 if unknown). Returns what happened to the landmark store, if anything.
     pub fn step<M: PrototypeMetric>(
         &mut self,
         labels: [u8; STREAMS],
         (x, y, heading): (f32, f32, f32),
+        var: f32,
         metric: &M,
     ) -> Option<Event> {
         self.step = self.step.wrapping_add(1);
@@ -280,6 +294,7 @@ impl LandmarkStore {
                         x,
                         y,
                         heading,
+                        var,
                     });
                     self.last_kernel = Some(self.step);
                 }
@@ -368,13 +383,21 @@ impl LandmarkStore {
         if let Some((i, d)) = best {
             let lm = &mut self.landmarks[i];
             lm.matches = lm.matches.saturating_add(1);
-            return Event::Matched {
+            let event = Event::Matched {
                 index: i as u16,
                 dx: lm.x - p.x,
                 dy: lm.y - p.y,
                 dheading: wrap_pi(lm.heading - p.heading),
                 d,
+                var: lm.var,
             };
+            if let Some(f) = prm.refine {
+                let k = refine(lm.var, p.var, &f);
+                lm.x += k * (p.x - lm.x);
+                lm.y += k * (p.y - lm.y);
+                lm.var *= 1.0 - k;
+            }
+            return event;
         }
         if self.used >= MAX_LANDMARKS {
             return Event::Full;
@@ -386,6 +409,7 @@ impl LandmarkStore {
             x: p.x,
             y: p.y,
             heading: p.heading,
+            var: p.var,
             matches: 0,
         };
         self.used += 1;
@@ -451,7 +475,7 @@ mod tests {
         for k in 0..60u32 {
             let l0 = if k == 20 { 9 } else { (k / 10) as u8 };
             let x = x0 + k as f32 * 0.001;
-            if let Some(e) = store.step([l0, 1, s2(k)], (x, 0.0, 0.0), &Same) {
+            if let Some(e) = store.step([l0, 1, s2(k)], (x, 0.0, 0.0), 0.0, &Same) {
                 if *n < out.len() {
                     out[*n] = Some(e);
                 }
@@ -526,7 +550,7 @@ mod tests {
             for k in 0..60u32 {
                 let l0 = if k == 20 { 9 } else { (k / 10) as u8 };
                 if let Some(Event::Matched { dheading, .. }) =
-                    store.step([l0, 1, 2], (k as f32 * 0.001, 0.0, h), &Same)
+                    store.step([l0, 1, 2], (k as f32 * 0.001, 0.0, h), 0.0, &Same)
                 {
                     seen = Some(dheading);
                 }
@@ -544,7 +568,7 @@ mod tests {
         for k in 0..400u32 {
             let a = if k % 2 == 0 { 5 } else { 6 };
             let b = if (k / 50) % 2 == 0 { 7 } else { 8 };
-            assert_eq!(store.step([a, b, 0], (0.0, 0.0, 0.0), &Same), None);
+            assert_eq!(store.step([a, b, 0], (0.0, 0.0, 0.0), 0.0, &Same), None);
         }
         assert!(store.landmarks().is_empty());
     }

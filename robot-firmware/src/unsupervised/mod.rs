@@ -12,8 +12,10 @@
 //! - [`levenshtein`]: weighted Levenshtein distance over class labels (§3.7).
 //! - [`landmarks`]: significant classes (§3.2.3), landmarks and odometry reset (§3.6-3.7.8).
 //! - [`places`]: Markov-chain places over the landmark stream (§3.11).
+//! - [`fusion`]: the position's variance and how far a match moves it (§3.15.2's bound).
 
 pub mod classify;
+pub mod fusion;
 pub mod landmarks;
 pub mod levenshtein;
 pub mod places;
