@@ -39,9 +39,6 @@ fn main() {
         if std::env::var("FUSION").is_ok_and(|v| v == "off") {
             o.fusion = None;
         }
-        if std::env::var("REFINE").is_ok_and(|v| v == "on") {
-            o.landmarks.refine = o.fusion;
-        }
         if std::env::var("WHEEL_HEADING").is_ok_and(|v| !v.is_empty()) {
             o.compass_heading = false;
         }

@@ -404,8 +404,9 @@ fn unsupervised_places(args: &RunArgs) -> Result<(), String> {
              classes (ART-1, K-means, Fuzzy ART) {:?}; {} landmarks ({} bytes each, store {} \
              bytes), {} matches ({} made the error worse), {} places ({} recognitions)\n\
              position error, robot diameters   peak    mean\n\
-             landmark-corrected             {:>7.2} {:>7.2}\n\
-             plain odometry                 {:>7.2} {:>7.2}",
+             plain odometry                 {:>7.2} {:>7.2}\n\
+             wheels + compass heading       {:>7.2} {:>7.2}\n\
+             compass + landmarks            {:>7.2} {:>7.2}",
             r.arena,
             r.seed,
             r.distance_m,
@@ -421,10 +422,12 @@ fn unsupervised_places(args: &RunArgs) -> Result<(), String> {
             r.worsening_matches,
             r.places,
             r.places_recognised,
-            r.corrected_peak,
-            r.corrected_mean,
             r.plain_peak,
             r.plain_mean,
+            r.compass_peak,
+            r.compass_mean,
+            r.corrected_peak,
+            r.corrected_mean,
         );
     }
     Ok(())

@@ -18,17 +18,25 @@
 //!   `Noise::motors`, clipped to two sigma, as in `line_correct`); ground speed =
 //!   rotation x (1 + bias), encoders count the rotation. Into a wall the motors stall.
 //!
-//! Heading: the thesis's "odometry module" integrates the wheels, whose constant speed bias
-//! makes the heading drift without bound; the plain odometry here is exactly that. A landmark
-//! match resets the position to the stored one (§3.15.1); the heading goes to the robot's
-//! compass by default ([`HeadingReset`]: a landmark also stores its heading, §3.6 "position,
-//! time, direction", and resetting to that is an option, measured worse because landmarks
-//! made after some drift carry a drifted heading). The report also gives a third estimate,
-//! wheels plus compass heading at every step and no landmarks, because in an arena this small
-//! a drift-free heading alone bounds the error by bias x arena size: that baseline shows how
-//! much of the correction the compass does. [`RevisitDiagnosis`] judges every landmark
-//! resolution against the truth (report only): whether the robot was back at a stored
-//! landmark, how far the odometry had drifted, how different the contexts were.
+//! Three estimates, all from what the robot senses, judged against the truth:
+//! - plain odometry: the wheels alone; their constant speed bias makes the heading drift
+//!   without bound (about 0.135 rad per metre of wheel difference), a diameter off within
+//!   about a metre;
+//! - wheels plus compass heading, no landmarks (the usual fusion of odometry with a
+//!   continuous sensor, thesis ch. 1): what is left is the along-track error of the common
+//!   bias (bounded by bias x arena size: 0.01-0.08 diameters with a perfect compass) and the
+//!   compass noise's sideways random walk, which grows as the square root of the distance;
+//! - compass plus landmarks, the corrected estimate: the same, and every landmark match moves
+//!   the position towards the stored one by the variance-weighted gain of
+//!   [`robot_firmware::unsupervised::fusion`] (the thesis resets all the way, gain 1,
+//!   `fusion: None`: landmarks made late carry the error of their moment and resets to them
+//!   walk the error). With `compass_heading: false` the heading comes from the wheels and a
+//!   match sets it per [`HeadingReset`] (the earlier scenario; a landmark also stores its
+//!   heading, §3.6 "position, time, direction").
+//!
+//! [`RevisitDiagnosis`] judges every landmark resolution against the truth (report only):
+//! whether the robot was back at a stored landmark, how far the odometry had drifted, how
+//! different the contexts were.
 
 use std::time::Instant;
 

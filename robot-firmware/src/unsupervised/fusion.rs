@@ -15,7 +15,7 @@
 //!   stored position, R being the variance of a kernel's place about the landmark's (a kernel
 //!   fires a little earlier or later along the track). k = 1 is the thesis's reset; an old
 //!   landmark made with a fresh estimate pulls hard, a late one made with a drifted estimate
-//!   pulls little. The landmark itself can learn from the match the same way ([`refine`]).
+//!   pulls little.
 //!
 //! Variances are per axis, metres squared. `no_std`, heap-free, no state beyond a few floats.
 
@@ -97,12 +97,6 @@ pub fn gain(own: f32, other: f32, p: &FusionParams) -> f32 {
     }
 }
 
-/// What the landmark learns from a match with an estimate of variance `robot_var`: its gain
-/// towards the robot's estimate (same rule, roles swapped).
-pub fn refine(landmark_var: f32, robot_var: f32, p: &FusionParams) -> f32 {
-    gain(landmark_var, robot_var, p)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -140,8 +134,11 @@ mod tests {
         let fresh = gain(own, 0.0, &p());
         let late = gain(own, 1e-3, &p());
         assert!(fresh > 0.5 && late < 0.1, "{fresh} {late}");
-        // A certain robot refines an uncertain landmark strongly, and the reverse.
-        assert!(refine(1e-3, 1e-5, &p()) > 0.9);
-        assert!(refine(1e-6, 1e-3, &p()) < 0.01);
+        // Nothing known (zero variances, zero R): the thesis's reset.
+        let exact = FusionParams {
+            match_sigma_m: 0.0,
+            ..p()
+        };
+        assert_eq!(gain(0.0, 0.0, &exact), 1.0);
     }
 }

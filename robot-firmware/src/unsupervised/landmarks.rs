@@ -21,7 +21,6 @@
 //!
 //! Fixed capacity `MAX_LANDMARKS`; a full store still matches but creates nothing more.
 
-use super::fusion::{refine, FusionParams};
 use super::levenshtein::{weighted, EditCosts};
 use super::{CONTEXT, MAX_CLASSES, MAX_LANDMARKS, STREAMS, WINDOW};
 
@@ -53,10 +52,6 @@ pub struct LandmarkParams {
     pub match_threshold: f32,
     /// Robot diameter, metres (unit of d_dist; candidates beyond one are ignored).
     pub diameter_m: f32,
-    /// When set, a matched landmark also learns from the robot's estimate, weighted by the
-    /// two variances ([`super::fusion`]); None: a landmark keeps the position it was made
-    /// with (the thesis).
-    pub refine: Option<FusionParams>,
 }
 
 impl Default for LandmarkParams {
@@ -71,7 +66,6 @@ impl Default for LandmarkParams {
             lev_scale: 0.5,
             match_threshold: 1.0,
             diameter_m: 0.055,
-            refine: None,
         }
     }
 }
@@ -92,8 +86,10 @@ pub struct Landmark {
     /// Odometric heading when it was made, radians (§3.6: a landmark holds "the estimated
     /// robot position, time, direction"; a match resets the pose, heading included).
     pub heading: f32,
-    /// Variance (per axis, metres squared) of the position when it was made, or after the
-    /// matches it learnt from ([`LandmarkParams::refine`]).
+    /// Variance (per axis, metres squared) of the position when it was made: the robot's
+    /// own estimate of how far off it was then ([`super::fusion`]). A landmark keeps the
+    /// position it was made with (the thesis; learning from later matches measured no
+    /// better, README).
     pub var: f32,
     /// Times it was matched.
     pub matches: u16,
@@ -383,7 +379,7 @@ impl LandmarkStore {
         if let Some((i, d)) = best {
             let lm = &mut self.landmarks[i];
             lm.matches = lm.matches.saturating_add(1);
-            let event = Event::Matched {
+            return Event::Matched {
                 index: i as u16,
                 dx: lm.x - p.x,
                 dy: lm.y - p.y,
@@ -391,13 +387,6 @@ impl LandmarkStore {
                 d,
                 var: lm.var,
             };
-            if let Some(f) = prm.refine {
-                let k = refine(lm.var, p.var, &f);
-                lm.x += k * (p.x - lm.x);
-                lm.y += k * (p.y - lm.y);
-                lm.var *= 1.0 - k;
-            }
-            return event;
         }
         if self.used >= MAX_LANDMARKS {
             return Event::Full;
@@ -561,6 +550,27 @@ mod tests {
         assert!((d + 0.3).abs() < 1e-5, "{d}");
     }
 
+    /// A landmark keeps the variance of the estimate that made it, and a match hands it to
+    /// the caller (who weighs the correction by it, `super::super::fusion`).
+    #[test]
+    fn a_landmark_keeps_the_variance_it_was_made_with() {
+        let mut store = LandmarkStore::new(params());
+        let mut seen = None;
+        for lap_no in 0..4 {
+            let var = if lap_no < 3 { 2e-4 } else { 5e-5 };
+            for k in 0..60u32 {
+                let l0 = if k == 20 { 9 } else { (k / 10) as u8 };
+                if let Some(Event::Matched { var, .. }) =
+                    store.step([l0, 1, 2], (k as f32 * 0.001, 0.0, 0.0), var, &Same)
+                {
+                    seen = Some(var);
+                }
+            }
+        }
+        assert_eq!(store.landmarks()[0].var, 2e-4);
+        assert_eq!(seen, Some(2e-4));
+    }
+
     #[test]
     fn frequent_or_long_classes_are_not_significant() {
         let mut store = LandmarkStore::new(params());
@@ -577,7 +587,7 @@ mod tests {
     fn store_size_is_stated() {
         // README states these numbers; the test keeps them honest.
         let (one, all) = (LANDMARK_BYTES, STORE_BYTES);
-        assert!(one <= 112, "{one}");
+        assert!(one <= 116, "{one}");
         assert!(all <= 40 * 1024, "{all}");
     }
 }
