@@ -2,7 +2,8 @@
 //! station. It runs the `unsupervised-places` scenario here, with the firmware's own
 //! `robot_firmware::unsupervised` code (classifiers, landmark store, places) in the loop, and
 //! plays the run back on screen: landmarks on the map, the three class streams, matches as
-//! they happen, corrected versus plain odometry versus truth, and the error over time.
+//! they happen, plain odometry, wheels plus compass heading and compass plus landmarks (the
+//! corrected estimate) against the truth, and the error over time.
 //!
 //! Why on the station: no robot profile carries this capability (README, "Unsupervised
 //! landmarks"): the Khepera firmware has neither the thesis's line camera nor a compass, and
@@ -78,8 +79,12 @@ pub fn command(args: &PlacesArgs) -> anyhow::Result<ExitCode> {
             "landmarks": report.landmarks,
             "matches": report.matches,
             "places": report.places,
-            "corrected_peak": report.corrected_peak,
             "plain_peak": report.plain_peak,
+            "plain_mean": report.plain_mean,
+            "compass_peak": report.compass_peak,
+            "compass_mean": report.compass_mean,
+            "corrected_peak": report.corrected_peak,
+            "corrected_mean": report.corrected_mean,
             "revisit": report.revisit,
         });
         println!(

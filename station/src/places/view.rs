@@ -2,10 +2,13 @@
 //!
 //! Left, the map: walls grey, landmarks as stored (odometric place; colour = the stream whose
 //! significant class made it: ART-1 yellow, growing K-means cyan, Fuzzy ART magenta; white once
-//! matched), the truth white, the corrected odometry green, the plain odometry red, and the
-//! last second's match as a blue jump. Right: the absolute error over time (corrected green,
-//! plain red, the thesis's bound of half a diameter grey), the three class streams (one glyph
-//! per label, the newest on the right) and the matches so far.
+//! matched), the truth white, the corrected estimate (compass + landmarks) green, wheels plus
+//! compass heading blue, the plain odometry red, and the last second's match as a light-blue
+//! jump. Right: the absolute error over time (the same colours, the thesis's bound of half a
+//! diameter grey; the scale fits the corrected and compass errors, the plain odometry's tens
+//! of diameters leave it at the top, its peak in the legend), the three class streams (one
+//! glyph per label, the newest on the right) and the matches so far with the share of the way
+//! each moved (its gain).
 //!
 //! Layer: presentation only; numbers come from the report, so nothing from outside reaches
 //! the terminal as text. Cannot fail.
@@ -28,6 +31,8 @@ pub const STREAM_NAMES: [&str; 3] = ["ART-1", "K-means", "FuzzyART"];
 pub const CORRECTED: Color = Color::Green;
 /// The plain odometry.
 pub const PLAIN: Color = Color::LightRed;
+/// Wheels plus compass heading, no landmarks.
+pub const COMPASS: Color = Color::Blue;
 /// The truth.
 pub const TRUTH: Color = Color::White;
 
@@ -124,12 +129,13 @@ impl PlacesView {
     pub fn header(&self, speed: f64, paused: bool) -> String {
         let r = &self.report;
         let n = self.series_len();
-        let (ec, ep) = n.checked_sub(1).map_or((0.0, 0.0), |i| {
-            (r.series[i].corrected_err, r.series[i].plain_err)
+        let (ec, eq, ep) = n.checked_sub(1).map_or((0.0, 0.0, 0.0), |i| {
+            let p = &r.series[i];
+            (p.corrected_err, p.compass_err, p.plain_err)
         });
         format!(
             "Mächler places · {:?} seed {} · t {:.0}/{:.0} s {} · landmarks {} · matches {} · \
-             error corrected {:.2} plain {:.2} diameters",
+             error corrected {:.2} compass {:.2} plain {:.2} diameters",
             r.arena,
             r.seed,
             self.t_s,
@@ -142,6 +148,7 @@ impl PlacesView {
             self.landmarks_len(),
             self.matches_len(),
             ec,
+            eq,
             ep
         )
     }
@@ -203,7 +210,10 @@ fn render_map(f: &mut Frame, view: &PlacesView, area: Rect) {
     let [x0, y0, x1, y1] = view.bounds;
     let pad = DIAMETER_M;
     let canvas = Canvas::default()
-        .block(Block::bordered().title(" map: truth white · corrected green · plain red "))
+        .block(
+            Block::bordered()
+                .title(" map: truth white · compass + landmarks green · compass blue · plain red "),
+        )
         .marker(Marker::Braille)
         .x_bounds([x0 - pad, x1 + pad])
         .y_bounds([y0 - pad, y1 + pad])
@@ -223,8 +233,10 @@ fn render_map(f: &mut Frame, view: &PlacesView, area: Rect) {
             };
             let plain = track(|p| p.plain);
             let corrected = track(|p| p.corrected);
+            let compass = track(|p| p.compass);
             let truth = track(|p| p.truth);
             ctx.draw(&Points::new(&plain, PLAIN));
+            ctx.draw(&Points::new(&compass, COMPASS));
             ctx.draw(&Points::new(&corrected, CORRECTED));
             ctx.draw(&Points::new(&truth, TRUTH));
             ctx.layer();
@@ -265,8 +277,15 @@ fn render_errors(f: &mut Frame, view: &PlacesView, area: Rect) {
         .map(|p| (p.t_s, p.corrected_err))
         .collect();
     let p: Vec<(f64, f64)> = r.series[..n].iter().map(|p| (p.t_s, p.plain_err)).collect();
+    let q: Vec<(f64, f64)> = r.series[..n]
+        .iter()
+        .map(|p| (p.t_s, p.compass_err))
+        .collect();
     let bound = [(0.0, 0.5), (r.duration_s, 0.5)];
-    let top = r.plain_peak.max(r.corrected_peak).max(1.0).ceil();
+    // Scaled to the two estimates that stay near the bound; the plain odometry (tens of
+    // diameters) would flatten them, so it leaves the chart at the top.
+    let top = r.compass_peak.max(r.corrected_peak).max(1.0).ceil();
+    let plain_name = format!("plain (peak {:.1})", r.plain_peak);
     let chart = Chart::new(vec![
         Dataset::default()
             .name("bound 1/2")
@@ -275,19 +294,27 @@ fn render_errors(f: &mut Frame, view: &PlacesView, area: Rect) {
             .style(Style::default().dark_gray())
             .data(&bound),
         Dataset::default()
-            .name("plain")
+            .name(plain_name)
             .marker(Marker::Braille)
             .graph_type(GraphType::Line)
             .style(Style::default().fg(PLAIN))
             .data(&p),
         Dataset::default()
-            .name("corrected")
+            .name("compass")
+            .marker(Marker::Braille)
+            .graph_type(GraphType::Line)
+            .style(Style::default().fg(COMPASS))
+            .data(&q),
+        Dataset::default()
+            .name("compass + landmarks")
             .marker(Marker::Braille)
             .graph_type(GraphType::Line)
             .style(Style::default().fg(CORRECTED))
             .data(&c),
     ])
     .block(Block::bordered().title(" error, robot diameters "))
+    // Four series: the default (a quarter of the chart) hides the legend on small panels.
+    .hidden_legend_constraints((Constraint::Ratio(1, 2), Constraint::Ratio(3, 4)))
     .x_axis(
         Axis::default()
             .bounds([0.0, r.duration_s])
@@ -339,8 +366,8 @@ fn render_matches(f: &mut Frame, view: &PlacesView, area: Rect) {
             let better = m.err_after <= m.err_before;
             TLine::from(vec![
                 Span::raw(format!(
-                    "{:7.1} s  landmark {:>3}  D {:.2}  moved {:.2}  error {:.2} -> ",
-                    m.t_s, m.landmark, m.d, m.correction, m.err_before
+                    "{:7.1} s  landmark {:>3}  D {:.2}  gain {:.2} moved {:.2}  error {:.2} -> ",
+                    m.t_s, m.landmark, m.d, m.gain, m.correction, m.err_before
                 )),
                 Span::styled(
                     format!("{:.2}", m.err_after),
@@ -413,6 +440,19 @@ mod tests {
         for name in STREAM_NAMES {
             assert!(end.contains(name), "{name}: {end}");
         }
+        // All three estimates against the truth: in the header, the legend and the match log.
+        let last = v.report.series.last().unwrap();
+        assert!(
+            end.contains(&format!(
+                "error corrected {:.2} compass {:.2} plain {:.2} diameters",
+                last.corrected_err, last.compass_err, last.plain_err
+            )),
+            "{end}"
+        );
+        for legend in ["compass + landmarks", "compass", "plain (peak"] {
+            assert!(end.contains(legend), "{legend}: {end}");
+        }
+        assert!(end.contains(&format!("gain {:.2}", m.gain)), "{end}");
         // The stream rows hold the labels up to the cursor, the newest last.
         let tail = v.stream_tail(10);
         let last = v.report.class_streams.last().unwrap();
