@@ -1,5 +1,8 @@
 //! Seed 003 ch. 3 over seeds: one summary line per run and the medians, for measuring what
-//! a change does (`cargo run --release -p emulator --example places_sweep -- structured 1 10`).
+//! a change does (`cargo run --release -p emulator --example places_sweep -- structured 1 10`,
+//! optional 4th argument: seconds). Variants by environment: FUSION=off (the thesis's reset,
+//! gain 1), WHEEL_HEADING=1 (heading from the wheels; HEADING=stored|compass|keep at matches),
+//! MATCH_SIGMA (diameters), COMPASS_DEG, MOTORS, THRESH, LEV_SCALE, NOEXC=1.
 #![allow(clippy::unwrap_used)]
 
 use emulator::unsupervised_places::{run, ArenaKind, PlacesOptions};
@@ -48,6 +51,23 @@ fn main() {
             }
         }
         let r = run(&o);
+        // The landmarks' own error when made (truth), by quarter of their making order.
+        let made: Vec<f64> = r
+            .landmark_positions
+            .iter()
+            .zip(&r.landmark_truth)
+            .map(|(p, t)| (p[0] - t[0]).hypot(p[1] - t[1]) / 0.055)
+            .collect();
+        let q = made.len() / 4;
+        let quarters: Vec<f64> = (0..4)
+            .map(|i| {
+                let part = &made[i * q..if i == 3 { made.len() } else { (i + 1) * q }];
+                (part.iter().sum::<f64>() / part.len().max(1) as f64 * 100.0).round() / 100.0
+            })
+            .collect();
+        println!(
+            "seed {seed:>2}: landmark error when made, by quarter of making order: {quarters:?}"
+        );
         let n = r.match_log.len().max(1) as f64;
         println!(
             "seed {seed:>2}: three estimates, peak/mean diameters: plain {:5.2}/{:5.2} compass {:4.2}/{:4.2} compass+landmarks {:4.2}/{:4.2} | matches {} mean gain {:.2} landmark err mean {:.2} max {:.2} worse {}",
