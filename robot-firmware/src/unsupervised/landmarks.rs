@@ -17,7 +17,9 @@
 //!    then by `lev_scale`; d_dist is the distance of the kernel-time position to the stored one in
 //!    robot diameters. Candidates farther than one diameter are ignored (§3.15.2); the best
 //!    candidate with D = sqrt(d_lev^2 + d_dist^2) < `match_threshold` is a match and the caller
-//!    moves its position by (stored - kernel-time position). No match: a new landmark.
+//!    moves its position towards the stored one: all the way (stored - kernel-time position,
+//!    the thesis's reset) or by the gain that the landmark's stored variance and its own give
+//!    ([`super::fusion`]). No match: a new landmark, stored with the caller's variance.
 //!
 //! Fixed capacity `MAX_LANDMARKS`; a full store still matches but creates nothing more.
 
