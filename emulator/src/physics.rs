@@ -564,6 +564,33 @@ mod tests {
     }
 
     #[test]
+    fn a_new_command_is_looked_up_anew_not_served_from_the_last_ones_rows() {
+        let mut params = PhysicsParams::for_profile(&MICRO_RATO);
+        params.motor_tau_s = 0.0;
+        let SpeedModel::Table(table) = params.speed else {
+            panic!("micro-rato has a speed table")
+        };
+        let pose = Pose {
+            x: 0.0,
+            y: 0.0,
+            heading: 0.0,
+        };
+        let mut b = Body::new(params, pose);
+        let walls = SegmentSet::default();
+        for (cmd, level) in [
+            ((75, 75), 0.5),
+            ((30, 75), 0.5),
+            ((-40, 60), 0.2),
+            ((75, 75), 0.9),
+        ] {
+            let cmd = MotorCommand::new(cmd.0, cmd.1);
+            b.step(cmd, level, &walls, 1e-3, &mut SimRng::new(1, 1));
+            let want = table.speeds_mps([f32::from(cmd.left), f32::from(cmd.right)], level as f32);
+            assert_eq!(b.rotation_mps(), want.map(f64::from), "{cmd:?} at {level}");
+        }
+    }
+
+    #[test]
     fn micro_rato_speed_follows_the_firmware_table_at_the_battery_level() {
         let mut params = PhysicsParams::for_profile(&MICRO_RATO);
         params.motor_tau_s = 0.0;

@@ -482,6 +482,52 @@ impl DeadReckoner {
 mod tests {
     use super::*;
 
+    /// The table's lookup as it was written before rows were found once per command: every
+    /// row interpolated at the battery level, then the command's rows.
+    fn speed_by_column(t: &SpeedTable, nominal: f32, battery: f32) -> f32 {
+        let (b0, b1, tb) = bracket(&t.battery, battery);
+        let column = t.mps.map(|row| lerp(row[b0], row[b1], tb));
+        let sign = if nominal < 0.0 { -1.0 } else { 1.0 };
+        let n = nominal * sign;
+        let v = if n <= t.nominal[0] {
+            if t.nominal[0] > 0.0 {
+                column[0] * n / t.nominal[0]
+            } else {
+                column[0]
+            }
+        } else {
+            let (r0, r1, tn) = bracket(&t.nominal, n);
+            lerp(column[r0], column[r1], tn)
+        };
+        sign * v
+    }
+
+    #[test]
+    fn rows_found_once_give_the_same_bits_as_the_whole_column() {
+        let odd = SpeedTable {
+            nominal: [0.0, 40.0, 40.0],
+            battery: [0.2, 0.2, 0.9],
+            mps: [[0.01, 0.02, 0.03], [0.1, 0.3, 0.2], [0.5, 0.4, 0.6]],
+        };
+        for t in [SpeedTable::default(), odd] {
+            for cmd in -130i16..=130 {
+                let row = t.row(f32::from(cmd));
+                for b in 0..=24 {
+                    let battery = b as f32 / 20.0 - 0.1;
+                    let want = speed_by_column(&t, f32::from(cmd), battery);
+                    let both = t.speeds_on_rows(&[row, t.row(7.0)], battery);
+                    assert_eq!(both[0].to_bits(), want.to_bits(), "{cmd} at {battery}");
+                    assert_eq!(
+                        t.speed_mps(f32::from(cmd), battery).to_bits(),
+                        want.to_bits()
+                    );
+                    let pair = t.speeds_mps([7.0, f32::from(cmd)], battery);
+                    assert_eq!(pair[1].to_bits(), want.to_bits());
+                }
+            }
+        }
+    }
+
     fn reckoner_at(x: f32, y: f32) -> DeadReckoner {
         DeadReckoner::new(DeadReckonParams::default(), Point::new(x, y))
     }
