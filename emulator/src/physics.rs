@@ -26,7 +26,7 @@
 //! the heading stays in (-pi, pi]; every state value stays finite for finite parameters
 //! (checked by [`PhysicsParams::validate`]). Nothing here panics or allocates per step.
 
-use robot_firmware::deadreckon::SpeedTable;
+use robot_firmware::deadreckon::{SpeedRow, SpeedTable};
 use robot_firmware::{MotorCommand, Profile};
 use thiserror::Error;
 
@@ -185,6 +185,10 @@ pub struct Body {
     resync: u32,
     /// Cached (dt, lag factor).
     alpha: (f64, f64),
+    /// The table speed model's rows for the last (clamped) command: the command changes
+    /// once a control cycle at most, the lookup runs every step (the rows' brackets and
+    /// divisions were a tenth of a micro-rato run).
+    rows: Option<((i16, i16), [SpeedRow; 2])>,
 }
 
 impl Body {
@@ -207,6 +211,7 @@ impl Body {
             dir: (pose.heading.cos(), pose.heading.sin()),
             resync: 0,
             alpha: (f64::NAN, 1.0),
+            rows: None,
         }
     }
 
@@ -276,7 +281,7 @@ impl Body {
     }
 
     /// Target rotation speeds of the wheels for a command, m/s.
-    fn commanded_mps(&self, cmd: MotorCommand, battery_level: f64) -> [f64; 2] {
+    fn commanded_mps(&mut self, cmd: MotorCommand, battery_level: f64) -> [f64; 2] {
         if cmd.left == 0 && cmd.right == 0 {
             // Stopped is zero at any battery level: no table lookup.
             return [0.0; 2];
@@ -288,10 +293,18 @@ impl Body {
                 f64::from(l) * mm_s_per_unit * 1e-3,
                 f64::from(r) * mm_s_per_unit * 1e-3,
             ],
-            // Both wheels in one lookup, by reference (the table was copied twice a step; the
-            // lookups were an eighth of a micro-rato run).
+            // Both wheels in one lookup, by reference, on the rows found once per command:
+            // the same bits as `speeds_mps`.
             SpeedModel::Table(t) => {
-                let [vl, vr] = t.speeds_mps([f32::from(l), f32::from(r)], battery_level as f32);
+                let rows = match self.rows {
+                    Some((key, rows)) if key == (l, r) => rows,
+                    _ => {
+                        let rows = [t.row(f32::from(l)), t.row(f32::from(r))];
+                        self.rows = Some(((l, r), rows));
+                        rows
+                    }
+                };
+                let [vl, vr] = t.speeds_on_rows(&rows, battery_level as f32);
                 [f64::from(vl), f64::from(vr)]
             }
         }
@@ -548,6 +561,33 @@ mod tests {
             "{}",
             b.pose().x
         );
+    }
+
+    #[test]
+    fn a_new_command_is_looked_up_anew_not_served_from_the_last_ones_rows() {
+        let mut params = PhysicsParams::for_profile(&MICRO_RATO);
+        params.motor_tau_s = 0.0;
+        let SpeedModel::Table(table) = params.speed else {
+            panic!("micro-rato has a speed table")
+        };
+        let pose = Pose {
+            x: 0.0,
+            y: 0.0,
+            heading: 0.0,
+        };
+        let mut b = Body::new(params, pose);
+        let walls = SegmentSet::default();
+        for (cmd, level) in [
+            ((75, 75), 0.5),
+            ((30, 75), 0.5),
+            ((-40, 60), 0.2),
+            ((75, 75), 0.9),
+        ] {
+            let cmd = MotorCommand::new(cmd.0, cmd.1);
+            b.step(cmd, level, &walls, 1e-3, &mut SimRng::new(1, 1));
+            let want = table.speeds_mps([f32::from(cmd.left), f32::from(cmd.right)], level as f32);
+            assert_eq!(b.rotation_mps(), want.map(f64::from), "{cmd:?} at {level}");
+        }
     }
 
     #[test]

@@ -60,50 +60,85 @@ impl SpeedTable {
     /// Real speed in m/s for a nominal speed command at a battery level.
     #[inline]
     pub fn speed_mps(&self, nominal: f32, battery: f32) -> f32 {
-        self.speed_in_column(&self.column(battery), nominal)
+        let (b0, b1, tb) = bracket(&self.battery, battery);
+        self.speed_on_row(&self.row(nominal), b0, b1, tb)
     }
 
     /// Both wheels' speeds at one battery level: [`SpeedTable::speed_mps`] of each, bit for
-    /// bit, with the battery interpolated once (the emulator's motors look this up every
-    /// simulated millisecond).
+    /// bit, with the battery bracketed once.
     #[inline]
     pub fn speeds_mps(&self, nominal: [f32; 2], battery: f32) -> [f32; 2] {
-        let column = self.column(battery);
-        // Not `map`: its closure plumbing stays in the code, here once a simulated ms.
+        self.speeds_on_rows(&[self.row(nominal[0]), self.row(nominal[1])], battery)
+    }
+
+    /// Where a nominal speed command falls among the rows. It depends on the command only,
+    /// so a caller that looks speeds up far more often than the command changes (the
+    /// emulator's motors, every simulated millisecond) finds it once per command and passes
+    /// it to [`SpeedTable::speeds_on_rows`].
+    #[inline]
+    pub fn row(&self, nominal: f32) -> SpeedRow {
+        let sign = if nominal < 0.0 { -1.0 } else { 1.0 };
+        let n = nominal * sign;
+        let below = n <= self.nominal[0];
+        // Below the first row the speed is linear in the first row's: no bracket needed.
+        let (r0, r1, tn) = if below {
+            (0, 0, 0.0)
+        } else {
+            bracket(&self.nominal, n)
+        };
+        SpeedRow {
+            sign,
+            n,
+            below,
+            lo: self.mps[r0],
+            hi: self.mps[r1],
+            tn,
+        }
+    }
+
+    /// Both wheels' speeds at one battery level from their rows ([`SpeedTable::row`]): the
+    /// same bits as [`SpeedTable::speeds_mps`], interpolating only the rows they need.
+    #[inline]
+    pub fn speeds_on_rows(&self, rows: &[SpeedRow; 2], battery: f32) -> [f32; 2] {
+        let (b0, b1, tb) = bracket(&self.battery, battery);
         [
-            self.speed_in_column(&column, nominal[0]),
-            self.speed_in_column(&column, nominal[1]),
+            self.speed_on_row(&rows[0], b0, b1, tb),
+            self.speed_on_row(&rows[1], b0, b1, tb),
         ]
     }
 
-    /// Every row's speed at `battery`.
+    /// The speed on `row` with the battery between columns `b0` and `b1` at fraction `tb`.
     #[inline]
-    fn column(&self, battery: f32) -> [f32; SPEED_ROWS] {
-        let (b0, b1, tb) = bracket(&self.battery, battery);
-        let mut out = [0.0; SPEED_ROWS];
-        for (o, row) in out.iter_mut().zip(&self.mps) {
-            *o = lerp(row[b0], row[b1], tb);
-        }
-        out
-    }
-
-    #[inline]
-    fn speed_in_column(&self, column: &[f32; SPEED_ROWS], nominal: f32) -> f32 {
-        let sign = if nominal < 0.0 { -1.0 } else { 1.0 };
-        let n = nominal * sign;
-        let v = if n <= self.nominal[0] {
+    fn speed_on_row(&self, row: &SpeedRow, b0: usize, b1: usize, tb: f32) -> f32 {
+        let at = |r: &[f32; BATTERY_COLS]| lerp(r[b0], r[b1], tb);
+        let v = if row.below {
             // Below the first row: linear down to zero at a zero command.
             if self.nominal[0] > 0.0 {
-                column[0] * n / self.nominal[0]
+                at(&row.lo) * row.n / self.nominal[0]
             } else {
-                column[0]
+                at(&row.lo)
             }
         } else {
-            let (r0, r1, tn) = bracket(&self.nominal, n);
-            lerp(column[r0], column[r1], tn)
+            lerp(at(&row.lo), at(&row.hi), row.tn)
         };
-        sign * v
+        row.sign * v
     }
+}
+
+/// Where one nominal speed command falls in a [`SpeedTable`] ([`SpeedTable::row`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpeedRow {
+    /// -1 for reverse (mirrored), else 1.
+    sign: f32,
+    /// The command's magnitude.
+    n: f32,
+    /// At or below the first row.
+    below: bool,
+    /// The rows around the command (copied: no index to check every lookup; the first
+    /// row twice when `below`) and the fraction between them.
+    lo: [f32; BATTERY_COLS],
+    hi: [f32; BATTERY_COLS],
+    tn: f32,
 }
 
 /// Indices `(i, i+1)` of `xs` around `x` and the fraction between them, clamped at both ends.
@@ -446,6 +481,52 @@ impl DeadReckoner {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The table's lookup as it was written before rows were found once per command: every
+    /// row interpolated at the battery level, then the command's rows.
+    fn speed_by_column(t: &SpeedTable, nominal: f32, battery: f32) -> f32 {
+        let (b0, b1, tb) = bracket(&t.battery, battery);
+        let column = t.mps.map(|row| lerp(row[b0], row[b1], tb));
+        let sign = if nominal < 0.0 { -1.0 } else { 1.0 };
+        let n = nominal * sign;
+        let v = if n <= t.nominal[0] {
+            if t.nominal[0] > 0.0 {
+                column[0] * n / t.nominal[0]
+            } else {
+                column[0]
+            }
+        } else {
+            let (r0, r1, tn) = bracket(&t.nominal, n);
+            lerp(column[r0], column[r1], tn)
+        };
+        sign * v
+    }
+
+    #[test]
+    fn rows_found_once_give_the_same_bits_as_the_whole_column() {
+        let odd = SpeedTable {
+            nominal: [0.0, 40.0, 40.0],
+            battery: [0.2, 0.2, 0.9],
+            mps: [[0.01, 0.02, 0.03], [0.1, 0.3, 0.2], [0.5, 0.4, 0.6]],
+        };
+        for t in [SpeedTable::default(), odd] {
+            for cmd in -130i16..=130 {
+                let row = t.row(f32::from(cmd));
+                for b in 0..=24 {
+                    let battery = b as f32 / 20.0 - 0.1;
+                    let want = speed_by_column(&t, f32::from(cmd), battery);
+                    let both = t.speeds_on_rows(&[row, t.row(7.0)], battery);
+                    assert_eq!(both[0].to_bits(), want.to_bits(), "{cmd} at {battery}");
+                    assert_eq!(
+                        t.speed_mps(f32::from(cmd), battery).to_bits(),
+                        want.to_bits()
+                    );
+                    let pair = t.speeds_mps([7.0, f32::from(cmd)], battery);
+                    assert_eq!(pair[1].to_bits(), want.to_bits());
+                }
+            }
+        }
+    }
 
     fn reckoner_at(x: f32, y: f32) -> DeadReckoner {
         DeadReckoner::new(DeadReckonParams::default(), Point::new(x, y))

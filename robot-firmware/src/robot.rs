@@ -279,14 +279,20 @@ fn pass<K: Kit, H: Hal>(
     if now_us >= core.timing.next_cycle_us {
         core.control_cycle(hal, now_us);
     }
-    send_periodic(link, core, now_ms);
+    // Nothing to send and no event to drop while no station listens: skipped (the loop runs
+    // every millisecond in the emulator, where these calls were a twentieth of a run).
+    if link.connected() || !core.events.is_empty() {
+        send_periodic(link, core, now_ms);
+    }
     if link.connected() {
         // Download chunks yield to replies and events, like telemetry.
         core.objects
             .poll(now_ms, &mut |m| link.send_low_priority(m, now_ms));
     }
     emit_trace(hal, link, now_ms, cycles != core.timing.cycles);
-    link.flush(&mut |bytes| hal.serial_write(bytes));
+    if link.queued() > 0 {
+        link.flush(&mut |bytes| hal.serial_write(bytes));
+    }
 }
 
 fn receive<K: Kit, H: Hal>(
