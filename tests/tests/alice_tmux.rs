@@ -38,10 +38,16 @@ fn the_qt_layer_grows_live_from_a_wandering_alice_and_t_hides_it() {
         &["--profile", "alice"],
     );
     let wait = |what: &str, ok: &dyn Fn(&str) -> bool| {
-        t.wait_for(what, WAIT, |rows| ok(&rows.join("\n"))).join("\n")
+        t.wait_for(what, WAIT, |rows| ok(&rows.join("\n")))
+            .join("\n")
     };
-    let s = wait("the handshake", &|s| s.contains("connected") && s.contains("Alice"));
-    assert!(s.contains("ALICE test scene"), "builtin:alice on the map:\n{s}");
+    let s = wait("the handshake", &|s| {
+        s.contains("connected") && s.contains("Alice")
+    });
+    assert!(
+        s.contains("ALICE test scene"),
+        "builtin:alice on the map:\n{s}"
+    );
     t.keys(&["3"]);
     let s = wait("wandering with a few cells", &|s| {
         s.contains("mode Wander") && cells(s).is_some_and(|n| n >= 3)
