@@ -261,7 +261,6 @@ fn other_robots_send_no_situations_and_alice_without_sensors_sends_zeros() {
 
 #[test]
 fn a_traced_alice_run_plays_back_to_the_same_bytes() {
-    use robot_firmware::hal_trace::playback::{Next, Playback};
     let run = || {
         let mut b = Bench::<Alice>::with(&ALICE, true, true);
         b.command(Command::SetMode(Mode::Wander));
@@ -274,10 +273,16 @@ fn a_traced_alice_run_plays_back_to_the_same_bytes() {
     };
     let out = run();
     assert_eq!(out, run(), "same inputs, same run");
-    // Join the trace stream.
+    let trace = trace_of(&out);
+    check_playback(&out, &trace);
+    bad_alice_entries_are_refused_by_offset(&trace);
+}
+
+/// The trace stream of a traced run's bytes.
+fn trace_of(out: &[u8]) -> Vec<u8> {
     let mut dec = FrameDecoder::new();
     let mut trace = Vec::new();
-    let mut input = &out[..];
+    let mut input = out;
     loop {
         match dec.feed(input) {
             Feed::Frame { frame, rest } => {
@@ -291,7 +296,42 @@ fn a_traced_alice_run_plays_back_to_the_same_bytes() {
             Feed::NeedMore => break,
         }
     }
-    let mut play = Playback::new(&trace).unwrap();
+    trace
+}
+
+/// Untrusted trace bytes: a whisker value beyond 32 bits is refused at its byte, and a
+/// photoresistor entry cut by the end of the stream ends the playback, neither panics.
+fn bad_alice_entries_are_refused_by_offset(trace: &[u8]) {
+    use robot_firmware::hal_trace::playback::{Next, Playback, TraceError};
+    use robot_firmware::hal_trace::tag;
+    let play_all = |bytes: &[u8]| {
+        let mut p = Playback::new(bytes).unwrap();
+        loop {
+            match p.next_step() {
+                Ok(Next::Step) => {}
+                other => return other,
+            }
+        }
+    };
+    let mut bad = trace.to_vec();
+    let at = bad.len();
+    bad.extend_from_slice(&[tag::STEP, 1, tag::WHISKERS]);
+    bad.extend_from_slice(&[0xFF, 0xFF, 0xFF, 0xFF, 0x7F]); // 2^35 - 1
+    bad.extend_from_slice(&[tag::STEP, 1]);
+    match play_all(&bad) {
+        Err(TraceError::BadValue { offset, field }) => {
+            assert_eq!((offset, field), (at + 3, "WHISKERS"));
+        }
+        other => panic!("{other:?}"),
+    }
+    let mut cut = trace.to_vec();
+    cut.extend_from_slice(&[tag::STEP, 1, tag::LIGHT24, 1, 2, 3]);
+    assert_eq!(play_all(&cut).unwrap(), Next::End);
+}
+
+fn check_playback(out: &[u8], trace: &[u8]) {
+    use robot_firmware::hal_trace::playback::{Next, Playback};
+    let mut play = Playback::new(trace).unwrap();
     assert_eq!(play.start.steps_before, 0, "traced from power-up");
     let mut again = robot::<Alice>(&ALICE);
     again.core.apply(
