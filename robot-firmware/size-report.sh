@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Size report of the firmware on a Cortex-M4F (thumbv7em-none-eabihf), per profile's
-# composition (robot::kit: Dom Dinis, Khepera): the robot's state as the compiler lays it out
+# composition (robot::kit: Dom Dinis, Khepera, ALICE): the robot's state as the compiler lays it out
 # for that target (-Zprint-type-sizes) and the worst-case stack of its construction in place
 # (Robot::init), of Robot::step and of the link handler (stack_report.py over
 # -Zemit-stack-sizes), then state + worst stack against the Dom Dinis board's 32 KB.
@@ -39,7 +39,8 @@ if [ -n "$json" ]; then
   report --json
 else
   echo "== state on $target (bytes)"
-  for t in 'robot::Robot<robot::kit::DomDinis>' 'robot::Robot<robot::kit::Khepera>' 'link::Link' \
+  for t in 'robot::Robot<robot::kit::DomDinis>' 'robot::Robot<robot::kit::Khepera>' \
+           'robot::Robot<robot::kit::Alice>' 'robot::alice::AliceState' 'link::Link' \
            'transfer::Objects' 'nav::fixed::FixedNav<' 'robot::linecorr::LineCorr' \
            'robot::calibrate::LightCalibration' 'robot::forage::Forage' 'explore::Explorer'; do
     grep -m1 -F "type: \`$t" "$dir/type-sizes.txt" | sed 's/print-type-size type: /  /'

@@ -18,7 +18,11 @@ import json, re, subprocess, sys
 
 RAM = 32 * 1024
 # (name in reports, mangled name of the kit type, the size probe's symbol suffix)
-KITS = [("dom-dinis", "8DomDinis", "dom_dinis"), ("khepera", "7Khepera", "khepera")]
+KITS = [
+    ("dom-dinis", "8DomDinis", "dom_dinis"),
+    ("khepera", "7Khepera", "khepera"),
+    ("alice", "5Alice", "alice"),
+]
 
 bindir, image = sys.argv[1], sys.argv[2]
 type_sizes = sys.argv[3] if len(sys.argv) > 3 else None

@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use robot_firmware::{Profile, KHEPERA, MICRO_RATO};
+use robot_firmware::{Profile, ALICE, KHEPERA, MICRO_RATO};
 
 use crate::fault::{FaultConfig, Stall};
 use crate::fleet::RobotSpec;
@@ -29,7 +29,8 @@ use crate::sim::SimConfig;
         robot-emulator --link /tmp/robot                 # and a stable path to the port\n  \
         station --port /tmp/robot                        # drive it\n  \
         robot-emulator --arena maze.txt --profile khepera --speed 10\n  \
-        robot-emulator run --arena lab.xml --profile micro-rato --task go-to --seed 3 --json"
+        robot-emulator run --arena lab.xml --profile micro-rato --task go-to --seed 3 --json\n  \
+        robot-emulator --profile alice   # seed 001's ALICE in builtin:alice, kind-16 situations"
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -227,7 +228,8 @@ impl BenchArgs {
 #[derive(Debug, Clone, Args)]
 pub struct WorldArgs {
     /// Arena file: CiberRato lab .xml, micromouse maze .txt, ROS map .yaml, or an ASCII grid;
-    /// or a built-in one: `builtin:micro-rato-99`, `builtin:forage`, `builtin:floor-grid`.
+    /// or a built-in one: `builtin:micro-rato-99`, `builtin:forage`, `builtin:floor-grid`,
+    /// `builtin:alice` (the default for `--profile alice`).
     #[arg(long, default_value = crate::builtin::MICRO_RATO_99, value_name = "FILE")]
     pub arena: String,
     /// CiberRato grid file with start poses (default: found beside a `...Lab.xml`).
@@ -414,7 +416,7 @@ fn parse_robot(s: &str) -> Result<RobotArg, String> {
         None => (s, None),
     };
     let profile = ProfileArg::from_str(name.trim(), true).map_err(|_| {
-        format!("unknown profile `{name}` in `{s}`: expected khepera or micro-rato")
+        format!("unknown profile `{name}` in `{s}`: expected khepera, micro-rato or alice")
     })?;
     Ok(RobotArg {
         profile,
@@ -426,6 +428,9 @@ fn parse_robot(s: &str) -> Result<RobotArg, String> {
 pub enum ProfileArg {
     Khepera,
     MicroRato,
+    /// Seed 001's ALICE: 24 whiskers, 24 photoresistors, situations (kind 16); in
+    /// `builtin:alice` unless --arena names another.
+    Alice,
 }
 
 impl ProfileArg {
@@ -433,6 +438,7 @@ impl ProfileArg {
         match self {
             ProfileArg::Khepera => &KHEPERA,
             ProfileArg::MicroRato => &MICRO_RATO,
+            ProfileArg::Alice => &ALICE,
         }
     }
 }
@@ -571,6 +577,16 @@ pub enum TaskArg {
 }
 
 impl WorldArgs {
+    /// The arena to load: `--arena`, except that ALICE replaces the default (Micro-Rato'99)
+    /// with its own scene, `builtin:alice` (seed 001 §4.5), as foraging does with its own.
+    pub fn arena(&self) -> &str {
+        if self.profile == ProfileArg::Alice && self.arena == crate::builtin::MICRO_RATO_99 {
+            crate::alice::arena::BUILTIN_ALICE
+        } else {
+            &self.arena
+        }
+    }
+
     fn noise(&self) -> Result<Noise, String> {
         let mut n = if self.no_noise {
             Noise::none()
@@ -656,7 +672,7 @@ impl WorldArgs {
         cfg.slip = self.slip;
         cfg.floor_grid_m = self
             .floor_grid
-            .or_else(|| crate::builtin::floor_grid_pitch(&self.arena));
+            .or_else(|| crate::builtin::floor_grid_pitch(self.arena()));
         cfg.baud = baud;
         Ok(cfg)
     }
@@ -668,7 +684,7 @@ impl ServeArgs {
         let sim = self.world.sim_config(self.baud)?;
         let serve = self.link_options(1, 1)?;
         Ok(EmulatorOptions {
-            arena: self.world.arena.clone(),
+            arena: self.world.arena().to_string(),
             load: self.world.load_options(),
             sim,
             serve,
@@ -751,7 +767,7 @@ impl RunArgs {
         if self.task == TaskArg::Forage && self.world.arena == crate::builtin::MICRO_RATO_99 {
             crate::forage::BUILTIN_FORAGE
         } else {
-            &self.world.arena
+            self.world.arena()
         }
     }
 

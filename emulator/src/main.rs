@@ -153,8 +153,8 @@ fn serve_fleet(args: &ServeArgs, robots: &[emulator::fleet::RobotSpec]) -> Resul
         .collect::<Result<Vec<_>, String>>()?;
     let base = args.world.sim_config(args.baud)?;
     let arena =
-        load_arena(&args.world.arena, &args.world.load_options()).map_err(|e| e.to_string())?;
-    let arena_name = args.world.arena.clone();
+        load_arena(args.world.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
+    let arena_name = args.world.arena().to_string();
     let mut fleet = emulator::fleet::Fleet::new(arena, &base, robots).map_err(|e| e.to_string())?;
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
@@ -187,8 +187,8 @@ fn serve_fleet(args: &ServeArgs, robots: &[emulator::fleet::RobotSpec]) -> Resul
 
 fn run(args: &RunArgs) -> Result<(), String> {
     if let Some(opts) = args.contest_options()? {
-        let arena =
-            load_arena(&args.world.arena, &args.world.load_options()).map_err(|e| e.to_string())?;
+        let arena = load_arena(args.world.arena(), &args.world.load_options())
+            .map_err(|e| e.to_string())?;
         let report =
             emulator::scenario::contest::run_contest(arena, &opts).map_err(|e| e.to_string())?;
         if args.json {
@@ -224,7 +224,7 @@ fn run(args: &RunArgs) -> Result<(), String> {
     }
     let opts = args.options()?;
     let arena =
-        load_arena(&args.world.arena, &args.world.load_options()).map_err(|e| e.to_string())?;
+        load_arena(args.world.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
     let report = emulator::scenario::run_scenario(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
         println!("{}", run_json(&report)?);
@@ -436,7 +436,7 @@ fn unsupervised_places(args: &RunArgs) -> Result<(), String> {
 fn line_correct(args: &RunArgs) -> Result<(), String> {
     let opts = args.line_correct_options()?;
     let arena =
-        load_arena(&args.world.arena, &args.world.load_options()).map_err(|e| e.to_string())?;
+        load_arena(args.world.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
     let r = emulator::line_correct::run_line_correct(arena, &opts).map_err(|e| e.to_string())?;
     if args.json {
         println!("{}", run_json(&r)?);

@@ -30,6 +30,8 @@ pub mod stream {
     pub const BATTERY: u64 = 8;
     /// The firmware's own seed (behaviour threshold jitter).
     pub const FIRMWARE: u64 = 9;
+    /// ALICE's whiskers and photoresistors (seed 001: `alice::sensors`).
+    pub const ALICE: u64 = 10;
 }
 
 /// xoshiro256++ with a cached second normal deviate.

@@ -170,6 +170,8 @@ pub struct SimHal {
     /// Their bodies, for the sensors.
     others: Vec<Disc>,
     robot_contacts: RobotContacts,
+    /// ALICE's whiskers and photoresistors (seed 001), on the ALICE profile only.
+    alice: Option<crate::alice::sensors::Sensors>,
 }
 
 impl Hal for SimHal {
@@ -229,6 +231,25 @@ impl Hal for SimHal {
 
     fn camera(&mut self, image: &mut [u8; CAMERA_PIXELS]) -> bool {
         self.camera.read(self.body.pose(), image)
+    }
+
+    fn whiskers(&mut self) -> Option<u32> {
+        let p = self.body.pose();
+        let touch =
+            self.alice
+                .as_mut()?
+                .whiskers(self.world.walls(), Point::new(p.x, p.y), p.heading);
+        Some(crate::alice::sensors::whisker_bits(&touch))
+    }
+
+    fn photoresistors(&mut self) -> Option<[u8; robot_firmware::alice::SENSORS]> {
+        let p = self.body.pose();
+        let (walls, lights) = (self.world.walls(), self.world.lights());
+        let light = self
+            .alice
+            .as_mut()?
+            .light(walls, lights, Point::new(p.x, p.y), p.heading);
+        Some(crate::alice::sensors::light_bytes(&light))
     }
 
     fn serial_read(&mut self, buf: &mut [u8]) -> usize {
@@ -435,6 +456,9 @@ impl Sim {
             neighbours: Vec::new(),
             others: Vec::new(),
             robot_contacts: RobotContacts::default(),
+            // Seed 001's sensor models, the scenarios' own (one place: `alice::sensors`).
+            alice: (profile.id == protocol::ProfileId::Alice)
+                .then(|| crate::alice::sensors::Sensors::new(SimRng::new(seed, stream::ALICE))),
         };
         let robot = build_robot(profile, seed, start, &hal.world);
         let mut sim = Sim {

@@ -66,6 +66,9 @@ pub struct HelloReply<'a> {
 pub enum ProfileId {
     Khepera,
     MicroRato,
+    /// ALICE (seed 001 §3.1): 24 whiskers, 24 photoresistors, odometry; sends
+    /// `AliceSituation` (kind 16).
+    Alice,
 }
 
 /// Capability bits carried in `HelloReply::capabilities`.

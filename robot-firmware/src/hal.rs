@@ -96,6 +96,19 @@ pub trait Hal {
         false
     }
 
+    /// ALICE's 24 binary whiskers (seed 001 §3.1): bit `i` set while whisker `i` (looking
+    /// `i * 15` degrees anticlockwise from forward) touches; `None` on robots without them
+    /// (the default).
+    fn whiskers(&mut self) -> Option<u32> {
+        None
+    }
+
+    /// ALICE's 24 photoresistors, each 0 (dark) ..= 255 (saturated), uncalibrated, sensor `i`
+    /// looking like whisker `i`; `None` on robots without them (the default).
+    fn photoresistors(&mut self) -> Option<[u8; crate::alice::SENSORS]> {
+        None
+    }
+
     /// Reads received serial bytes into `buf`; returns how many (0 when none are waiting).
     fn serial_read(&mut self, buf: &mut [u8]) -> usize;
 

@@ -34,6 +34,8 @@
 //! - `MOTORS` (22): left, right zigzag varints (the command given). `GRIP_CMD` (23): arm u8,
 //!   closed u8.
 //! - `GAP` (24): n varint: n passes are missing here (the pass in progress included).
+//! - `WHISKERS` (25): bits varint (ALICE's 24 whiskers); `NO_WHISKERS` (26).
+//! - `LIGHT24` (27): 24 bytes (ALICE's photoresistors); `NO_LIGHT24` (28).
 
 pub mod playback;
 
@@ -80,6 +82,10 @@ pub mod tag {
     pub const MOTORS: u8 = 22;
     pub const GRIP_CMD: u8 = 23;
     pub const GAP: u8 = 24;
+    pub const WHISKERS: u8 = 25;
+    pub const NO_WHISKERS: u8 = 26;
+    pub const LIGHT24: u8 = 27;
+    pub const NO_LIGHT24: u8 = 28;
 }
 
 /// What the robot was started with and told, as `START` carries it.
@@ -556,6 +562,32 @@ impl<H: Hal> Hal for Recorder<'_, H> {
             self.trace.entry(&Entry::new(tag::NO_CAMERA));
         }
         ok
+    }
+
+    fn whiskers(&mut self) -> Option<u32> {
+        let v = self.hal.whiskers();
+        match v {
+            Some(bits) => {
+                let mut e = Entry::new(tag::WHISKERS);
+                e.varint(u64::from(bits));
+                self.trace.entry(&e);
+            }
+            None => self.trace.entry(&Entry::new(tag::NO_WHISKERS)),
+        }
+        v
+    }
+
+    fn photoresistors(&mut self) -> Option<[u8; crate::alice::SENSORS]> {
+        let v = self.hal.photoresistors();
+        match v {
+            Some(light) => {
+                self.trace.open_step();
+                self.trace.put(&[tag::LIGHT24]);
+                self.trace.put(&light);
+            }
+            None => self.trace.entry(&Entry::new(tag::NO_LIGHT24)),
+        }
+        v
     }
 
     fn serial_read(&mut self, buf: &mut [u8]) -> usize {

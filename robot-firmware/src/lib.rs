@@ -6,7 +6,8 @@
 //!
 //! - `robot`: `Robot::step`, the main loop over a `Hal`; `robot::kit`, which capabilities'
 //!   state each profile's robot carries.
-//! - `hal`, `profile`: the hardware boundary and the two robots of the papers.
+//! - `hal`, `profile`: the hardware boundary and the three robots of the papers.
+//! - `alice`: seed 001's ALICE: its situations (kind 16) and its wandering.
 //! - `hal_trace`: the hardware trace, recorded at that boundary, for retracing a run.
 //! - `link`, `telemetry`, `params`: the robot's side of the protocol.
 //! - `transfer`: the robot's map, plan and regions objects, their uploads and downloads.
@@ -17,6 +18,7 @@
 #![no_std]
 #![deny(unsafe_code)]
 
+pub mod alice;
 pub mod behaviour;
 pub mod deadreckon;
 pub mod execute;
@@ -41,7 +43,7 @@ pub mod transfer;
 pub mod unsupervised;
 
 pub use hal::{BeaconReading, Hal, MotorCommand};
-pub use profile::{Profile, KHEPERA, MICRO_RATO};
+pub use profile::{Profile, ALICE, KHEPERA, MICRO_RATO};
 pub use robot::{AnyRobot, Robot, RobotOptions};
 
 /// Side of the square map the firmware holds, in cells (seed 004 used 17 x 17).

@@ -1,8 +1,9 @@
 //! Robot profiles: which hardware a robot has and its physical constants.
 //!
-//! Two robots come from the papers. `khepera` (seeds 000 and 003) has encoders, eight IR
+//! Three robots come from the papers. `khepera` (seeds 000 and 003) has encoders, eight IR
 //! proximity sensors and ambient light; `micro-rato` (seed 004, Dom Dinis) has a compass and no
-//! encoders, three IR sensors, a beacon sensor and a ground sensor. Constants the papers give
+//! encoders, three IR sensors, a beacon sensor and a ground sensor; `alice` (seed 001) has
+//! odometry, 24 whiskers and 24 photoresistors. Constants the papers give
 //! are cited; constants they leave open are marked "default" and can be changed over the link
 //! as parameters where they affect behaviour. Each profile's robot carries the state of the
 //! capabilities it uses (`robot::kit`: micro-rato runs `DomDinis`, khepera `Khepera`).
@@ -120,12 +121,39 @@ pub const MICRO_RATO: Profile = Profile {
     ir_range_m: 0.25,
 };
 
+/// ALICE (seed 001 §3.1, Zimmer's thesis): round, 40 cm, 25 cm/s, odometry, 24 binary
+/// whiskers and 24 photoresistors (read through `Hal::whiskers` and `Hal::photoresistors`, not
+/// the IR slots: it has no IR proximity sensors). ALICE steered six wheels; here the drive is
+/// differential like the other robots' (the firmware's and the emulator's only drive).
+pub const ALICE: Profile = Profile {
+    id: ProfileId::Alice,
+    name: "alice",
+    capabilities: caps::ENCODERS,
+    // seed 001 §3.1: 40 cm.
+    body_diameter_m: 0.40,
+    // default: the thesis gives no wheel base (six steered wheels); 0.36 m fits a 40 cm body.
+    wheel_distance_m: 0.36,
+    // default: the thesis gives no encoder resolution; 0.1 mm per pulse.
+    pulse_m: 0.000_1,
+    // default: 5 mm/s a unit, so the thesis's 25 cm/s is 50 units and 100 is twice it.
+    motor_unit_mm_s: 5.0,
+    motor_max: 100,
+    // default: 50 ms; situations are sampled on their own 3 Hz grid (`alice::situation`).
+    cycle_us: 50_000,
+    ir: IrLayout {
+        count: 0,
+        angle_rad: [0.0; 8],
+    },
+    ir_range_m: 0.0,
+};
+
 impl Profile {
     /// The profile for a command-line or link name.
     pub fn by_name(name: &str) -> Option<&'static Profile> {
         match name {
             "khepera" => Some(&KHEPERA),
             "micro-rato" | "microrato" | "dom-dinis" => Some(&MICRO_RATO),
+            "alice" => Some(&ALICE),
             _ => None,
         }
     }

@@ -38,6 +38,7 @@ use crate::profile::Profile;
 use crate::telemetry;
 use crate::transfer::{Installed, Objects};
 
+mod alice;
 mod any;
 mod calibrate;
 mod explore;
@@ -48,12 +49,13 @@ mod linecorr;
 mod progress;
 mod scan;
 
+pub use alice::AliceState;
 pub use any::AnyRobot;
 pub use calibrate::{CalPhase, LightCalibration, T1 as LIGHT_NEAR_T1};
 pub use follow::Execution;
 pub use forage::{Forage, ForageParams, ForagePhase, GripStep};
-pub use kit::{Absent, DomDinis, Khepera, Kit, Slot};
-use kit::{ExplorerSlot, ForageSlot, LightCalSlot, LineCorrSlot};
+pub use kit::{Absent, Alice, DomDinis, Khepera, Kit, Slot};
+use kit::{AliceSlot, ExplorerSlot, ForageSlot, LightCalSlot, LineCorrSlot};
 pub use linecorr::{LineCorr, REPORT_PERIOD_MS as LOCALIZATION_PERIOD_MS};
 pub use progress::{MotionProgress, ProgressParams, REPORT_PERIOD_MS as PROGRESS_PERIOD_MS};
 pub use scan::{LandmarkScan, ScanParams, Sighting};
@@ -163,6 +165,8 @@ pub struct Core<K: Kit> {
     pub light_cal: K::LightCal,
     /// What the mode in force is doing; giving up when it makes no progress.
     pub progress: MotionProgress,
+    /// Seed 001 ALICE: whiskers, photoresistors, situations, wandering.
+    pub alice: K::Alice,
 }
 
 /// The whole robot.
@@ -349,6 +353,9 @@ fn send_periodic<K: Kit>(link: &mut Link, core: &mut Core<K>, now_ms: u32) {
     if let Some(p) = core.progress.report_due(core.mode, now_ms, plan) {
         link.send_low_priority(&Message::Progress(p), now_ms);
     }
+    if let Some(a) = core.alice.get_mut() {
+        alice::send_situation(link, a, now_ms);
+    }
     if let Some(lc) = core.linecorr.get_mut() {
         if lc.report_due(now_ms) {
             let m = lc.report(now_ms);
@@ -420,6 +427,7 @@ impl<K: Kit> Core<K> {
             }),
             light_cal: Slot::fill(|| LightCalibration::new(opts.seed ^ 0x5EED_0005)),
             progress: MotionProgress::new(ProgressParams::for_profile(profile)),
+            alice: Slot::fill(|| AliceState::new(opts.seed ^ 0x5EED_0001)),
         }
     }
 
@@ -462,6 +470,7 @@ impl<K: Kit> Core<K> {
             linecorr: _,
             light_cal: _,
             progress: _,
+            alice: _,
         } = self;
     }
 
@@ -734,6 +743,8 @@ impl<K: Kit> Core<K> {
                     Err(NackReason::Unsupported)
                 }
             }
+            // ALICE wanders by its whiskers (`robot::alice`).
+            Mode::Wander if <K::Alice as Slot<AliceState>>::PRESENT => Ok(()),
             Mode::Wander | Mode::EdgeFollowLeft | Mode::EdgeFollowRight => {
                 if khepera_like {
                     Ok(())
@@ -810,6 +821,9 @@ impl<K: Kit> Core<K> {
         if mode == Mode::CalibrateLight {
             K::LightCal::start(self);
         }
+        if let Some(a) = self.alice.get_mut() {
+            a.wander.reset();
+        }
         if mode != self.mode {
             self.mode = mode;
             self.push_event(EventCode::ModeChanged, mode as i32);
@@ -866,7 +880,9 @@ impl<K: Kit> Core<K> {
         };
 
         self.read_sensors(hal);
+        K::Alice::read(self, hal);
         self.estimate(now_ms);
+        K::Alice::sample(self, now_ms);
         K::LightCal::report_bearing(self, now_ms);
         self.map_as_it_moves();
         let cmd = match self.track_progress() {
@@ -987,6 +1003,12 @@ impl<K: Kit> Core<K> {
 
     /// The motor command for this cycle, by mode.
     fn decide(&mut self) -> MotorCommand {
+        if self.mode == Mode::Wander {
+            // ALICE wanders by its whiskers; the others by the arbiter's IR behaviours.
+            if let Some(cmd) = K::Alice::wander(self) {
+                return cmd;
+            }
+        }
         match self.mode {
             Mode::Idle => MotorCommand::STOP,
             Mode::Manual => {

@@ -29,6 +29,10 @@ pub struct ScriptedHal {
     pub gripper_cmd: GripperCommand,
     /// The camera line; `None` = no camera.
     pub camera: Option<[u8; CAMERA_PIXELS]>,
+    /// ALICE's whisker bits; `None` = no whiskers.
+    pub whiskers: Option<u32>,
+    /// ALICE's photoresistors; `None` = none.
+    pub photoresistors: Option<[u8; crate::alice::SENSORS]>,
     /// Bytes waiting for the robot to read.
     pub rx: Deque<u8, SCRIPTED_PORT>,
     /// Bytes the robot sent.
@@ -54,6 +58,8 @@ impl Default for ScriptedHal {
             gripper: None,
             gripper_cmd: GripperCommand::default(),
             camera: None,
+            whiskers: None,
+            photoresistors: None,
             rx: Deque::new(),
             tx: Deque::new(),
             tx_chunk: usize::MAX,
@@ -148,6 +154,14 @@ impl Hal for ScriptedHal {
             *image = line;
         }
         self.camera.is_some()
+    }
+
+    fn whiskers(&mut self) -> Option<u32> {
+        self.whiskers
+    }
+
+    fn photoresistors(&mut self) -> Option<[u8; crate::alice::SENSORS]> {
+        self.photoresistors
     }
 
     fn serial_read(&mut self, buf: &mut [u8]) -> usize {

@@ -90,7 +90,7 @@ pub fn start_builtin_emulator_with(
             heading: deg.to_radians(),
         });
     }
-    if let Some(a) = arena {
+    if let Some(a) = arena.or_else(|| alice_arena(profile)) {
         opts.arena = a.to_string();
     }
     let forage = opts.arena == emulator::forage::BUILTIN_FORAGE;
@@ -110,6 +110,13 @@ pub fn start_builtin_emulator_with(
         dir,
         arena,
     })
+}
+
+/// ALICE's own scene (`builtin:alice`, seed 001 §4.5) when no arena is named for it.
+fn alice_arena(profile: Option<&'static robot_firmware::Profile>) -> Option<&'static str> {
+    profile
+        .filter(|p| p.id == protocol::ProfileId::Alice)
+        .map(|_| emulator::alice::arena::BUILTIN_ALICE)
 }
 
 /// The built-in emulator with several robots in one world (`station --robots N`): one pty
@@ -166,7 +173,7 @@ pub fn start_builtin_fleet(
     let dir = base.join(format!("station-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(BuiltinError::Dir)?;
     let mut opts = EmulatorOptions::builtin_default();
-    if let Some(a) = arena {
+    if let Some(a) = arena.or_else(|| alice_arena(profile)) {
         opts.arena = a.to_string();
     }
     let forage = opts.arena == emulator::forage::BUILTIN_FORAGE;

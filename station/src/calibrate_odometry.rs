@@ -131,6 +131,7 @@ async fn calibrate(
     let profile = match peer.profile {
         ProfileId::Khepera => &robot_firmware::profile::KHEPERA,
         ProfileId::MicroRato => &robot_firmware::profile::MICRO_RATO,
+        ProfileId::Alice => &robot_firmware::profile::ALICE,
     };
     if !peer.has(caps::ENCODERS) {
         bail!(

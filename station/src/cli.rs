@@ -30,12 +30,13 @@ pub struct Cli {
     pub port: PortArgs,
     /// An arena file to draw under the map and plan on with P (CiberRato XML, maze text, ROS
     /// YAML, ASCII grid), or a built-in one (`builtin:micro-rato-99`, `builtin:forage`,
-    /// `builtin:floor-grid`).
+    /// `builtin:floor-grid`, `builtin:alice`).
     /// Without --port the built-in emulator simulates it.
     #[arg(long, value_name = "FILE", global = false)]
     pub arena: Option<PathBuf>,
     /// The built-in emulator's robot (without --port): default micro-rato, or khepera in
-    /// `builtin:forage` (the foraging robot, with its gripper).
+    /// `builtin:forage` (the foraging robot, with its gripper); `alice` (seed 001, its
+    /// situations feed the QT world model, `T`) in `builtin:alice` unless --arena names another.
     #[arg(long, value_enum, global = false)]
     pub profile: Option<emulator::cli::ProfileArg>,
     /// The built-in emulator's start pose `X,Y[,HEADING_DEG]` in metres (without --port;

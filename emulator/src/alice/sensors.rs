@@ -33,6 +33,19 @@ pub const LIGHT_NOISE: f64 = 0.02;
 /// Saturation constant of the response `1 - exp(-x / k)` (x in lamp intensity / m^2).
 pub const LIGHT_SATURATION: f64 = 0.6;
 
+/// The whiskers as the robot's port reads them: bit `i` for whisker `i`.
+pub fn whisker_bits(touch: &[bool; COUNT]) -> u32 {
+    touch
+        .iter()
+        .enumerate()
+        .fold(0, |bits, (i, &t)| bits | (u32::from(t) << i))
+}
+
+/// The photoresistors as the robot's 8-bit converter reads them: 0 (dark) ..= 255.
+pub fn light_bytes(light: &[f64; COUNT]) -> [u8; COUNT] {
+    light.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+}
+
 /// One robot's sensor set: the per-sensor gains drawn once.
 #[derive(Clone, Debug)]
 pub struct Sensors {

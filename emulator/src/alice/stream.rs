@@ -86,7 +86,9 @@ impl AliceStream {
     }
 }
 
-/// The wire's form of one sample.
+/// The wire's form of one sample: the readings as the robot's ports give them
+/// (`sensors::whisker_bits`, `sensors::light_bytes`), built by the firmware's own
+/// `robot_firmware::alice::situation::situation`, the one place a kind-16 frame is made.
 pub fn situation(
     seq: u16,
     time_ms: u32,
@@ -94,21 +96,11 @@ pub fn situation(
     light: &[f64; ALICE_SENSORS],
     odo: (f64, f64, f64),
 ) -> AliceSituation {
-    let mut whiskers = 0u32;
-    for (i, &t) in touch.iter().enumerate() {
-        if t {
-            whiskers |= 1 << i;
-        }
-    }
-    AliceSituation {
-        time_ms,
+    robot_firmware::alice::situation::situation(
         seq,
-        whiskers,
-        light: light.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8),
-        odometry: protocol::Pose {
-            x_mm: (odo.0 * 1000.0).round() as i32,
-            y_mm: (odo.1 * 1000.0).round() as i32,
-            heading_mrad: (super::wrap(odo.2) * 1000.0).round() as i16,
-        },
-    }
+        time_ms,
+        super::sensors::whisker_bits(touch),
+        super::sensors::light_bytes(light),
+        robot_firmware::odometry::Pose::new(odo.0 as f32, odo.1 as f32, odo.2 as f32),
+    )
 }

@@ -161,6 +161,8 @@ pub struct StepInputs<'a> {
     encoders: Option<Option<[i32; 2]>>,
     gripper: Option<Option<GripperState>>,
     camera: Option<Option<&'a [u8]>>,
+    whiskers: Option<Option<u32>>,
+    light24: Option<Option<&'a [u8]>>,
     /// The motor commands the recorded firmware gave in this pass, in order.
     pub motors: [MotorCommand; COMMANDS],
     pub n_motors: usize,
@@ -426,6 +428,13 @@ impl<'a> Playback<'a> {
             tag::NO_GRIPPER => s.gripper = Some(None),
             tag::CAMERA => s.camera = Some(Some(c.take(CAMERA_PIXELS)?)),
             tag::NO_CAMERA => s.camera = Some(None),
+            tag::WHISKERS => {
+                let bits = c.small("WHISKERS", u64::from(u32::MAX))? as u32;
+                s.whiskers = Some(Some(bits));
+            }
+            tag::NO_WHISKERS => s.whiskers = Some(None),
+            tag::LIGHT24 => s.light24 = Some(Some(c.take(crate::alice::SENSORS)?)),
+            tag::NO_LIGHT24 => s.light24 = Some(None),
             tag::MOTORS => {
                 let l = c.zigzag("MOTORS left")?;
                 let r = c.zigzag("MOTORS right")?;
@@ -613,6 +622,20 @@ impl Hal for Playback<'_> {
                 false
             }
         }
+    }
+
+    fn whiskers(&mut self) -> Option<u32> {
+        let (now, last) = (self.step.whiskers, self.last.whiskers);
+        self.value(now, last, None, "whiskers")
+    }
+
+    fn photoresistors(&mut self) -> Option<[u8; crate::alice::SENSORS]> {
+        let (now, last) = (self.step.light24, self.last.light24);
+        let bytes = self.value(now, last, None, "photoresistors")?;
+        let mut out = [0u8; crate::alice::SENSORS];
+        // `take` gave exactly SENSORS bytes.
+        out.iter_mut().zip(bytes).for_each(|(o, b)| *o = *b);
+        Some(out)
     }
 
     fn serial_read(&mut self, buf: &mut [u8]) -> usize {

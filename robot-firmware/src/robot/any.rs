@@ -5,8 +5,8 @@
 use protocol::{Command, Mode, ProfileId};
 
 use super::{
-    DomDinis, Forage, Khepera, LightCalibration, LineCorr, Robot, RobotOptions, Sensors, Slot,
-    Timing,
+    Alice, DomDinis, Forage, Khepera, LightCalibration, LineCorr, Robot, RobotOptions, Sensors,
+    Slot, Timing,
 };
 use crate::behaviour::Arbiter;
 use crate::deadreckon::DeadReckoner;
@@ -25,6 +25,7 @@ use crate::transfer::Objects;
 pub enum AnyRobot {
     DomDinis(Robot<DomDinis>),
     Khepera(Robot<Khepera>),
+    Alice(Robot<Alice>),
 }
 
 /// `$body` with `$r` bound to the robot, whatever its composition.
@@ -33,6 +34,7 @@ macro_rules! each {
         match $self {
             AnyRobot::DomDinis($r) => $body,
             AnyRobot::Khepera($r) => $body,
+            AnyRobot::Alice($r) => $body,
         }
     };
 }
@@ -43,6 +45,7 @@ impl AnyRobot {
         match opts.profile.id {
             ProfileId::MicroRato => AnyRobot::DomDinis(Robot::new(opts)),
             ProfileId::Khepera => AnyRobot::Khepera(Robot::new(opts)),
+            ProfileId::Alice => AnyRobot::Alice(Robot::new(opts)),
         }
     }
 
@@ -52,6 +55,7 @@ impl AnyRobot {
         match self {
             AnyRobot::DomDinis(_) => DomDinis::NAME,
             AnyRobot::Khepera(_) => Khepera::NAME,
+            AnyRobot::Alice(_) => Alice::NAME,
         }
     }
 
@@ -59,7 +63,7 @@ impl AnyRobot {
     pub fn khepera(&self) -> Option<&Robot<Khepera>> {
         match self {
             AnyRobot::Khepera(r) => Some(r),
-            AnyRobot::DomDinis(_) => None,
+            _ => None,
         }
     }
 
@@ -67,7 +71,15 @@ impl AnyRobot {
     pub fn dom_dinis(&self) -> Option<&Robot<DomDinis>> {
         match self {
             AnyRobot::DomDinis(r) => Some(r),
-            AnyRobot::Khepera(_) => None,
+            _ => None,
+        }
+    }
+
+    /// The ALICE composition, when it is one.
+    pub fn alice(&self) -> Option<&Robot<Alice>> {
+        match self {
+            AnyRobot::Alice(r) => Some(r),
+            _ => None,
         }
     }
 

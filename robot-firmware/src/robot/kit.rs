@@ -14,10 +14,10 @@
 
 use protocol::{caps, NackReason};
 
-use super::{Core, Forage, LightCalibration, LineCorr};
+use super::{AliceState, Core, Forage, LightCalibration, LineCorr};
 use crate::behaviour;
 use crate::explore::Explorer;
-use crate::hal::MotorCommand;
+use crate::hal::{Hal, MotorCommand};
 
 /// A capability's state, or `Absent`.
 pub trait Slot<T> {
@@ -62,7 +62,7 @@ macro_rules! present {
         }
     )*};
 }
-present!(Forage, LineCorr, LightCalibration, Explorer);
+present!(Forage, LineCorr, LightCalibration, Explorer, AliceState);
 
 /// A composition: the optional capabilities a robot build carries.
 pub trait Kit: Sized + 'static {
@@ -74,6 +74,8 @@ pub trait Kit: Sized + 'static {
     type LightCal: LightCalSlot;
     /// Seed 004 §5 reactive search with mapping (`Mode::Explore`).
     type Explorer: ExplorerSlot;
+    /// Seed 001 ALICE: 24 whiskers and 24 photoresistors, situations (kind 16), wandering.
+    type Alice: AliceSlot;
     /// Its name in reports.
     const NAME: &'static str;
 }
@@ -87,6 +89,7 @@ impl Kit for DomDinis {
     type LineCorr = Absent;
     type LightCal = Absent;
     type Explorer = Explorer;
+    type Alice = Absent;
     const NAME: &'static str = "dom-dinis";
 }
 
@@ -100,7 +103,22 @@ impl Kit for Khepera {
     type LineCorr = LineCorr;
     type LightCal = LightCalibration;
     type Explorer = Absent;
+    type Alice = Absent;
     const NAME: &'static str = "khepera";
+}
+
+/// Seed 001's ALICE: odometry, 24 whiskers and 24 photoresistors, its situations streamed as
+/// kind 16 for the station's world model, and its wandering; none of the other papers'
+/// capabilities (no IR, light calibration, foraging, line correction or reactive search).
+pub struct Alice;
+
+impl Kit for Alice {
+    type Forage = Absent;
+    type LineCorr = Absent;
+    type LightCal = Absent;
+    type Explorer = Absent;
+    type Alice = AliceState;
+    const NAME: &'static str = "alice";
 }
 
 /// The capability bits `K` cannot serve whatever the profile says (the HelloReply leaves
@@ -214,6 +232,36 @@ impl ExplorerSlot for Absent {
     }
     fn command<K: Kit<Explorer = Self>>(_: &mut Core<K>) -> MotorCommand {
         MotorCommand::STOP
+    }
+}
+
+/// ALICE's entry points from the common code.
+pub trait AliceSlot: Slot<AliceState> + Sized {
+    /// Reads the whiskers and photoresistors (nothing without them).
+    fn read<K: Kit<Alice = Self>, H: Hal>(core: &mut Core<K>, hal: &mut H);
+    /// Samples the situation when due.
+    fn sample<K: Kit<Alice = Self>>(core: &mut Core<K>, now_ms: u32);
+    /// `Mode::Wander`'s command on ALICE; `None` elsewhere (the arbiter's wander drives).
+    fn wander<K: Kit<Alice = Self>>(core: &mut Core<K>) -> Option<MotorCommand>;
+}
+
+impl AliceSlot for AliceState {
+    fn read<K: Kit<Alice = Self>, H: Hal>(core: &mut Core<K>, hal: &mut H) {
+        core.read_alice(hal);
+    }
+    fn sample<K: Kit<Alice = Self>>(core: &mut Core<K>, now_ms: u32) {
+        core.sample_alice(now_ms);
+    }
+    fn wander<K: Kit<Alice = Self>>(core: &mut Core<K>) -> Option<MotorCommand> {
+        Some(core.alice_wander_command())
+    }
+}
+
+impl AliceSlot for Absent {
+    fn read<K: Kit<Alice = Self>, H: Hal>(_: &mut Core<K>, _: &mut H) {}
+    fn sample<K: Kit<Alice = Self>>(_: &mut Core<K>, _: u32) {}
+    fn wander<K: Kit<Alice = Self>>(_: &mut Core<K>) -> Option<MotorCommand> {
+        None
     }
 }
 

@@ -39,6 +39,7 @@ impl QtState {
             }
         }
         self.last_seq = Some(s.seq);
+        self.last = Some(*s);
         let (light, touch, odometry) = sample_parts(s);
         let params = self.params.clone();
         let sample = Sample {

@@ -25,6 +25,8 @@ pub struct QtState {
     pub lost: u64,
     /// The last situation's sequence number.
     pub last_seq: Option<u16>,
+    /// The last situation (the sensor panel draws ALICE's whiskers and photoresistors).
+    pub last: Option<protocol::AliceSituation>,
 }
 
 impl QtState {

@@ -82,6 +82,7 @@ pub fn profile_name(p: protocol::ProfileId) -> &'static str {
     match p {
         protocol::ProfileId::Khepera => "khepera",
         protocol::ProfileId::MicroRato => "micro-rato",
+        protocol::ProfileId::Alice => "alice",
     }
 }
 

@@ -79,6 +79,7 @@ pub fn retrace(
     let profile = match start.profile {
         0 => &KHEPERA,
         1 => &MICRO_RATO,
+        2 => &robot_firmware::ALICE,
         p => {
             return Err(format!(
             "byte {}: hardware trace: START names profile {p}, which this station does not know",

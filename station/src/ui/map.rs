@@ -189,6 +189,10 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
     {
         items.push("B beacon ".yellow());
     }
+    // The QT world model (seed 001), once it has cells and while its layer is shown.
+    if let Some(label) = super::qt_map::legend(app) {
+        items.push(label);
+    }
     let extra: Vec<ratatui::text::Span<'static>> = if app.map.cursor_mode {
         vec!["+ cursor ".green()]
     } else {

@@ -6,6 +6,7 @@
 //! the same arguments. Every panel degrades to something readable at 80 x 24 and uses the
 //! room of a large terminal. Cannot fail: a panel too small for its content clips it.
 
+pub mod alice_sensors;
 pub mod charts;
 pub mod fleet;
 pub mod forage;

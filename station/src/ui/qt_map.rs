@@ -28,6 +28,17 @@ pub fn edge_color(c: f64) -> Color {
     Color::Indexed(236 + (c * 19.0).round() as u8)
 }
 
+/// The legend's item: the model's cell count, while the layer is shown and has cells (the
+/// cells' dots alone do not say how many there are).
+pub fn legend(app: &App) -> Option<ratatui::text::Span<'static>> {
+    use ratatui::style::Stylize;
+    let model = app.qt.model.as_ref().filter(|_| app.qt.active())?;
+    if !app.map.visible(QT) {
+        return None;
+    }
+    Some(format!("• {} QT cells ", model.network().len()).green())
+}
+
 /// The QT network.
 pub struct QtLayer;
 

@@ -14,7 +14,7 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::canvas::{Canvas, Circle, Line as CLine};
 use ratatui::widgets::{Block, Paragraph};
 use ratatui::Frame;
-use robot_firmware::profile::{IrLayout, Profile, KHEPERA, MICRO_RATO};
+use robot_firmware::profile::{IrLayout, Profile, ALICE, KHEPERA, MICRO_RATO};
 
 use crate::app::{mode_name, App};
 
@@ -70,7 +70,9 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             Layout::vertical([Constraint::Min(5), Constraint::Length(text_h)]).areas(inner);
         (g, t)
     };
-    if glyph.height >= 5 {
+    if glyph.height >= 5 && profile.id == ProfileId::Alice {
+        super::alice_sensors::render_glyph(app, frame, glyph);
+    } else if glyph.height >= 5 {
         render_glyph(app, profile, frame, glyph);
     }
     frame.render_widget(Paragraph::new(lines), text);
@@ -80,6 +82,7 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
 pub fn profile_of(app: &App) -> &'static Profile {
     match app.peer.as_ref().map(|p| p.profile) {
         Some(ProfileId::MicroRato) => &MICRO_RATO,
+        Some(ProfileId::Alice) => &ALICE,
         _ => &KHEPERA,
     }
 }
@@ -326,6 +329,9 @@ fn text_lines(app: &App, profile: &Profile, width: u16) -> Vec<Line<'static>> {
                 Span::raw(readings(&t.light.values(), 8)),
             ]],
         ));
+    }
+    if profile.id == ProfileId::Alice {
+        rows.push((2, super::alice_sensors::text_row(app)));
     }
     fit(rows, width)
 }
