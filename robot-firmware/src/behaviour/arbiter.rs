@@ -401,7 +401,7 @@ impl Arbiter {
     /// Avoidance and drift cancelling each other (the robot pressed against a wall across
     /// its way, turned away by one as much as towards the target by the other) leave the
     /// robot standing still: a sign of cyclic behaviour for drift's escalation (seed 000
-    /// §4.4), given at once instead of after the circle criterion's N cycles (§4.5).
+    /// §4.4), given after `standstill_cycles` instead of the circle criterion's N (§4.5).
     fn watch_standstill(&mut self, cmd: MotorCommand) {
         let still = cmd.left.abs() <= 1 && cmd.right.abs() <= 1;
         let driving = self.drift.phase() == DriftPhase::Driving;

@@ -277,11 +277,11 @@ fn go_to_pressed_against_a_wall_across_its_way_pauses_to_follow_the_edge() {
 }
 
 #[test]
-fn go_to_standing_still_where_avoidance_and_drift_cancel_is_cyclic_within_a_second_or_two() {
+fn go_to_standing_still_where_avoidance_and_drift_cancel_is_cyclic_within_seconds() {
     // The target 40° to the left, an obstacle on the left front: drift slows the left wheel,
     // avoidance the right one, and for some reading they cancel and the robot stands still
-    // (what the box benchmark's failed runs did for 15-39 % of their time). About a second of
-    // commanded standstill is one sign of cyclic behaviour (seed 000 §4.4): the drift is
+    // (what the box benchmark's failed runs did for 15-39 % of their time). Four seconds of
+    // commanded standstill are one sign of cyclic behaviour (seed 000 §4.4): the drift is
     // halved, which lets avoidance turn the robot away. Before, only the circle criterion
     // noticed, after 200 cycles (16 s).
     // Aligned first (drift turns on the spot before it drives), then turned away by 40°.
@@ -306,6 +306,6 @@ fn go_to_standing_still_where_avoidance_and_drift_cancel_is_cyclic_within_a_seco
         }
     }
     let cycle = halved_at.expect("standing still was never taken as cyclic behaviour");
-    assert!(cycle <= 20, "{cycle}");
+    assert!(cycle <= 60, "{cycle}");
     assert_eq!(a.drift().phase(), DriftPhase::Driving);
 }
