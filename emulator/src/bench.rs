@@ -16,7 +16,8 @@
 //!   firmware reported arrival but the true pose is not in the target), `stuck` (no arrival,
 //!   and in the run's last [`crate::scenario::STUCK_WINDOW_S`] the robot stayed within one body diameter),
 //!   `timeout` (no arrival, still moving), `import_error` (the arena could not be loaded or
-//!   generated), `setup_error` (the runner refused: start in a wall, a refused command, no
+//!   generated), `no_path_on_explored_map` (explore-then-plan: the robot refused to plan
+//!   run 2 because its own explored map does not connect start and goal), `setup_error` (the runner refused: start in a wall, a refused command, no
 //!   goal), `panic` (a bug; the run is caught so the others finish).
 //!
 //! Seeds: every run gets its own emulator seed, [`run_seed`]`(--seed, arena index, draw)`, so
@@ -42,7 +43,7 @@ use crate::arena::{Arena, LoadOptions};
 use crate::arena_gen::{self, Kind};
 use crate::geometry::Point;
 use crate::rng::SimRng;
-use crate::scenario::{ScenarioOptions, Task};
+use crate::scenario::{ScenarioOptions, ScenarioReport, Task};
 use crate::sensors::Noise;
 
 /// The tasks the benchmark runs.
@@ -265,6 +266,9 @@ pub enum Cause {
     StartedInsideTarget,
     /// The arena could not be generated or loaded.
     ImportError,
+    /// Explore-then-plan: the robot's own explored map does not connect the start and the
+    /// goal it found, so it refused to plan run 2 (the robot's failure, not the setup's).
+    NoPathOnExploredMap,
     /// The runner refused the setup.
     SetupError,
     /// The run panicked (a bug).
@@ -273,10 +277,11 @@ pub enum Cause {
 
 impl Cause {
     /// Every cause, in report order.
-    pub const ALL: [Cause; 7] = [
+    pub const ALL: [Cause; 8] = [
         Cause::Stuck,
         Cause::Timeout,
         Cause::WrongArrival,
+        Cause::NoPathOnExploredMap,
         Cause::StartedInsideTarget,
         Cause::ImportError,
         Cause::SetupError,
@@ -289,6 +294,7 @@ impl Cause {
             Cause::Stuck => "stuck",
             Cause::Timeout => "timeout",
             Cause::WrongArrival => "wrong_arrival",
+            Cause::NoPathOnExploredMap => "no_path_on_explored_map",
             Cause::StartedInsideTarget => "started_inside_target",
             Cause::ImportError => "import_error",
             Cause::SetupError => "setup_error",
@@ -644,19 +650,8 @@ fn run_checked(
     let start = start_point(&arena, opts.profile).map_err(|e| (Cause::SetupError, e))?;
     let r = crate::scenario::run_scenario(arena, so).map_err(setup)?;
     let started_inside = (start - Point::new(r.goal.x_m, r.goal.y_m)).norm() <= r.tolerance_m;
-    let last = r.runs.last();
     let diameter = f64::from(opts.profile.body_diameter_m);
-    row.cause = if started_inside {
-        Some(Cause::StartedInsideTarget)
-    } else if r.reached {
-        None
-    } else if r.arrived {
-        Some(Cause::WrongArrival)
-    } else if last.is_some_and(|l| l.last_window_span_m < diameter) {
-        Some(Cause::Stuck)
-    } else {
-        Some(Cause::Timeout)
-    };
+    row.cause = cause_of(&r, started_inside, diameter);
     row.success = row.cause.is_none();
     row.sim_s = Some(r.sim_s);
     row.collisions = Some(r.collisions);
@@ -673,6 +668,27 @@ fn run_checked(
         row.run2_reached = Some(run(1).is_some_and(|x| x.reached));
     }
     Ok(row)
+}
+
+/// Why a scenario run failed (None: it succeeded), from the runner's ground truth:
+/// `started_inside` is whether the start was already within the goal's tolerance,
+/// `diameter_m` the robot's body diameter (a run that stayed within it over its last
+/// window was stuck, not still searching).
+pub fn cause_of(r: &ScenarioReport, started_inside: bool, diameter_m: f64) -> Option<Cause> {
+    let last = r.runs.last();
+    if started_inside {
+        Some(Cause::StartedInsideTarget)
+    } else if r.reached {
+        None
+    } else if r.arrived {
+        Some(Cause::WrongArrival)
+    } else if last.is_some_and(|l| l.no_path_on_map) {
+        Some(Cause::NoPathOnExploredMap)
+    } else if last.is_some_and(|l| l.last_window_span_m < diameter_m) {
+        Some(Cause::Stuck)
+    } else {
+        Some(Cause::Timeout)
+    }
 }
 
 /// Where the runner will start the robot (the same rule: `sim::start_pose`).

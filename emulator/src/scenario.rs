@@ -112,6 +112,10 @@ pub struct RunReport {
     /// [`STUCK_WINDOW_S`], metres: a run that timed out with this under a body diameter was
     /// stuck, not still searching.
     pub last_window_span_m: f64,
+    /// Run 2 of explore-then-plan only: the robot refused to plan (`Unreachable` or
+    /// `BadPoint`) because its own explored map does not connect the start and where it
+    /// found the goal. The robot's failure (its exploration left no path), not the setup's.
+    pub no_path_on_map: bool,
 }
 
 /// How a scenario is run. [`ScenarioOptions::new`] gives the defaults.
@@ -474,6 +478,7 @@ fn run_until_arrived(
         map_known_cells,
         plan_regions: None,
         last_window_span_m,
+        no_path_on_map: false,
     }
 }
 
@@ -491,14 +496,18 @@ fn plan_and_execute(
     apply(sim, Command::Segment, "Segment")?;
     let from = point_mm(["start x", "start y"], (start.x, start.y))?;
     let to = point_mm(["goal found x", "goal found y"], (found.x, found.y))?;
-    apply(
-        sim,
-        Command::Plan {
-            from: Some(from),
-            to: Some(to),
-        },
-        "Plan",
-    )?;
+    let plan = Command::Plan {
+        from: Some(from),
+        to: Some(to),
+    };
+    match apply(sim, plan, "Plan") {
+        Ok(()) => {}
+        Err(ScenarioError::Refused {
+            reason: NackReason::Unreachable | NackReason::BadPoint,
+            ..
+        }) => return Ok(no_path_run(sim)),
+        Err(e) => return Err(e),
+    }
     let (plan_id, regions) = match sim.robot().objects().plan() {
         Some((id, view)) => (id, view.waypoint_count().saturating_sub(2)),
         None => {
@@ -521,6 +530,24 @@ fn plan_and_execute(
     let mut run = run_until_arrived(sim, "execute_plan", timeout_ms, judge);
     run.plan_regions = Some(u32::from(regions));
     Ok(run)
+}
+
+/// Run 2 when the robot's explored map has no path from the start to where it found the
+/// goal: nothing is driven, the run fails as the robot's own.
+fn no_path_run(sim: &Sim) -> RunReport {
+    RunReport {
+        kind: "execute_plan",
+        arrived: false,
+        reached: false,
+        sim_s: 0.0,
+        collisions: 0,
+        distance_m: 0.0,
+        pose_error_m: sim.pose_error_m(),
+        map_known_cells: None,
+        plan_regions: None,
+        last_window_span_m: 0.0,
+        no_path_on_map: true,
+    }
 }
 
 /// Tells the firmware its arrival radius: the option, else `min(default, tolerance / 2)`.

@@ -241,3 +241,34 @@ fn calibrated_odometry_reaches_more_boxes_than_uncalibrated() {
         plain.summary.successes
     );
 }
+
+/// Explore-then-plan where the robot's own explored map does not connect its start and the
+/// goal it found: the firmware refuses run 2's plan (`Unreachable` on micro-rato 77,
+/// `BadPoint` on 109, each with its bench seed). That is the robot's failure, counted as
+/// `no_path_on_explored_map`; the runner used to return it as an error, which the bench
+/// counted as a setup error.
+#[test]
+fn a_plan_refused_on_the_explored_map_is_the_robots_failure_not_a_setup_error() {
+    use emulator::scenario::{run_scenario, ScenarioOptions, Task};
+    for arena_seed in [77u64, 109] {
+        let g = emulator::arena_gen::generate(Kind::MicroRato, arena_seed).expect("generates");
+        let task = BenchTask::ExploreThenPlan;
+        let mut o = ScenarioOptions::new(task.default_profile(), Task::ExploreThenPlan);
+        // The seed `bench --arenas generated:200` gives this arena (index = seed - 1).
+        o.seed = bench::run_seed(1, (arena_seed - 1) as usize, 1);
+        o.timeout_s = 300.0;
+        let r = run_scenario(g.arena, o).expect("the runner reports the refused plan as a run");
+        assert_eq!(
+            r.runs.len(),
+            2,
+            "arena {arena_seed}: explored, then no plan"
+        );
+        assert!(r.runs[1].no_path_on_map, "{:?}", r.runs[1]);
+        assert!(!r.reached);
+        let diameter = f64::from(task.default_profile().body_diameter_m);
+        assert_eq!(
+            bench::cause_of(&r, false, diameter),
+            Some(bench::Cause::NoPathOnExploredMap)
+        );
+    }
+}

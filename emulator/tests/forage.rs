@@ -121,3 +121,22 @@ fn on_an_arena_whose_target_is_elsewhere_the_home_base_is_the_start() {
         start.y
     );
 }
+
+/// `bench --task forage --arenas builtin:forage --seeds 10`, draw 8: the third object was put
+/// down 0.49 m from home (the belief 0.46 m and 62° off after the search) and the firmware
+/// counted it delivered (3) where the emulator's truth has 2 home: at home the landmark scans
+/// gave no fix it could trust, and "no fix" counted as home. Only a drop the robot has
+/// confirmed home counts now, so its count is the truth's.
+#[test]
+fn the_firmware_counts_only_drops_it_has_confirmed_at_home() {
+    let mut o = ScenarioOptions::new(&KHEPERA, Task::Forage);
+    o.seed = emulator::bench::run_seed(1, 0, 8);
+    o.timeout_s = TIMEOUT_S;
+    let r = run_forage(builtin::forage().unwrap(), o).unwrap();
+    assert_eq!(
+        usize::from(r.firmware_delivered),
+        r.delivered,
+        "firmware and truth disagree: {:?}",
+        r.returns
+    );
+}

@@ -148,8 +148,15 @@ fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), Scenario
     }
 }
 
+/// Drives to `p`, moved into the box first: the robot refuses a go-to outside its arena, and
+/// a detour square to a bearing near a wall, or a lamp triangulated a little beyond the wall
+/// it stands at, lies outside (the margin is the Khepera's radius).
 fn go_to(sim: &mut Sim, p: FwPoint) -> Result<(), ScenarioError> {
-    let to = (f64::from(p.x), f64::from(p.y));
+    const MARGIN_M: f64 = 0.03;
+    let to = (
+        f64::from(p.x).clamp(MARGIN_M, BOX_M.0 - MARGIN_M),
+        f64::from(p.y).clamp(MARGIN_M, BOX_M.1 - MARGIN_M),
+    );
     let cmd = Command::GoTo(point_mm(["go-to x", "go-to y"], to)?);
     apply(sim, cmd, "GoTo")
 }

@@ -177,6 +177,8 @@ pub struct Arbiter {
     held_light: Held<LightOutput>,
     held_turn: Held<MotorCommand>,
     state: BehaviourState,
+    /// Consecutive go-to cycles in which avoidance and drift cancelled to a standstill.
+    standstill: u16,
 }
 
 impl Arbiter {
@@ -199,6 +201,7 @@ impl Arbiter {
             held_light: Held::default(),
             held_turn: Held::default(),
             state: BehaviourState::default(),
+            standstill: 0,
         }
     }
 
@@ -220,6 +223,7 @@ impl Arbiter {
         self.held_drift = Held::default();
         self.held_light = Held::default();
         self.held_turn = Held::default();
+        self.standstill = 0;
     }
 
     /// Mode in force.
@@ -387,7 +391,29 @@ impl Arbiter {
             st.active.insert(BehaviourSet::AVOID);
         }
         st.avoid = a.cmd;
-        a.cmd.plus(correction)
+        let cmd = a.cmd.plus(correction);
+        if matches!(self.mode, Mode::GoTo(_)) {
+            self.watch_standstill(cmd);
+        }
+        cmd
+    }
+
+    /// Avoidance and drift cancelling each other (the robot pressed against a wall across
+    /// its way, turned away by one as much as towards the target by the other) leave the
+    /// robot standing still: a sign of cyclic behaviour for drift's escalation (seed 000
+    /// §4.4), given after `standstill_cycles` instead of the circle criterion's N (§4.5).
+    fn watch_standstill(&mut self, cmd: MotorCommand) {
+        let still = cmd.left.abs() <= 1 && cmd.right.abs() <= 1;
+        let driving = self.drift.phase() == DriftPhase::Driving;
+        self.standstill = if still && driving {
+            self.standstill.saturating_add(1)
+        } else {
+            0
+        };
+        if self.standstill >= self.params.drift.standstill_cycles.max(1) {
+            self.standstill = 0;
+            self.drift.cyclic(&self.params.drift);
+        }
     }
 
     fn edge_step(&mut self, inp: &Inputs, st: &mut BehaviourState) -> MotorCommand {

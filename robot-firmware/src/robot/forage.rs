@@ -182,6 +182,9 @@ pub struct Forage {
     pub scan: Option<LandmarkScan>,
     /// Scans at home this trip.
     locates: u8,
+    /// `fixes` when the object was gripped: a drop counts as delivered only if a landmark
+    /// fix corrected the pose since (or the robot has no landmark map: odometry's word).
+    fixes_at_grasp: u16,
     /// Global fixes applied so far.
     pub fixes: u16,
     /// Where the way home last made progress (and the cycles since); in the search, where
@@ -209,6 +212,7 @@ impl Default for Forage {
             triple: None,
             scan: None,
             locates: 0,
+            fixes_at_grasp: 0,
             fixes: 0,
             anchor: Point::new(0.0, 0.0),
             stalled_cycles: 0,
@@ -444,6 +448,11 @@ impl<K: Kit<Forage = Forage>> Core<K> {
             .triple
             .and_then(|t| scan::resect(&t, here, seen.sightings()));
         let home = self.forage.home.unwrap_or(here.point());
+        // A scan that saw too little, or a fix too far from the belief to be trusted, leaves
+        // the robot where it believes it is (home): it puts the object down, but counts it
+        // delivered only if its pose was fixed since the grasp (`fixes_at_grasp`). Counting
+        // every such drop, an object put down 0.49 m from home, the belief 0.46 m off after
+        // the search, was reported delivered.
         let mut at_home = true;
         if let Some(fix) =
             fix.filter(|f| f.point().distance_to(here.point()) <= self.forage.params.max_fix_m)
@@ -612,6 +621,7 @@ impl<K: Kit<Forage = Forage>> Core<K> {
                     let n = i32::from(self.forage.grasped);
                     self.push_event(EventCode::ObjectGrasped, n);
                     self.forage.locates = 0;
+                    self.forage.fixes_at_grasp = self.forage.fixes;
                     let next = if self.forage.triple.is_some() {
                         ForagePhase::Fix
                     } else {
@@ -645,8 +655,15 @@ impl<K: Kit<Forage = Forage>> Core<K> {
                 // sensed when the step times out with the grip open is on the
                 // floor between the open fingers: put down too. A grip that never opens
                 // delivers nothing; the search phase sees the object still held.
+                // Put down where home was not confirmed (the scans at home found no fix
+                // within tolerance), the object is not counted: the robot does not know it
+                // is home, and the emulator's truth showed it was not.
+                // Without a landmark map odometry is all the robot has to go by; with one, a
+                // fix since the grasp (at the source or at home) must have corrected it.
+                let confirmed =
+                    self.forage.triple.is_none() || self.forage.fixes > self.forage.fixes_at_grasp;
                 let open = !g.closed;
-                if open && (!g.object || timed_out) {
+                if open && (!g.object || timed_out) && confirmed {
                     self.forage.delivered = self.forage.delivered.saturating_add(1);
                     let n = i32::from(self.forage.delivered);
                     self.push_event(EventCode::ObjectDelivered, n);
@@ -768,6 +785,22 @@ mod tests {
         core.sensors.gripper = gripper(ARM_DOWN, false, false);
         let _ = core.forage_command();
         assert_eq!(core.forage.delivered, 2);
+        // With a landmark map, one put down where no fix has corrected the pose since the
+        // grasp is not counted.
+        core.forage.triple = Some(Triple::new(
+            Point::new(0.0, 1.0),
+            Point::new(1.0, 1.0),
+            Point::new(1.0, 0.0),
+        ));
+        core.forage.fixes_at_grasp = core.forage.fixes;
+        core.forage
+            .set_phase(ForagePhase::Drop(GripStep::Lower), 0.0);
+        core.sensors.gripper = gripper(ARM_DOWN, true, true);
+        let _ = core.forage_command();
+        core.sensors.gripper = gripper(ARM_DOWN, false, false);
+        let _ = core.forage_command();
+        assert_eq!(core.forage.delivered, 2, "pose never fixed: not delivered");
+        assert_eq!(core.forage.phase, ForagePhase::Drop(GripStep::Raise));
     }
 
     #[test]
