@@ -2,6 +2,7 @@
 //! port, enough to handshake, send commands and collect what the robot says. The product's
 //! station has its own full client; this one keeps the emulator's tests independent of it.
 
+pub mod procs;
 pub mod tmux;
 
 use std::time::{Duration, Instant};

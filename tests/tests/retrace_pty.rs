@@ -14,70 +14,24 @@
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
+use e2e_tests::procs::{record_emulator, scratch_dir};
 use e2e_tests::workspace_bin;
 use protocol::{Feed, FrameDecoder, Message};
 use robot_firmware::odometry::paper_000::{TABLE_1, TABLE_2};
 use station::record::{RecordKind, Recording};
 
 fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("e2e-retrace-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// An emulator on `link` with `args`; returned once its pty is there.
-#[allow(clippy::zombie_processes)] // the caller kills and waits for it
-fn emulator(link: &Path, args: &[&str]) -> Child {
-    let _ = std::fs::remove_file(link);
-    let mut child = Command::new(workspace_bin("robot-emulator"))
-        .arg("serve")
-        .args(args)
-        .arg("--link")
-        .arg(link)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("robot-emulator starts");
-    let deadline = Instant::now() + Duration::from_secs(10);
-    while std::fs::metadata(link).is_err() {
-        if Instant::now() >= deadline {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("the emulator made no pty");
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    child
+    scratch_dir("retrace", name)
 }
 
 /// Records `seconds` of the emulator started with `emu_args`, sending `send` once connected.
 fn record(d: &Path, name: &str, emu_args: &[&str], send: &[&str], seconds: f64) -> PathBuf {
-    let link = d.join(format!("{name}.pty"));
-    let out = d.join(format!("{name}.rec"));
-    let mut emu = emulator(&link, emu_args);
-    let mut cmd = Command::new(workspace_bin("station"));
-    cmd.args(["record", "--port"])
-        .arg(&link)
-        .arg("--out")
-        .arg(&out)
-        .args(["--seconds", &seconds.to_string()]);
-    for s in send {
-        cmd.args(["--send", s]);
-    }
-    let status = cmd
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .status()
-        .unwrap();
-    emu.kill().unwrap();
-    emu.wait().unwrap();
-    assert!(status.success(), "station record {name}: {status}");
-    out
+    let mut all = vec!["serve"];
+    all.extend_from_slice(emu_args);
+    record_emulator(d, name, &all, send, seconds)
 }
 
 /// `station retrace REC ARGS --json`: exit code and report.

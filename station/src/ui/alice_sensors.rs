@@ -12,15 +12,14 @@ use ratatui::layout::Rect;
 use ratatui::style::{Color, Style};
 use ratatui::symbols::Marker;
 use ratatui::text::Span;
-use ratatui::widgets::canvas::{Canvas, Circle, Line as CLine};
+use ratatui::widgets::canvas::{Canvas, Line as CLine};
 use ratatui::Frame;
 
+use super::sensors::{draw_body, glyph_bounds, BODY, RING};
 use crate::app::App;
 
-/// Body, whisker and ring radii in glyph units (the other glyph's scale).
-const BODY: f64 = 1.0;
+/// Whisker length in glyph units (the body and ring radii are the other glyph's).
 const WHISKER: f64 = 0.85;
-const RING: f64 = 3.0;
 const LIGHT_LEN: f64 = 0.9;
 
 /// Direction of sensor `i` on screen, the robot facing up.
@@ -31,8 +30,7 @@ fn direction(i: usize) -> (f64, f64) {
 
 /// The glyph: body, heading, whiskers, photoresistor ring (empty until a situation came).
 pub fn render_glyph(app: &App, frame: &mut Frame, area: Rect) {
-    let half_y = RING + 0.3;
-    let half_x = half_y * f64::from(area.width) / (2.0 * f64::from(area.height));
+    let (half_x, half_y) = glyph_bounds(area);
     let last = app.qt.last;
     let stale = app.stale_s().is_some();
     let tint = move |c: Color| if stale { Color::DarkGray } else { c };
@@ -41,19 +39,7 @@ pub fn render_glyph(app: &App, frame: &mut Frame, area: Rect) {
         .x_bounds([-half_x, half_x])
         .y_bounds([-half_y, half_y])
         .paint(move |ctx| {
-            ctx.draw(&Circle {
-                x: 0.0,
-                y: 0.0,
-                radius: BODY,
-                color: Color::White,
-            });
-            ctx.draw(&CLine {
-                x1: 0.0,
-                y1: 0.0,
-                x2: 0.0,
-                y2: BODY * 0.8,
-                color: Color::White,
-            });
+            draw_body(ctx);
             let Some(s) = last else { return };
             ctx.layer();
             for i in 0..ALICE_SENSORS {

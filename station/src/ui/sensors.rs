@@ -11,7 +11,7 @@ use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Style, Stylize};
 use ratatui::symbols::Marker;
 use ratatui::text::{Line, Span};
-use ratatui::widgets::canvas::{Canvas, Circle, Line as CLine};
+use ratatui::widgets::canvas::{Canvas, Circle, Context, Line as CLine};
 use ratatui::widgets::{Block, Paragraph};
 use ratatui::Frame;
 use robot_firmware::profile::{IrLayout, Profile, ALICE, KHEPERA, MICRO_RATO};
@@ -19,9 +19,9 @@ use robot_firmware::profile::{IrLayout, Profile, ALICE, KHEPERA, MICRO_RATO};
 use crate::app::{mode_name, App};
 
 /// Radius of the body, IR bar room and light ring, in glyph units.
-const BODY: f64 = 1.0;
+pub(super) const BODY: f64 = 1.0;
 const IR_LEN: f64 = 1.6;
-const RING: f64 = 3.0;
+pub(super) const RING: f64 = 3.0;
 const LIGHT_LEN: f64 = 0.5;
 
 pub fn render(app: &App, frame: &mut Frame, area: Rect) {
@@ -87,10 +87,36 @@ pub fn profile_of(app: &App) -> &'static Profile {
     }
 }
 
-fn render_glyph(app: &App, profile: &'static Profile, frame: &mut Frame, area: Rect) {
+/// The glyph canvas's half extents in its units for `area`: the ring and a margin high, and
+/// as wide as keeps circles round (Braille dots are 2 x 4 per cell).
+pub(super) fn glyph_bounds(area: Rect) -> (f64, f64) {
     let half_y = RING + 0.3;
-    // Braille dots are 2 x 4 per cell: keep circles round.
-    let half_x = half_y * f64::from(area.width) / (2.0 * f64::from(area.height));
+    (
+        half_y * f64::from(area.width) / (2.0 * f64::from(area.height)),
+        half_y,
+    )
+}
+
+/// The robot's body and heading in a sensor glyph: a circle facing up. Every profile's glyph
+/// (the IR and light ring here, ALICE's whiskers and photoresistors) draws the same body.
+pub(super) fn draw_body(ctx: &mut Context<'_>) {
+    ctx.draw(&Circle {
+        x: 0.0,
+        y: 0.0,
+        radius: BODY,
+        color: Color::White,
+    });
+    ctx.draw(&CLine {
+        x1: 0.0,
+        y1: 0.0,
+        x2: 0.0,
+        y2: BODY * 0.8,
+        color: Color::White,
+    });
+}
+
+fn render_glyph(app: &App, profile: &'static Profile, frame: &mut Frame, area: Rect) {
+    let (half_x, half_y) = glyph_bounds(area);
     let t = app.telemetry;
     let has_light = app.peer.as_ref().is_none_or(|p| p.has(caps::AMBIENT_LIGHT));
     // Old readings in grey, like the text beside them.
@@ -101,20 +127,7 @@ fn render_glyph(app: &App, profile: &'static Profile, frame: &mut Frame, area: R
         .x_bounds([-half_x, half_x])
         .y_bounds([-half_y, half_y])
         .paint(move |ctx| {
-            ctx.draw(&Circle {
-                x: 0.0,
-                y: 0.0,
-                radius: BODY,
-                color: Color::White,
-            });
-            // Heading: the robot faces up.
-            ctx.draw(&CLine {
-                x1: 0.0,
-                y1: 0.0,
-                x2: 0.0,
-                y2: BODY * 0.8,
-                color: Color::White,
-            });
+            draw_body(ctx);
             let Some(t) = t else { return };
             ctx.layer();
             for (a, v) in sensor_angles(&profile.ir).zip(t.ir.values()) {
