@@ -1,0 +1,83 @@
+//! The odometry calibration alone over the go-to benchmark's generated boxes, with each
+//! arena's own noise draw (the same seeds as `robot-emulator bench --task goto --profile
+//! khepera --kind box --calibrate-odometry`): the wheel-ratio error against the emulator's
+//! truth, its distribution and how many gave nothing. For measuring what a change to the
+//! calibration does without running the go-to after it:
+//! `cargo run --release -p emulator --example calibration_bench -- [FIRST LAST [JOBS]]`
+//! (default 1 200 2); `VERBOSE=1` prints each box.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use emulator::arena_gen::{generate, Kind};
+use emulator::bench::run_seed;
+use emulator::scenario::calibrate_odometry::{run_calibration, DEFAULT_TIMEOUT_S};
+use emulator::scenario::{ScenarioOptions, Task};
+
+fn main() {
+    let a: Vec<String> = std::env::args().collect();
+    let first: u64 = a.get(1).map_or(1, |s| s.parse().unwrap());
+    let last: u64 = a.get(2).map_or(200, |s| s.parse().unwrap());
+    let jobs: usize = a.get(3).map_or(2, |s| s.parse().unwrap());
+    let verbose = std::env::var("VERBOSE").is_ok_and(|v| !v.is_empty());
+    let boxes: Vec<u64> = (first..=last).collect();
+    let next = AtomicUsize::new(0);
+    let out = Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..jobs.max(1) {
+            s.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(&b) = boxes.get(i) else { break };
+                let arena = generate(Kind::Box, b).expect("generates").arena;
+                let mut so = ScenarioOptions::new(&robot_firmware::KHEPERA, Task::GoTo(None));
+                // The bench's seed for arena index b - 1, draw 1, base seed 1.
+                so.seed = run_seed(1, (b - 1) as usize, 1);
+                let r = run_calibration(arena, &so, DEFAULT_TIMEOUT_S).expect("runs");
+                if verbose {
+                    eprintln!(
+                        "box {b:>3}: true {:>7.0} measured {:>7.0} err {:>6.0} laps {:?} both {} {:.0} s {}",
+                        r.true_ratio_ppm,
+                        r.wheel_ratio_ppm.unwrap_or(f32::NAN),
+                        r.wheel_ratio_ppm.map_or(f64::NAN, |m| (f64::from(m) - r.true_ratio_ppm).abs()),
+                        r.lap_length_m,
+                        r.both_directions,
+                        r.sim_s,
+                        r.error.as_deref().unwrap_or("")
+                    );
+                }
+                out.lock().unwrap().push((b, r));
+            });
+        }
+    });
+    let mut rows = out.into_inner().unwrap();
+    rows.sort_by_key(|r| r.0);
+    let mut err: Vec<f64> = rows
+        .iter()
+        .filter_map(|(_, r)| {
+            r.wheel_ratio_ppm
+                .map(|m| (f64::from(m) - r.true_ratio_ppm).abs())
+        })
+        .collect();
+    let none = rows.len() - err.len();
+    err.sort_by(f64::total_cmp);
+    let rank = |q: f64| {
+        err.get(((q * err.len() as f64).ceil() as usize).clamp(1, err.len().max(1)) - 1)
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
+    let under = |x: f64| err.iter().filter(|e| **e < x).count();
+    let sim: f64 = rows.iter().map(|(_, r)| r.sim_s).sum::<f64>() / rows.len().max(1) as f64;
+    println!(
+        "{} boxes: nothing {none}; error < 500 ppm {} ({:.1} %), < 1500 {}; median {:.0} p90 {:.0} p95 {:.0} max {:.0} ppm; mean {:.0} s simulated",
+        rows.len(),
+        under(500.0),
+        100.0 * under(500.0) as f64 / rows.len().max(1) as f64,
+        under(1500.0),
+        rank(0.5),
+        rank(0.9),
+        rank(0.95),
+        err.last().copied().unwrap_or(f64::NAN),
+        sim
+    );
+}
