@@ -16,6 +16,10 @@ use emulator::scenario::calibrate_odometry::{run_calibration, DEFAULT_TIMEOUT_S}
 use emulator::scenario::{ScenarioOptions, Task};
 
 fn main() {
+    if let Some(b) = std::env::var("TRACE").ok().and_then(|v| v.parse().ok()) {
+        trace(b);
+        return;
+    }
     let a: Vec<String> = std::env::args().collect();
     let first: u64 = a.get(1).map_or(1, |s| s.parse().unwrap());
     let last: u64 = a.get(2).map_or(200, |s| s.parse().unwrap());
@@ -80,4 +84,68 @@ fn main() {
         err.last().copied().unwrap_or(f64::NAN),
         sim
     );
+}
+
+/// `TRACE=B`: one box's calibration sample by sample (travel, believed and true heading, side
+/// and front IR, the mode), to see what the manoeuvre sees.
+fn trace(b: u64) {
+    use emulator::sim::Sim;
+    use robot_firmware::odometry_calibration::CalibrationParams;
+    use robot_firmware::odometry_manoeuvre::{Manoeuvre, Observation};
+    let arena = generate(Kind::Box, b).expect("generates").arena;
+    let mut so = ScenarioOptions::new(&robot_firmware::KHEPERA, Task::GoTo(None));
+    so.seed = run_seed(1, (b - 1) as usize, 1);
+    let mut sim = Sim::new(arena, so.sim_config()).expect("sim");
+    eprintln!("bias {:?}", sim.wheel_bias());
+    let p = &robot_firmware::KHEPERA;
+    let mut m = Manoeuvre::new(
+        CalibrationParams::default(),
+        p.pulse_m * 1000.0,
+        p.wheel_distance_m * 1000.0,
+    );
+    let now = |sim: &Sim| (sim.now_us() / 1000) as u32;
+    let c = m.start();
+    let t = now(&sim);
+    let _ = sim.robot_mut().apply(c, t);
+    let mut seq = 0u16;
+    while sim.now_us() < 600_000_000 {
+        let mut buf = [0u8; protocol::MAX_FRAME];
+        let hb = protocol::Message::Heartbeat(protocol::Heartbeat { time_ms: 0 });
+        let n = protocol::encode(seq, &hb, &mut buf).unwrap();
+        seq = seq.wrapping_add(1);
+        sim.uart_mut().push_inbound(&buf[..n]);
+        let _ = sim.uart_mut().take_outbound();
+        sim.run_for(40);
+        let core = sim.robot();
+        let enc = core.sensors().encoders.expect("encoders");
+        let ir = core.sensors().ir;
+        let h = core.pose().heading;
+        let tr = sim.truth();
+        println!(
+            "{:.2} {} {} {:.4} {:.4} {} {} {} {} {:.4} {:.4}",
+            sim.now_us() as f64 * 1e-6,
+            enc[0],
+            enc[1],
+            h,
+            tr.heading,
+            ir[5],
+            ir[0],
+            ir[2],
+            ir[3],
+            tr.x,
+            tr.y
+        );
+        let step = m.step(Observation {
+            pulses: [i64::from(enc[0]), i64::from(enc[1])],
+            heading_rad: h,
+            ir,
+        });
+        for c in step.commands() {
+            let t = now(&sim);
+            let _ = sim.robot_mut().apply(c, t);
+        }
+        if step.done.is_some() {
+            break;
+        }
+    }
 }

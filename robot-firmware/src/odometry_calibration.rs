@@ -220,7 +220,8 @@ pub struct LapCalibrator {
 /// Most laps kept; the calibration ends when it has this many.
 pub const MAX_LAPS: usize = 12;
 
-const NO_LAP: Lap = Lap {
+/// An empty lap (no travel, no turn).
+pub const NO_LAP: Lap = Lap {
     right_mm: 0.0,
     left_mm: 0.0,
     turns: 0,

@@ -1,16 +1,21 @@
 //! The odometry calibration's manoeuvre as a pure state machine: which command to send the
-//! robot after each observation, feeding [`LapCalibrator`] on the way. One place for the
-//! driving sequence, used by whoever commands the robot: the emulator's scenario
-//! (`bench --calibrate-odometry`, observing the simulated robot every 40 ms) and the
+//! robot after each observation, feeding [`LapCalibrator`] and [`StraightWalls`] on the way.
+//! One place for the driving sequence, used by whoever commands the robot: the emulator's
+//! scenario (`bench --calibrate-odometry`, observing the simulated robot every 40 ms) and the
 //! station's `station calibrate odometry` (observing the robot's telemetry).
 //!
-//! The sequence: follow the wall with it on the right (`EdgeFollowRight`) until the
-//! calibrator asks for the other side; then turn round on the spot by half a turn of the
-//! believed heading (Manual mode, a teleop command each observation, as a station's joystick
-//! would, so the link failsafe keeps working), stop, and follow with the wall on the left;
-//! until the calibrator is done. The caller sends [`Manoeuvre::start`]'s command first, then
-//! each [`Step`]'s commands in order, and on `done` (or its own timeout, with
+//! The sequence: hold the wall on the right ([`WallHolder`], Manual mode, a teleop command
+//! each observation, as a station's joystick would, so the link failsafe keeps working)
+//! until the lap calibrator asks for the other side; then turn round on the spot by half a
+//! turn of the believed heading, stop, and hold the wall on the left; until the lap
+//! calibrator is done. The caller sends [`Manoeuvre::start`]'s command first, then each
+//! [`Step`]'s commands in order, and on `done` (or its own timeout, with
 //! [`Manoeuvre::finish`]) stops the robot.
+//!
+//! The result: the wheel ratio from the straight walls ([`StraightWalls`], no closed lap
+//! needed, free of the wheels' common speed error) once they cover
+//! [`MIN_STRAIGHT_MM`], else the laps'; the wheel distance from the laps (both directions), or
+//! from the laps one way with the straight walls' ratio, else the nominal one.
 //!
 //! Layer: pure, no I/O, no clock, no heap (`#![no_std]`).
 
@@ -21,6 +26,15 @@ use crate::behaviour::{S_LEFT, S_RIGHT};
 use crate::odometry_calibration::{
     Calibration, CalibrationError, CalibrationParams, LapCalibrator, Next, Sample, WallSide,
 };
+use crate::odometry_stretch::{ratio_from_kappa, StraightWalls, StretchParams};
+use crate::wall_holder::{HolderParams, HolderPhase, WallHolder};
+
+/// Straight-wall travel from which the wheel ratio is the straight walls' (two walls of a
+/// small box: the error bound is per stretch, more only averages it down).
+pub const MIN_STRAIGHT_MM: f32 = 1000.0;
+
+/// Motor speed unit of the holder's wheel commands, mm/s (a Khepera's: 8 mm/s).
+pub const UNIT_MM_S: f32 = 8.0;
 
 /// Turn rate of the turn round, mrad/s (about 0.6 rad/s: 16 mm/s a wheel on a Khepera).
 pub const TURN_MRAD_S: i16 = 600;
@@ -74,17 +88,29 @@ enum Phase {
 #[derive(Clone, Debug)]
 pub struct Manoeuvre {
     cal: LapCalibrator,
+    walls: StraightWalls,
+    holder: WallHolder,
+    was_holding: bool,
     phase: Phase,
     side: WallSide,
     wall_level: u16,
+    mm_per_pulse: f32,
+    nominal_distance_mm: f32,
+    origin: Option<[i64; 2]>,
+    last_heading: Option<f32>,
+    unwrapped: f32,
 }
 
-/// The edge-following mode for a wall side.
-pub fn follow(side: WallSide) -> Command {
-    Command::SetMode(match side {
-        WallSide::Right => Mode::EdgeFollowRight,
-        WallSide::Left => Mode::EdgeFollowLeft,
-    })
+/// The command that starts holding a wall: Manual mode (the holder's teleop follows).
+pub const HOLD: Command = Command::SetMode(Mode::Manual);
+
+fn holder(side: WallSide, nominal_distance_mm: f32) -> WallHolder {
+    WallHolder::new(
+        HolderParams::default(),
+        side == WallSide::Right,
+        UNIT_MM_S,
+        nominal_distance_mm,
+    )
 }
 
 /// The command that stops the robot at the end, on a timeout or an interruption.
@@ -96,17 +122,30 @@ impl Manoeuvre {
         let cal = LapCalibrator::new(params, mm_per_pulse, nominal_distance_mm);
         Manoeuvre {
             side: cal.side(),
+            holder: holder(cal.side(), nominal_distance_mm),
             cal,
+            walls: StraightWalls::new(StretchParams::default()),
+            was_holding: false,
             phase: Phase::Following,
             // A wall is beside when the side sensor reads what the edge follower counts as
             // found.
             wall_level: EdgeParams::default().found_level,
+            mm_per_pulse,
+            nominal_distance_mm,
+            origin: None,
+            last_heading: None,
+            unwrapped: 0.0,
         }
     }
 
-    /// The first command: follow the first side.
+    /// The first command: Manual mode, for the wall holder's teleop.
     pub fn start(&self) -> Command {
-        follow(self.side)
+        HOLD
+    }
+
+    /// The straight-wall estimator (its stretches, for progress and reports).
+    pub fn straight_walls(&self) -> &StraightWalls {
+        &self.walls
     }
 
     /// The calibrator (laps closed so far, for progress).
@@ -122,6 +161,10 @@ impl Manoeuvre {
     /// Feeds one observation; returns what to send next.
     pub fn step(&mut self, o: Observation) -> Step {
         let mut out = Step::NONE;
+        let origin = *self.origin.get_or_insert(o.pulses);
+        let last = *self.last_heading.get_or_insert(o.heading_rad);
+        self.unwrapped += crate::odometry::wrap_angle(o.heading_rad - last);
+        self.last_heading = Some(o.heading_rad);
         match self.phase {
             Phase::Finished => {}
             Phase::Following => {
@@ -129,6 +172,20 @@ impl Manoeuvre {
                     WallSide::Right => S_RIGHT,
                     WallSide::Left => S_LEFT,
                 };
+                let hold = self.holder.step(&o.ir, self.unwrapped);
+                let holding = self.holder.phase() == HolderPhase::Holding;
+                // Mean signed wheel travel: the distance along a straight.
+                let travel_mm = ((o.pulses[0] - origin[0]) + (o.pulses[1] - origin[1])) as f32
+                    * self.mm_per_pulse
+                    / 2.0;
+                self.walls.observe(
+                    travel_mm,
+                    self.unwrapped,
+                    o.ir[sensor],
+                    holding && self.was_holding,
+                );
+                self.was_holding = holding;
+                out.commands = [Some(hold), None];
                 let sample = Sample {
                     pulses: o.pulses,
                     heading_rad: o.heading_rad,
@@ -139,6 +196,9 @@ impl Manoeuvre {
                         // Turn round on the spot, so the wall it was following is now on its
                         // other side: the laps go the other way.
                         self.side = s;
+                        self.walls.end();
+                        self.holder = holder(s, self.nominal_distance_mm);
+                        self.was_holding = false;
                         out.turned_to = Some(s);
                         self.phase = Phase::Turning {
                             last: o.heading_rad,
@@ -149,7 +209,8 @@ impl Manoeuvre {
                     Next::Follow(_) => {}
                     Next::Done(r) => {
                         self.phase = Phase::Finished;
-                        out.done = Some(r);
+                        self.walls.end();
+                        out.done = Some(self.combine(r));
                         out.commands = [Some(STOP), None];
                     }
                 }
@@ -169,7 +230,7 @@ impl Manoeuvre {
                             v_mm_s: 0,
                             w_mrad_s: 0,
                         }),
-                        Some(follow(self.side)),
+                        None,
                     ];
                 }
             }
@@ -177,9 +238,36 @@ impl Manoeuvre {
         out
     }
 
-    /// The result with the laps closed so far (the caller's time is up).
-    pub fn finish(&self) -> Result<Calibration, CalibrationError> {
-        self.cal.finish()
+    /// The result with the laps and straight walls so far (the caller's time is up).
+    pub fn finish(&mut self) -> Result<Calibration, CalibrationError> {
+        self.walls.end();
+        let laps = self.cal.finish();
+        self.combine(laps)
+    }
+
+    /// The straight walls' ratio with the laps' wheel distance (module text).
+    fn combine(
+        &self,
+        laps: Result<Calibration, CalibrationError>,
+    ) -> Result<Calibration, CalibrationError> {
+        let Some(kappa) = self.walls.kappa(MIN_STRAIGHT_MM) else {
+            return laps;
+        };
+        let ratio = ratio_from_kappa(kappa, self.nominal_distance_mm);
+        let b = self.nominal_distance_mm;
+        Ok(match laps {
+            Ok(c) => Calibration {
+                wheel_ratio: ratio,
+                ..c
+            },
+            Err(_) => Calibration {
+                wheel_ratio: ratio,
+                wheel_distance_mm: b,
+                both_directions: false,
+                laps: [crate::odometry_calibration::NO_LAP; 2],
+                median_of: 0,
+            },
+        })
     }
 }
 

@@ -86,10 +86,12 @@ pub fn run_calibration(
         profile.pulse_m * 1000.0,
         profile.wheel_distance_m * 1000.0,
     );
-    apply(&mut sim, m.start(), "SetMode(EdgeFollowRight)")?;
+    apply(&mut sim, m.start(), "SetMode(Manual)")?;
+    let mut seq = 0u16;
     let end_ms = (timeout_s * 1000.0).ceil() as u64;
     let mut outcome = None;
     while sim.now_us() / 1000 < end_ms {
+        keep_alive(&mut sim, &mut seq);
         sim.run_for(SAMPLE_MS);
         let core = sim.robot();
         let Some(enc) = core.sensors().encoders else {
@@ -130,6 +132,23 @@ pub fn run_calibration(
         Err(e) => report.error = Some(format!("{e:?} after {sim_s:.0} s")),
     }
     Ok(report)
+}
+
+/// A heartbeat on the simulated serial line, as the station's link sends them: the
+/// manoeuvre drives the robot in Manual mode, whose failsafe stops the motors when the link
+/// is silent (commands applied directly are not link traffic). The robot's answers are
+/// drained and dropped.
+fn keep_alive(sim: &mut Sim, seq: &mut u16) {
+    let mut buf = [0u8; protocol::MAX_FRAME];
+    let hb = protocol::Message::Heartbeat(protocol::Heartbeat {
+        time_ms: (sim.now_us() / 1000) as u32,
+    });
+    // A heartbeat is small and fixed: encoding cannot fail.
+    if let Ok(n) = protocol::encode(*seq, &hb, &mut buf) {
+        sim.uart_mut().push_inbound(&buf[..n]);
+    }
+    *seq = seq.wrapping_add(1);
+    let _ = sim.uart_mut().take_outbound();
 }
 
 fn fill(report: &mut CalibrationReport, c: &Calibration) {
