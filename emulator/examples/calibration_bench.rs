@@ -40,12 +40,15 @@ fn main() {
                 let r = run_calibration(arena, &so, DEFAULT_TIMEOUT_S).expect("runs");
                 if verbose {
                     eprintln!(
-                        "box {b:>3}: true {:>7.0} measured {:>7.0} err {:>6.0} laps {:?} both {} {:.0} s {}",
+                        "box {b:>3}: true {:>7.0} measured {:>7.0} err {:>6.0} laps {:?} both {} straight {} {:.2} m rej {} {:.0} s {}",
                         r.true_ratio_ppm,
                         r.wheel_ratio_ppm.unwrap_or(f32::NAN),
                         r.wheel_ratio_ppm.map_or(f64::NAN, |m| (f64::from(m) - r.true_ratio_ppm).abs()),
                         r.lap_length_m,
                         r.both_directions,
+                        r.straight_stretches,
+                        r.straight_m,
+                        r.straight_rejected,
                         r.sim_s,
                         r.error.as_deref().unwrap_or("")
                     );
@@ -148,4 +151,9 @@ fn trace(b: u64) {
             break;
         }
     }
+    for st in m.straight_walls().stretches() {
+        eprintln!("stretch {st:?}");
+    }
+    let rejected = m.straight_walls().rejected;
+    eprintln!("rejected {rejected} result {:?}", m.finish());
 }

@@ -191,7 +191,20 @@ impl Manoeuvre {
                     heading_rad: o.heading_rad,
                     wall_beside: o.ir[sensor] >= self.wall_level,
                 };
-                match self.cal.observe(sample) {
+                let before = self.cal.closed_laps().len();
+                let next = self.cal.observe(sample);
+                if let Some(lap) = self.cal.closed_laps().get(before) {
+                    // A lap the wrong way round for the side (clockwise with the wall on the
+                    // right) went round an island, not along the enclosing wall: leave it,
+                    // or the robot circles it to the end (a small block gives no straight
+                    // wall long enough).
+                    let ccw = self.side == WallSide::Right;
+                    if (lap.turns > 0) != ccw {
+                        self.holder.leave(self.unwrapped);
+                        self.walls.end();
+                    }
+                }
+                match next {
                     Next::Follow(s) if s != self.side => {
                         // Turn round on the spot, so the wall it was following is now on its
                         // other side: the laps go the other way.

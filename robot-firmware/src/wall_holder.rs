@@ -12,7 +12,10 @@
 //! - a wall ahead (front or diagonal sensor on the wall's side above `front_level`): turn on
 //!   the spot away from it until clear (an inside corner, a block);
 //! - the wall lost (side and diagonal below `lost_level`): curve towards it with radius
-//!   `lost_radius_mm` (round the end of a wall);
+//!   `lost_radius_mm` (round the end of a wall); after a whole turn without finding it (the
+//!   robot is in the open: at the start, or it left a small block), cross: straight on
+//!   until a wall is ahead, then the rules above (the caller also has the robot leave an
+//!   island it went round: a quarter turn away, then across);
 //! - otherwise hold: the wanted heading relative to the wall is proportional to the distance
 //!   error (reading minus `set_level`, over the band's counts a millimetre), clamped; the
 //!   heading relative to the wall is the believed heading minus its slow average (the wall's
@@ -80,6 +83,11 @@ pub enum HolderPhase {
     Spinning,
     /// Curving towards a lost wall.
     Seeking,
+    /// Straight on across the open until a wall is ahead.
+    Crossing,
+    /// Turning away from an island (a block the robot went round) by a quarter turn; the
+    /// believed heading where the turn began.
+    Leaving,
 }
 
 /// The holder's state (a few words).
@@ -92,6 +100,8 @@ pub struct WallHolder {
     wall_dir: Option<f32>,
     acc: f32,
     phase: HolderPhase,
+    /// The believed heading where the current seeking curve began.
+    seek_from: Option<f32>,
     unit_mm_s: f32,
     half_base_mm: f32,
 }
@@ -106,10 +116,19 @@ impl WallHolder {
             right,
             wall_dir: None,
             acc: 0.0,
-            phase: HolderPhase::Seeking,
+            phase: HolderPhase::Crossing,
+            seek_from: None,
             unit_mm_s,
             half_base_mm: wheel_distance_mm / 2.0,
         }
+    }
+
+    /// Leave the wall being held (the caller found it is an island: a lap went round it the
+    /// wrong way): a quarter turn away from it, then straight on to the next wall ahead.
+    pub fn leave(&mut self, heading: f32) {
+        self.phase = HolderPhase::Leaving;
+        self.seek_from = Some(heading);
+        self.wall_dir = None;
     }
 
     /// The rule that drove the last observation.
@@ -126,23 +145,53 @@ impl WallHolder {
         } else {
             (ir[0], ir[1], ir[2].max(ir[3]))
         };
+        let away = if self.right {
+            p.spin_mrad_s
+        } else {
+            -p.spin_mrad_s
+        };
+        if self.phase == HolderPhase::Leaving {
+            let from = self.seek_from.unwrap_or(heading);
+            if libm::fabsf(heading - from) < core::f32::consts::FRAC_PI_2 {
+                return Command::Teleop {
+                    v_mm_s: 0,
+                    w_mrad_s: away,
+                };
+            }
+            self.phase = HolderPhase::Crossing;
+            self.seek_from = None;
+        }
         if front >= p.front_level || diag >= p.front_level {
             self.phase = HolderPhase::Spinning;
             self.wall_dir = None;
+            self.seek_from = None;
+            // Away from the wall: left for a wall on the right.
             return Command::Teleop {
                 v_mm_s: 0,
-                // Away from the wall: left for a wall on the right.
-                w_mrad_s: if self.right {
-                    p.spin_mrad_s
-                } else {
-                    -p.spin_mrad_s
-                },
+                w_mrad_s: away,
+            };
+        }
+        let v = f32::from(p.base_units) * self.unit_mm_s;
+        // Crossing ends at a wall ahead (the spin above), not at one beside: the island just
+        // left, or the wall lost, may still be in the side sensor's view.
+        if self.phase == HolderPhase::Crossing {
+            return Command::Teleop {
+                v_mm_s: v as i16,
+                w_mrad_s: 0,
             };
         }
         if side < p.lost_level && diag < p.lost_level {
-            self.phase = HolderPhase::Seeking;
             self.wall_dir = None;
-            let v = f32::from(p.base_units) * self.unit_mm_s;
+            let from = *self.seek_from.get_or_insert(heading);
+            if libm::fabsf(heading - from) > 2.0 * core::f32::consts::PI {
+                self.phase = HolderPhase::Crossing;
+                self.seek_from = None;
+                return Command::Teleop {
+                    v_mm_s: v as i16,
+                    w_mrad_s: 0,
+                };
+            }
+            self.phase = HolderPhase::Seeking;
             let w = v / p.lost_radius_mm * 1000.0;
             return Command::Teleop {
                 v_mm_s: v as i16,
@@ -150,6 +199,7 @@ impl WallHolder {
             };
         }
         self.phase = HolderPhase::Holding;
+        self.seek_from = None;
         let dir = *self.wall_dir.get_or_insert(heading);
         let rel = heading - dir;
         self.wall_dir = Some(dir + p.wall_gain * rel);

@@ -46,6 +46,13 @@ pub struct CalibrationReport {
     /// The emulator's true ratio error, ppm: (1 + right bias) / (1 + left bias) - 1. The
     /// robot never sees it; it is here to judge the measurement.
     pub true_ratio_ppm: f64,
+    /// Straight-wall stretches accepted (`robot_firmware::odometry_stretch`): how many, their
+    /// total length in metres, and how many were rejected.
+    pub straight_stretches: usize,
+    /// Their total length, metres.
+    pub straight_m: f64,
+    /// Stretches rejected (bent, a reading that is not the distance).
+    pub straight_rejected: u16,
     /// Simulated seconds the calibration took.
     pub sim_s: f64,
     /// Why there is no result.
@@ -124,6 +131,9 @@ pub fn run_calibration(
         lap_drift_deg: Vec::new(),
         lap_length_m: Vec::new(),
         true_ratio_ppm,
+        straight_stretches: m.straight_walls().stretches().len(),
+        straight_m: f64::from(m.straight_walls().total_mm()) / 1000.0,
+        straight_rejected: m.straight_walls().rejected,
         sim_s,
         error: None,
     };
