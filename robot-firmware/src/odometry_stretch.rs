@@ -19,7 +19,8 @@
 //! `8 dy / L^2` for a distance error `dy` left at the ends. A Khepera's sensor gives about 60
 //! counts a millimetre mid-band with a noise of about 3 counts, so `dy` is under 0.1 mm once
 //! the model's curve is fitted; over `L` = 0.5 m that is `kappa` within 3.2e-3 rad/m, a ratio
-//! error within 170 ppm (`kappa B`, B = 52 mm); stretches combine weighted by length.
+//! error within 170 ppm (`kappa B`, B = 52 mm); stretches combine by their length-weighted
+//! median.
 //!
 //! Rejected: stretches shorter than `min_mm`, or where the belief turned by more than
 //! `max_turn_rad` from the start (a corner, a block), or where the fit's residual is above
@@ -185,19 +186,26 @@ impl StraightWalls {
         }
     }
 
-    /// The belief's drift rate along straight walls, radians a metre, weighted by length;
-    /// `None` below `min_total_mm` of accepted stretches.
+    /// The belief's drift rate along straight walls, radians a metre: the length-weighted
+    /// median of the stretches' own (a stretch whose reading was not the distance all along,
+    /// another wall in the sensor's cone near a corner, is an outlier, not a shift); `None`
+    /// below `min_total_mm` of accepted stretches.
     pub fn kappa(&self, min_total_mm: f32) -> Option<f32> {
         let total = self.total_mm();
         if total < min_total_mm || total <= 0.0 {
             return None;
         }
-        let w: f32 = self
-            .stretches()
-            .iter()
-            .map(|s| s.kappa * s.length_mm)
-            .sum();
-        Some(w / total)
+        let mut v = self.kept;
+        let v = &mut v[..self.count];
+        v.sort_unstable_by(|a, b| a.kappa.total_cmp(&b.kappa));
+        let mut acc = 0.0;
+        for s in v.iter() {
+            acc += s.length_mm;
+            if acc >= total / 2.0 {
+                return Some(s.kappa);
+            }
+        }
+        v.last().map(|s| s.kappa)
     }
 }
 
