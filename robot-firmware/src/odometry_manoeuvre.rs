@@ -217,7 +217,7 @@ impl Manoeuvre {
                             last: o.heading_rad,
                             turned: 0.0,
                         };
-                        out.commands = [Some(Command::SetMode(Mode::Manual)), Some(turn())];
+                        out.commands = [Some(HOLD), Some(turn())];
                     }
                     Next::Follow(_) => {}
                     Next::Done(r) => {
@@ -298,46 +298,64 @@ mod tests {
     use core::f32::consts::PI;
     use std::vec::Vec;
 
-    /// A synthetic robot obeying the manoeuvre's commands: edge following drives a 700 x 550
-    /// mm rectangle (2 mm steps, corners on the spot, the side by the mode), Manual turns by
-    /// the last teleop's rate over one 40 ms observation. Wheels 0.37 % apart, so the belief
-    /// drifts as a real one does.
+    /// Reading of a Khepera-like sensor at `d` mm from the body's edge (useful 17-33 mm).
+    fn reading(d: f32) -> u16 {
+        if d >= 33.0 {
+            return 5;
+        }
+        let x = ((33.0 - d) / 16.0).max(0.0);
+        (5.0 + 1023.0 * libm::powf(x, 1.5)).min(1023.0) as u16
+    }
+
+    /// A synthetic robot in a 1000 x 800 mm box obeying the manoeuvre's commands every 40
+    /// ms: teleop to whole motor units (8 mm/s) as the firmware does, the right wheel truly
+    /// 0.37 % faster than the left over the same encoder counts, the belief integrated from
+    /// the counts with the nominal 52 mm, IR readings from the centre ray of each sensor.
     #[test]
-    fn follows_right_turns_round_by_half_a_turn_follows_left_and_stops() {
+    fn holds_the_wall_both_ways_turns_round_and_measures_the_ratio_on_straight_walls() {
         let (kr, kl, b) = (1.0037_f32, 0.9990_f32, 52.0_f32);
+        let (w, h, radius) = (1000.0f32, 800.0f32, 27.5f32);
+        let angles = [90.0f32, 45.0, 10.0, -10.0, -45.0, -90.0, 180.0, 180.0];
         let mut m = Manoeuvre::new(CalibrationParams::default(), 0.08, b);
-        let mut mode = match m.start() {
-            Command::SetMode(mode) => mode,
-            c => panic!("{c:?}"),
-        };
-        assert_eq!(mode, Mode::EdgeFollowRight);
-        let mut w = 0i16;
-        let mut pulses = [0.0f64; 2];
+        assert_eq!(m.start(), HOLD);
+        let (mut x, mut y, mut th) = (500.0f32, 400.0f32, 0.3f32);
+        let mut pulses = [0i64; 2];
         let mut believed = 0.3f32;
+        let mut teleop = (0i16, 0i16);
+        let mut idle = false;
         let mut sent: Vec<Command> = Vec::new();
-        let mut turn_at = None;
-        let mut turned_seen = None;
-        let (mut side_k, mut along) = (0usize, 0.0f32);
+        let mut turned = None;
         let mut done = None;
-        for _ in 0..2_000_000 {
-            let ir = match mode {
-                Mode::EdgeFollowRight => [0, 0, 0, 0, 0, 1023, 0, 0],
-                _ => [1023, 0, 0, 0, 0, 0, 0, 0],
-            };
+        for _ in 0..15_000 {
+            let mut ir = [0u16; 8];
+            for (r, a) in ir.iter_mut().zip(angles) {
+                let (sa, ca) = libm::sincosf(th + a * PI / 180.0);
+                let mut t = f32::MAX;
+                if ca > 1e-6 {
+                    t = t.min((w - x) / ca);
+                } else if ca < -1e-6 {
+                    t = t.min(-x / ca);
+                }
+                if sa > 1e-6 {
+                    t = t.min((h - y) / sa);
+                } else if sa < -1e-6 {
+                    t = t.min(-y / sa);
+                }
+                *r = reading(t - radius);
+            }
             let step = m.step(Observation {
-                pulses: [pulses[0] as i64, pulses[1] as i64],
-                heading_rad: believed,
-                ir: if along < 0.0 { [0; 8] } else { ir },
+                pulses,
+                heading_rad: libm::remainderf(believed, 2.0 * PI),
+                ir,
             });
-            if let Some(s) = step.turned_to {
-                turned_seen = Some(s);
-                turn_at = Some(believed);
+            if step.turned_to.is_some() {
+                turned = step.turned_to;
             }
             for c in step.commands() {
                 sent.push(c);
                 match c {
-                    Command::SetMode(x) => mode = x,
-                    Command::Teleop { w_mrad_s, .. } => w = w_mrad_s,
+                    Command::Teleop { v_mm_s, w_mrad_s } => teleop = (v_mm_s, w_mrad_s),
+                    Command::SetMode(Mode::Idle) => idle = true,
                     _ => {}
                 }
             }
@@ -345,73 +363,36 @@ mod tests {
                 done = Some(r);
                 break;
             }
-            // The world answers.
-            let sgn = if mode == Mode::EdgeFollowLeft {
-                -1.0
-            } else {
-                1.0
-            };
-            match mode {
-                Mode::EdgeFollowRight | Mode::EdgeFollowLeft if along >= 0.0 => {
-                    pulses[0] += f64::from(2.0 / kl / 0.08);
-                    pulses[1] += f64::from(2.0 / kr / 0.08);
-                    believed += (2.0 / kr - 2.0 / kl) / b;
-                    along += 2.0;
-                    let len = if side_k % 2 == 0 { 700.0 } else { 550.0 };
-                    if along >= len {
-                        // A corner: 90 one-degree steps, the side sensor off.
-                        along = -90.0;
-                        side_k += 1;
-                    }
-                }
-                Mode::EdgeFollowRight | Mode::EdgeFollowLeft => {
-                    let arc = (PI / 180.0) * b / 2.0;
-                    pulses[0] -= f64::from(sgn * arc / kl / 0.08);
-                    pulses[1] += f64::from(sgn * arc / kr / 0.08);
-                    believed += sgn * (arc / kr + arc / kl) / b;
-                    along += 1.0;
-                }
-                Mode::Manual => {
-                    let arc = f32::from(w) * 0.04 * b / 2.0 / 1000.0;
-                    pulses[0] -= f64::from(arc / kl / 0.08);
-                    pulses[1] += f64::from(arc / kr / 0.08);
-                    believed += (arc / kr + arc / kl) / b;
-                }
-                _ => {}
+            if idle {
+                continue;
             }
+            // The firmware's teleop: whole units a wheel; 4 pulses a unit in 40 ms.
+            let turn = f32::from(teleop.1) / 1000.0 * b / 2.0;
+            let units = |mm_s: f32| libm::roundf(mm_s / 8.0) as i64;
+            let (ul, ur) = (
+                units(f32::from(teleop.0) - turn),
+                units(f32::from(teleop.0) + turn),
+            );
+            pulses[0] += ul * 4;
+            pulses[1] += ur * 4;
+            believed += (ur - ul) as f32 * 4.0 * 0.08 / b;
+            let (vl, vr) = (ul as f32 * 8.0 * kl, ur as f32 * 8.0 * kr);
+            th += (vr - vl) / b * 0.04;
+            let v = (vl + vr) / 2.0 * 0.04;
+            x = (x + v * libm::cosf(th)).clamp(radius, w - radius);
+            y = (y + v * libm::sinf(th)).clamp(radius, h - radius);
         }
-        let c = done.expect("done").expect("solves");
-        assert!(c.both_directions, "{c:?}");
-        assert!((c.wheel_ratio - kr / kl).abs() < 5e-4, "{c:?}");
-        assert_eq!(turned_seen, Some(WallSide::Left));
-        assert!(turn_at.is_some());
-        // The order: right, (Manual, turn x n, stop, left), idle.
-        assert_eq!(sent.first(), Some(&Command::SetMode(Mode::Manual)));
-        let turns = sent
-            .iter()
-            .filter(|c| {
-                matches!(
-                    c,
-                    Command::Teleop {
-                        w_mrad_s: TURN_MRAD_S,
-                        ..
-                    }
-                )
-            })
-            .count();
-        // Half a turn at 0.024 rad an observation (believed: the wheels' mean factor ~1).
-        assert!((130..=133).contains(&turns), "{turns}");
-        let k = sent.len();
-        assert_eq!(sent[k - 1], STOP);
-        let left = sent.iter().position(|c| *c == follow(WallSide::Left));
-        let left = left.expect("follows left");
-        assert_eq!(
-            sent[left - 1],
-            Command::Teleop {
-                v_mm_s: 0,
-                w_mrad_s: 0
-            }
+        let c = done.expect("done in time").expect("a result");
+        assert!(
+            (c.wheel_ratio - kr / kl).abs() < 3e-4,
+            "{c:?} {:?}",
+            m.straight_walls().stretches()
         );
-        assert_eq!(left, turns + 2);
+        assert!(m.straight_walls().total_mm() >= MIN_STRAIGHT_MM);
+        assert_eq!(turned, Some(WallSide::Left));
+        assert_eq!(sent.last(), Some(&STOP));
+        // Turning round: Manual, then the spin, before the left wall is held.
+        let k = sent.iter().position(|c| *c == HOLD).expect("turned round");
+        assert_eq!(sent[k + 1], turn());
     }
 }

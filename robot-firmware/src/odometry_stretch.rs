@@ -7,7 +7,9 @@
 //! metre), and the true wobble (scaled by `eta`, the wheels' common factor and distance
 //! error). Integrated over the travel, `Psi(s) = int theta ds = c0 + theta_w s + kappa s^2/2 +
 //! (1 + eta) y(s)`, and `y` is a smooth function of the reading `r`, so a least-squares fit
-//! of `Psi` on `[1, s, s^2, rho, rho^2]` (`rho` the reading, scaled) gives `kappa` with the
+//! of `Psi` on `[1, s, s^2, rho, rho^2, rho^3]` (`rho` the reading, scaled; a cubic, as a
+//! quadratic in the reading leaves a bias of up to 0.02 rad/m where the reading spans the
+//! band) gives `kappa` with the
 //! sensor's curve and gain learnt from the stretch itself: no IR model, no wall direction.
 //! The true heading change over the stretch being zero, `kappa` is the wheel ratio alone:
 //! `R kr = L kl` exactly, so `kr / kl = (1 - kappa B / 2) / (1 + kappa B / 2)` with `B` the
@@ -37,6 +39,10 @@ pub struct StretchParams {
     pub band_lo: u16,
     /// Highest, counts (below saturation at 1023).
     pub band_hi: u16,
+    /// A stretch starts only with the reading within this many counts of the holder's set
+    /// level, 450: after a corner the robot approaches the wall at an angle, and the reading
+    /// then also depends on the angle (the ray's slant), not on the distance alone.
+    pub start_window: u16,
     /// Shortest stretch, mm (the `s^2` term needs length: the bound goes as 1 / L^2).
     pub min_mm: f32,
     /// Largest believed turn from the stretch's start, radians (more than the belief's drift
@@ -49,8 +55,9 @@ pub struct StretchParams {
 impl Default for StretchParams {
     fn default() -> Self {
         Self {
-            band_lo: 60,
-            band_hi: 1000,
+            band_lo: 250,
+            band_hi: 700,
+            start_window: 150,
             min_mm: 200.0,
             max_turn_rad: 0.45,
             max_residual_mm: 0.3,
@@ -58,8 +65,11 @@ impl Default for StretchParams {
     }
 }
 
-/// Regressors: 1, u, u^2, rho, rho^2.
-const K: usize = 5;
+/// The reading the wall holder keeps (`wall_holder::HolderParams::set_level`), counts.
+const SET_LEVEL: u16 = 450;
+
+/// Regressors: 1, u, u^2, rho, rho^2, rho^3.
+const K: usize = 6;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Fit {
@@ -130,6 +140,9 @@ impl StraightWalls {
             self.end();
             return;
         }
+        if self.fit.is_none() && side.abs_diff(SET_LEVEL) > p.start_window {
+            return;
+        }
         let f = self.fit.get_or_insert(Fit {
             s0: travel_mm,
             th0: heading,
@@ -146,8 +159,8 @@ impl StraightWalls {
         f.last_s = travel_mm;
         f.last_th = heading;
         let u = f64::from(travel_mm - f.s0) / 1000.0;
-        let rho = (f64::from(side) - 450.0) / 450.0;
-        let x = [1.0, u, u * u, rho, rho * rho];
+        let rho = (f64::from(side) - f64::from(SET_LEVEL)) / f64::from(SET_LEVEL);
+        let x = [1.0, u, u * u, rho, rho * rho, rho * rho * rho];
         for i in 0..K {
             for j in 0..K {
                 f.xx[i][j] += x[i] * x[j];
@@ -219,7 +232,8 @@ pub fn ratio_from_kappa(kappa: f32, b_mm: f32) -> f32 {
 /// Gaussian elimination with partial pivoting; `None` for a singular system.
 fn solve(mut a: [[f64; K]; K], mut b: [f64; K]) -> Option<[f64; K]> {
     for col in 0..K {
-        let piv = (col..K).max_by(|&i, &j| libm::fabs(a[i][col]).total_cmp(&libm::fabs(a[j][col])))?;
+        let piv =
+            (col..K).max_by(|&i, &j| libm::fabs(a[i][col]).total_cmp(&libm::fabs(a[j][col])))?;
         if libm::fabs(a[piv][col]) < 1e-12 {
             return None;
         }
@@ -252,7 +266,7 @@ mod tests {
     fn the_drift_rate_comes_out_of_a_wobbling_stretch() {
         let kappa = -0.25f32;
         let mut w = StraightWalls::new(StretchParams::default());
-        let mut y = 25.0f64; // mm from the wall
+        let mut y = 24.0f64; // mm from the wall
         for i in 0..400 {
             let s = i as f32 * 2.0;
             let phi = 0.02 * libm::sinf(s / 60.0);

@@ -236,17 +236,15 @@ mod tests {
     #[test]
     fn holds_by_whole_units_and_turns_away_from_a_close_wall() {
         let mut h = WallHolder::new(HolderParams::default(), true, 8.0, 52.0);
-        // Far too close on the right: turn left (right wheel faster).
+        // In the open: straight on.
         let mut ir = [0u16; 8];
-        ir[5] = 900;
-        let mut sum = 0i32;
-        for _ in 0..10 {
-            if let Command::Teleop { w_mrad_s, .. } = h.step(&ir, 0.0) {
-                sum += i32::from(w_mrad_s);
+        assert_eq!(
+            h.step(&ir, 0.0),
+            Command::Teleop {
+                v_mm_s: 32,
+                w_mrad_s: 0
             }
-        }
-        assert!(sum > 0, "{sum}");
-        assert_eq!(h.phase(), HolderPhase::Holding);
+        );
         // A wall ahead: spin left on the spot.
         ir[3] = 500;
         assert_eq!(
@@ -256,6 +254,23 @@ mod tests {
                 w_mrad_s: 600
             }
         );
+        assert_eq!(h.phase(), HolderPhase::Spinning);
+        // Far too close on the right: turn left (right wheel faster), by whole units.
+        ir[3] = 0;
+        ir[5] = 900;
+        let mut sum = 0i32;
+        for _ in 0..10 {
+            match h.step(&ir, 0.0) {
+                Command::Teleop { v_mm_s, w_mrad_s } => {
+                    assert_eq!(v_mm_s % 4, 0);
+                    assert_eq!(i32::from(w_mrad_s) % 154, 0, "{w_mrad_s}");
+                    sum += i32::from(w_mrad_s);
+                }
+                c => panic!("{c:?}"),
+            }
+        }
+        assert!(sum > 0, "{sum}");
+        assert_eq!(h.phase(), HolderPhase::Holding);
         // Nothing in view: curve right, towards where the wall was.
         let ir = [0u16; 8];
         match h.step(&ir, 0.0) {
