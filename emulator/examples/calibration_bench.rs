@@ -40,10 +40,11 @@ fn main() {
                 let r = run_calibration(arena, &so, DEFAULT_TIMEOUT_S).expect("runs");
                 if verbose {
                     eprintln!(
-                        "box {b:>3}: true {:>7.0} measured {:>7.0} err {:>6.0} laps {:?} both {} straight {} {:.2} m rej {} {:.0} s {}",
+                        "box {b:>3}: true {:>7.0} measured {:>7.0} err {:>6.0} dist err {:>6.3} mm laps {:?} both {} straight {} {:.2} m rej {} {:.0} s {}",
                         r.true_ratio_ppm,
                         r.wheel_ratio_ppm.unwrap_or(f32::NAN),
                         r.wheel_ratio_ppm.map_or(f64::NAN, |m| (f64::from(m) - r.true_ratio_ppm).abs()),
+                        r.wheel_distance_mm.map_or(f64::NAN, |d| f64::from(d) - r.true_distance_mm),
                         r.lap_length_m,
                         r.both_directions,
                         r.straight_stretches,

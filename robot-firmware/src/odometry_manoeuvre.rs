@@ -96,6 +96,7 @@ pub struct Manoeuvre {
     wall_level: u16,
     mm_per_pulse: f32,
     nominal_distance_mm: f32,
+    max_distance_error: f32,
     origin: Option<[i64; 2]>,
     last_heading: Option<f32>,
     unwrapped: f32,
@@ -132,6 +133,7 @@ impl Manoeuvre {
             wall_level: EdgeParams::default().found_level,
             mm_per_pulse,
             nominal_distance_mm,
+            max_distance_error: params.max_distance_error,
             origin: None,
             last_heading: None,
             unwrapped: 0.0,
@@ -268,19 +270,50 @@ impl Manoeuvre {
         };
         let ratio = ratio_from_kappa(kappa, self.nominal_distance_mm);
         let b = self.nominal_distance_mm;
+        let distance = self.lap_distance(ratio);
         Ok(match laps {
             Ok(c) => Calibration {
                 wheel_ratio: ratio,
+                wheel_distance_mm: distance.unwrap_or(c.wheel_distance_mm),
                 ..c
             },
             Err(_) => Calibration {
                 wheel_ratio: ratio,
-                wheel_distance_mm: b,
+                wheel_distance_mm: distance.unwrap_or(b),
                 both_directions: false,
                 laps: [crate::odometry_calibration::NO_LAP; 2],
                 median_of: 0,
             },
         })
+    }
+
+    /// The effective wheel distance with the wheel ratio known, the median over the closed
+    /// laps (either direction): the odometry scales the counts to `2 L / (1 + r)` and
+    /// `2 r R / (1 + r)` and turns by their difference over the distance parameter, the truth
+    /// by `kl (r R - L) / B_true`, so a lap of `k` whole turns gives the parameter
+    /// `2 (r R - L) / ((1 + r) 2 pi k)` (= `B_true / mean wheel factor`). One direction is
+    /// enough: the ratio, not the other direction, separates the wheels. `None` without
+    /// laps or outside `max_distance_error`.
+    fn lap_distance(&self, ratio: f32) -> Option<f32> {
+        let mut d = [0.0f32; crate::odometry_calibration::MAX_LAPS];
+        let mut n = 0;
+        for lap in self.cal.closed_laps() {
+            if lap.turns == 0 {
+                continue;
+            }
+            let turn = 2.0 * core::f32::consts::PI * lap.turns as f32;
+            d[n] = 2.0 * (ratio * lap.right_mm - lap.left_mm) / ((1.0 + ratio) * turn);
+            n += 1;
+        }
+        let v = &mut d[..n];
+        v.sort_unstable_by(f32::total_cmp);
+        let median = match n {
+            0 => return None,
+            n if n % 2 == 1 => v[n / 2],
+            n => (v[n / 2 - 1] + v[n / 2]) / 2.0,
+        };
+        let b = self.nominal_distance_mm;
+        (libm::fabsf(median / b - 1.0) <= self.max_distance_error).then_some(median)
     }
 }
 

@@ -46,6 +46,10 @@ pub struct CalibrationReport {
     /// The emulator's true ratio error, ppm: (1 + right bias) / (1 + left bias) - 1. The
     /// robot never sees it; it is here to judge the measurement.
     pub true_ratio_ppm: f64,
+    /// The emulator's true effective wheel distance, mm: the true distance over the wheels'
+    /// mean factor, what `odo_wheel_distance_mm` should be with the ratio exact. The robot
+    /// never sees it.
+    pub true_distance_mm: f64,
     /// Straight-wall stretches accepted (`robot_firmware::odometry_stretch`): how many, their
     /// total length in metres, and how many were rejected.
     pub straight_stretches: usize,
@@ -131,6 +135,8 @@ pub fn run_calibration(
         lap_drift_deg: Vec::new(),
         lap_length_m: Vec::new(),
         true_ratio_ppm,
+        true_distance_mm: sim.body().params().wheel_distance_m * 1000.0
+            / (1.0 + (bias[0] + bias[1]) / 2.0),
         straight_stretches: m.straight_walls().stretches().len(),
         straight_m: f64::from(m.straight_walls().total_mm()) / 1000.0,
         straight_rejected: m.straight_walls().rejected,
