@@ -176,12 +176,12 @@ impl Manoeuvre {
                 };
                 let hold = self.holder.step(&o.ir, self.unwrapped);
                 let holding = self.holder.phase() == HolderPhase::Holding;
-                // Mean signed wheel travel: the distance along a straight.
-                let travel_mm = ((o.pulses[0] - origin[0]) + (o.pulses[1] - origin[1])) as f32
-                    * self.mm_per_pulse
-                    / 2.0;
+                let wheels_mm = [
+                    (o.pulses[0] - origin[0]) as f32 * self.mm_per_pulse,
+                    (o.pulses[1] - origin[1]) as f32 * self.mm_per_pulse,
+                ];
                 self.walls.observe(
-                    travel_mm,
+                    wheels_mm,
                     self.unwrapped,
                     o.ir[sensor],
                     holding && self.was_holding,
@@ -270,7 +270,12 @@ impl Manoeuvre {
         };
         let ratio = ratio_from_kappa(kappa, self.nominal_distance_mm);
         let b = self.nominal_distance_mm;
-        let distance = self.lap_distance(ratio);
+        let b_max = self.max_distance_error;
+        let distance = self
+            .walls
+            .lap_distance(ratio, kappa, 0.3, 500.0)
+            .filter(|d| libm::fabsf(d / b - 1.0) <= b_max)
+            .or_else(|| self.lap_distance(ratio));
         Ok(match laps {
             Ok(c) => Calibration {
                 wheel_ratio: ratio,

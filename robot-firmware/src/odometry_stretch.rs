@@ -77,6 +77,7 @@ struct Fit {
     th0: f32,
     last_s: f32,
     last_th: f32,
+    last_wheels: [f32; 2],
     psi: f64,
     // Normal equations: sum x x^T (full, K x K), sum x psi, sum psi^2, samples.
     xx: [[f64; K]; K],
@@ -97,6 +98,13 @@ pub struct Stretch {
     pub length_mm: f32,
     /// RMS residual of the fit, mm.
     pub residual_mm: f32,
+    /// The wall's direction in the belief at the stretch's last sample (the fit's heading
+    /// without the wobble), unwrapped radians.
+    pub wall_end: f32,
+    /// The believed heading at that sample minus `wall_end`: the robot's angle to the wall.
+    pub phi_end: f32,
+    /// Left and right wheel encoder travel at that sample, mm.
+    pub wheels_mm: [f32; 2],
 }
 
 /// The straight-wall estimator (see the module text).
@@ -132,10 +140,11 @@ impl StraightWalls {
         self.stretches().iter().map(|s| s.length_mm).sum()
     }
 
-    /// One sample: travel (mm, mean of the wheels' encoder travel), believed heading
+    /// One sample: the wheels' encoder travel (left, right, mm), believed heading
     /// (unwrapped, radians), the side reading, and whether the robot is holding a wall.
-    pub fn observe(&mut self, travel_mm: f32, heading: f32, side: u16, holding: bool) {
+    pub fn observe(&mut self, wheels_mm: [f32; 2], heading: f32, side: u16, holding: bool) {
         let p = self.params;
+        let travel_mm = (wheels_mm[0] + wheels_mm[1]) / 2.0;
         if !holding || side < p.band_lo || side > p.band_hi {
             self.end();
             return;
@@ -158,6 +167,7 @@ impl StraightWalls {
         f.psi += ds * f64::from((heading + f.last_th) / 2.0 - f.th0);
         f.last_s = travel_mm;
         f.last_th = heading;
+        f.last_wheels = wheels_mm;
         let u = f64::from(travel_mm - f.s0) / 1000.0;
         let rho = (f64::from(side) - f64::from(SET_LEVEL)) / f64::from(SET_LEVEL);
         let x = [1.0, u, u * u, rho, rho * rho, rho * rho * rho];
@@ -194,6 +204,12 @@ impl StraightWalls {
                 kappa: (2.0 * c[2]) as f32,
                 length_mm,
                 residual_mm,
+                // d Psi / du without the wobble term: theta_w - th0 + kappa u.
+                wall_end: f.th0 + (c[1] + 2.0 * c[2] * f64::from(length_mm) / 1000.0) as f32,
+                phi_end: f.last_th
+                    - f.th0
+                    - (c[1] + 2.0 * c[2] * f64::from(length_mm) / 1000.0) as f32,
+                wheels_mm: f.last_wheels,
             };
             self.count += 1;
         }
@@ -219,6 +235,58 @@ impl StraightWalls {
             }
         }
         v.last().map(|s| s.kappa)
+    }
+}
+
+impl StraightWalls {
+    /// The effective wheel distance (`odo_wheel_distance_mm`) from pairs of stretches along
+    /// walls of the same direction (the same wall a lap later, or a parallel one traversed
+    /// the same way): the true turn between their last samples is `2 pi k` plus the robot's
+    /// angle to the wall at each (`phi_end`), and the odometry with ratio `r` turns by `2 (r
+    /// R - L) / ((1 + r) B)` for encoder travel R, L, so `B = 2 (r R - L) / ((1 + r) (2 pi k +
+    /// phi_j - phi_i))`. The fitted wall directions, free of the wobble, make this sharper
+    /// than a lap's window means. A pair is one when its wall directions, less the belief's
+    /// drift (`kappa` radians a metre), differ by whole turns within `tolerance_rad`, and
+    /// `min_lap_mm` of travel apart; each stretch pairs with the latest such one before it.
+    /// The median of the pairs; `None` without a pair.
+    pub fn lap_distance(
+        &self,
+        ratio: f32,
+        kappa: f32,
+        tolerance_rad: f32,
+        min_lap_mm: f32,
+    ) -> Option<f32> {
+        let two_pi = 2.0 * core::f32::consts::PI;
+        let mut d = [0.0f32; MAX_STRETCHES];
+        let mut n = 0;
+        let v = self.stretches();
+        for (j, b) in v.iter().enumerate() {
+            let travel = |s: &Stretch| (s.wheels_mm[0] + s.wheels_mm[1]) / 2.0;
+            let pair = v[..j].iter().rev().find_map(|a| {
+                let dist = travel(b) - travel(a);
+                if dist < min_lap_mm {
+                    return None;
+                }
+                let turned = b.wall_end - a.wall_end - kappa * dist / 1000.0;
+                let k = libm::roundf(turned / two_pi);
+                (k != 0.0 && libm::fabsf(turned - k * two_pi) < tolerance_rad).then_some((a, k))
+            });
+            let Some((a, k)) = pair else { continue };
+            let (dl, dr) = (
+                b.wheels_mm[0] - a.wheels_mm[0],
+                b.wheels_mm[1] - a.wheels_mm[1],
+            );
+            let turn = k * two_pi + b.phi_end - a.phi_end;
+            d[n] = 2.0 * (ratio * dr - dl) / ((1.0 + ratio) * turn);
+            n += 1;
+        }
+        let v = &mut d[..n];
+        v.sort_unstable_by(f32::total_cmp);
+        match n {
+            0 => None,
+            n if n % 2 == 1 => Some(v[n / 2]),
+            n => Some((v[n / 2 - 1] + v[n / 2]) / 2.0),
+        }
     }
 }
 
@@ -273,7 +341,7 @@ mod tests {
             y += f64::from(phi) * 2.0;
             let r = 1.1 * 1023.0 * libm::pow((33.0 - y) / 16.0, 1.5) + 5.0;
             let heading = 1.0 + kappa * s / 1000.0 + 1.03 * phi;
-            w.observe(s, heading, r as u16, true);
+            w.observe([s, s], heading, r as u16, true);
         }
         w.end();
         let k = w.kappa(100.0).expect("a stretch");
@@ -286,10 +354,10 @@ mod tests {
     fn a_corner_ends_the_stretch_and_short_ones_count_for_nothing() {
         let mut w = StraightWalls::new(StretchParams::default());
         for i in 0..50 {
-            w.observe(i as f32 * 2.0, 0.0, 450, true);
+            w.observe([i as f32 * 2.0; 2], 0.0, 450, true);
         }
         // Turned by a corner: the 98 mm before it are too short.
-        w.observe(100.0, 1.5, 450, true);
+        w.observe([100.0; 2], 1.5, 450, true);
         w.end();
         assert_eq!(w.stretches().len(), 0);
         assert_eq!(w.kappa(1.0), None);
