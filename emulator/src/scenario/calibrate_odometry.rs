@@ -1,9 +1,12 @@
-//! The odometry calibration run (`robot_firmware::odometry_calibration`), as an operator runs
-//! it before a go-to: the Khepera follows the wall counter-clockwise (`EdgeFollowRight`) until
-//! its recogniser closes a lap, then clockwise (`EdgeFollowLeft`) until it closes another; the
-//! solution becomes the parameters `odo_wheel_distance_mm` and `odo_wheel_ratio_ppm`, which a
-//! later run sets before its task (`ScenarioOptions::params`), as a station loads a saved
-//! parameter file.
+//! The odometry calibration run (`robot_firmware::odometry_manoeuvre`), as an operator runs
+//! it before a go-to: the Khepera holds the wall on its right (`robot_firmware::wall_holder`,
+//! Manual mode, a teleop each observation) until laps close, turns round, holds it on its
+//! left; the wheel ratio comes from the straight walls (`robot_firmware::odometry_stretch`),
+//! the wheel distance from walls a lap apart; they become the parameters
+//! `odo_wheel_distance_mm` and `odo_wheel_ratio_ppm`, which a later run sets before its task
+//! (`ScenarioOptions::params`), as a station loads a saved parameter file. A heartbeat goes
+//! on the simulated serial line each observation, as a station's link sends them, so Manual
+//! mode's link failsafe does not stop the motors.
 //!
 //! What the recogniser sees is what the robot sees: its encoder counts, its believed heading
 //! and its side IR sensor, sampled at 25 Hz (the telemetry rate a station would use). The
