@@ -33,6 +33,7 @@ pub mod nav;
 pub mod odometry;
 pub mod odometry_calibration;
 pub mod odometry_manoeuvre;
+pub mod odometry_stretch;
 pub mod params;
 pub mod profile;
 pub mod robot;
@@ -41,6 +42,7 @@ pub mod som;
 pub mod telemetry;
 pub mod transfer;
 pub mod unsupervised;
+pub mod wall_holder;
 
 pub use hal::{BeaconReading, Hal, MotorCommand};
 pub use profile::{Profile, ALICE, KHEPERA, MICRO_RATO};

@@ -8,9 +8,10 @@
 //! 0.37 % difference; that curvature is what the go-to benchmark's misses come from. Real
 //! robots calibrate it; this is that calibration, made with the robot's own sensors only.
 //!
-//! The manoeuvre (driven by whoever commands the robot: the emulator's `bench
-//! --calibrate-odometry`; a station would do the same over the link): follow the wall, first
-//! with the wall on the RIGHT, and close laps. A lap is closed when the robot is again moving
+//! The manoeuvre (`odometry_manoeuvre`, driven by the emulator's `bench
+//! --calibrate-odometry` and by `station calibrate odometry`): hold the wall, first with the
+//! wall on the RIGHT, and close laps. (The manoeuvre takes its wheel ratio from straight walls,
+//! `odometry_stretch`, when they cover a metre; these laps are its fallback.) A lap is closed when the robot is again moving
 //! straight along a wall (its side sensor sees the wall and its believed heading has held
 //! still over [`CalibrationParams::window_mm`]) and its believed heading is within
 //! [`CalibrationParams::heading_tolerance_rad`] of the heading at the lap's start plus a
@@ -220,7 +221,8 @@ pub struct LapCalibrator {
 /// Most laps kept; the calibration ends when it has this many.
 pub const MAX_LAPS: usize = 12;
 
-const NO_LAP: Lap = Lap {
+/// An empty lap (no travel, no turn).
+pub const NO_LAP: Lap = Lap {
     right_mm: 0.0,
     left_mm: 0.0,
     turns: 0,

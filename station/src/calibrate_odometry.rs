@@ -123,6 +123,9 @@ pub async fn run(args: &OdometryArgs) -> anyhow::Result<ExitCode> {
     result
 }
 
+/// Telemetry rate during the manoeuvre, Hz (the emulator scenario samples at 25 Hz).
+const HOLD_HZ: u8 = 25;
+
 async fn calibrate(
     link: &mut RunningLink,
     peer: &crate::link::PeerInfo,
@@ -153,10 +156,25 @@ async fn calibrate(
         profile.pulse_m * 1000.0,
         before[0],
     );
+    // The wall holder steers once per telemetry frame: at the robot's default 10 Hz a
+    // Khepera moves 3 mm between corrections, so ask for the emulator scenario's 25 Hz for
+    // the manoeuvre, and put the rate back after it.
+    let rate = peer.telemetry_hz;
+    if rate < HOLD_HZ {
+        send(link, Command::SetTelemetryRate { hz: HOLD_HZ })
+            .await
+            .map_err(|e| anyhow::anyhow!(e))?;
+    }
     let t0 = Instant::now();
     let end = drive(link, &mut m, args).await;
     // Whatever happened, the robot stops (a link already lost has stopped it).
     let stop = link.handle.call(Command::Stop).await;
+    if rate < HOLD_HZ {
+        let _ = link
+            .handle
+            .call(Command::SetTelemetryRate { hz: rate })
+            .await;
+    }
     let seconds = t0.elapsed().as_secs_f64();
     let mut report = Report {
         laps: laps(&m),

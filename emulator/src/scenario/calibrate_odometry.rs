@@ -1,9 +1,12 @@
-//! The odometry calibration run (`robot_firmware::odometry_calibration`), as an operator runs
-//! it before a go-to: the Khepera follows the wall counter-clockwise (`EdgeFollowRight`) until
-//! its recogniser closes a lap, then clockwise (`EdgeFollowLeft`) until it closes another; the
-//! solution becomes the parameters `odo_wheel_distance_mm` and `odo_wheel_ratio_ppm`, which a
-//! later run sets before its task (`ScenarioOptions::params`), as a station loads a saved
-//! parameter file.
+//! The odometry calibration run (`robot_firmware::odometry_manoeuvre`), as an operator runs
+//! it before a go-to: the Khepera holds the wall on its right (`robot_firmware::wall_holder`,
+//! Manual mode, a teleop each observation) until laps close, turns round, holds it on its
+//! left; the wheel ratio comes from the straight walls (`robot_firmware::odometry_stretch`),
+//! the wheel distance from walls a lap apart; they become the parameters
+//! `odo_wheel_distance_mm` and `odo_wheel_ratio_ppm`, which a later run sets before its task
+//! (`ScenarioOptions::params`), as a station loads a saved parameter file. A heartbeat goes
+//! on the simulated serial line each observation, as a station's link sends them, so Manual
+//! mode's link failsafe does not stop the motors.
 //!
 //! What the recogniser sees is what the robot sees: its encoder counts, its believed heading
 //! and its side IR sensor, sampled at 25 Hz (the telemetry rate a station would use). The
@@ -46,6 +49,17 @@ pub struct CalibrationReport {
     /// The emulator's true ratio error, ppm: (1 + right bias) / (1 + left bias) - 1. The
     /// robot never sees it; it is here to judge the measurement.
     pub true_ratio_ppm: f64,
+    /// The emulator's true effective wheel distance, mm: the true distance over the wheels'
+    /// mean factor, what `odo_wheel_distance_mm` should be with the ratio exact. The robot
+    /// never sees it.
+    pub true_distance_mm: f64,
+    /// Straight-wall stretches accepted (`robot_firmware::odometry_stretch`): how many, their
+    /// total length in metres, and how many were rejected.
+    pub straight_stretches: usize,
+    /// Their total length, metres.
+    pub straight_m: f64,
+    /// Stretches rejected (bent, a reading that is not the distance).
+    pub straight_rejected: u16,
     /// Simulated seconds the calibration took.
     pub sim_s: f64,
     /// Why there is no result.
@@ -86,10 +100,12 @@ pub fn run_calibration(
         profile.pulse_m * 1000.0,
         profile.wheel_distance_m * 1000.0,
     );
-    apply(&mut sim, m.start(), "SetMode(EdgeFollowRight)")?;
+    apply(&mut sim, m.start(), "SetMode(Manual)")?;
+    let mut seq = 0u16;
     let end_ms = (timeout_s * 1000.0).ceil() as u64;
     let mut outcome = None;
     while sim.now_us() / 1000 < end_ms {
+        keep_alive(&mut sim, &mut seq);
         sim.run_for(SAMPLE_MS);
         let core = sim.robot();
         let Some(enc) = core.sensors().encoders else {
@@ -122,6 +138,11 @@ pub fn run_calibration(
         lap_drift_deg: Vec::new(),
         lap_length_m: Vec::new(),
         true_ratio_ppm,
+        true_distance_mm: sim.body().params().wheel_distance_m * 1000.0
+            / (1.0 + (bias[0] + bias[1]) / 2.0),
+        straight_stretches: m.straight_walls().stretches().len(),
+        straight_m: f64::from(m.straight_walls().total_mm()) / 1000.0,
+        straight_rejected: m.straight_walls().rejected,
         sim_s,
         error: None,
     };
@@ -130,6 +151,23 @@ pub fn run_calibration(
         Err(e) => report.error = Some(format!("{e:?} after {sim_s:.0} s")),
     }
     Ok(report)
+}
+
+/// A heartbeat on the simulated serial line, as the station's link sends them: the
+/// manoeuvre drives the robot in Manual mode, whose failsafe stops the motors when the link
+/// is silent (commands applied directly are not link traffic). The robot's answers are
+/// drained and dropped.
+fn keep_alive(sim: &mut Sim, seq: &mut u16) {
+    let mut buf = [0u8; protocol::MAX_FRAME];
+    let hb = protocol::Message::Heartbeat(protocol::Heartbeat {
+        time_ms: (sim.now_us() / 1000) as u32,
+    });
+    // A heartbeat is small and fixed: encoding cannot fail.
+    if let Ok(n) = protocol::encode(*seq, &hb, &mut buf) {
+        sim.uart_mut().push_inbound(&buf[..n]);
+    }
+    *seq = seq.wrapping_add(1);
+    let _ = sim.uart_mut().take_outbound();
 }
 
 fn fill(report: &mut CalibrationReport, c: &Calibration) {
