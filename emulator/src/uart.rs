@@ -19,10 +19,15 @@
 //! - Truth channel (emulator only): a `protocol::FrameDecoder` watches the robot's transmitted
 //!   bytes; when a Telemetry frame has been sent, an `EmuTruth` frame (its own sequence
 //!   counter; `time_ms` of that telemetry; the TRUE pose at that time, mm and mrad; collisions)
-//!   is sent next, on the same wire and out of the same bit budget, so the total never
-//!   exceeds the baud rate. The robot's FIFO waits meanwhile.
+//!   is owed, on the same wire and out of the same bit budget, so the total never exceeds the
+//!   baud rate. A real robot sends no truth, so it must not delay the robot's own bytes: a
+//!   truth frame starts only between robot frames with the robot's FIFO empty (an ack queued
+//!   behind a telemetry frame goes first), and once started it goes out whole. At most
+//!   [`TRUTH_BACKLOG`] wait; when the robot keeps the line busy longer, the oldest unsent one
+//!   is dropped (counted in `truth_dropped`). Each is numbered when it starts, so a dropped
+//!   one leaves no gap the station would count as lost.
 //!
-//! Invariants: bytes leave in order, frames are never interleaved; an idle line does not bank
+//! Invariants: bytes leave in order, frames are never interleaved or cut; an idle line does not bank
 //! time (a burst after silence still goes at the line rate); host-side queues are bounded
 //! (inbound: `push_inbound` takes what fits; outbound: the oldest bytes are dropped and
 //! counted if the host never takes them). Nothing here panics. What can fail: [`Uart::new`]
@@ -53,6 +58,10 @@ pub const OUTBOUND_LIMIT: usize = 1 << 20;
 pub const MAX_BAUD: u32 = 10_000_000;
 /// Milliseconds of truth history kept for `EmuTruth` look-ups.
 pub const TRUTH_HISTORY_MS: usize = 4096;
+/// Most `EmuTruth` frames waiting for the robot's bytes to clear the line: over 150 ms of
+/// 50 Hz telemetry, long enough for any burst of the robot's, short enough that a truth frame
+/// is not so stale that the station's plot lags.
+pub const TRUTH_BACKLOG: usize = 8;
 
 /// Why a UART cannot be made.
 #[derive(Clone, Copy, Debug, Error, PartialEq, Eq)]
@@ -126,6 +135,8 @@ pub struct UartStats {
     pub outbound_dropped: u64,
     /// `EmuTruth` frames sent.
     pub truth_frames: u32,
+    /// `EmuTruth` frames dropped unsent because [`TRUTH_BACKLOG`] were already waiting.
+    pub truth_dropped: u32,
 }
 
 impl UartStats {
@@ -140,7 +151,12 @@ impl UartStats {
 pub struct Uart {
     baud: u32,
     tx_fifo: VecDeque<u8>,
+    /// The bytes of the truth frame on the wire, if one is.
     truth_queue: VecDeque<u8>,
+    /// Truth owed, not started: the message and the telemetry's signing timestamp.
+    truth_pending: VecDeque<(EmuTruth, Option<u64>)>,
+    /// The robot's last byte on the wire did not end a frame: only its bytes may follow.
+    robot_mid_frame: bool,
     outbound: VecDeque<u8>,
     /// Bit-clock position of the TX line (bits since time 0).
     tx_bits: u64,
@@ -179,6 +195,8 @@ impl Uart {
             baud,
             tx_fifo: VecDeque::with_capacity(TX_FIFO),
             truth_queue: VecDeque::with_capacity(MAX_FRAME),
+            truth_pending: VecDeque::with_capacity(TRUTH_BACKLOG),
+            robot_mid_frame: false,
             outbound: VecDeque::new(),
             tx_bits: 0,
             inbound: VecDeque::new(),
@@ -274,6 +292,7 @@ impl Uart {
     pub fn idle(&self) -> bool {
         self.tx_fifo.is_empty()
             && self.truth_queue.is_empty()
+            && self.truth_pending.is_empty()
             && self.inbound.is_empty()
             && self.rx_fifo.is_empty()
     }
@@ -288,7 +307,8 @@ impl Uart {
 
     /// Moves bytes on both lines up to `now_us`; `truth` supplies true poses for `EmuTruth`.
     pub fn tick(&mut self, now_us: u64, truth: &TruthHistory) {
-        let tx_idle = self.truth_queue.is_empty() && self.tx_fifo.is_empty();
+        let tx_idle =
+            self.truth_queue.is_empty() && self.truth_pending.is_empty() && self.tx_fifo.is_empty();
         let rx_idle = self.inbound.is_empty();
         if tx_idle && rx_idle {
             // Nothing to move: note that both lines were idle up to now (a byte written
@@ -307,14 +327,21 @@ impl Uart {
             // Idle line: time passed without banking bits.
             self.tx_bits = self.tx_bits.max(self.line_bits(t));
         }
+        let mut starved = false;
         while self.tx_bits.saturating_add(BITS_PER_BYTE) <= avail {
+            // A truth frame once started goes out whole; then the robot's bytes, a frame it
+            // has begun first of all; truth only on a line the robot leaves free.
             let byte = if let Some(b) = self.truth_queue.pop_front() {
                 b
             } else if let Some(b) = self.tx_fifo.pop_front() {
                 self.stats.tx_robot_bytes += 1;
+                self.robot_mid_frame = b != 0;
                 self.watch(b, truth);
                 b
+            } else if !self.robot_mid_frame && self.start_truth_frame() {
+                continue;
             } else {
+                starved = true;
                 break;
             };
             self.tx_bits += BITS_PER_BYTE;
@@ -325,9 +352,39 @@ impl Uart {
             }
             self.outbound.push_back(byte);
         }
-        if self.truth_queue.is_empty() && self.tx_fifo.is_empty() {
+        if starved {
+            // Nothing the line may carry now (truth may be waiting for the rest of a robot
+            // frame): it idles, banking no bits.
             self.tx_idle_us = Some(now_us);
         }
+    }
+
+    /// Encodes the oldest owed truth frame into `truth_queue`; false when none is owed.
+    fn start_truth_frame(&mut self) -> bool {
+        while let Some((msg, timestamp)) = self.truth_pending.pop_front() {
+            let msg = Message::EmuTruth(msg);
+            let mut buf = [0u8; MAX_FRAME];
+            let encoded = match (&self.truth_key, timestamp) {
+                (Some(key), Some(ts)) => protocol::encode_signed(
+                    self.truth_seq,
+                    &msg,
+                    key,
+                    protocol::sign::TRUTH_LINK,
+                    ts,
+                    &mut buf,
+                ),
+                // A keyed station would refuse unsigned truth; an unkeyed one, signed truth.
+                (Some(_), None) | (None, Some(_)) => continue,
+                (None, None) => encode(self.truth_seq, &msg, &mut buf),
+            };
+            if let Ok(n) = encoded {
+                self.truth_seq = self.truth_seq.wrapping_add(1);
+                self.truth_queue.extend(buf.iter().take(n));
+                self.stats.truth_frames = self.stats.truth_frames.wrapping_add(1);
+                return true;
+            }
+        }
+        false
     }
 
     fn tick_rx(&mut self, now_us: u64, avail: u64) {
@@ -351,8 +408,8 @@ impl Uart {
         }
     }
 
-    /// Feeds one transmitted robot byte to the frame watcher; queues `EmuTruth` after a
-    /// completed Telemetry frame.
+    /// Feeds one transmitted robot byte to the frame watcher; owes an `EmuTruth` after a
+    /// completed Telemetry frame (sent when the robot leaves the line free).
     fn watch(&mut self, byte: u8, truth: &TruthHistory) {
         if !self.truth_enabled {
             return;
@@ -370,31 +427,17 @@ impl Uart {
             _ => return,
         };
         let Some(s) = truth.at(time_ms) else { return };
-        let msg = Message::EmuTruth(EmuTruth {
+        if self.truth_pending.len() >= TRUTH_BACKLOG {
+            self.truth_pending.pop_front();
+            self.stats.truth_dropped = self.stats.truth_dropped.wrapping_add(1);
+        }
+        let msg = EmuTruth {
             time_ms,
             pose: wire_pose(s.pose),
             collisions: s.collisions,
             robot_id: truth.robot_id,
-        });
-        let mut buf = [0u8; MAX_FRAME];
-        let encoded = match (&self.truth_key, timestamp) {
-            (Some(key), Some(ts)) => protocol::encode_signed(
-                self.truth_seq,
-                &msg,
-                key,
-                protocol::sign::TRUTH_LINK,
-                ts,
-                &mut buf,
-            ),
-            // A keyed station would refuse unsigned truth; an unkeyed one, signed truth.
-            (Some(_), None) | (None, Some(_)) => return,
-            (None, None) => encode(self.truth_seq, &msg, &mut buf),
         };
-        if let Ok(n) = encoded {
-            self.truth_seq = self.truth_seq.wrapping_add(1);
-            self.truth_queue.extend(buf.iter().take(n));
-            self.stats.truth_frames = self.stats.truth_frames.wrapping_add(1);
-        }
+        self.truth_pending.push_back((msg, timestamp));
     }
 }
 
@@ -496,5 +539,151 @@ mod tests {
         assert_eq!(h.at(903).map(|s| s.pose.x), Some(4999.0));
         assert_eq!(h.at(5000).map(|s| s.pose.x), Some(4999.0));
         assert_eq!(TruthHistory::default().at(0), None);
+    }
+
+    /// Encodes `msg` as one frame.
+    fn frame(seq: u16, msg: &Message<'_>) -> Vec<u8> {
+        let mut buf = [0u8; MAX_FRAME];
+        let n = encode(seq, msg, &mut buf).expect("encodes");
+        buf.get(..n).expect("in bounds").to_vec()
+    }
+
+    /// The kinds of the frames in `bytes`, in order; panics on anything that is not a whole
+    /// good frame (a frame cut by another's bytes fails its COBS or CRC check).
+    fn kinds(bytes: &[u8]) -> Vec<protocol::Kind> {
+        let mut d = FrameDecoder::new();
+        let mut out = Vec::new();
+        let mut rest = bytes;
+        loop {
+            match d.feed(rest) {
+                Feed::NeedMore => break,
+                Feed::Frame { frame, rest: r } => {
+                    out.push(frame.header.kind);
+                    rest = r;
+                }
+                Feed::Error { error, .. } => panic!("a frame was cut: {error:?} after {out:?}"),
+            }
+        }
+        assert_eq!(d.stats().bytes_dropped, 0, "partial frame left: {out:?}");
+        out
+    }
+
+    /// Ticks the port every simulated millisecond from `*t_us` for `ms` milliseconds,
+    /// collecting what it sends.
+    fn run(u: &mut Uart, h: &TruthHistory, t_us: &mut u64, ms: u64, out: &mut Vec<u8>) {
+        for _ in 0..ms {
+            *t_us += 1000;
+            u.tick(*t_us, h);
+            out.extend(u.take_outbound());
+        }
+    }
+
+    #[test]
+    fn a_truth_frame_waits_for_queued_robot_bytes_and_never_cuts_a_frame() {
+        use protocol::{Ack, AckInfo, Kind, Telemetry};
+        let mut u = Uart::new(115_200, true).expect("valid baud");
+        let mut h = TruthHistory::default();
+        let pose = Pose {
+            x: 1.0,
+            y: 2.0,
+            heading: 0.5,
+        };
+        for time_ms in 0..10 {
+            h.push(TruthSample {
+                time_ms,
+                pose,
+                collisions: 0,
+            });
+        }
+        let telemetry = frame(
+            1,
+            &Message::Telemetry(Telemetry {
+                time_ms: 5,
+                ..Telemetry::default()
+            }),
+        );
+        let ack = frame(
+            2,
+            &Message::Ack(Ack {
+                cmd_seq: 9,
+                info: AckInfo::Done,
+            }),
+        );
+        // The telemetry takes longer than 2 ms on the wire (11.5 bytes a millisecond).
+        assert!(telemetry.len() > 24 && telemetry.len() <= TX_FIFO);
+        let (mut t_us, mut out) = (0, Vec::new());
+
+        // 1. An ack queued behind a telemetry frame goes out before that frame's truth.
+        assert_eq!(u.serial_write(&telemetry), telemetry.len());
+        run(&mut u, &h, &mut t_us, 2, &mut out);
+        assert_eq!(u.serial_write(&ack), ack.len());
+        run(&mut u, &h, &mut t_us, 20, &mut out);
+        assert_eq!(kinds(&out), [Kind::Telemetry, Kind::Ack, Kind::EmuTruth]);
+
+        // 2. A robot frame written in two parts with the line idle between them (the FIFO
+        // empties mid-frame) is not cut by the truth frame its telemetry is owed.
+        out.clear();
+        u.serial_write(&telemetry);
+        let (head, tail) = ack.split_at(ack.len() / 2);
+        u.serial_write(head);
+        run(&mut u, &h, &mut t_us, 20, &mut out);
+        u.serial_write(tail);
+        run(&mut u, &h, &mut t_us, 20, &mut out);
+        assert_eq!(kinds(&out), [Kind::Telemetry, Kind::Ack, Kind::EmuTruth]);
+
+        // 3. Robot bytes written while a truth frame is on the wire wait for its end.
+        out.clear();
+        u.serial_write(&telemetry);
+        while out.len() <= telemetry.len() {
+            run(&mut u, &h, &mut t_us, 1, &mut out);
+        }
+        // The truth frame has started (at most 12 bytes a millisecond: it is longer than
+        // that), so the ack lands mid-truth.
+        u.serial_write(&ack);
+        run(&mut u, &h, &mut t_us, 20, &mut out);
+        assert_eq!(kinds(&out), [Kind::Telemetry, Kind::EmuTruth, Kind::Ack]);
+        assert_eq!(u.stats().truth_frames, 3);
+    }
+
+    #[test]
+    fn truth_owed_while_the_robot_keeps_the_line_busy_is_bounded_and_numbered_without_gaps() {
+        use protocol::{Kind, Telemetry};
+        let mut u = Uart::new(115_200, true).expect("valid baud");
+        let mut h = TruthHistory::default();
+        h.push(TruthSample {
+            time_ms: 0,
+            pose: Pose {
+                x: 0.0,
+                y: 0.0,
+                heading: 0.0,
+            },
+            collisions: 0,
+        });
+        let telemetry = frame(1, &Message::Telemetry(Telemetry::default()));
+        let (mut t_us, mut out) = (0, Vec::new());
+        // The robot refills its FIFO every millisecond: the line is never free for truth.
+        let owed = TRUTH_BACKLOG + 3;
+        let mut pending: Vec<u8> = telemetry.repeat(owed);
+        while !pending.is_empty() {
+            let n = u.serial_write(&pending);
+            pending.drain(..n);
+            run(&mut u, &h, &mut t_us, 1, &mut out);
+        }
+        run(&mut u, &h, &mut t_us, 200, &mut out);
+        let k = kinds(&out);
+        assert_eq!(k.iter().filter(|&&k| k == Kind::Telemetry).count(), owed);
+        assert_eq!(u.stats().truth_dropped, 3);
+        assert_eq!(u.stats().truth_frames as usize, TRUTH_BACKLOG);
+        // Numbered as sent: 0, 1, 2, ... with no gap a station would count as lost.
+        let mut d = FrameDecoder::new();
+        let mut seqs = Vec::new();
+        let mut rest = out.as_slice();
+        while let Feed::Frame { frame, rest: r } = d.feed(rest) {
+            if frame.header.kind == Kind::EmuTruth {
+                seqs.push(frame.header.seq);
+            }
+            rest = r;
+        }
+        assert_eq!(seqs, (0..TRUTH_BACKLOG as u16).collect::<Vec<_>>());
     }
 }

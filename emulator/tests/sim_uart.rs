@@ -157,32 +157,40 @@ fn check_session(baud: u32) -> (usize, usize) {
     }
     assert!(per_second.iter().sum::<usize>() <= budget * 10);
     assert!(matches!(seen.first(), Some(Seen::HelloReply { caps: c }) if c & caps::EMULATED != 0));
-    let mut telemetry = 0;
-    for (i, frame) in seen.iter().enumerate() {
-        if let Seen::Telemetry(t) = frame {
-            telemetry += 1;
-            match seen.get(i + 1) {
-                Some(Seen::Truth {
-                    time_ms,
-                    x_mm,
-                    y_mm,
-                    collisions,
-                }) => {
-                    assert_eq!(time_ms, t);
-                    assert_eq!(truth.get(time_ms), Some(&(*x_mm, *y_mm)));
-                    assert_eq!(*collisions, 0);
-                }
-                // The run may end between a telemetry frame and its truth frame.
-                None => {}
-                other => panic!("telemetry at {t} ms followed by {other:?}"),
+    // Each truth frame is about a telemetry frame sent before it: the oldest still owed, or a
+    // later one when the emulator dropped older truth the robot's bytes left no room for.
+    // Robot frames may come between a telemetry frame and its truth (truth waits for them).
+    let mut owed = std::collections::VecDeque::new();
+    let (mut telemetry, mut truths) = (0, 0);
+    for frame in &seen {
+        match frame {
+            Seen::Telemetry(t) => {
+                telemetry += 1;
+                owed.push_back(*t);
             }
+            Seen::Truth {
+                time_ms,
+                x_mm,
+                y_mm,
+                collisions,
+            } => {
+                truths += 1;
+                while owed.front().is_some_and(|t| t != time_ms) {
+                    owed.pop_front();
+                }
+                assert_eq!(owed.pop_front(), Some(*time_ms), "truth for no telemetry");
+                assert_eq!(truth.get(time_ms), Some(&(*x_mm, *y_mm)));
+                assert_eq!(*collisions, 0);
+            }
+            _ => {}
         }
     }
-    let truths = seen
-        .iter()
-        .filter(|f| matches!(f, Seen::Truth { .. }))
-        .count();
-    assert!(truths + 1 >= telemetry && truths <= telemetry);
+    println!("{baud} baud: {truths} truth frames for {telemetry} telemetry frames");
+    assert!(truths <= telemetry);
+    if baud >= 115_200 {
+        // A line a third busy leaves room for every truth frame (the last may be in flight).
+        assert!(truths + 2 >= telemetry, "{truths} of {telemetry}");
+    }
     (telemetry, per_second.iter().sum())
 }
 
@@ -197,7 +205,8 @@ fn at_115200_baud_50_hz_telemetry_flows_with_truth_frames_within_the_budget() {
 #[test]
 fn at_9600_baud_the_line_saturates_but_never_exceeds_baud_over_ten() {
     let (telemetry, bytes) = check_session(9600);
-    // The firmware skips telemetry it cannot send; the line runs close to full.
+    // The firmware skips telemetry it cannot send; the line runs close to full, with the
+    // robot's own bytes: truth, which a real robot does not send, only gets what they leave.
     assert!(telemetry < 480, "{telemetry}");
     assert!(bytes > 9600 * 10 / 10 * 8 / 10, "{bytes}");
     println!("9600 baud: {telemetry} telemetry frames, {bytes} bytes in 10 s");
