@@ -23,8 +23,10 @@
 //!   baud rate. A real robot sends no truth, so it must not delay the robot's own bytes: a
 //!   truth frame starts only between robot frames with the robot's FIFO empty (an ack queued
 //!   behind a telemetry frame goes first), and once started it goes out whole. At most
-//!   [`TRUTH_BACKLOG`] wait; when the robot keeps the line busy longer, the oldest unsent one
-//!   is dropped (counted in `truth_dropped`). Each is numbered when it starts, so a dropped
+//!   [`TRUTH_BACKLOG`] wait; once [`TRUTH_OWED_FIRST`] are owed, the oldest goes between two
+//!   robot frames even with the FIFO full (a robot filling a slow line would starve truth
+//!   otherwise); when more than the backlog are owed, the oldest unsent one is dropped
+//!   (counted in `truth_dropped`). Each is numbered when it starts, so a dropped
 //!   one leaves no gap the station would count as lost.
 //!
 //! Invariants: bytes leave in order, frames are never interleaved or cut; an idle line does not bank
@@ -62,6 +64,11 @@ pub const TRUTH_HISTORY_MS: usize = 4096;
 /// 50 Hz telemetry, long enough for any burst of the robot's, short enough that a truth frame
 /// is not so stale that the station's plot lags.
 pub const TRUTH_BACKLOG: usize = 8;
+/// Truth frames owed after which the oldest goes ahead of the robot's next frame (never
+/// inside one). At 115200 baud the robot's FIFO empties between its frames and one truth
+/// frame at a time is owed, so acks still go first; at 9600 baud the robot's bytes fill the
+/// line, and without this no truth frame would ever go out.
+pub const TRUTH_OWED_FIRST: usize = 2;
 
 /// Why a UART cannot be made.
 #[derive(Clone, Copy, Debug, Error, PartialEq, Eq)]
@@ -333,6 +340,13 @@ impl Uart {
             // has begun first of all; truth only on a line the robot leaves free.
             let byte = if let Some(b) = self.truth_queue.pop_front() {
                 b
+            } else if !self.robot_mid_frame
+                && self.truth_pending.len() >= TRUTH_OWED_FIRST
+                && self.start_truth_frame()
+            {
+                // A robot that keeps its FIFO full (a slow line) would starve truth for
+                // good: once this many are owed, the oldest goes between two robot frames.
+                continue;
             } else if let Some(b) = self.tx_fifo.pop_front() {
                 self.stats.tx_robot_bytes += 1;
                 self.robot_mid_frame = b != 0;
@@ -646,7 +660,7 @@ mod tests {
     }
 
     #[test]
-    fn truth_owed_while_the_robot_keeps_the_line_busy_is_bounded_and_numbered_without_gaps() {
+    fn truth_owed_while_the_robot_keeps_the_line_busy_still_goes_between_its_frames() {
         use protocol::{Kind, Telemetry};
         let mut u = Uart::new(115_200, true).expect("valid baud");
         let mut h = TruthHistory::default();
@@ -661,7 +675,8 @@ mod tests {
         });
         let telemetry = frame(1, &Message::Telemetry(Telemetry::default()));
         let (mut t_us, mut out) = (0, Vec::new());
-        // The robot refills its FIFO every millisecond: the line is never free for truth.
+        // The robot refills its FIFO every millisecond: the line is never free for truth, so
+        // truth goes between robot frames once TRUTH_OWED_FIRST are owed, and none is lost.
         let owed = TRUTH_BACKLOG + 3;
         let mut pending: Vec<u8> = telemetry.repeat(owed);
         while !pending.is_empty() {
@@ -672,8 +687,8 @@ mod tests {
         run(&mut u, &h, &mut t_us, 200, &mut out);
         let k = kinds(&out);
         assert_eq!(k.iter().filter(|&&k| k == Kind::Telemetry).count(), owed);
-        assert_eq!(u.stats().truth_dropped, 3);
-        assert_eq!(u.stats().truth_frames as usize, TRUTH_BACKLOG);
+        assert_eq!(u.stats().truth_dropped, 0);
+        assert_eq!(u.stats().truth_frames as usize, owed);
         // Numbered as sent: 0, 1, 2, ... with no gap a station would count as lost.
         let mut d = FrameDecoder::new();
         let mut seqs = Vec::new();
@@ -684,6 +699,16 @@ mod tests {
             }
             rest = r;
         }
-        assert_eq!(seqs, (0..TRUTH_BACKLOG as u16).collect::<Vec<_>>());
+        assert_eq!(seqs, (0..owed as u16).collect::<Vec<_>>());
+        // Never more than TRUTH_OWED_FIRST telemetry frames ahead of their truth.
+        let mut ahead = 0usize;
+        for k in &k {
+            match k {
+                Kind::Telemetry => ahead += 1,
+                Kind::EmuTruth => ahead -= 1,
+                _ => {}
+            }
+            assert!(ahead <= TRUTH_OWED_FIRST, "{k:?}");
+        }
     }
 }
