@@ -9,13 +9,11 @@ use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdout, Command, Output, Stdio};
 
+use e2e_tests::procs::scratch_dir;
 use e2e_tests::workspace_bin;
 
 fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("calibrate-odo-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    scratch_dir("calibrate-odometry", name)
 }
 
 /// The emulator, killed if the test fails before asking it to stop.

@@ -11,6 +11,7 @@ use std::process::{Child, Command as Process, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
+use e2e_tests::procs::scratch_dir;
 use e2e_tests::{workspace_bin, Received, TestStation};
 use protocol::{Command, Heartbeat, Message};
 
@@ -19,10 +20,7 @@ const CUT_AT_S: f64 = 4.0;
 const CUT_FOR_S: f64 = 3.0;
 
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("e2e-fleet-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    scratch_dir("fleet", "run")
 }
 
 struct Emulator {

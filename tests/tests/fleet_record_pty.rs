@@ -9,14 +9,12 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command as Process, Output, Stdio};
 use std::time::{Duration, Instant};
 
+use e2e_tests::procs::scratch_dir;
 use e2e_tests::{workspace_bin, Received, TestStation};
 use protocol::{Heartbeat, Message};
 
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("e2e-fleet-rec-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    scratch_dir("fleet-record", "run")
 }
 
 struct Emulator(Child);

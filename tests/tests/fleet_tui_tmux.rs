@@ -12,16 +12,14 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
+use e2e_tests::procs::scratch_dir;
 use e2e_tests::tmux::Tmux;
 use e2e_tests::workspace_bin;
 
 const WAIT: Duration = Duration::from_secs(30);
 
 fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fleet-tmux-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    scratch_dir("fleet-tmux", name)
 }
 
 fn tmux_or_skip() -> bool {

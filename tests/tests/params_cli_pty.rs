@@ -6,14 +6,12 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use e2e_tests::procs::scratch_dir;
 use e2e_tests::workspace_bin;
 use emulator::link::{spawn, EmulatorOptions};
 
 fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("params-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    scratch_dir("params-cli", name)
 }
 
 fn params(port: &Path, args: &[&str], cwd: &Path) -> Output {

@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
+use e2e_tests::procs::scratch_dir;
 use e2e_tests::workspace_bin;
 use station::record::{LinkState, RecordKind, Recording};
 
@@ -25,10 +26,7 @@ fn unix_ms() -> u64 {
 }
 
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("e2e-reconnect-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    scratch_dir("reconnect", "run")
 }
 
 /// Starts an emulator on `link`; returns it once the symlink points at its new pty. A killed
