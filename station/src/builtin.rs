@@ -73,12 +73,7 @@ pub fn start_builtin_emulator_with(
     key: Option<&[u8; protocol::sign::KEY_LEN]>,
     start: Option<[f64; 3]>,
 ) -> Result<BuiltinEmulator, BuiltinError> {
-    let base = std::env::var_os("XDG_RUNTIME_DIR")
-        .map(PathBuf::from)
-        .filter(|p| p.is_dir())
-        .unwrap_or_else(std::env::temp_dir);
-    let dir = base.join(format!("station-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(BuiltinError::Dir)?;
+    let dir = runtime_dir()?;
     let link = dir.join("robot");
     let mut opts = EmulatorOptions::builtin_default();
     opts.serve.link = Some(link.clone());
@@ -90,16 +85,7 @@ pub fn start_builtin_emulator_with(
             heading: deg.to_radians(),
         });
     }
-    if let Some(a) = arena.or_else(|| alice_arena(profile)) {
-        opts.arena = a.to_string();
-    }
-    let forage = opts.arena == emulator::forage::BUILTIN_FORAGE;
-    // `builtin:floor-grid` (seed 003): its floor lines, and the robot with a line sensor.
-    opts.sim.floor_grid_m = emulator::builtin::floor_grid_pitch(&opts.arena);
-    let grid = opts.sim.floor_grid_m.is_some();
-    if let Some(p) = profile.or_else(|| (forage || grid).then_some(&robot_firmware::KHEPERA)) {
-        opts.sim.profile = p;
-    }
+    choose_world(&mut opts, arena, profile);
     let arena = emulator::builtin::load(&opts.arena, &opts.load)
         .ok()
         .map(|a| ArenaOverlay::from_arena(&a));
@@ -110,6 +96,38 @@ pub fn start_builtin_emulator_with(
         dir,
         arena,
     })
+}
+
+/// The per-process directory the built-in emulator's ptys live in: `$XDG_RUNTIME_DIR` when it
+/// is a directory, else the temporary directory.
+fn runtime_dir() -> Result<PathBuf, BuiltinError> {
+    let base = std::env::var_os("XDG_RUNTIME_DIR")
+        .map(PathBuf::from)
+        .filter(|p| p.is_dir())
+        .unwrap_or_else(std::env::temp_dir);
+    let dir = base.join(format!("station-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(BuiltinError::Dir)?;
+    Ok(dir)
+}
+
+/// The arena and robot of a built-in run, one rule for one robot and a fleet: `arena`, else
+/// ALICE's arena for ALICE, else the default; `profile`, else the Khepera where the arena
+/// needs its gripper (`builtin:forage`) or line sensor (`builtin:floor-grid`, seed 003, whose
+/// floor lines are set here too), else the default robot.
+fn choose_world(
+    opts: &mut EmulatorOptions,
+    arena: Option<&str>,
+    profile: Option<&'static robot_firmware::Profile>,
+) {
+    if let Some(a) = arena.or_else(|| alice_arena(profile)) {
+        opts.arena = a.to_string();
+    }
+    let forage = opts.arena == emulator::forage::BUILTIN_FORAGE;
+    opts.sim.floor_grid_m = emulator::builtin::floor_grid_pitch(&opts.arena);
+    let grid = opts.sim.floor_grid_m.is_some();
+    if let Some(p) = profile.or_else(|| (forage || grid).then_some(&robot_firmware::KHEPERA)) {
+        opts.sim.profile = p;
+    }
 }
 
 /// ALICE's own scene (`builtin:alice`, seed 001 §4.5) when no arena is named for it.
@@ -166,22 +184,9 @@ pub fn start_builtin_fleet(
 ) -> Result<BuiltinFleet, BuiltinError> {
     use std::sync::atomic::AtomicBool;
     use std::sync::Arc;
-    let base = std::env::var_os("XDG_RUNTIME_DIR")
-        .map(PathBuf::from)
-        .filter(|p| p.is_dir())
-        .unwrap_or_else(std::env::temp_dir);
-    let dir = base.join(format!("station-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(BuiltinError::Dir)?;
+    let dir = runtime_dir()?;
     let mut opts = EmulatorOptions::builtin_default();
-    if let Some(a) = arena.or_else(|| alice_arena(profile)) {
-        opts.arena = a.to_string();
-    }
-    let forage = opts.arena == emulator::forage::BUILTIN_FORAGE;
-    opts.sim.floor_grid_m = emulator::builtin::floor_grid_pitch(&opts.arena);
-    let grid = opts.sim.floor_grid_m.is_some();
-    if let Some(p) = profile.or_else(|| (forage || grid).then_some(&robot_firmware::KHEPERA)) {
-        opts.sim.profile = p;
-    }
+    choose_world(&mut opts, arena, profile);
     let loaded = emulator::builtin::load(&opts.arena, &opts.load)
         .map_err(|e| BuiltinError::Spawn(e.to_string()))?;
     let overlay = Some(ArenaOverlay::from_arena(&loaded));
