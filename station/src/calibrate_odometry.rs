@@ -3,7 +3,8 @@
 //! calibration"). The robot follows the wall one way until it closes a lap, turns round,
 //! follows it the other way; the wheel ratio and the effective wheel distance come out and
 //! are set as `odo_wheel_ratio_ppm` and `odo_wheel_distance_mm` (`params set` semantics: the
-//! value the robot put in force is printed, or its refusal).
+//! value the robot put in force is printed, or its refusal), both or neither: a value refused
+//! puts the one already set back.
 //!
 //! The driving sequence is `robot_firmware::odometry_manoeuvre`, the one the emulator's
 //! `bench --calibrate-odometry` runs; here it is fed the robot's telemetry (encoders,
@@ -65,6 +66,12 @@ pub struct Change {
     pub after: Option<f32>,
     /// The robot's reason for refusing.
     pub refused: Option<String>,
+    /// Set, then put back because a later value was refused: the value in force again.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub restored: Option<f32>,
+    /// Why putting it back failed (it stays at `after`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub restore_failed: Option<String>,
 }
 
 /// What the run gave.
@@ -201,34 +208,22 @@ async fn calibrate(
         Ok(c) => {
             report.both_directions = c.both_directions;
             let measured = [c.wheel_distance_mm, (c.wheel_ratio - 1.0) * 1e6];
-            ok = true;
-            for ((id, b), v) in ids.into_iter().zip(before).zip(measured) {
-                let mut change = Change {
+            report.changes = ids
+                .into_iter()
+                .zip(before)
+                .zip(measured)
+                .map(|((id, before), measured)| Change {
                     name: robot_firmware::params::info(id).map_or("?", |p| p.name),
                     id,
-                    before: b,
-                    measured: v,
+                    before,
+                    measured,
                     after: None,
                     refused: None,
-                };
-                if !args.dry_run {
-                    let command = Command::SetParam {
-                        id: ParamId(id),
-                        value: v,
-                    };
-                    match link.handle.call(command).await {
-                        CommandOutcome::Acked {
-                            info: AckInfo::Param { value, .. },
-                            ..
-                        } => change.after = Some(value),
-                        other => {
-                            ok = false;
-                            change.refused = Some(outcome_text(&command, &other));
-                        }
-                    }
-                }
-                report.changes.push(change);
-            }
+                    restored: None,
+                    restore_failed: None,
+                })
+                .collect();
+            ok = args.dry_run || apply(&mut report.changes, |c| link.handle.call(c)).await;
         }
     }
     print_report(args.json, &report);
@@ -237,6 +232,47 @@ async fn calibrate(
     } else {
         ExitCode::FAILURE
     })
+}
+
+/// Sets the measured values in order, all or none: once one is refused (or unanswered),
+/// those already set are put back to their values before, so a refusal never leaves the
+/// odometry half calibrated (this run's wheel distance with the old ratio is neither
+/// calibration). Returns whether every value was set.
+async fn apply<F, Fut>(changes: &mut [Change], mut call: F) -> bool
+where
+    F: FnMut(Command) -> Fut,
+    Fut: std::future::Future<Output = CommandOutcome>,
+{
+    for i in 0..changes.len() {
+        let command = Command::SetParam {
+            id: ParamId(changes[i].id),
+            value: changes[i].measured,
+        };
+        match call(command).await {
+            CommandOutcome::Acked {
+                info: AckInfo::Param { value, .. },
+                ..
+            } => changes[i].after = Some(value),
+            other => {
+                changes[i].refused = Some(outcome_text(&command, &other));
+                for done in changes[..i].iter_mut().rev() {
+                    let back = Command::SetParam {
+                        id: ParamId(done.id),
+                        value: done.before,
+                    };
+                    match call(back).await {
+                        CommandOutcome::Acked {
+                            info: AckInfo::Param { value, .. },
+                            ..
+                        } => done.restored = Some(value),
+                        other => done.restore_failed = Some(outcome_text(&back, &other)),
+                    }
+                }
+                return false;
+            }
+        }
+    }
+    true
 }
 
 /// Drives the manoeuvre from telemetry until it is done, the time is up, Ctrl-C, or a
@@ -416,12 +452,120 @@ fn print_report(json: bool, r: &Report) {
     );
     for c in &r.changes {
         match (&c.after, &c.refused) {
-            (Some(a), _) => println!("{}: {} -> {}", c.name, c.before, a),
+            (Some(a), _) => match (c.restored, &c.restore_failed) {
+                (Some(v), _) => eprintln!(
+                    "{}: set to {a}, put back to {v} because the next value was refused",
+                    c.name
+                ),
+                (None, Some(why)) => eprintln!(
+                    "{}: set to {a}; putting it back to {} failed: {why}",
+                    c.name, c.before
+                ),
+                (None, None) => println!("{}: {} -> {}", c.name, c.before, a),
+            },
             (None, Some(why)) => eprintln!("{} = {}: {why}", c.name, c.measured),
             (None, None) => println!(
                 "{}: {} -> {} (dry run: not set)",
                 c.name, c.before, c.measured
             ),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use protocol::NackReason;
+    use std::cell::RefCell;
+
+    fn changes() -> Vec<Change> {
+        [
+            (param::ODO_WHEEL_DISTANCE_MM, 53.0, 52.6),
+            (param::ODO_WHEEL_RATIO_PPM, 0.0, -3650.0),
+        ]
+        .into_iter()
+        .map(|(id, before, measured)| Change {
+            name: "x",
+            id,
+            before,
+            measured,
+            after: None,
+            refused: None,
+            restored: None,
+            restore_failed: None,
+        })
+        .collect()
+    }
+
+    /// Runs `apply` against a robot that holds parameters in `held` and refuses a value
+    /// when `refuse` says so; returns whether all were set.
+    fn run(
+        changes: &mut [Change],
+        held: &RefCell<Vec<(u16, f32)>>,
+        refuse: impl Fn(u16, f32) -> bool,
+    ) -> bool {
+        let robot = |c: Command| {
+            let Command::SetParam { id, value } = c else {
+                panic!("only SetParam is sent: {c:?}");
+            };
+            std::future::ready(if refuse(id.0, value) {
+                CommandOutcome::Nacked {
+                    reason: NackReason::OutOfRange,
+                    sends: 1,
+                }
+            } else {
+                held.borrow_mut().retain(|(i, _)| *i != id.0);
+                held.borrow_mut().push((id.0, value));
+                CommandOutcome::Acked {
+                    info: AckInfo::Param { id, value },
+                    sends: 1,
+                    rtt_ms: 3,
+                }
+            })
+        };
+        tokio::runtime::Builder::new_current_thread()
+            .build()
+            .expect("runtime")
+            .block_on(apply(changes, robot))
+    }
+
+    #[test]
+    fn both_values_are_set_when_both_are_accepted() {
+        let held = RefCell::new(vec![]);
+        let mut c = changes();
+        assert!(run(&mut c, &held, |_, _| false));
+        assert_eq!(c[0].after, Some(52.6));
+        assert_eq!(c[1].after, Some(-3650.0));
+        assert!(c
+            .iter()
+            .all(|c| c.restored.is_none() && c.refused.is_none()));
+    }
+
+    /// The second value refused: the first, already set, goes back to its value before,
+    /// so the robot's odometry is as it was, not half calibrated.
+    #[test]
+    fn a_refused_ratio_puts_the_wheel_distance_back() {
+        let held = RefCell::new(vec![]);
+        let mut c = changes();
+        let ratio = param::ODO_WHEEL_RATIO_PPM;
+        assert!(!run(&mut c, &held, |id, _| id == ratio));
+        assert!(c[1]
+            .refused
+            .as_deref()
+            .is_some_and(|r| r.contains("refused")));
+        assert_eq!(c[0].restored, Some(53.0));
+        assert_eq!(*held.borrow(), vec![(param::ODO_WHEEL_DISTANCE_MM, 53.0)]);
+    }
+
+    /// Putting back refused too: said, not hidden.
+    #[test]
+    fn a_failed_restore_is_reported() {
+        let held = RefCell::new(vec![]);
+        let mut c = changes();
+        let ratio = param::ODO_WHEEL_RATIO_PPM;
+        assert!(!run(&mut c, &held, |id, v| id == ratio || v == 53.0));
+        assert_eq!(c[0].after, Some(52.6));
+        assert_eq!(c[0].restored, None);
+        assert!(c[0].restore_failed.is_some());
     }
 }
