@@ -188,14 +188,30 @@ pub fn correlation(seed: u64, params: &Params) -> Result<ExperimentReport, Strin
 
 /// §4.5.4 dynamic: a wall cuts the circle round the pillar until sample [`REMOVE_AT`].
 pub fn dynamic(seed: u64, params: &Params) -> Result<ExperimentReport, String> {
+    dynamic_with(seed, params, true)
+}
+
+/// [`dynamic`] with the odometry's drift on or off (off, with both correlations off too, the
+/// internal position is the true one but for 1 % of each turn: the control that shows what
+/// the edge rule and the gap measure do when the frame cannot fold).
+pub fn dynamic_with(seed: u64, params: &Params, drift: bool) -> Result<ExperimentReport, String> {
     let r = one(seed, DYNAMIC_SAMPLES, params, |o| {
-        o.remove_wall_at = Some(REMOVE_AT)
+        o.remove_wall_at = Some(REMOVE_AT);
+        o.drift = drift;
     })?;
     let mut rep = report(
         "dynamic",
         seed,
         params,
-        vec![RunSummary::of("wall until 3500", &r, REMOVE_AT)],
+        vec![RunSummary::of(
+            if drift {
+                "wall until 3500"
+            } else {
+                "wall until 3500, no drift"
+            },
+            &r,
+            REMOVE_AT,
+        )],
         r.wall_s,
     );
     let before = r.checkpoints.iter().rfind(|c| c.sample < REMOVE_AT);
