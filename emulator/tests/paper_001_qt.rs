@@ -202,9 +202,11 @@ fn a_removed_wall_leaves_a_gap_that_closes_within_1500_situations() {
 /// closed within 1500 samples, seeds 1-10.
 #[test]
 fn with_the_true_position_the_wall_leaves_a_clear_gap_that_closes_within_1500() {
-    let mut p = Params::default();
-    p.eps_pos = 0.0;
-    p.eps_or = 0.0;
+    let p = Params {
+        eps_pos: 0.0,
+        eps_or: 0.0,
+        ..Params::default()
+    };
     for seed in 1..=10 {
         let e = dynamic_with(seed, &p, false).expect("experiment runs");
         assert!(
