@@ -570,6 +570,8 @@ pub enum TaskArg {
     AliceCorrelation,
     /// ALICE's QT model with a wall below the pillar removed at situation 3500 (§4.5.4).
     AliceDynamic,
+    /// ALICE's QT model, eps_o at 0.03 and 0.005 continued to 20000 situations (§4.5.1).
+    AliceEpsOContinued,
     /// ALICE's navigation (§5.3): map by exploring, then five test runs out and back with A*
     /// planning, the reinforcement-trained path execution and 5 deg/m static drift; the first
     /// run against the fifth.
@@ -820,6 +822,7 @@ impl RunArgs {
             | TaskArg::AliceEpsO
             | TaskArg::AliceCorrelation
             | TaskArg::AliceDynamic
+            | TaskArg::AliceEpsOContinued
             | TaskArg::AliceNavigation => {
                 return Err("the alice-* tasks are run by `alice::experiments`".to_string())
             }

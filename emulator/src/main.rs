@@ -295,6 +295,7 @@ fn alice_experiment(task: emulator::cli::TaskArg) -> Option<AliceRun> {
         TaskArg::AliceEpsO => Some(x::eps_o),
         TaskArg::AliceCorrelation => Some(x::correlation),
         TaskArg::AliceDynamic => Some(x::dynamic),
+        TaskArg::AliceEpsOContinued => Some(x::eps_o_continued),
         _ => None,
     }
 }
@@ -367,18 +368,19 @@ fn alice(args: &RunArgs, run: AliceRun) -> Result<(), String> {
             r.experiment, r.seed, r.wall_s
         );
         println!(
-            "variant                  cells  edges  settled  abs err m  odometry m  crossings/edge"
+            "variant                  cells  edges  settled  abs err m  odometry m  crossings/edge  |heading| deg"
         );
         for s in &r.runs {
             println!(
-                "{:<24} {:>5} {:>6} {:>8} {:>10.2} {:>11.2} {:>15.3}",
+                "{:<24} {:>5} {:>6} {:>8} {:>10.2} {:>11.2} {:>15.3} {:>14.1}",
                 s.variant,
                 s.cells,
                 s.edges,
                 s.equilibrium_at.map_or("-".to_string(), |v| v.to_string()),
                 s.late_absolute_error_m,
                 s.late_odometry_error_m,
-                s.crossings_per_edge
+                s.crossings_per_edge,
+                s.late_heading_error_deg
             );
         }
         if let Some(g) = r.gap_edges_at_removal {
@@ -387,6 +389,9 @@ fn alice(args: &RunArgs, run: AliceRun) -> Result<(), String> {
                 r.gap_closed_after
                     .map_or("never".to_string(), |v| format!("{v} samples"))
             );
+        }
+        if let Some(n) = r.gap_two_sided_at_removal {
+            println!("cells winning on both sides of the standing wall: {n}");
         }
     }
     Ok(())

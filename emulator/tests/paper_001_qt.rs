@@ -3,7 +3,9 @@
 //! written, `robot-emulator run --task alice-... --seed N`), the tolerance and the seeds.
 //! What is not reproduced is `#[ignore]`d with the reason and the numbers.
 
-use emulator::alice::experiments::{correlation, dynamic, eps_o, equilibrium, ExperimentReport};
+use emulator::alice::experiments::{
+    correlation, dynamic, dynamic_with, eps_o, eps_o_continued, equilibrium, ExperimentReport,
+};
 use emulator::alice::navigation::{navigation, NavOptions, NavReport};
 use world_model::Params;
 
@@ -56,23 +58,65 @@ fn eps_o_large_gives_few_cells_and_muddled_edges_small_gives_many_cells() {
     assert!(cross[0] > cross[1], "crossings per edge summed: {cross:?}");
 }
 
-/// Thesis §4.5.1: at eps_o = 0.005 "even the position and orientation correlation fails".
-/// NOT reproduced: late absolute position error (m) at 0.005 against 0.03, seeds 1-4:
-/// 1.13/0.78, 0.80/0.80, 1.54/1.47, 0.77/0.86 (mean 1.06 against 0.98); the tolerance, 1.5x
-/// the base's error in the mean, is not met.
+/// Thesis §4.5.1: at eps_o = 0.005 "a huge amount of cells is inserted ... Even the position
+/// and orientation correlation fails, when the test as shown in figure 6b is continued". §4.5
+/// names what a failed correlation is: "the most important, observed feature ... is the
+/// internal position of ALICE. Whenever ALICE loses its position respectively orientation
+/// correlation, the world model is obviously useless" (the §4.5.3 ablation's "total loss of
+/// consistency"). So: the internal pose against the truth, late in a continued run
+/// (`alice-eps-o-continued`: 20000 situations, samples 8000-20000): absolute position error
+/// (m) and heading error after aligning the internal track (degrees), eps_o 0.03 / 0.005,
+/// seeds 1-10: 0.85/0.86 5.3/9.6, 0.74/0.67 7.0/7.4, 2.05/1.97 7.9/10.1, 1.84/1.77 7.9/11.9,
+/// 0.82/2.01 7.1/11.6, 0.89/0.72 6.4/8.8, 0.89/1.03 7.2/10.4, 0.93/1.45 8.3/9.8, 0.52/0.64
+/// 7.2/11.4, 1.01/1.22 8.0/9.0 (means 1.05/1.23 m, 7.2/10.0 degrees). NOT reproduced: the
+/// position does not fail (seeds 1-4: 1.32 m against 1.37 m) and the heading degrades (1.4x,
+/// every seed; see the next test) without failing; the aligned error and the place spread
+/// are equal too (0.33/0.35 m, 0.18/0.17 m, samples 12500-20000), and 40000 situations
+/// change nothing (seeds 1-3, 25000-40000: position 0.97/1.05, 0.74/0.75, 1.63/2.07 m;
+/// heading 8.2/9.5, 5.6/6.7, 8.4/8.1 degrees). What we see instead of the failure: our "huge
+/// amount" is 1.75x the cells (407 against 232 at 20000, mean of 10 seeds), mostly
+/// statistical insertions, which n_insert = 60 paces by misses (seed 1: 15230 against 5880
+/// misses, 253 against 98 insertions), not spontaneous ones, which slow cells failing to
+/// follow the situations would make (157 against 125); about 13 against 17 cm between cells
+/// over the 7 m^2 a robot's centre reaches, so a cell is still near the internal position
+/// for both correlations (our reading, not a measured cause). The
+/// tolerance of the §4.5.3 ablation: 1.8x the base's error in the mean, position or heading,
+/// seeds 1-4.
 #[test]
-#[ignore = "not reproduced: eps_o = 0.005 costs cells but not the correlation (mean late error 1.06 m against 0.98 m, seeds 1-4)"]
+#[ignore = "not reproduced: at eps_o = 0.005 continued to 20000 situations the position error is 0.96x and the heading error 1.39x the base's (seeds 1-4)"]
 fn eps_o_small_makes_the_correlation_fail() {
-    let r = each(eps_o);
-    let (mut small, mut base) = (0.0, 0.0);
+    let r = each(eps_o_continued);
+    let (mut pos, mut head) = ([0.0; 2], [0.0; 2]);
     for e in &r {
-        base += e.runs[1].late_absolute_error_m;
-        small += e.runs[2].late_absolute_error_m;
+        for i in 0..2 {
+            pos[i] += e.runs[i].late_absolute_error_m;
+            head[i] += e.runs[i].late_heading_error_deg;
+        }
     }
     assert!(
-        small >= 1.5 * base,
-        "late error 0.005 {small} against base {base}"
+        pos[1] >= 1.8 * pos[0] || head[1] >= 1.8 * head[0],
+        "position {pos:?}, heading {head:?} (0.03, 0.005)"
     );
+}
+
+/// What §4.5.1's continued eps_o = 0.005 run does show here: the orientation correlation
+/// keeps the heading less well (numbers in the test above: 7.2 against 10.0 degrees over
+/// seeds 1-10, higher in every one; seeds 1-4 7.0 against 9.8). Tolerance: higher in every
+/// seed of 1-4, 1.2x in the mean.
+#[test]
+fn eps_o_small_continued_keeps_the_heading_less_well() {
+    let r = each(eps_o_continued);
+    let mut head = [0.0; 2];
+    for e in &r {
+        let h = [
+            e.runs[0].late_heading_error_deg,
+            e.runs[1].late_heading_error_deg,
+        ];
+        assert!(h[1] > h[0], "seed {}: heading {h:?}", e.seed);
+        head[0] += h[0];
+        head[1] += h[1];
+    }
+    assert!(head[1] >= 1.2 * head[0], "heading summed {head:?}");
 }
 
 /// Thesis §4.5.3: without position or without orientation correlation "none of these
@@ -102,26 +146,80 @@ fn turning_either_correlation_off_loses_consistency_under_the_drift() {
 }
 
 /// Thesis §4.5.4 dynamic: a wall cut the circle round the pillar until situation 3500 ("a
-/// clear gap"); the gap closed within about 1500 more. NOT reproduced in every seed: edges
-/// across the wall's line (cells placed where they truly win) at removal, seeds 1-4: 8, 0,
-/// 6, 0, so two seeds show no clear gap while the wall stands (our internal position is off
-/// by 0.5-0.8 m, more than the 4 cm wall's two sides need); the closing, 2 edges across,
-/// came 0, 250, 0, 750 samples after removal. Tolerance: at most 1 edge across at removal,
-/// closed within 1500.
+/// clear gap"); the gap closed within about 1500 more. Judged by truth: each cell placed
+/// where it truly wins (the true position of the situation it won, `l` samples before the
+/// win is reported), an edge is across when those places lie on either side of the wall's
+/// line. NOT reproduced in every seed. Edges across at removal, seeds 1-10: 8, 0, 6, 0, 2, 0,
+/// 0, 18, 15, 2; the closing (2 edges across) 0, 250, 0, 750, 0, 250, 500, 0, 0, 0 samples
+/// after. Why: the internal frame folded the wall's two sides onto each other, and one cell
+/// came to stand for places on both. Cells that won at least 3 times on each side of the
+/// standing wall, seeds 1-10: 10, 0, 11, 0, 0, 0, 0, 10, 9, 0. Of the 60 edges across at
+/// sample 3499 in seeds 1, 3, 5, 8, 9, 10, 40 are eq. 7's (consecutive winners), 16 a
+/// statistical insertion's (between a runner and its farthest neighbour, already joined
+/// across), 4 the spontaneous insertion's join to the cell it beat; 54 have an end that won
+/// on both sides (seed 10's two join a cell that won 1.2 m apart, left of the pillar and
+/// right of the wall). At the wins of a two-sided cell the internal positions on the two
+/// sides were 0.03-0.19 m apart (seeds 1, 3), the true ones at least 0.44 m (a 4 cm wall, a
+/// 40 cm robot). A fold follows a stretch where the internal track turned against the true
+/// one (seed 3, samples 963-980: 19 degrees and 14 % long over 1.4 m), bringing the robot on
+/// one side to the other side's cells, and the sensors do not keep the sides apart: right
+/// of the wall (y 0.3-1.0 m) the weighted light ring differs from the one straight across by
+/// 0.29-0.36 and from the most similar place on the left by 0.23-0.27, what 6-9 cm of
+/// position weigh, against d_acc 0.8. The folds need the correlations, not only the drift:
+/// with exact odometry and both correlations off every seed shows the clear gap (the next
+/// test), with exact odometry and both on 5 of 10 fold; no eps_or (0.02-0.2) or the thesis's
+/// axis fit (`or_method=axis`) removes them under the drift (4-8 of 10 seeds fold). Neither
+/// the spontaneous insertion's join (edges from
+/// the path only: 2, 0, 9, 0, 2, 8, 0, 17, 24, 4) nor the winner's 2-sample lag in the
+/// measure (fixed: seeds 1-4 unchanged) is the cause. Tolerance: at most 1 edge across at
+/// removal, closed within 1500, seeds 1-10.
 #[test]
-#[ignore = "not reproduced: the gap is not clear while the wall stands in seeds 1 and 3 (8 and 6 edges across at removal)"]
+#[ignore = "not reproduced: the internal frame folds the wall's two sides in 4 of seeds 1-10 (6-18 edges across at removal, seeds 1, 3, 8, 9)"]
 fn a_removed_wall_leaves_a_gap_that_closes_within_1500_situations() {
-    for e in each(dynamic) {
+    for seed in 1..=10 {
+        let e = dynamic(seed, &Params::default()).expect("experiment runs");
         assert!(
             e.gap_edges_at_removal.unwrap_or(99) <= 1,
-            "seed {}: {:?}",
+            "seed {}: {:?} edges across, {:?} cells on both sides",
             e.seed,
-            e.gap_edges_at_removal
+            e.gap_edges_at_removal,
+            e.gap_two_sided_at_removal
         );
         assert!(
             e.gap_closed_after.is_some_and(|a| a <= 1500),
             "seed {}: {:?}",
             e.seed,
+            e.gap_closed_after
+        );
+    }
+}
+
+/// The control for the test above: with exact odometry (but 1 % of each turn) and both
+/// correlations off, the internal position is the true one and cannot fold, and then the
+/// thesis's edge rule leaves the standing wall a clear gap that closes after its removal:
+/// edges across at removal 0 in every one of seeds 1-10, closed 250, 250, 1250, 750, 1000,
+/// 250, 1000, 250, 500, 250 samples after. With exact odometry and both correlations on,
+/// seeds 1, 3, 5, 9, 10 fold (3, 6, 1, 14, 4 cells on both sides; 3, 14, 3, 17, 4 edges
+/// across): the orientation correlation alone folds seeds 8 and 10, the position
+/// correlation alone none. Tolerance (the thesis's): at most 1 edge across at removal,
+/// closed within 1500 samples, seeds 1-10.
+#[test]
+fn with_the_true_position_the_wall_leaves_a_clear_gap_that_closes_within_1500() {
+    let p = Params {
+        eps_pos: 0.0,
+        eps_or: 0.0,
+        ..Params::default()
+    };
+    for seed in 1..=10 {
+        let e = dynamic_with(seed, &p, false).expect("experiment runs");
+        assert!(
+            e.gap_edges_at_removal.is_some_and(|g| g <= 1),
+            "seed {seed}: {:?} edges across",
+            e.gap_edges_at_removal
+        );
+        assert!(
+            e.gap_closed_after.is_some_and(|a| a <= 1500),
+            "seed {seed}: closed after {:?}",
             e.gap_closed_after
         );
     }

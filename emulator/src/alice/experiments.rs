@@ -16,6 +16,9 @@ pub const LATE_FROM: u64 = 5000;
 pub const REMOVE_AT: u64 = 3500;
 /// See [`REMOVE_AT`].
 pub const DYNAMIC_SAMPLES: u64 = 5500;
+/// §4.5.1's eps_o = 0.005 run "continued": 2.5 times the static runs (about 1 h 50 min of
+/// ALICE's time); its late part starts where the static runs end.
+pub const CONTINUED_SAMPLES: u64 = 20_000;
 
 /// One run's headline numbers.
 #[derive(Clone, Debug, Serialize)]
@@ -32,6 +35,10 @@ pub struct RunSummary {
     pub late_absolute_error_m: f64,
     /// The plain odometry's, the same way.
     pub late_odometry_error_m: f64,
+    /// Mean magnitude of the internal heading's error over the late checkpoints, degrees,
+    /// after the rigid alignment of the internal track (what the orientation correlation
+    /// keeps: the heading agreeing with the map's own frame).
+    pub late_heading_error_deg: f64,
     /// Mean place spread over the late checkpoints, metres.
     pub late_place_spread_m: f64,
     /// Edge crossings per edge at the end.
@@ -50,6 +57,7 @@ impl RunSummary {
             equilibrium_at: r.equilibrium_at,
             late_absolute_error_m: late_mean(r, late_from, |c| c.absolute_error_m),
             late_odometry_error_m: late_mean(r, late_from, |c| c.odometry_absolute_m),
+            late_heading_error_deg: late_mean(r, late_from, |c| c.heading_error_deg.abs()),
             late_place_spread_m: late_mean(r, late_from, |c| c.place_spread_m),
             crossings_per_edge: last.map_or(0.0, |c| c.crossings_per_edge),
             cells_series: r
@@ -77,6 +85,9 @@ pub struct ExperimentReport {
     pub gap_edges_at_removal: Option<usize>,
     /// Dynamic experiment: samples after the removal until at least 2 edges crossed it.
     pub gap_closed_after: Option<u64>,
+    /// Dynamic experiment: cells that won on both sides of the standing wall in the last
+    /// window before its removal (folds of the internal frame; see `Checkpoint::gap_two_sided`).
+    pub gap_two_sided_at_removal: Option<usize>,
     /// Wall-clock seconds.
     pub wall_s: f64,
 }
@@ -107,6 +118,7 @@ fn report(
         runs,
         gap_edges_at_removal: None,
         gap_closed_after: None,
+        gap_two_sided_at_removal: None,
         wall_s: wall,
     }
 }
@@ -138,6 +150,23 @@ pub fn eps_o(seed: u64, params: &Params) -> Result<ExperimentReport, String> {
     Ok(report("eps-o", seed, params, runs, wall))
 }
 
+/// §4.5.1 "even the position and orientation correlation fails, when the test ... is
+/// continued": the base eps_o and 0.005 (eps_n = eps_o / 10) over [`CONTINUED_SAMPLES`], the
+/// late part from [`STATIC_SAMPLES`] on.
+pub fn eps_o_continued(seed: u64, params: &Params) -> Result<ExperimentReport, String> {
+    let mut runs = Vec::new();
+    let mut wall = 0.0;
+    for eps in [params.eps_o, 0.005] {
+        let r = one(seed, CONTINUED_SAMPLES, params, |o| {
+            o.params.eps_o = eps;
+            o.params.eps_n = eps / 10.0;
+        })?;
+        wall += r.wall_s;
+        runs.push(RunSummary::of(&format!("eps_o={eps}"), &r, STATIC_SAMPLES));
+    }
+    Ok(report("eps-o-continued", seed, params, runs, wall))
+}
+
 /// §4.5.3: both correlations, without the position correlation, without the orientation one.
 pub fn correlation(seed: u64, params: &Params) -> Result<ExperimentReport, String> {
     let mut runs = Vec::new();
@@ -159,21 +188,35 @@ pub fn correlation(seed: u64, params: &Params) -> Result<ExperimentReport, Strin
 
 /// §4.5.4 dynamic: a wall cuts the circle round the pillar until sample [`REMOVE_AT`].
 pub fn dynamic(seed: u64, params: &Params) -> Result<ExperimentReport, String> {
+    dynamic_with(seed, params, true)
+}
+
+/// [`dynamic`] with the odometry's drift on or off (off, with both correlations off too, the
+/// internal position is the true one but for 1 % of each turn: the control that shows what
+/// the edge rule and the gap measure do when the frame cannot fold).
+pub fn dynamic_with(seed: u64, params: &Params, drift: bool) -> Result<ExperimentReport, String> {
     let r = one(seed, DYNAMIC_SAMPLES, params, |o| {
-        o.remove_wall_at = Some(REMOVE_AT)
+        o.remove_wall_at = Some(REMOVE_AT);
+        o.drift = drift;
     })?;
     let mut rep = report(
         "dynamic",
         seed,
         params,
-        vec![RunSummary::of("wall until 3500", &r, REMOVE_AT)],
+        vec![RunSummary::of(
+            if drift {
+                "wall until 3500"
+            } else {
+                "wall until 3500, no drift"
+            },
+            &r,
+            REMOVE_AT,
+        )],
         r.wall_s,
     );
-    rep.gap_edges_at_removal = r
-        .checkpoints
-        .iter()
-        .rfind(|c| c.sample < REMOVE_AT)
-        .and_then(|c| c.gap_edges);
+    let before = r.checkpoints.iter().rfind(|c| c.sample < REMOVE_AT);
+    rep.gap_edges_at_removal = before.and_then(|c| c.gap_edges);
+    rep.gap_two_sided_at_removal = before.and_then(|c| c.gap_two_sided);
     rep.gap_closed_after = r.gap_closed_after;
     Ok(rep)
 }

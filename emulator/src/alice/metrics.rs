@@ -172,9 +172,85 @@ pub fn edges_across(net: &Network, place: &HashMap<u32, (f64, f64)>, gap: Segmen
         .count()
 }
 
+/// The true positions of the last `delay + 1` samples: the model's winner at a sample is the
+/// first presentation's, of the situation taken `delay` (the model's `l`) samples earlier, so
+/// that is where the robot truly was when the cell won (17 cm back at l = 2 and 25 cm/s).
+#[derive(Clone, Debug)]
+pub struct TakenAt {
+    delay: usize,
+    taken: std::collections::VecDeque<(f64, f64)>,
+}
+
+impl TakenAt {
+    /// For a model that presents a situation first `delay` samples after it was taken.
+    pub fn new(delay: usize) -> Self {
+        TakenAt {
+            delay,
+            taken: std::collections::VecDeque::with_capacity(delay + 1),
+        }
+    }
+
+    /// Record this sample's true position; returns the true position of the situation this
+    /// sample's winner won (the oldest one kept until `delay` samples have passed).
+    pub fn push(&mut self, at: (f64, f64)) -> (f64, f64) {
+        self.taken.push_back(at);
+        while self.taken.len() > self.delay + 1 {
+            self.taken.pop_front();
+        }
+        self.taken.front().copied().unwrap_or(at)
+    }
+}
+
+/// Cells that won at least `min` times on each side of the line through `gap` (a wall's
+/// centre line), counting only wins beside the wall (the projection onto its line within its
+/// length): one cell standing for places on both sides of a wall the robot cannot cross,
+/// which only a folded internal frame makes possible.
+pub fn two_sided_cells(wins: &[(u32, (f64, f64))], gap: Segment, min: usize) -> usize {
+    let (a, b) = (gap.a, gap.b);
+    let (dx, dy) = (b.x - a.x, b.y - a.y);
+    let len2 = dx * dx + dy * dy;
+    if len2 <= 0.0 {
+        return 0;
+    }
+    let mut count: HashMap<u32, [usize; 2]> = HashMap::new();
+    for &(c, (x, y)) in wins {
+        let along = ((x - a.x) * dx + (y - a.y) * dy) / len2;
+        if !(0.0..=1.0).contains(&along) {
+            continue;
+        }
+        let side = usize::from(dx * (y - a.y) - dy * (x - a.x) > 0.0);
+        count.entry(c).or_default()[side] += 1;
+    }
+    count
+        .values()
+        .filter(|n| n[0] >= min && n[1] >= min)
+        .count()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The winner a model reports was won by the situation `l` samples old: its place is
+    /// where the robot was then (the scenario used the current position, 2 samples on).
+    #[test]
+    fn a_winner_is_placed_where_its_situation_was_taken() {
+        let mut t = TakenAt::new(2);
+        let got: Vec<_> = (0..5).map(|i| t.push((f64::from(i), 0.0)).0).collect();
+        assert_eq!(got, vec![0.0, 0.0, 0.0, 1.0, 2.0]);
+    }
+
+    #[test]
+    fn a_cell_winning_on_both_sides_of_a_wall_is_counted() {
+        let wall = Segment::new(Point::new(1.0, 0.0), Point::new(1.0, 1.0));
+        let mut wins: Vec<_> = (0..3).map(|_| (1, (0.7, 0.5))).collect();
+        wins.extend((0..3).map(|_| (2, (1.3, 0.5))));
+        assert_eq!(two_sided_cells(&wins, wall, 3), 0);
+        wins.extend((0..3).map(|_| (1, (1.3, 0.4))));
+        // Beyond the wall's end the two sides meet: not counted.
+        wins.extend((0..3).map(|_| (2, (0.7, 1.4))));
+        assert_eq!(two_sided_cells(&wins, wall, 3), 1);
+    }
 
     #[test]
     fn the_fit_undoes_a_rigid_motion() {

@@ -1,7 +1,8 @@
 //! Seed 001 (ALICE) chapters 4-5: the QT world model (`world_model`) fed by a simulated ALICE
 //! in the thesis's test scene, and the thesis's experiments as scenarios with JSON reports
-//! (`robot-emulator run --task alice-equilibrium|alice-eps-o|alice-correlation|alice-dynamic
-//! --seed N --json`), and §5.3's navigation (`--task alice-navigation`, `navigation`).
+//! (`robot-emulator run --task alice-equilibrium|alice-eps-o|alice-correlation|alice-dynamic|
+//! alice-eps-o-continued --seed N --json`), and §5.3's navigation (`--task alice-navigation`,
+//! `navigation`).
 //!
 //! Layer: std, beside `unsupervised_places`. The world is its own small kinematic model (no
 //! `Sim`: the firmware's `Robot` has no ALICE profile with 24 + 24 sensors), like the seed 003

@@ -10,13 +10,22 @@ use world_model::{Params, Pose, QtModel, Sample, Stats};
 use super::arena::{alice, gap_wall, PILLAR_CENTRE, PILLAR_RADIUS_M};
 use super::body::{Body, SPEED_M_S, SUBSTEPS, TURN_RAD_S};
 use super::explore::{decide, Move};
-use super::metrics::{crossings_per_edge, edges_across, place_spread, unreachable_fraction, Rigid};
+use super::metrics::{
+    crossings_per_edge, edges_across, place_spread, two_sided_cells, unreachable_fraction, Rigid,
+    TakenAt,
+};
 use super::sensors::Sensors;
 use crate::geometry::{Point, Segment};
 use crate::rng::SimRng;
 
-/// One sample's true, internal and odometry positions and the winner.
-type Trace = ((f64, f64), (f64, f64), (f64, f64), Option<u32>);
+/// One sample's true, internal and odometry positions, and the winner with the true position
+/// of the situation it won (taken `l` samples earlier).
+type Trace = (
+    (f64, f64),
+    (f64, f64),
+    (f64, f64),
+    Option<(u32, (f64, f64))>,
+);
 
 /// Sensor samples per second (§4.3: "3 sensor-samples per second").
 pub const SAMPLES_PER_S: f64 = 3.0;
@@ -89,7 +98,14 @@ pub struct Checkpoint {
     /// Dynamic experiment: edges whose cells truly win on either side of the gap wall's line
     /// (each cell placed at the running mean of the true positions where it won).
     pub gap_edges: Option<usize>,
+    /// Dynamic experiment: cells that won at least [`GAP_TWO_SIDED_MIN`] times on each side of
+    /// the gap wall's line while it stood, up to this sample (true positions): the folds of
+    /// the internal frame that make edges across a standing wall.
+    pub gap_two_sided: Option<usize>,
 }
+
+/// Wins on each side that make a cell two-sided (see [`Checkpoint::gap_two_sided`]).
+pub const GAP_TWO_SIDED_MIN: usize = 3;
 
 /// One run's report.
 #[derive(Clone, Debug, Serialize)]
@@ -115,10 +131,11 @@ pub struct RunReport {
     pub wall_s: f64,
 }
 
-/// Run the simulated ALICE for `o.samples` samples; `observe` sees the model after each.
+/// Run the simulated ALICE for `o.samples` samples; `observe` sees the model after each, with
+/// the robot's true position (to judge by, never fed to the model).
 pub fn run_with(
     o: &RunOptions,
-    mut observe: impl FnMut(u64, &QtModel),
+    mut observe: impl FnMut(u64, &QtModel, (f64, f64)),
 ) -> Result<RunReport, String> {
     if o.samples > MAX_SAMPLES {
         return Err(format!(
@@ -161,6 +178,8 @@ pub fn run_with(
     let mut checkpoints = Vec::new();
     let mut true_place: std::collections::HashMap<u32, (f64, f64)> =
         std::collections::HashMap::new();
+    let mut taken = TakenAt::new(o.params.l);
+    let mut gap_wins = Vec::new();
     for t in 1..=o.samples {
         if o.remove_wall_at == Some(t) {
             arena.walls.retain(|w| *w != gap);
@@ -196,20 +215,26 @@ pub fn run_with(
                 odometry,
             })
             .map_err(|e| e.to_string())?;
-        observe(t, &model);
+        observe(t, &model, (body.at.x, body.at.y));
+        let winner_at = taken.push((body.at.x, body.at.y));
+        if let (Some(w), Some(r)) = (model.winner(), o.remove_wall_at) {
+            if t < r {
+                gap_wins.push((w, winner_at));
+            }
+        }
         if let Some(w) = model.winner() {
             // Where, truly, this cell wins (a running mean that forgets): the gap metric's
             // frame, free of the internal frame's drift.
-            let e = true_place.entry(w).or_insert((body.at.x, body.at.y));
-            e.0 += 0.05 * (body.at.x - e.0);
-            e.1 += 0.05 * (body.at.y - e.1);
+            let e = true_place.entry(w).or_insert(winner_at);
+            e.0 += 0.05 * (winner_at.0 - e.0);
+            e.1 += 0.05 * (winner_at.1 - e.1);
         }
         let p = model.pose();
         hist.push_back((
             (body.at.x, body.at.y),
             (p.x, p.y),
             (odometry.x, odometry.y),
-            model.winner(),
+            model.winner().map(|w| (w, winner_at)),
         ));
         while hist.len() > o.window {
             hist.pop_front();
@@ -220,7 +245,7 @@ pub fn run_with(
             let odo: Vec<_> = hist.iter().map(|h| h.2).collect();
             let r = Rigid::fit(&internal, &truth);
             let ro = Rigid::fit(&odo, &truth);
-            let wins: Vec<_> = hist.iter().filter_map(|h| h.3.map(|w| (w, h.0))).collect();
+            let wins: Vec<_> = hist.iter().filter_map(|h| h.3).collect();
             let net = model.network();
             let (mut edges, mut conf) = (0usize, 0.0);
             for (_, _, w) in net.edges() {
@@ -250,6 +275,9 @@ pub fn run_with(
                 gap_edges: o
                     .remove_wall_at
                     .map(|_| edges_across(net, &true_place, gap_line)),
+                gap_two_sided: o
+                    .remove_wall_at
+                    .map(|_| two_sided_cells(&gap_wins, gap_line, GAP_TWO_SIDED_MIN)),
             });
         }
     }
@@ -286,7 +314,7 @@ pub fn run_with(
 
 /// [`run_with`] without an observer.
 pub fn run(o: &RunOptions) -> Result<RunReport, String> {
-    run_with(o, |_, _| {})
+    run_with(o, |_, _, _| {})
 }
 
 /// Mean of a checkpoint field over the checkpoints at or after `from` samples.
