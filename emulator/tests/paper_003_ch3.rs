@@ -205,21 +205,94 @@ fn structured_arena_gives_fewer_landmarks_and_corrections() {
 }
 
 /// Paper: in the structured arena the error passes one diameter and the robot is lost
-/// (Fig. 3-37). Ours: NOT reproduced with the compass in the odometry: the compass alone
-/// drifts by 0.16-0.39 diameters in 1200 s (0.39-1.11 in 7200 s), too slowly to outrun even the
-/// structured arena's few corrections: compass + landmarks peaks 0.16-0.44 (1200 s) and
-/// 0.25-0.70 (7200 s). The loss needs an odometry that drifts past one diameter between
-/// corrections: with the heading from the wheels the structured arena is lost on every seed
-/// (peak 6.8-38, `structured_arena_is_lost_when_the_heading_drifts`), but so is the
-/// unstructured one (2.1-25). Asserted (with --ignored): peak > 1 on at least 8 of 10.
+/// (§3.15.4, Fig. 3-37: "After a certain time, the odometry error exceeds the limit of one
+/// robot diameter due to missing landmarks. No further corrections can be proceeded because
+/// rediscovered 'good' landmarks, with an assumed distance of more than one robot diameter,
+/// are pronounced as unlikely and therefore ignored"). The thesis's mechanism is the drift
+/// outrunning few corrections; it adds that the few landmarks are less reliable (negative
+/// peaks) and that whether an arena fails "depends ... also of the sensor and odometry
+/// quality of the robot". It prints no noise figure of its simulator's odometry.
+/// Ours: NOT reproduced. Per seed (1-10, 1200 s, thesis 5 cm IR; thesis: > 1, lost):
+/// peak 0.22 0.34 0.15 0.63 0.20 0.22 0.45 0.24 0.36 0.29 diameters, never lost; matches
+/// 46 20 39 16 7 3 6 10 7 0; longest time without a match 397 944 255 539 460 857 913 573
+/// 770 1200 s (unstructured 92-252 s: the thesis's "less correction events" holds); yet the
+/// corrected error grows by at most 0.00-0.17 diameters between two matches, because the
+/// compass-heading odometry drifts about 0.15-0.45 in 1200 s (0.22-1.08 in 7200 s). Wrong
+/// identifications (kernel more than 1/2 from the landmark's true place): 1 of 154 matches
+/// (unstructured 10 of 634); landmarks made at most 0.13-0.51 off; no revisit ignored by the
+/// gate. 7200 s: peak 0.15-0.82, 21 wrong of 1,627 matches. With the thesis's reset (gain 1)
+/// 0.25-0.86 (unstructured 0.49-1.54: the reset loses the unstructured arena first). With
+/// the heading from the wheels both arenas are lost (structured 9.5-34, unstructured 20-29).
+/// The contrast needs an odometry drifting about one diameter in 250-500 s (between the
+/// arenas' longest gaps); ours drifts one in hours with the compass, in about 15 s without.
+/// Asserted (with --ignored): peak > 1 on at least 8 of 10.
 #[test]
-#[ignore = "not reproduced: with the compass heading the drift is too slow to get lost (README)"]
+#[ignore = "not reproduced: the compass-heading odometry drifts too slowly to outrun even the structured arena's few corrections (README)"]
 fn structured_arena_gets_lost() {
     let lost = reports(ArenaKind::Structured)
         .iter()
         .filter(|r| r.corrected_peak > 1.0)
         .count();
     assert!(lost >= 8, "lost in {lost} of 10");
+}
+
+/// Paper (§3.15.4): the structured arena has "almost as many classes" but of "worse
+/// quality": the right-angle corners make their class no longer significant. Ours
+/// (1200 s, all streams): classes 38-54 (median 44.5) against 43-65 (60.5); significant
+/// classes at the end 1-7 (median 2) against 3-14 (median 8.5). Asserted: structured median classes
+/// at least half the unstructured's, significant ones less than half.
+#[test]
+fn structured_arena_has_classes_but_few_significant_ones() {
+    let sum = |v: [usize; 3]| v.iter().sum::<usize>() as f64;
+    let med = |k, f: &dyn Fn(&PlacesReport) -> f64| median(reports(k).iter().map(f).collect());
+    let (cs, cu) = (
+        med(ArenaKind::Structured, &|r| sum(r.classes)),
+        med(ArenaKind::Unstructured, &|r| sum(r.classes)),
+    );
+    let (ss, su) = (
+        med(ArenaKind::Structured, &|r| sum(r.significant_classes)),
+        med(ArenaKind::Unstructured, &|r| sum(r.significant_classes)),
+    );
+    assert!(cs >= 0.5 * cu, "classes: structured {cs} vs unstructured {cu}");
+    assert!(ss < 0.5 * su, "significant: structured {ss} vs unstructured {su}");
+}
+
+/// Which of the ways to get lost the structured arena shows (`report.loss`, judged with
+/// the truth; numbers in `structured_arena_gets_lost`): fewer corrections, yes (median
+/// longest gap without a match 672 s against 170 s unstructured); wrong identifications and
+/// landmarks made at wrong poses, no (at most 5 % of matches wrong over the seeds, every
+/// landmark made within one diameter); and the error between corrections never grows to the
+/// gate, so no revisit is ignored as too far. Asserted: those four, seeds 1-10.
+#[test]
+fn structured_arena_has_long_gaps_but_no_loss_mechanism() {
+    let s = reports(ArenaKind::Structured);
+    let u = reports(ArenaKind::Unstructured);
+    let gs = median(s.iter().map(|r| r.loss.gap_max_s).collect());
+    let gu = median(u.iter().map(|r| r.loss.gap_max_s).collect());
+    assert!(gs > 2.0 * gu, "longest gap: structured {gs} s vs unstructured {gu} s");
+    let matches: u32 = s.iter().map(|r| r.loss.matches).sum();
+    let wrong: u32 = s.iter().map(|r| r.loss.wrong_matches).sum();
+    assert!(
+        f64::from(wrong) <= 0.05 * f64::from(matches),
+        "{wrong} of {matches} wrong"
+    );
+    for r in s {
+        assert!(r.loss.made_err_max < 1.0, "seed {}: {:?}", r.seed, r.loss);
+        assert!(r.loss.drift_between_max < 1.0, "seed {}: {:?}", r.seed, r.loss);
+        assert_eq!(r.revisit.revisits_too_far, 0, "seed {}", r.seed);
+    }
+}
+
+/// The thesis's simulated IR sensors reach about 5 cm (§3.2.2) and read 300 at about
+/// 2.5 cm (§3.3.1). The scenario used the real Khepera's curve (nothing beyond 3.3 cm)
+/// before. Asserted on the scenario's default curve: 300 within 2.3-2.7 cm, a wall at 4 cm
+/// well above the floor, nothing from 5 cm.
+#[test]
+fn the_scenario_ir_sensor_is_the_thesis_five_centimetre_one() {
+    let c = PlacesOptions::new(ArenaKind::Structured, 1).ir_curve;
+    assert!(c.reading(0.023) > 300 && c.reading(0.027) < 300);
+    assert!(c.reading(0.04) >= 30, "{}", c.reading(0.04));
+    assert_eq!(c.reading(0.05), 5);
 }
 
 /// The thesis's mechanism of the loss, with the heading from the wheels (compass only at
