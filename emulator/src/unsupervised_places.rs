@@ -42,7 +42,7 @@ mod loss;
 
 use std::time::Instant;
 
-pub use loss::LossDiagnosis;
+pub use loss::{LossDiagnosis, WRONG_OFFSET};
 
 use robot_firmware::odometry::{integrate, OdometryParams, Pose as FwPose};
 use robot_firmware::unsupervised::classify::{Art1, Classifier, FuzzyArt, GrowingKMeans};
