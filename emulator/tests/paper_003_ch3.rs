@@ -258,8 +258,14 @@ fn structured_arena_has_classes_but_few_significant_ones() {
         med(ArenaKind::Structured, &|r| sum(r.significant_classes)),
         med(ArenaKind::Unstructured, &|r| sum(r.significant_classes)),
     );
-    assert!(cs >= 0.5 * cu, "classes: structured {cs} vs unstructured {cu}");
-    assert!(ss < 0.5 * su, "significant: structured {ss} vs unstructured {su}");
+    assert!(
+        cs >= 0.5 * cu,
+        "classes: structured {cs} vs unstructured {cu}"
+    );
+    assert!(
+        ss < 0.5 * su,
+        "significant: structured {ss} vs unstructured {su}"
+    );
 }
 
 /// Which of the ways to get lost the structured arena shows (`report.loss`, judged with
@@ -274,7 +280,10 @@ fn structured_arena_has_long_gaps_but_no_loss_mechanism() {
     let u = reports(ArenaKind::Unstructured);
     let gs = median(s.iter().map(|r| r.loss.gap_max_s).collect());
     let gu = median(u.iter().map(|r| r.loss.gap_max_s).collect());
-    assert!(gs > 2.0 * gu, "longest gap: structured {gs} s vs unstructured {gu} s");
+    assert!(
+        gs > 2.0 * gu,
+        "longest gap: structured {gs} s vs unstructured {gu} s"
+    );
     let matches: u32 = s.iter().map(|r| r.loss.matches).sum();
     let wrong: u32 = s.iter().map(|r| r.loss.wrong_matches).sum();
     assert!(
@@ -283,7 +292,12 @@ fn structured_arena_has_long_gaps_but_no_loss_mechanism() {
     );
     for r in s {
         assert!(r.loss.made_err_max < 1.0, "seed {}: {:?}", r.seed, r.loss);
-        assert!(r.loss.drift_between_max < 1.0, "seed {}: {:?}", r.seed, r.loss);
+        assert!(
+            r.loss.drift_between_max < 1.0,
+            "seed {}: {:?}",
+            r.seed,
+            r.loss
+        );
         assert_eq!(r.revisit.revisits_too_far, 0, "seed {}", r.seed);
     }
 }

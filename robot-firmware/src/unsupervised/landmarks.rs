@@ -248,9 +248,7 @@ impl LandmarkStore {
     pub fn significant_classes(&self) -> [usize; STREAMS] {
         let mut out = [0; STREAMS];
         for (s, o) in out.iter_mut().enumerate() {
-            *o = (0..MAX_CLASSES)
-                .filter(|&c| self.significant(s, c))
-                .count();
+            *o = (0..MAX_CLASSES).filter(|&c| self.significant(s, c)).count();
         }
         out
     }
