@@ -12,7 +12,8 @@
 //! - arena: [`generate`], seeded; unstructured = jittered outer wall, irregular polygon
 //!   obstacles and walls of random reflectance; structured = square walls, axis-aligned
 //!   rectangles (right-angle corners), one reflectance. Both get the same number of lamps;
-//! - sensors: the emulator's Khepera IR and ambient-light models, a compass (white noise,
+//! - sensors: the emulator's IR model read through the thesis's 5 cm curve ([`THESIS_IR`]),
+//!   its ambient-light model, a compass (white noise,
 //!   `Noise::compass_deg`), and the new 64-pixel, 36-degree line camera ([`camera`]);
 //! - wheels: seed 003's constant per-wheel speed bias (drawn per run with sigma
 //!   `Noise::motors`, clipped to two sigma, as in `line_correct`); ground speed =

@@ -162,3 +162,54 @@ impl LossDiagnosis {
         d
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::{run, ArenaKind, MatchRecord, PlacesOptions};
+    use super::*;
+
+    fn record(t_s: f64, offset: f64, err_before: f64, err_after: f64) -> MatchRecord {
+        MatchRecord {
+            t_s,
+            landmark: 0,
+            d: 0.5,
+            correction: 0.0,
+            gain: 1.0,
+            landmark_sigma: 0.0,
+            landmark_err: 0.0,
+            offset,
+            err_before,
+            err_after,
+            from: [0.0; 2],
+            to: [0.0; 2],
+        }
+    }
+
+    /// Gaps count from the start and to the end, drift is the error's growth between one
+    /// match and the next, a match more than half a diameter off is wrong, and the robot is
+    /// lost from the first sample past one diameter.
+    #[test]
+    fn gaps_drift_wrong_matches_and_loss_from_a_known_run() {
+        let mut o = PlacesOptions::new(ArenaKind::Structured, 1);
+        o.duration_s = 100.0;
+        o.series_every_s = 10.0;
+        let mut r = run(&o);
+        r.match_log = vec![
+            record(10.0, 0.1, 0.3, 0.1),
+            record(40.0, 0.7, 0.5, 0.8),
+            record(90.0, 0.2, 1.3, 1.2),
+        ];
+        for p in &mut r.series {
+            p.corrected_err = if p.t_s >= 60.0 { 1.1 } else { 0.2 };
+        }
+        let d = LossDiagnosis::of(&r, &[]);
+        assert_eq!((d.matches, d.wrong_matches), (3, 1));
+        assert!((d.wrong_offset_max - 0.7).abs() < 1e-9);
+        assert!((d.wrong_error_change_mean - 0.3).abs() < 1e-9);
+        // Gaps 10, 30, 50, 10 s.
+        assert!((d.gap_max_s - 50.0).abs() < 1e-9 && (d.gap_mean_s - 25.0).abs() < 1e-9);
+        // Growth 0.5 - 0.1 and 1.3 - 0.8.
+        assert!((d.drift_between_max - 0.5).abs() < 1e-9, "{d:?}");
+        assert_eq!((d.lost_at_s, d.matches_after_lost), (Some(60.0), 1));
+    }
+}

@@ -369,14 +369,14 @@ fn render_matches(f: &mut Frame, view: &PlacesView, area: Rect) {
             let wrong = m.offset > WRONG_OFFSET;
             TLine::from(vec![
                 Span::raw(format!(
-                    "{:7.1} s  landmark {:>3}  D {:.2}  gain {:.2} moved {:.2}  ",
+                    "{:7.1} s  landmark {:>3}  D {:.2} gain {:.2} moved {:.2} ",
                     m.t_s, m.landmark, m.d, m.gain, m.correction
                 )),
                 Span::styled(
-                    format!("off {:.2}{}", m.offset, if wrong { " !" } else { "" }),
+                    format!("off {:.2}{}", m.offset, if wrong { "!" } else { "" }),
                     Style::default().fg(if wrong { Color::Red } else { Color::Reset }),
                 ),
-                Span::raw(format!("  err {:.2}->", m.err_before)),
+                Span::raw(format!(" err {:.2}->", m.err_before)),
                 Span::styled(
                     format!("{:.2}", m.err_after),
                     Style::default().fg(if better { Color::Green } else { Color::Red }),
@@ -465,10 +465,10 @@ mod tests {
         }
         assert!(end.contains(&format!("gain {:.2}", m.gain)), "{end}");
         // ... and the truth's verdict on the identification.
-        let mark = if m.offset > WRONG_OFFSET { " !" } else { "" };
+        let mark = if m.offset > WRONG_OFFSET { "!" } else { "" };
         assert!(
             end.contains(&format!(
-                "off {:.2}{mark}  err {:.2}->{:.2}",
+                "off {:.2}{mark} err {:.2}->{:.2}",
                 m.offset, m.err_before, m.err_after
             )),
             "{end}"
