@@ -2,7 +2,8 @@
 //! a change does (`cargo run --release -p emulator --example places_sweep -- structured 1 10`,
 //! optional 4th argument: seconds). Variants by environment: FUSION=off (the thesis's reset,
 //! gain 1), WHEEL_HEADING=1 (heading from the wheels; HEADING=stored|compass|keep at matches),
-//! MATCH_SIGMA (diameters), COMPASS_DEG, MOTORS, THRESH, LEV_SCALE, NOEXC=1.
+//! MATCH_SIGMA (diameters), COMPASS_DEG, MOTORS, THRESH, LEV_SCALE, NOEXC=1, IR=khepera (the
+//! real robot's 3.3 cm IR curve instead of the thesis's 5 cm).
 #![allow(clippy::unwrap_used)]
 
 use emulator::unsupervised_places::{run, ArenaKind, PlacesOptions};
@@ -38,6 +39,9 @@ fn main() {
         }
         if let Ok(v) = std::env::var("COMPASS_DEG") {
             o.noise.compass_deg = v.parse().unwrap();
+        }
+        if std::env::var("IR").is_ok_and(|v| v == "khepera") {
+            o.ir_curve = emulator::sensors::ir::IrCurve::KHEPERA;
         }
         if std::env::var("FUSION").is_ok_and(|v| v == "off") {
             o.fusion = None;
@@ -95,6 +99,16 @@ fn main() {
             d.matches,
             d.match_offset_mean,
             d.match_offset_over_half
+        );
+        let l = r.loss;
+        println!(
+            "         loss: peak {:.2} lost_at {:?} after {} | matches {} wrong {} (offset mean {:.2} max {:.2}, error change {:+.2}) offset mean {:.2} | gap mean {:.0} s max {:.0} s, drift between mean {:.2} max {:.2}, err before {:.2} after {:.2} | landmarks {} spacing {:.2} same-kernel {:.2} alias pairs {} made err {:.2}/{:.2} | classes {:?} significant {:?} | gate-ignored revisits {} of {}",
+            r.corrected_peak, l.lost_at_s, l.matches_after_lost, l.matches, l.wrong_matches,
+            l.wrong_offset_mean, l.wrong_offset_max, l.wrong_error_change_mean, l.offset_mean,
+            l.gap_mean_s, l.gap_max_s, l.drift_between_mean, l.drift_between_max,
+            l.err_before_mean, l.err_after_mean, l.landmarks, l.spacing_mean,
+            l.same_kernel_spacing_mean, l.alias_pairs, l.made_err_mean, l.made_err_max,
+            r.classes, r.significant_classes, d.revisits_too_far, d.revisits
         );
         peaks.push((r.corrected_peak, r.landmarks));
     }

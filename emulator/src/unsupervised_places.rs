@@ -12,7 +12,8 @@
 //! - arena: [`generate`], seeded; unstructured = jittered outer wall, irregular polygon
 //!   obstacles and walls of random reflectance; structured = square walls, axis-aligned
 //!   rectangles (right-angle corners), one reflectance. Both get the same number of lamps;
-//! - sensors: the emulator's Khepera IR and ambient-light models, a compass (white noise,
+//! - sensors: the emulator's IR model read through the thesis's 5 cm curve ([`THESIS_IR`]),
+//!   its ambient-light model, a compass (white noise,
 //!   `Noise::compass_deg`), and the new 64-pixel, 36-degree line camera ([`camera`]);
 //! - wheels: seed 003's constant per-wheel speed bias (drawn per run with sigma
 //!   `Noise::motors`, clipped to two sigma, as in `line_correct`); ground speed =
@@ -38,7 +39,11 @@
 //! whether the robot was back at a stored landmark, how far the odometry had drifted, how
 //! different the contexts were.
 
+mod loss;
+
 use std::time::Instant;
+
+pub use loss::{LossDiagnosis, WRONG_OFFSET};
 
 use robot_firmware::odometry::{integrate, OdometryParams, Pose as FwPose};
 use robot_firmware::unsupervised::classify::{Art1, Classifier, FuzzyArt, GrowingKMeans};
@@ -54,7 +59,7 @@ use serde::Serialize;
 use crate::arena::{Light, Pose};
 use crate::geometry::{point_in_polygon, polygon_edges, Point, Segment, SegmentSet, Vector};
 use crate::rng::{stream, SimRng};
-use crate::sensors::ir::IrArray;
+use crate::sensors::ir::{IrArray, IrCurve};
 use crate::sensors::light::AmbientLight;
 use crate::sensors::Noise;
 
@@ -68,6 +73,18 @@ pub const BINARY_THRESHOLD: u16 = 300;
 pub const CAMERA_PIXELS: usize = 64;
 /// See [`CAMERA_PIXELS`].
 pub const CAMERA_FOV_DEG: f64 = 36.0;
+
+/// The thesis's simulated IR sensor (§3.2.2: "about 5 cm range"; §3.3.1: 300 counts at
+/// about 2.5 cm): 1023 touching, 300 at 2.5 cm (exponent ln(295/1023) / ln(1/2) = 1.79 over
+/// the floor of 5), nothing from 5 cm on. The emulator's Khepera curve (the real robot's,
+/// seed 000: saturated below 1.7 cm, nothing from 3.3 cm) reads 300 at 2.6 cm but sees
+/// nothing beyond 3.3 cm.
+pub const THESIS_IR: IrCurve = IrCurve {
+    saturate_m: 0.0,
+    range_m: 0.05,
+    exponent: 1.79,
+    floor_counts: 5.0,
+};
 
 /// Sigma of a kernel's place about its landmark's, in diameters (the robot's assumption for
 /// [`FusionParams::match_sigma_m`]; judged with the truth, matched kernels lie 0.07-0.17
@@ -144,6 +161,9 @@ pub struct PlacesOptions {
     /// Leave a followed wall now and then to cross open space (default true); false: follow
     /// the first wall met, always on the same side.
     pub excursions: bool,
+    /// The IR sensors' reading against distance. Default [`THESIS_IR`] (the thesis's
+    /// simulator: about 5 cm); `IrCurve::KHEPERA` is the real robot's (3.3 cm).
+    pub ir_curve: IrCurve,
     /// Keep every step's class labels in the report (`class_streams`; default false: they
     /// are 3 bytes a step, for the station's view).
     pub record_labels: bool,
@@ -178,6 +198,7 @@ impl PlacesOptions {
             places: PlaceParams::default(),
             series_every_s: 2.0,
             excursions: true,
+            ir_curve: THESIS_IR,
             record_labels: false,
         }
     }
@@ -545,6 +566,10 @@ pub struct MatchRecord {
     /// How far the landmark's stored position (after what it learnt from this match, if
     /// `refine`) is from the true place where it was made, diameters (truth, report only).
     pub landmark_err: f64,
+    /// How far (truth) the kernel was from the matched landmark's true place, diameters:
+    /// more than 1/2 (the thesis's least distance between two identical landmarks, §3.15.2)
+    /// is a wrong identification (report only).
+    pub offset: f64,
     /// Error before and after the correction, diameters (truth, for the report only).
     pub err_before: f64,
     /// See `err_before`.
@@ -658,6 +683,10 @@ pub struct PlacesReport {
     pub match_stats: MatchStatsReport,
     /// Why landmarks are (not) met again, against the truth.
     pub revisit: RevisitDiagnosis,
+    /// Classes per stream that are significant at the end (could make a landmark).
+    pub significant_classes: [usize; STREAMS],
+    /// Each way the robot could get lost, measured against the truth (§3.15.4).
+    pub loss: LossDiagnosis,
     /// Collisions (stalled steps).
     pub stalls: u32,
     /// Wall-clock seconds.
@@ -695,7 +724,8 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
         noise.obstacle_gain_spread,
         &mut run_rng,
         SimRng::new(opts.seed, stream::IR),
-    );
+    )
+    .with_curve(opts.ir_curve);
     let mut light = AmbientLight::new(
         &KHEPERA,
         noise.light_counts,
@@ -752,6 +782,8 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
         corrected_peak_after_60s: 0.0,
         match_stats: MatchStatsReport::default(),
         revisit: RevisitDiagnosis::default(),
+        significant_classes: [0; STREAMS],
+        loss: LossDiagnosis::default(),
         stalls: 0,
         wall_s: 0.0,
         series: Vec::new(),
@@ -863,6 +895,10 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
                         let l = &store.landmarks()[usize::from(index)];
                         (f64::from(l.x) - t.x).hypot(f64::from(l.y) - t.y) / DIAMETER_M
                     }),
+                    offset: match (ring.front(), lm_truth.get(usize::from(index))) {
+                        (Some((kt, _)), Some(t)) => (t.x - kt.x).hypot(t.y - kt.y) / DIAMETER_M,
+                        _ => 0.0,
+                    },
                     err_before: before,
                     err_after: after,
                     from,
@@ -980,6 +1016,8 @@ pub fn run(opts: &PlacesOptions) -> PlacesReport {
     };
     report.revisit = diag.finish();
     report.landmark_truth = lm_truth.iter().map(|p| [p.x, p.y]).collect();
+    report.significant_classes = store.significant_classes();
+    report.loss = LossDiagnosis::of(&report, store.landmarks());
     report.wall_s = started.elapsed().as_secs_f64();
     report
 }

@@ -181,6 +181,13 @@ impl IrArray {
         }
     }
 
+    /// The same sensors read through `curve` instead of the profile's (a scenario whose
+    /// paper gives its own simulated sensor; the cone stays the profile's).
+    pub fn with_curve(mut self, curve: IrCurve) -> IrArray {
+        self.curve = curve;
+        self
+    }
+
     /// The curve in use.
     pub fn curve(&self) -> &IrCurve {
         &self.curve

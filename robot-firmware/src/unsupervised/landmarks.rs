@@ -242,6 +242,17 @@ impl LandmarkStore {
         &self.params
     }
 
+    /// How many classes of each stream are significant now (could make a landmark's
+    /// kernel); a class seen everywhere, such as the thesis's right-angle corner (§3.15.4),
+    /// is not.
+    pub fn significant_classes(&self) -> [usize; STREAMS] {
+        let mut out = [0; STREAMS];
+        for (s, o) in out.iter_mut().enumerate() {
+            *o = (0..MAX_CLASSES).filter(|&c| self.significant(s, c)).count();
+        }
+        out
+    }
+
     fn significant(&self, stream: usize, class: usize) -> bool {
         let s = self.stats[stream][class];
         let p = &self.params;

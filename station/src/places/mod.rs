@@ -86,6 +86,8 @@ pub fn command(args: &PlacesArgs) -> anyhow::Result<ExitCode> {
             "corrected_peak": report.corrected_peak,
             "corrected_mean": report.corrected_mean,
             "revisit": report.revisit,
+            "significant_classes": report.significant_classes,
+            "loss": report.loss,
         });
         println!(
             "{}",

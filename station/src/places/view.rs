@@ -21,7 +21,7 @@ use ratatui::widgets::canvas::{Canvas, Line, Points};
 use ratatui::widgets::{Axis, Block, Chart, Dataset, GraphType, Paragraph};
 use ratatui::Frame;
 
-use emulator::unsupervised_places::{PlacesReport, World, DIAMETER_M};
+use emulator::unsupervised_places::{PlacesReport, World, DIAMETER_M, WRONG_OFFSET};
 
 /// Colour of each class stream (ART-1, growing K-means, Fuzzy ART).
 pub const STREAM_COLOURS: [Color; 3] = [Color::Yellow, Color::Cyan, Color::Magenta];
@@ -364,11 +364,19 @@ fn render_matches(f: &mut Frame, view: &PlacesView, area: Rect) {
         .take(rows)
         .map(|m| {
             let better = m.err_after <= m.err_before;
+            // The truth's verdict on the identification itself (§3.15.2: identical landmarks
+            // closer than half a diameter cannot be told apart; farther is another place).
+            let wrong = m.offset > WRONG_OFFSET;
             TLine::from(vec![
                 Span::raw(format!(
-                    "{:7.1} s  landmark {:>3}  D {:.2}  gain {:.2} moved {:.2}  error {:.2} -> ",
-                    m.t_s, m.landmark, m.d, m.gain, m.correction, m.err_before
+                    "{:7.1} s  landmark {:>3}  D {:.2} gain {:.2} moved {:.2} ",
+                    m.t_s, m.landmark, m.d, m.gain, m.correction
                 )),
+                Span::styled(
+                    format!("off {:.2}{}", m.offset, if wrong { "!" } else { "" }),
+                    Style::default().fg(if wrong { Color::Red } else { Color::Reset }),
+                ),
+                Span::raw(format!(" err {:.2}->", m.err_before)),
                 Span::styled(
                     format!("{:.2}", m.err_after),
                     Style::default().fg(if better { Color::Green } else { Color::Red }),
@@ -376,7 +384,10 @@ fn render_matches(f: &mut Frame, view: &PlacesView, area: Rect) {
             ])
         })
         .collect();
-    let title = format!(" matches ({}; newest first) ", log.len());
+    let title = format!(
+        " matches ({}; newest first) off: from the landmark's true place, ! wrong place ",
+        log.len()
+    );
     f.render_widget(
         Paragraph::new(lines).block(Block::bordered().title(title)),
         area,
@@ -453,6 +464,15 @@ mod tests {
             assert!(end.contains(legend), "{legend}: {end}");
         }
         assert!(end.contains(&format!("gain {:.2}", m.gain)), "{end}");
+        // ... and the truth's verdict on the identification.
+        let mark = if m.offset > WRONG_OFFSET { "!" } else { "" };
+        assert!(
+            end.contains(&format!(
+                "off {:.2}{mark} err {:.2}->{:.2}",
+                m.offset, m.err_before, m.err_after
+            )),
+            "{end}"
+        );
         // The stream rows hold the labels up to the cursor, the newest last.
         let tail = v.stream_tail(10);
         let last = v.report.class_streams.last().unwrap();
