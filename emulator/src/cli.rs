@@ -531,6 +531,10 @@ pub struct RunArgs {
     /// (default 5, the thesis's "up to 5"; 0 separates its effect).
     #[arg(long = "static-drift", value_name = "DEG_PER_M")]
     pub static_drift: Option<f64>,
+    /// alice-navigation: the control, a path-execution memory that never learns (the
+    /// first-over-fifth factors without any learning).
+    #[arg(long = "no-learning")]
+    pub no_learning: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -324,6 +324,7 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
         }
         options.static_drift_deg_per_m = d;
     }
+    options.learn = !args.no_learning;
     let r = navigation(&options)?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);

@@ -66,6 +66,12 @@ pub struct NavOptions {
     pub static_map: bool,
     /// Most samples one leg may take before it counts as failed.
     pub leg_cap: u64,
+    /// What a step's geometric command is measured from (see [`StepBase`]).
+    pub step_base: StepBase,
+    /// The memory learns from the reinforcement (false: the control, the pre-learned
+    /// memory throughout, which shows what the first-over-fifth factors are without any
+    /// learning).
+    pub learn: bool,
     /// The model's parameters.
     pub params: Params,
 }
@@ -80,9 +86,24 @@ impl NavOptions {
             static_drift_deg_per_m: 5.0,
             leg_cap: 1500,
             static_map: true,
+            step_base: StepBase::Cell,
+            learn: true,
             params,
         }
     }
+}
+
+/// What a step's geometric command (before the memory's correction) is measured from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum StepBase {
+    /// From the internal pose to the sub-goal cell's position.
+    Pose,
+    /// From the winner cell's position to the sub-goal cell's: the map's own relative
+    /// motion along the edge, turned into the robot's frame by the internal heading. The
+    /// association (winner, sub-goal) then fully determines the command, so what the memory
+    /// learns for an edge applies the next time the edge is driven (§5.2: the mapping is
+    /// "triggered by the current situation and the desired (sub-) goal only").
+    Cell,
 }
 
 /// One leg (start to target, or back).
@@ -353,6 +374,18 @@ impl Robot {
         (dx.hypot(dy), super::wrap(dy.atan2(dx) - p.heading))
     }
 
+    /// The map's relative motion from cell `from` to cell `to`: (distance, bearing in the
+    /// robot's frame by the internal heading).
+    fn along(&self, from: u32, to: u32) -> (f64, f64) {
+        let net = self.model.network();
+        let (a, b) = (net.position(from), net.position(to));
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        (
+            dx.hypot(dy),
+            super::wrap(dy.atan2(dx) - self.model.pose().heading),
+        )
+    }
+
     /// The truth's judgement of the internal pose: (position error, metres; absolute heading
     /// error, radians) against the map's frame.
     fn localisation_error(&self) -> Option<(f64, f64)> {
@@ -377,7 +410,13 @@ impl Robot {
     }
 
     /// Drive to `target`'s cell: plan, execute, refine on failure.
-    fn leg(&mut self, target: u32, exec: &mut Executor, cap: u64) -> Result<Leg, String> {
+    fn leg(
+        &mut self,
+        target: u32,
+        exec: &mut Executor,
+        cap: u64,
+        base: StepBase,
+    ) -> Result<Leg, String> {
         let started = self.samples;
         let fail_per_m = self.model.params().nav_fail_per_m;
         let mut planner = Planner::default();
@@ -414,7 +453,10 @@ impl Robot {
                     planner.failed();
                     continue 'plan;
                 }
-                let (dist, bearing) = self.towards(sub);
+                let (dist, bearing) = match base {
+                    StepBase::Pose => self.towards(sub),
+                    StepBase::Cell => self.along(from, sub),
+                };
                 let before = self.cell_gap(Some(from), sub);
                 let c = exec.choose(from, sub, self.rng.uniform());
                 leg.steps += 1;
@@ -514,17 +556,26 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         .collect();
     let fit = MapFit::new(&pairs);
     // The test path's ends are open places, as the thesis's (between the obstacles, the open
-    // space): cells whose situation has no whisker touching, judged from the map alone.
+    // space): cells whose situation has no whisker touching, judged from the map alone. And
+    // places the map knows well: a leg is reached when the target cell wins, and a cell that
+    // won a handful of times in the whole exploration (the farthest open cell often is one,
+    // 3-12 wins in 6000 samples) is one the robot can stand on and still not be "at"; so the
+    // ends are taken among the open cells with at least the median of their updates.
     let p = &o.params;
-    let open: Vec<u32> = net
+    let mut open: Vec<(u32, u32)> = net
         .cells()
         .filter(|(_, c)| {
             c.s[p.lights..p.lights + p.touches]
                 .iter()
                 .all(|&t| t.abs() < OPEN_TOUCH)
         })
-        .map(|(id, _)| id)
+        .map(|(id, c)| (id, c.updates))
         .collect();
+    let mut updates: Vec<u32> = open.iter().map(|c| c.1).collect();
+    updates.sort_unstable();
+    let median = updates.get(updates.len() / 2).copied().unwrap_or(0);
+    open.retain(|c| c.1 >= median);
+    let open: Vec<u32> = open.into_iter().map(|c| c.0).collect();
     let gap = |id: u32, to: (f64, f64)| {
         let q = net.position(id);
         (q.0 - to.0).hypot(q.1 - to.1)
@@ -550,15 +601,18 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
             .map_err(|e| e.to_string())?;
     }
     let mut exec = Executor::default();
+    if !o.learn {
+        exec.rate = 0.0;
+    }
     // Get to the start of the test path first (not measured; the memory learns already, as
     // it would on any drive).
-    r.leg(home, &mut exec, o.leg_cap)?;
+    r.leg(home, &mut exec, o.leg_cap, o.step_base)?;
     let (or_before, testing_from) = (r.model.stats().or_corrections, r.samples);
     let mut runs = Vec::new();
     for _ in 0..o.runs {
         let mut legs: [Leg; 2] = Default::default();
         for (i, target) in [away, home].into_iter().enumerate() {
-            let mut leg = r.leg(target, &mut exec, o.leg_cap)?;
+            let mut leg = r.leg(target, &mut exec, o.leg_cap, o.step_base)?;
             leg.final_gap_m = r.model.network().cell(target).map(|_| r.towards(target).0);
             legs[i] = leg;
         }
