@@ -12,8 +12,10 @@
 //! winner cell and the internal pose; the truth goes into the report only.
 //!
 //! A step: turn to the sub-goal's bearing plus the memory's offset, drive its distance times
-//! the memory's scale (as the odometry measures it; a front whisker or a blocked way stops
-//! it), stand still for l + 1 samples so the model's winner is the arrival's situation. The
+//! the memory's scale, as the odometry measures it (bearing and distance of the map's edge
+//! from the winner cell to the sub-goal, `StepBase::Cell`, or from the internal pose,
+//! `StepBase::Pose`; the body blocked by a wall or the pillar stops it), then stand still
+//! for l + 1 samples so the model's winner is the arrival's situation. The
 //! step succeeded when the winner is the sub-goal (or a later cell of the plan); otherwise it
 //! failed and the plan is refined from the winner. The reinforcement is the distance from the
 //! winner's cell to the sub-goal's before and after. A reversal is a step that ended farther
@@ -666,5 +668,37 @@ fn frozen(p: &Params) -> Params {
         n_insert: u32::MAX,
         a_red: 1e-9,
         ..p.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The judge's fit recovers a known rotation and shift, and says how far the points
+    /// stray from it.
+    #[test]
+    fn the_map_fit_recovers_a_rigid_transform() {
+        let (rot, shift) = (0.3f64, (1.0, -2.0));
+        let internal = [(0.0, 0.0), (1.0, 0.0), (0.0, 2.0), (1.5, 1.5)];
+        let pairs: Vec<_> = internal
+            .iter()
+            .map(|&(x, y)| {
+                let (s, c) = rot.sin_cos();
+                ((x, y), (c * x - s * y + shift.0, s * x + c * y + shift.1))
+            })
+            .collect();
+        let fit = MapFit::new(&pairs).expect("enough points");
+        assert!((fit.rotation - rot).abs() < 1e-9, "{fit:?}");
+        assert!(fit.residual_m < 1e-9, "{fit:?}");
+        let w = fit.world((2.0, 3.0));
+        let (s, c) = rot.sin_cos();
+        assert!((w.0 - (c * 2.0 - s * 3.0 + shift.0)).abs() < 1e-9);
+        assert!((w.1 - (s * 2.0 + c * 3.0 + shift.1)).abs() < 1e-9);
+        // One point moved 1 m: the residual shows it, spread over the four.
+        let mut moved = pairs.clone();
+        moved[3].1 .0 += 1.0;
+        assert!(MapFit::new(&moved).expect("fit").residual_m > 0.2);
+        assert!(MapFit::new(&pairs[..2]).is_none());
     }
 }
