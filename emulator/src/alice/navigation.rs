@@ -214,6 +214,9 @@ struct Robot {
     fit: Option<MapFit>,
 }
 
+/// A cell's internal position and its place in the world.
+type Pair = ((f64, f64), (f64, f64));
+
 /// The rigid transform that maps internal positions onto the world (least squares over the
 /// cells' places): world = R(rotation) (internal - from) + to.
 #[derive(Clone, Copy, Debug)]
@@ -226,13 +229,12 @@ struct MapFit {
 
 impl MapFit {
     /// Fit `pairs` of (internal, world) points; None for fewer than three.
-    fn new(pairs: &[((f64, f64), (f64, f64))]) -> Option<MapFit> {
+    fn new(pairs: &[Pair]) -> Option<MapFit> {
         if pairs.len() < 3 {
             return None;
         }
         let n = pairs.len() as f64;
-        let mean =
-            |f: &dyn Fn(&((f64, f64), (f64, f64))) -> f64| pairs.iter().map(f).sum::<f64>() / n;
+        let mean = |f: &dyn Fn(&Pair) -> f64| pairs.iter().map(f).sum::<f64>() / n;
         let from = (mean(&|p| p.0 .0), mean(&|p| p.0 .1));
         let to = (mean(&|p| p.1 .0), mean(&|p| p.1 .1));
         let (mut dot, mut cross) = (0.0, 0.0);
