@@ -527,6 +527,14 @@ pub struct RunArgs {
     /// alice-*: set a QT world-model parameter (repeatable), e.g. `--qt-param eps_o=0.05`.
     #[arg(long = "qt-param", value_name = "NAME=VALUE")]
     pub qt_param: Vec<String>,
+    /// alice-navigation: §5.3's static drift during the test runs, degrees per metre
+    /// (default 5, the thesis's "up to 5"; 0 separates its effect).
+    #[arg(long = "static-drift", value_name = "DEG_PER_M")]
+    pub static_drift: Option<f64>,
+    /// alice-navigation: the control, a path-execution memory that never learns (the
+    /// first-over-fifth factors without any learning).
+    #[arg(long = "no-learning")]
+    pub no_learning: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

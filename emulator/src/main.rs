@@ -316,7 +316,17 @@ fn qt_params(args: &RunArgs) -> Result<world_model::Params, String> {
 
 fn alice_navigation(args: &RunArgs) -> Result<(), String> {
     use emulator::alice::navigation::{navigation, NavOptions};
-    let r = navigation(&NavOptions::new(args.world.seed, qt_params(args)?))?;
+    let mut options = NavOptions::new(args.world.seed, qt_params(args)?);
+    if let Some(d) = args.static_drift {
+        if !(d.is_finite() && d.abs() <= 45.0) {
+            return Err(format!(
+                "--static-drift {d}: expected degrees per metre within -45 ..= 45"
+            ));
+        }
+        options.static_drift_deg_per_m = d;
+    }
+    options.learn = !args.no_learning;
+    let r = navigation(&options)?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
         return Ok(());

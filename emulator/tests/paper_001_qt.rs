@@ -6,7 +6,7 @@
 use emulator::alice::experiments::{
     correlation, dynamic, dynamic_with, eps_o, eps_o_continued, equilibrium, ExperimentReport,
 };
-use emulator::alice::navigation::{navigation, NavOptions, NavReport};
+use emulator::alice::navigation::{navigation, NavOptions, NavReport, TestRun};
 use world_model::Params;
 
 const SEEDS: [u64; 4] = [1, 2, 3, 4];
@@ -225,48 +225,71 @@ fn with_the_true_position_the_wall_leaves_a_clear_gap_that_closes_within_1500() 
     }
 }
 
-fn navigation_runs() -> Vec<NavReport> {
+fn navigation_runs_with(learn: bool) -> Vec<NavReport> {
     SEEDS
         .iter()
-        .map(|&s| navigation(&NavOptions::new(s, Params::default())).expect("navigation runs"))
+        .map(|&s| {
+            let mut o = NavOptions::new(s, Params::default());
+            o.learn = learn;
+            navigation(&o).expect("navigation runs")
+        })
         .collect()
+}
+
+fn navigation_runs() -> Vec<NavReport> {
+    navigation_runs_with(true)
+}
+
+/// Over the seeds, run 1's total over run 5's (the factor of the pooled runs: one leg stuck
+/// at its cap decides a single seed's factor).
+fn pooled(r: &[NavReport], f: fn(&TestRun) -> f64) -> f64 {
+    let first: f64 = r.iter().map(|n| f(&n.runs[0])).sum();
+    let fifth: f64 = r.iter().map(|n| f(&n.runs[4])).sum();
+    first / fifth.max(1.0)
 }
 
 /// Thesis §5.3 (simulation, static maps, static drift up to 5 deg/m): after four test runs
 /// the time to target is 2-3x better, plan refinements 3-4x fewer, reversed manoeuvres about
-/// 5x fewer. Ours (seeds 1-4, `--task alice-navigation`: 6000 situations of exploration,
-/// the map frozen, out and back between open cells 2.2-3.2 m apart, 5 deg/m, A* with the
-/// weights moving to flooding, the reinforcement-trained memory of `world_model::execute`),
-/// first run over fifth: time 0.84, 0.92, 3.83, 1.14; refinements 0.83, 0.89, 4.50, 1.14;
-/// reversals 0.88, 1.00, 4.59, 1.09. NOT reproduced: nearly every failed step is a drive the
-/// body could not finish (failed/blocked steps over the 20 runs 1576/1482): the internal
-/// frame is only locally consistent (0.5-0.8 m absolute error, §4.5 rows), so commands aimed
-/// at a cell's internal position meet walls, and a memory that learns per edge cannot move a
-/// wall; legs that get stuck run to the 1500-sample cap and decide the factors. Tolerance:
-/// mean time factor >= 2 and mean refinement factor >= 3 over seeds 1-4.
+/// 5x fewer. Ours (`--task alice-navigation`: 6000 situations of exploration, the map frozen,
+/// out and back between well-known open cells 1.65-3.21 m apart, 5 deg/m, A* with the weights
+/// moving to flooding, the reinforcement-trained memory of `world_model::execute` commanding
+/// the map's edge from the winner cell), run 1 over run 5 per seed 1-4: time 3.37, 0.31,
+/// 2.36, 1.20; refinements 4.00, 0.27, 2.33, 1.50; reversals 5.42, 0.24, 2.85, 1.00. Pooled
+/// over seeds 1-10: time 0.91, refinements 0.88, reversals 0.89 (no improvement). The
+/// control, a memory that never learns (`--no-learning`), pooled: 1.01, 1.00, 0.95, and its
+/// per-seed means over seeds 1-4 are LARGER (4.70, 4.94, 21.83 against 1.81, 2.02, 2.38):
+/// single-seed factors are decided by which leg happens to stick at the 1500-sample cap.
+/// NOT reproduced, because the robot gets lost against the frozen map as it drives: judged
+/// from the truth after each step (seeds 1-10), the internal pose is 0.75, 1.03, 1.33, 1.22,
+/// 1.13 m off in runs 1-5 and its heading 54, 87, 99, 94, 72 degrees off (the orientation
+/// correlation, applied on 21-40 % of the samples while exploring, applies on 0-31 %, median
+/// 1.6 %, while testing);
+/// with no static drift still 0.58 -> 0.82 m and 7 -> 23 degrees. Run 5 starts worse
+/// localised than run 1, which the memory (learning per edge of the map) cannot undo; it
+/// does shorten every run against the control (all five runs of seeds 1-10: 54,248
+/// against 70,780 samples). Tolerance: pooled time factor >= 2 and refinement factor >= 3
+/// over seeds 1-4, and both above the control's.
 #[test]
-#[ignore = "not reproduced: time 0.84/0.92/3.83/1.14x, refinements 0.83/0.89/4.50/1.14x (seeds 1-4); failed steps are blocked drives, see the doc comment"]
+#[ignore = "not reproduced: pooled run 1 over run 5 time 0.91x, refinements 0.88x (seeds 1-10; control without learning 1.01x, 1.00x); the robot's localisation against the frozen map decays run by run, see the doc comment"]
 fn navigation_improves_after_four_runs() {
     let r = navigation_runs();
-    let mean = |f: fn(&NavReport) -> Option<f64>| {
-        r.iter().map(|n| f(n).expect("five runs")).sum::<f64>() / r.len() as f64
-    };
-    let (time, refine) = (mean(|n| n.time_factor), mean(|n| n.refinement_factor));
+    let c = navigation_runs_with(false);
+    let time = |t: &TestRun| t.samples as f64;
+    let refine = |t: &TestRun| t.refinements as f64;
+    let (lt, lr) = (pooled(&r, time), pooled(&r, refine));
+    let (ct, cr) = (pooled(&c, time), pooled(&c, refine));
+    assert!(lt >= 2.0 && lt > ct, "time factor {lt} (control {ct})");
     assert!(
-        time >= 2.0,
-        "time factors: {:?}",
-        r.iter().map(|n| n.time_factor).collect::<Vec<_>>()
-    );
-    assert!(
-        refine >= 3.0,
-        "refinement factors: {:?}",
-        r.iter().map(|n| n.refinement_factor).collect::<Vec<_>>()
+        lr >= 3.0 && lr > cr,
+        "refinement factor {lr} (control {cr})"
     );
 }
 
 /// What the navigator does reach: planning over the QT map and executing step by step gets
-/// the robot to the target cell in 23 of the 40 legs of seeds 1-4 (cap 1500 situations, about
-/// 8 minutes, a leg); every leg plans at least once and drives. Tolerance: at least 16 legs.
+/// the robot to the target cell in 34 of the 40 legs of seeds 1-4 (cap 1500 situations, about
+/// 8 minutes, a leg; 23 when the far end was the farthest open cell, which had won only 3-12
+/// times while exploring; 29 measuring the command from the internal pose, 28 from the cell
+/// without that choice); every leg plans at least once and drives. Tolerance: at least 30 legs.
 #[test]
 fn the_navigator_reaches_its_target_in_most_legs() {
     let r = navigation_runs();
@@ -277,7 +300,7 @@ fn the_navigator_reaches_its_target_in_most_legs() {
     assert_eq!(legs.len(), 40);
     assert!(legs.iter().all(|l| l.steps > 0), "a leg never drove");
     let reached = legs.iter().filter(|l| l.reached).count();
-    assert!(reached >= 16, "reached {reached} of 40 legs");
+    assert!(reached >= 30, "reached {reached} of 40 legs");
     for n in &r {
         assert!(n.associations > 0 && n.cells > 50, "{} cells", n.cells);
     }

@@ -12,12 +12,24 @@
 //! winner cell and the internal pose; the truth goes into the report only.
 //!
 //! A step: turn to the sub-goal's bearing plus the memory's offset, drive its distance times
-//! the memory's scale (as the odometry measures it; a front whisker or a blocked way stops
-//! it), stand still for l + 1 samples so the model's winner is the arrival's situation. The
+//! the memory's scale, as the odometry measures it (bearing and distance of the map's edge
+//! from the winner cell to the sub-goal, `StepBase::Cell`, or from the internal pose,
+//! `StepBase::Pose`; the body blocked by a wall or the pillar stops it), then stand still
+//! for l + 1 samples so the model's winner is the arrival's situation. The
 //! step succeeded when the winner is the sub-goal (or a later cell of the plan); otherwise it
 //! failed and the plan is refined from the winner. The reinforcement is the distance from the
 //! winner's cell to the sub-goal's before and after. A reversal is a step that ended farther
 //! from its sub-goal than it started.
+//!
+//! Judging the robot's self-localisation (truth only, never used by the robot): while it
+//! explores, the true positions where each cell wins are averaged into the cell's "place";
+//! the rigid transform that best maps the cells' internal positions onto their places
+//! (`MapFit`) is the map's frame in the world. After every step the report notes how far the
+//! internal pose, carried through that transform, is from the true pose (position and
+//! heading): a step aimed at a cell's internal position can only reach the cell when these
+//! are small.
+
+use std::collections::HashMap;
 
 use serde::Serialize;
 use world_model::execute::Executor;
@@ -56,6 +68,12 @@ pub struct NavOptions {
     pub static_map: bool,
     /// Most samples one leg may take before it counts as failed.
     pub leg_cap: u64,
+    /// What a step's geometric command is measured from (see [`StepBase`]).
+    pub step_base: StepBase,
+    /// The memory learns from the reinforcement (false: the control, the pre-learned
+    /// memory throughout, which shows what the first-over-fifth factors are without any
+    /// learning).
+    pub learn: bool,
     /// The model's parameters.
     pub params: Params,
 }
@@ -70,9 +88,24 @@ impl NavOptions {
             static_drift_deg_per_m: 5.0,
             leg_cap: 1500,
             static_map: true,
+            step_base: StepBase::Cell,
+            learn: true,
             params,
         }
     }
+}
+
+/// What a step's geometric command (before the memory's correction) is measured from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum StepBase {
+    /// From the internal pose to the sub-goal cell's position.
+    Pose,
+    /// From the winner cell's position to the sub-goal cell's: the map's own relative
+    /// motion along the edge, turned into the robot's frame by the internal heading. The
+    /// association (winner, sub-goal) then fully determines the command, so what the memory
+    /// learns for an edge applies the next time the edge is driven (§5.2: the mapping is
+    /// "triggered by the current situation and the desired (sub-) goal only").
+    Cell,
 }
 
 /// One leg (start to target, or back).
@@ -97,6 +130,12 @@ pub struct Leg {
     /// Internal distance from the robot to the target cell at the end, metres (None: the
     /// cell is gone).
     pub final_gap_m: Option<f64>,
+    /// Judged from the truth after each step: mean distance between the true position and
+    /// the internal one carried into the world by the map's fit, metres.
+    pub localisation_error_m: f64,
+    /// See `localisation_error_m`: mean absolute heading error against the map's frame,
+    /// degrees (90 is a heading that knows nothing).
+    pub heading_error_deg: f64,
 }
 
 /// One test run: out and back.
@@ -110,6 +149,10 @@ pub struct TestRun {
     pub refinements: u32,
     /// Both legs' reversals.
     pub reversals: u32,
+    /// Both legs' localisation error after a step (see `Leg`), mean over steps, metres.
+    pub localisation_error_m: f64,
+    /// Both legs' heading error after a step (see `Leg`), mean over steps, degrees.
+    pub heading_error_deg: f64,
 }
 
 /// The experiment's report.
@@ -127,6 +170,17 @@ pub struct NavReport {
     pub target_cell: u32,
     /// See `start_cell`.
     pub path_m: f64,
+    /// The map's frame in the world (truth, to judge): rotation, degrees, and the cells'
+    /// mean distance from their places after the fit, metres.
+    pub map_rotation_deg: f64,
+    /// See `map_rotation_deg`.
+    pub map_fit_residual_m: f64,
+    /// Orientation correlations the model applied while exploring, and during the test
+    /// runs, per sample (the correlation that would hold the heading against the static
+    /// drift).
+    pub or_corrections_exploring: f64,
+    /// See `or_corrections_exploring`.
+    pub or_corrections_testing: f64,
     /// The test runs in order.
     pub runs: Vec<TestRun>,
     /// First run over the run after four (index 4): time, refinements, reversals
@@ -153,6 +207,64 @@ struct Robot {
     /// The latest whiskers.
     touch: [bool; COUNT],
     samples: u64,
+    /// Truth, to judge only: per cell, the sum of the true positions where it won and how
+    /// often.
+    places: HashMap<u32, (f64, f64, u32)>,
+    /// Truth, to judge only: the map's frame in the world, once the exploration is done.
+    fit: Option<MapFit>,
+}
+
+/// A cell's internal position and its place in the world.
+type Pair = ((f64, f64), (f64, f64));
+
+/// The rigid transform that maps internal positions onto the world (least squares over the
+/// cells' places): world = R(rotation) (internal - from) + to.
+#[derive(Clone, Copy, Debug)]
+struct MapFit {
+    from: (f64, f64),
+    to: (f64, f64),
+    rotation: f64,
+    residual_m: f64,
+}
+
+impl MapFit {
+    /// Fit `pairs` of (internal, world) points; None for fewer than three.
+    fn new(pairs: &[Pair]) -> Option<MapFit> {
+        if pairs.len() < 3 {
+            return None;
+        }
+        let n = pairs.len() as f64;
+        let mean = |f: &dyn Fn(&Pair) -> f64| pairs.iter().map(f).sum::<f64>() / n;
+        let from = (mean(&|p| p.0 .0), mean(&|p| p.0 .1));
+        let to = (mean(&|p| p.1 .0), mean(&|p| p.1 .1));
+        let (mut dot, mut cross) = (0.0, 0.0);
+        for (a, b) in pairs {
+            let (ax, ay, bx, by) = (a.0 - from.0, a.1 - from.1, b.0 - to.0, b.1 - to.1);
+            dot += ax * bx + ay * by;
+            cross += ax * by - ay * bx;
+        }
+        let mut fit = MapFit {
+            from,
+            to,
+            rotation: cross.atan2(dot),
+            residual_m: 0.0,
+        };
+        fit.residual_m = pairs
+            .iter()
+            .map(|(a, b)| {
+                let w = fit.world(*a);
+                (w.0 - b.0).hypot(w.1 - b.1)
+            })
+            .sum::<f64>()
+            / n;
+        Some(fit)
+    }
+
+    fn world(&self, p: (f64, f64)) -> (f64, f64) {
+        let (s, c) = self.rotation.sin_cos();
+        let (x, y) = (p.0 - self.from.0, p.1 - self.from.1);
+        (c * x - s * y + self.to.0, s * x + c * y + self.to.1)
+    }
 }
 
 /// What the body does during one sample.
@@ -229,6 +341,12 @@ impl Robot {
         let mut m = Motion::Wander(0.0);
         for _ in 0..samples {
             self.sample(&mut m)?;
+            if let Some(w) = self.model.winner() {
+                let e = self.places.entry(w).or_insert((0.0, 0.0, 0));
+                e.0 += self.body.at.x;
+                e.1 += self.body.at.y;
+                e.2 += 1;
+            }
             if let Motion::Wander(turn) = &mut m {
                 if turn.abs() <= 1e-9 {
                     if let Move::Turn(a) = decide(&self.touch, &mut self.rng) {
@@ -260,6 +378,30 @@ impl Robot {
         (dx.hypot(dy), super::wrap(dy.atan2(dx) - p.heading))
     }
 
+    /// The map's relative motion from cell `from` to cell `to`: (distance, bearing in the
+    /// robot's frame by the internal heading).
+    fn along(&self, from: u32, to: u32) -> (f64, f64) {
+        let net = self.model.network();
+        let (a, b) = (net.position(from), net.position(to));
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        (
+            dx.hypot(dy),
+            super::wrap(dy.atan2(dx) - self.model.pose().heading),
+        )
+    }
+
+    /// The truth's judgement of the internal pose: (position error, metres; absolute heading
+    /// error, radians) against the map's frame.
+    fn localisation_error(&self) -> Option<(f64, f64)> {
+        let fit = self.fit?;
+        let p = self.model.pose();
+        let w = fit.world((p.x, p.y));
+        Some((
+            (w.0 - self.body.at.x).hypot(w.1 - self.body.at.y),
+            super::wrap(p.heading + fit.rotation - self.body.heading).abs(),
+        ))
+    }
+
     fn cell_gap(&self, a: Option<u32>, b: u32) -> f64 {
         let net = self.model.network();
         match a.filter(|&a| net.cell(a).is_some()) {
@@ -272,11 +414,18 @@ impl Robot {
     }
 
     /// Drive to `target`'s cell: plan, execute, refine on failure.
-    fn leg(&mut self, target: u32, exec: &mut Executor, cap: u64) -> Result<Leg, String> {
+    fn leg(
+        &mut self,
+        target: u32,
+        exec: &mut Executor,
+        cap: u64,
+        base: StepBase,
+    ) -> Result<Leg, String> {
         let started = self.samples;
         let fail_per_m = self.model.params().nav_fail_per_m;
         let mut planner = Planner::default();
         let mut leg = Leg::default();
+        let (mut judged, mut pos_err, mut head_err) = (0u32, 0.0, 0.0);
         let settle = self.model.params().l as u64 + 1;
         'plan: while self.samples - started < cap {
             if self.model.network().cell(target).is_none() {
@@ -308,7 +457,10 @@ impl Robot {
                     planner.failed();
                     continue 'plan;
                 }
-                let (dist, bearing) = self.towards(sub);
+                let (dist, bearing) = match base {
+                    StepBase::Pose => self.towards(sub),
+                    StepBase::Cell => self.along(from, sub),
+                };
                 let before = self.cell_gap(Some(from), sub);
                 let c = exec.choose(from, sub, self.rng.uniform());
                 leg.steps += 1;
@@ -326,6 +478,11 @@ impl Robot {
                 }
                 for _ in 0..settle {
                     self.sample(&mut Motion::Still)?;
+                }
+                if let Some((e, h)) = self.localisation_error() {
+                    judged += 1;
+                    pos_err += e;
+                    head_err += h.to_degrees();
                 }
                 let now = self.model.winner();
                 let after = if now == Some(sub) {
@@ -355,6 +512,10 @@ impl Robot {
         }
         leg.samples = self.samples - started;
         leg.refinements = planner.plans.saturating_sub(1);
+        if judged > 0 {
+            leg.localisation_error_m = pos_err / judged as f64;
+            leg.heading_error_deg = head_err / judged as f64;
+        }
         Ok(leg)
     }
 }
@@ -384,21 +545,41 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         arena,
         touch: [false; COUNT],
         samples: 0,
+        places: HashMap::new(),
+        fit: None,
     };
     r.explore(o.explore_samples)?;
+    let or_explored = r.model.stats().or_corrections;
     let net = r.model.network();
+    let pairs: Vec<_> = net
+        .cells()
+        .filter_map(|(id, _)| {
+            let &(x, y, n) = r.places.get(&id)?;
+            Some((net.position(id), (x / n as f64, y / n as f64)))
+        })
+        .collect();
+    let fit = MapFit::new(&pairs);
     // The test path's ends are open places, as the thesis's (between the obstacles, the open
-    // space): cells whose situation has no whisker touching, judged from the map alone.
+    // space): cells whose situation has no whisker touching, judged from the map alone. And
+    // places the map knows well: a leg is reached when the target cell wins, and a cell that
+    // won a handful of times in the whole exploration (the farthest open cell often is one,
+    // 3-12 wins in 6000 samples) is one the robot can stand on and still not be "at"; so the
+    // ends are taken among the open cells with at least the median of their updates.
     let p = &o.params;
-    let open: Vec<u32> = net
+    let mut open: Vec<(u32, u32)> = net
         .cells()
         .filter(|(_, c)| {
             c.s[p.lights..p.lights + p.touches]
                 .iter()
                 .all(|&t| t.abs() < OPEN_TOUCH)
         })
-        .map(|(id, _)| id)
+        .map(|(id, c)| (id, c.updates))
         .collect();
+    let mut updates: Vec<u32> = open.iter().map(|c| c.1).collect();
+    updates.sort_unstable();
+    let median = updates.get(updates.len() / 2).copied().unwrap_or(0);
+    open.retain(|c| c.1 >= median);
+    let open: Vec<u32> = open.into_iter().map(|c| c.0).collect();
     let gap = |id: u32, to: (f64, f64)| {
         let q = net.position(id);
         (q.0 - to.0).hypot(q.1 - to.1)
@@ -416,6 +597,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         .ok_or("the exploration made no cell in the open")?;
     let path_m = gap(away, hp);
     let (cells, edges) = (net.len(), net.edges().count());
+    r.fit = fit;
     r.body.curve = o.static_drift_deg_per_m.to_radians();
     if o.static_map {
         r.model
@@ -423,18 +605,31 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
             .map_err(|e| e.to_string())?;
     }
     let mut exec = Executor::default();
+    if !o.learn {
+        exec.rate = 0.0;
+    }
     // Get to the start of the test path first (not measured; the memory learns already, as
     // it would on any drive).
-    r.leg(home, &mut exec, o.leg_cap)?;
+    r.leg(home, &mut exec, o.leg_cap, o.step_base)?;
+    let (or_before, testing_from) = (r.model.stats().or_corrections, r.samples);
     let mut runs = Vec::new();
     for _ in 0..o.runs {
         let mut legs: [Leg; 2] = Default::default();
         for (i, target) in [away, home].into_iter().enumerate() {
-            let mut leg = r.leg(target, &mut exec, o.leg_cap)?;
+            let mut leg = r.leg(target, &mut exec, o.leg_cap, o.step_base)?;
             leg.final_gap_m = r.model.network().cell(target).map(|_| r.towards(target).0);
             legs[i] = leg;
         }
+        let steps = legs.iter().map(|l| l.steps.max(1) as f64).sum::<f64>();
+        let weighted = |f: fn(&Leg) -> f64| {
+            legs.iter()
+                .map(|l| f(l) * l.steps.max(1) as f64)
+                .sum::<f64>()
+                / steps
+        };
         runs.push(TestRun {
+            localisation_error_m: weighted(|l| l.localisation_error_m),
+            heading_error_deg: weighted(|l| l.heading_error_deg),
             samples: legs.iter().map(|l| l.samples).sum(),
             refinements: legs.iter().map(|l| l.refinements).sum(),
             reversals: legs.iter().map(|l| l.reversals).sum(),
@@ -451,6 +646,11 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         start_cell: home,
         target_cell: away,
         path_m,
+        map_rotation_deg: fit.map_or(0.0, |f| f.rotation.to_degrees()),
+        map_fit_residual_m: fit.map_or(0.0, |f| f.residual_m),
+        or_corrections_exploring: or_explored as f64 / o.explore_samples.max(1) as f64,
+        or_corrections_testing: (r.model.stats().or_corrections - or_before) as f64
+            / (r.samples - testing_from).max(1) as f64,
         time_factor: factor(&|t| t.samples as f64),
         refinement_factor: factor(&|t| t.refinements as f64),
         reversal_factor: factor(&|t| t.reversals as f64),
@@ -470,5 +670,37 @@ fn frozen(p: &Params) -> Params {
         n_insert: u32::MAX,
         a_red: 1e-9,
         ..p.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The judge's fit recovers a known rotation and shift, and says how far the points
+    /// stray from it.
+    #[test]
+    fn the_map_fit_recovers_a_rigid_transform() {
+        let (rot, shift) = (0.3f64, (1.0, -2.0));
+        let internal = [(0.0, 0.0), (1.0, 0.0), (0.0, 2.0), (1.5, 1.5)];
+        let pairs: Vec<_> = internal
+            .iter()
+            .map(|&(x, y)| {
+                let (s, c) = rot.sin_cos();
+                ((x, y), (c * x - s * y + shift.0, s * x + c * y + shift.1))
+            })
+            .collect();
+        let fit = MapFit::new(&pairs).expect("enough points");
+        assert!((fit.rotation - rot).abs() < 1e-9, "{fit:?}");
+        assert!(fit.residual_m < 1e-9, "{fit:?}");
+        let w = fit.world((2.0, 3.0));
+        let (s, c) = rot.sin_cos();
+        assert!((w.0 - (c * 2.0 - s * 3.0 + shift.0)).abs() < 1e-9);
+        assert!((w.1 - (s * 2.0 + c * 3.0 + shift.1)).abs() < 1e-9);
+        // One point moved 1 m: the residual shows it, spread over the four.
+        let mut moved = pairs.clone();
+        moved[3].1 .0 += 1.0;
+        assert!(MapFit::new(&moved).expect("fit").residual_m > 0.2);
+        assert!(MapFit::new(&pairs[..2]).is_none());
     }
 }
