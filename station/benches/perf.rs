@@ -141,8 +141,13 @@ fn ten_minutes() -> [(&'static str, Work); 3] {
         ("mcap", |bytes| {
             let rec = Recording::parse_strict(bytes).unwrap();
             let out = std::io::BufWriter::new(Cursor::new(Vec::with_capacity(64 << 20)));
-            station::export::mcap::write(&rec, out, std::path::Path::new("bench.mcap")).unwrap()
-                as usize
+            station::export::mcap::write(
+                &rec,
+                Default::default(),
+                out,
+                std::path::Path::new("bench.mcap"),
+            )
+            .unwrap() as usize
         }),
     ]
 }
@@ -257,7 +262,13 @@ fn main() {
     g.bench_function("mcap_60s_50hz", |b| {
         b.iter(|| {
             let out = Cursor::new(Vec::with_capacity(16 << 20));
-            station::export::mcap::write(&rec, out, std::path::Path::new("bench.mcap")).unwrap()
+            station::export::mcap::write(
+                &rec,
+                Default::default(),
+                out,
+                std::path::Path::new("bench.mcap"),
+            )
+            .unwrap()
         })
     });
     g.finish();

@@ -1,8 +1,7 @@
-//! A recording as MCAP, for Foxglove: JSON messages on JSON-schema channels, logged at the
-//! time they crossed the link.
+//! A recording as MCAP, for Foxglove: each message logged at the time it crossed the link.
 //!
 //! Layer: formatting over `export::walk`, writing through the `mcap` crate to any seekable
-//! writer. Channels (all `json`, each with a `jsonschema`):
+//! writer. Channels:
 //! - `/telemetry`: every telemetry frame, the fields of `csv::TelemetryRow` (SI-ish units);
 //! - `/pose`, `/truth_pose`: the believed and the true pose as `foxglove.PoseInFrame` in frame
 //!   `map`, so the 3D panel draws them;
@@ -13,6 +12,11 @@
 //! - `/qt_model`: the QT world model rebuilt from an ALICE's situations, once a second (`qt`);
 //! - `/commands`: the station's own commands (decoded from its recorded bytes), with their
 //!   sequence numbers; `/replies`: the robot's Acks and Nacks naming them.
+//!
+//! Encodings ([`Encoding`]): the topics of every frame (`/telemetry`, `/pose`, `/truth`,
+//! `/truth_pose`, `/tf`) are `protobuf` (`mcap_proto`) by default, or `json` with JSON schemas
+//! as before; the occasional topics are always `json` with a `jsonschema`. Field names are the
+//! same in both, so a Foxglove layout that plots `/telemetry.x_m` reads either.
 //!
 //! `log_time` and `publish_time` are the recording's start (wall clock, from its header) plus
 //! the record's time, in nanoseconds. Chunks are not compressed (no C dependencies). What can
@@ -29,6 +33,7 @@ use serde_json::{json, Value};
 
 use super::csv::TelemetryRow;
 use super::mcap_msg::{Body, PoseInFrame, Truth};
+use super::mcap_proto;
 use super::{walk, Direction, ExportError, Item};
 use crate::link::api::command_text;
 use crate::record::Recording;
@@ -137,9 +142,25 @@ const INTEGER_COLUMNS: &[&str] = &[
     "collisions",
 ];
 
+/// How the topics of every frame are encoded (`station export --mcap-encoding`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Encoding {
+    /// Protocol Buffers: Foxglove's well-known schemas for poses and transforms, the station's
+    /// for telemetry and truth; a quarter of JSON's bytes and far less work to write.
+    #[default]
+    Protobuf,
+    /// JSON text with JSON schemas, as exports before issue 15's binary encoding were.
+    Json,
+}
+
 /// Writes `rec` as MCAP to `w`; returns the number of messages.
-pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64, ExportError> {
-    write_robots(&rec.meta, &[("", rec)], w, path)
+pub fn write<W: Write + Seek>(
+    rec: &Recording,
+    enc: Encoding,
+    w: W,
+    path: &Path,
+) -> Result<u64, ExportError> {
+    write_robots(&rec.meta, &[("", rec)], enc, w, path)
 }
 
 /// Writes several robots' recordings (the links of one file, `meta` its header) as one MCAP
@@ -148,6 +169,7 @@ pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64,
 pub fn write_robots<W: Write + Seek>(
     meta: &crate::record::Meta,
     robots: &[(&str, &Recording)],
+    enc: Encoding,
     w: W,
     path: &Path,
 ) -> Result<u64, ExportError> {
@@ -169,6 +191,7 @@ pub fn write_robots<W: Write + Seek>(
             &mut schemas,
             prefix,
             rec,
+            enc,
             first.then_some(meta),
             path,
         )?;
@@ -191,9 +214,10 @@ pub fn topic_name(prefix: &str, topic: &str) -> String {
 /// One robot's channels and messages into `out` (and the file's metadata, when given).
 fn write_robot<W: Write + Seek>(
     out: &mut Writer<W>,
-    schemas: &mut BTreeMap<&'static str, u16>,
+    schemas: &mut BTreeMap<&'static str, (u16, bool)>,
     prefix: &str,
     rec: &Recording,
+    enc: Encoding,
     file_meta: Option<&crate::record::Meta>,
     path: &Path,
 ) -> Result<u64, ExportError> {
@@ -201,27 +225,41 @@ fn write_robot<W: Write + Seek>(
         path: path.to_path_buf(),
         message: e.to_string(),
     };
-    // Channel ids and per-channel sequence numbers, in `channels()` order.
+    // Channel ids, per-channel sequence numbers and whether the channel is protobuf, in
+    // `channels()` order. A schema `mcap_proto` has is binary unless JSON was asked for.
     let mut topics = Vec::new();
     for (topic, name, schema) in channels() {
-        let schema_id = match schemas.get(name) {
-            Some(&id) => id,
+        let (schema_id, protobuf) = match schemas.get(name) {
+            Some(&known) => known,
             None => {
-                let data = serde_json::to_vec(&schema).unwrap_or_default();
-                let id = out.add_schema(name, "jsonschema", &data).map_err(err)?;
-                schemas.insert(name, id);
-                id
+                let binary = match enc {
+                    Encoding::Protobuf => mcap_proto::descriptor_set(name),
+                    Encoding::Json => None,
+                };
+                let known = match binary {
+                    Some(set) => (out.add_schema(name, "protobuf", &set).map_err(err)?, true),
+                    None => {
+                        let data = serde_json::to_vec(&schema).unwrap_or_default();
+                        (
+                            out.add_schema(name, "jsonschema", &data).map_err(err)?,
+                            false,
+                        )
+                    }
+                };
+                schemas.insert(name, known);
+                known
             }
         };
+        let encoding = if protobuf { "protobuf" } else { "json" };
         let id = out
             .add_channel(
                 schema_id,
                 &topic_name(prefix, topic),
-                "json",
+                encoding,
                 &BTreeMap::new(),
             )
             .map_err(err)?;
-        topics.push((topic, id, 0u32));
+        topics.push((topic, id, 0u32, protobuf));
     }
     if let Some(file_meta) = file_meta {
         let meta = serde_json::to_value(file_meta).unwrap_or(Value::Null);
@@ -245,7 +283,7 @@ fn write_robot<W: Write + Seek>(
 /// Every message of `rec` on its channel (`topics`: topic, channel id, messages so far).
 fn write_messages<W: Write + Seek>(
     out: &mut Writer<W>,
-    topics: &mut [(&'static str, u16, u32)],
+    topics: &mut [(&'static str, u16, u32, bool)],
     rec: &Recording,
     path: &Path,
 ) -> Result<u64, ExportError> {
@@ -272,7 +310,8 @@ fn write_messages<W: Write + Seek>(
         let ns = base_ns.saturating_add(t_us.saturating_mul(1000));
         for (topic, body) in &mut messages {
             // Every topic is in `channels()`; a linear look-up over 14 beats a map's.
-            let Some((_, channel_id, n)) = topics.iter_mut().find(|(t, ..)| t == topic) else {
+            let Some((_, channel_id, n, protobuf)) = topics.iter_mut().find(|(t, ..)| t == topic)
+            else {
                 continue;
             };
             body.stamp(ns);
@@ -284,7 +323,7 @@ fn write_messages<W: Write + Seek>(
                 publish_time: ns,
             };
             data.clear();
-            body.write_json(&mut data);
+            body.write(*protobuf, &mut data);
             if let Err(e) = out.write_to_known_channel(&header, &data) {
                 failure = Some(err(e));
                 return;
