@@ -23,15 +23,14 @@
 //! fail: the writer (`ExportError::Mcap`).
 
 use std::collections::BTreeMap;
-use std::io::{Seek, Write};
+use std::io::Write;
 use std::path::Path;
 
-use mcap::records::MessageHeader;
-use mcap::{WriteOptions, Writer};
 use protocol::{LogLevel, Message};
 use serde_json::{json, Value};
 
 use super::csv::TelemetryRow;
+use super::mcap_file::Writer;
 use super::mcap_msg::{Body, PoseInFrame, Truth};
 use super::mcap_proto;
 use super::{walk, Direction, ExportError, Item};
@@ -154,7 +153,7 @@ pub enum Encoding {
 }
 
 /// Writes `rec` as MCAP to `w`; returns the number of messages.
-pub fn write<W: Write + Seek>(
+pub fn write<W: Write>(
     rec: &Recording,
     enc: Encoding,
     w: W,
@@ -166,22 +165,16 @@ pub fn write<W: Write + Seek>(
 /// Writes several robots' recordings (the links of one file, `meta` its header) as one MCAP
 /// file, each robot's channels under its prefix ([`topic_name`]); returns the number of
 /// messages. Robots are written one after the other: MCAP readers order by log time.
-pub fn write_robots<W: Write + Seek>(
+pub fn write_robots<W: Write>(
     meta: &crate::record::Meta,
     robots: &[(&str, &Recording)],
     enc: Encoding,
     w: W,
     path: &Path,
 ) -> Result<u64, ExportError> {
-    let err = |e: mcap::McapError| ExportError::Mcap {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
-    let opts = WriteOptions::new()
-        .compression(None)
-        .profile("")
-        .library(format!("station {}", env!("CARGO_PKG_VERSION")));
-    let mut out = Writer::with_options(w, opts).map_err(err)?;
+    let err = mcap_error(path);
+    let library = format!("station {}", env!("CARGO_PKG_VERSION"));
+    let mut out = Writer::new(w, "", &library).map_err(err)?;
     let mut schemas = BTreeMap::new();
     let mut count = 0;
     let mut first = true;
@@ -201,6 +194,14 @@ pub fn write_robots<W: Write + Seek>(
     Ok(count)
 }
 
+/// How a failure to write the file is reported.
+fn mcap_error(path: &Path) -> impl Fn(std::io::Error) -> ExportError + Copy + '_ {
+    move |e| ExportError::Mcap {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
 /// A robot's topic: `topic` itself for the only robot of a file (today's names), else under
 /// the robot's prefix (`/robot1/telemetry`, `/robot1/tf`, ...).
 pub fn topic_name(prefix: &str, topic: &str) -> String {
@@ -212,7 +213,7 @@ pub fn topic_name(prefix: &str, topic: &str) -> String {
 }
 
 /// One robot's channels and messages into `out` (and the file's metadata, when given).
-fn write_robot<W: Write + Seek>(
+fn write_robot<W: Write>(
     out: &mut Writer<W>,
     schemas: &mut BTreeMap<&'static str, (u16, bool)>,
     prefix: &str,
@@ -221,10 +222,7 @@ fn write_robot<W: Write + Seek>(
     file_meta: Option<&crate::record::Meta>,
     path: &Path,
 ) -> Result<u64, ExportError> {
-    let err = |e: mcap::McapError| ExportError::Mcap {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
+    let err = mcap_error(path);
     // Channel ids, per-channel sequence numbers and whether the channel is protobuf, in
     // `channels()` order. A schema `mcap_proto` has is binary unless JSON was asked for.
     let mut topics = Vec::new();
@@ -271,34 +269,26 @@ fn write_robot<W: Write + Seek>(
                     .collect()
             })
             .unwrap_or_default();
-        out.write_metadata(&mcap::records::Metadata {
-            name: "recording".into(),
-            metadata: meta,
-        })
-        .map_err(err)?;
+        out.metadata("recording", &meta).map_err(err)?;
     }
     write_messages(out, &mut topics, rec, path)
 }
 
 /// Every message of `rec` on its channel (`topics`: topic, channel id, messages so far).
-fn write_messages<W: Write + Seek>(
+fn write_messages<W: Write>(
     out: &mut Writer<W>,
     topics: &mut [(&'static str, u16, u32, bool)],
     rec: &Recording,
     path: &Path,
 ) -> Result<u64, ExportError> {
-    let err = |e: mcap::McapError| ExportError::Mcap {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
+    let err = mcap_error(path);
     let base_ns = rec.meta.created_unix_ms.saturating_mul(1_000_000);
     let mut count = 0u64;
     let mut failure = None;
     let mut scene = super::scene::Scene::new(rec);
     let mut qt = super::qt::QtExport::default();
-    // Reused for every item: its messages, and one message's JSON.
+    // Reused for every item: its messages.
     let mut messages = Vec::new();
-    let mut data = Vec::with_capacity(4096);
     walk(rec, |item| {
         if failure.is_some() {
             return;
@@ -316,15 +306,9 @@ fn write_messages<W: Write + Seek>(
             };
             body.stamp(ns);
             *n += 1;
-            let header = MessageHeader {
-                channel_id: *channel_id,
-                sequence: *n,
-                log_time: ns,
-                publish_time: ns,
-            };
-            data.clear();
-            body.write(*protobuf, &mut data);
-            if let Err(e) = out.write_to_known_channel(&header, &data) {
+            let protobuf = *protobuf;
+            if let Err(e) = out.message(*channel_id, *n, ns, ns, |data| body.write(protobuf, data))
+            {
                 failure = Some(err(e));
                 return;
             }
