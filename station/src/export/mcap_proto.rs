@@ -574,13 +574,13 @@ mod tests {
                 robot_time_s: 0.1,
                 x_m: 1.507,
                 y_m: -0.25,
-                heading_rad: -3.142,
+                heading_rad: -2.5,
                 collisions: 3,
             },
         );
         assert_eq!(
             hex(&out),
-            "099a9999999999b93f11e9263108ac1cf83f19000000000000d0bf21894160e5d02209c02803"
+            "099a9999999999b93f11e9263108ac1cf83f19000000000000d0bf2100000000000004c02803"
         );
 
         let row = TelemetryRow {
