@@ -1,5 +1,6 @@
 //! The bodies of MCAP messages, typed, and their JSON: what `mcap::write` writes for every
-//! topic, through one call (`Body::write_json`) into one reused buffer.
+//! topic, through one call (`Body::write`: protobuf by `mcap_proto` on a binary channel, else
+//! `Body::write_json`) into the chunk's buffer.
 //!
 //! Layer: data and JSON text, no I/O. The topics of every frame (`/telemetry`, `/pose`,
 //! `/truth`, `/truth_pose`, and `/tf` twice) are typed structs written as text directly: building
