@@ -11,12 +11,14 @@
 //!   frame into a `TestBackend`, with the state of a robot that has been driving for 60 s at
 //!   50 Hz on the built-in arena (full chart history and tracks).
 //! - `export/csv_60s_50hz`, `export/mcap_60s_50hz`: formatting into memory.
-//! - `ten_minutes/{summary,csv,mcap}`: issue 15's figures, each whole command's work on ten
+//! - `ten_minutes/{summary,csv,mcap,mcap_json}`: issue 15's figures, each whole command's work on ten
 //!   minutes at 50 Hz (about 30,000 telemetry and 30,000 truth frames) from the file's bytes:
 //!   parsing the recording (every record's CRC) and then the summary, or the export written
 //!   through a `BufWriter` as `station export` writes its file (here into memory). Target:
-//!   each at most 0.1 s. `PERF_TEN_MINUTES=summary` (or `csv`, `mcap`, `none`) runs only that
-//!   piece once, for `perf stat -e task-clock` or callgrind against `none`.
+//!   each at most 0.1 s. `mcap` is the default encoding (protobuf for the topics of every
+//!   frame), `mcap_json` the `--mcap-encoding json` one. `PERF_TEN_MINUTES=summary` (or `csv`,
+//!   `mcap`, `mcap_json`, `none`) runs only that piece once, for `perf stat -e task-clock` or
+//!   callgrind against `none`.
 //!
 //! `cargo bench -p station --bench perf` prints a one-shot summary (stderr), then runs the
 //! criterion groups with 10 samples and short measurement times (2-core machines). Without
@@ -24,7 +26,6 @@
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::hint::black_box;
-use std::io::Cursor;
 use std::time::{Duration, Instant};
 
 use criterion::{Criterion, Throughput};
@@ -34,6 +35,7 @@ use ratatui::Terminal;
 use station::action::Action;
 use station::app::arena::ArenaOverlay;
 use station::app::{App, AppOptions, View};
+use station::export::mcap::Encoding;
 use station::link::machine::{LinkMachine, MachineConfig};
 use station::record::synth::{demo, telemetry};
 use station::record::Recording;
@@ -126,7 +128,7 @@ fn time_per<T>(n: u32, mut f: impl FnMut() -> T) -> Duration {
 /// Issue 15's commands on a recording's bytes: parse, then summarise or export.
 type Work = fn(&[u8]) -> usize;
 
-fn ten_minutes() -> [(&'static str, Work); 3] {
+fn ten_minutes() -> [(&'static str, Work); 4] {
     [
         ("summary", |bytes| {
             let rec = Recording::parse_strict(bytes).unwrap();
@@ -138,13 +140,17 @@ fn ten_minutes() -> [(&'static str, Work); 3] {
             let mut out = std::io::BufWriter::new(Vec::with_capacity(16 << 20));
             station::export::csv::write(&rec, &mut out).unwrap()
         }),
-        ("mcap", |bytes| {
-            let rec = Recording::parse_strict(bytes).unwrap();
-            let out = std::io::BufWriter::new(Cursor::new(Vec::with_capacity(64 << 20)));
-            station::export::mcap::write(&rec, out, std::path::Path::new("bench.mcap")).unwrap()
-                as usize
-        }),
+        ("mcap", |bytes| mcap(bytes, Encoding::Protobuf)),
+        ("mcap_json", |bytes| mcap(bytes, Encoding::Json)),
     ]
+}
+
+/// `station export --mcap` of a recording's bytes into memory, in `enc`; the message count.
+fn mcap(bytes: &[u8], enc: Encoding) -> usize {
+    let rec = Recording::parse_strict(bytes).unwrap();
+    let out = std::io::BufWriter::new(Vec::with_capacity(64 << 20));
+    station::export::mcap::write(&rec, enc, out, std::path::Path::new("bench.mcap")).unwrap()
+        as usize
 }
 
 /// One-shot figures, printed even without `--bench`.
@@ -195,7 +201,7 @@ fn summary() {
 }
 
 fn main() {
-    // `PERF_TEN_MINUTES=summary|csv|mcap|none`: only that piece, once, after building the
+    // `PERF_TEN_MINUTES=summary|csv|mcap|mcap_json|none`: only that piece, once, after building the
     // recording, so that `perf stat` or `valgrind --tool=callgrind` can count its CPU time or
     // instructions against `none` on a machine too loaded for wall-clock timings.
     if let Ok(which) = std::env::var("PERF_TEN_MINUTES") {
@@ -256,8 +262,14 @@ fn main() {
     });
     g.bench_function("mcap_60s_50hz", |b| {
         b.iter(|| {
-            let out = Cursor::new(Vec::with_capacity(16 << 20));
-            station::export::mcap::write(&rec, out, std::path::Path::new("bench.mcap")).unwrap()
+            let out = Vec::with_capacity(16 << 20);
+            station::export::mcap::write(
+                &rec,
+                Encoding::Protobuf,
+                out,
+                std::path::Path::new("bench.mcap"),
+            )
+            .unwrap()
         })
     });
     g.finish();

@@ -13,7 +13,9 @@
 
 pub mod csv;
 pub mod mcap;
+pub mod mcap_file;
 pub mod mcap_msg;
+pub mod mcap_proto;
 pub mod qt;
 pub mod robots;
 pub mod scene;
@@ -35,12 +37,17 @@ pub struct ExportArgs {
     /// The recording to export.
     #[arg(value_name = "FILE")]
     pub file: PathBuf,
-    /// Write an MCAP file (JSON channels: /telemetry, /pose, /truth, /truth_pose, /events,
+    /// Write an MCAP file (channels: /telemetry, /pose, /truth, /truth_pose, /events,
     /// /log, /link, /commands, /replies, and for the 3D panel /tf, /map, /regions, /plan,
     /// /arena; /qt_model for an ALICE), for Foxglove; a recording of several robots puts each
     /// under its own prefix (/robot1/telemetry, ...).
     #[arg(long, value_name = "OUT")]
     pub mcap: Option<PathBuf>,
+    /// How the MCAP file's per-frame topics (/telemetry, /pose, /truth, /truth_pose, /tf) are
+    /// encoded: protobuf (Foxglove's schemas for poses and transforms; the default) or json
+    /// (the JSON of exports before, for tools that parse it). Other topics are always JSON.
+    #[arg(long, value_enum, value_name = "ENCODING", default_value_t = mcap::Encoding::Protobuf, requires = "mcap")]
+    pub mcap_encoding: mcap::Encoding,
     /// Write the telemetry as CSV, one row per frame (columns in README.md, "Recordings"); a
     /// recording of several robots writes one file each (OUT with `.robot<ID>` or `.link<K>`
     /// before its extension).
@@ -183,7 +190,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         let mut f = OutputFile::create(out, args.force)?;
         let robots: Vec<(&str, &Recording)> =
             labels.iter().map(String::as_str).zip(&links).collect();
-        let n = mcap::write_robots(&file_meta, &robots, f.writer(), out)?;
+        let n = mcap::write_robots(&file_meta, &robots, args.mcap_encoding, f.writer(), out)?;
         done.push(f);
         notes.push(format!("wrote {} ({n} messages)", out.display()));
     }

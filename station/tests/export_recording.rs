@@ -10,6 +10,11 @@ use std::process::{Command, Output};
 use station::export::csv::COLUMNS;
 use station::record::synth::demo;
 
+mod support;
+
+/// The topics of every frame, binary (protobuf) unless `--mcap-encoding json`.
+const BINARY_TOPICS: &[&str] = &["/telemetry", "/pose", "/truth", "/truth_pose", "/tf"];
+
 /// 10 s at 20 Hz: 200 telemetry frames, 200 truth frames, 40 heartbeats, one command.
 const SECONDS: u32 = 10;
 const HZ: u32 = 20;
@@ -56,10 +61,11 @@ fn mcap_export_has_every_message_on_its_channel_at_its_recorded_time() {
     let mut last_time = 0;
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
-        assert_eq!(m.channel.message_encoding, "json");
+        let binary = BINARY_TOPICS.contains(&m.channel.topic.as_str());
+        let want = if binary { "protobuf" } else { "json" };
+        assert_eq!(m.channel.message_encoding, want, "{}", m.channel.topic);
         let schema = m.channel.schema.as_ref().unwrap();
-        assert_eq!(schema.encoding, "jsonschema");
-        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        let v = support::message_json(&m);
         assert!(m.log_time >= last_time, "messages in time order");
         last_time = m.log_time;
         if m.channel.topic == "/telemetry" && first_telemetry.is_none() {
@@ -104,6 +110,223 @@ fn mcap_export_has_every_message_on_its_channel_at_its_recorded_time() {
         stats.message_count as usize,
         per_topic.values().sum::<usize>()
     );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Every message of `demo.mcap` exported from `demo(SECONDS, HZ)` with `args`, as (topic,
+/// channel encoding, schema name, log time, decoded value).
+fn exported(name: &str, args: &[&str]) -> Vec<(String, String, String, u64, serde_json::Value)> {
+    let d = dir(name);
+    std::fs::write(d.join("demo.rec"), demo(SECONDS, HZ)).unwrap();
+    let mut all = vec!["export", "demo.rec", "--mcap", "demo.mcap"];
+    all.extend_from_slice(args);
+    let o = station(&all, &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(d.join("demo.mcap")).unwrap();
+    let out = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| {
+            let m = m.unwrap();
+            let schema = m.channel.schema.as_ref().unwrap();
+            (
+                m.channel.topic.clone(),
+                m.channel.message_encoding.clone(),
+                schema.name.clone(),
+                m.log_time,
+                support::message_json(&m),
+            )
+        })
+        .collect();
+    let _ = std::fs::remove_dir_all(&d);
+    out
+}
+
+/// Issue 15: the binary topics, decoded by the schema the file carries (names, numbers and
+/// types from its FileDescriptorSet), hold the recording's values field by field: the third
+/// telemetry frame of `demo` and the truth frame after it, as pose, transform and truth.
+#[test]
+fn protobuf_messages_decode_field_by_field_to_the_recordings_values() {
+    use station::record::synth::telemetry;
+    let msgs = exported("proto-values", &[]);
+    let nth = |topic: &str, n: usize| {
+        msgs.iter()
+            .filter(|m| m.0 == topic)
+            .nth(n)
+            .unwrap_or_else(|| panic!("{topic} #{n}"))
+            .clone()
+    };
+    let tm = telemetry(2, HZ);
+    let t_us = 10_000 + 2 * 1_000_000 / u64::from(HZ);
+    let base_ns = 1_700_000_000_000 * 1_000_000;
+    let m = |v: f64| v / 1000.0;
+    let (x, y, h) = (
+        m(f64::from(tm.pose.x_mm)),
+        m(f64::from(tm.pose.y_mm)),
+        m(f64::from(tm.pose.heading_mrad)),
+    );
+    let stamp = |t_us: u64| {
+        let ns = base_ns + t_us * 1000;
+        serde_json::json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000})
+    };
+
+    let (_, enc, schema, log_time, v) = nth("/telemetry", 2);
+    assert_eq!(
+        (enc.as_str(), schema.as_str()),
+        ("protobuf", "station.Telemetry")
+    );
+    assert_eq!(log_time, base_ns + t_us * 1000);
+    assert_eq!(v["time_s"], t_us as f64 / 1e6);
+    assert_eq!(v["robot_time_s"], f64::from(tm.time_ms) / 1000.0);
+    assert_eq!(v["mode"], "Wander");
+    assert_eq!((v["x_m"].clone(), v["y_m"].clone()), (x.into(), y.into()));
+    assert_eq!(v["heading_rad"], h);
+    let ir = tm.ir.values();
+    assert_eq!(v["ir"], serde_json::json!(ir));
+    assert_eq!(v["light"], serde_json::json!([500u16; 8].to_vec()));
+    // The demo's Khepera has encoders, IR and light sensors, no compass, battery or beacon.
+    assert_eq!(v["enc_left"], 0, "a sensor the robot has is written at 0");
+    for lacks in ["compass_deg", "battery_v", "beacon_strength", "on_line"] {
+        assert!(v[lacks].is_null(), "{lacks}: {}", v[lacks]);
+    }
+    assert_eq!(v["flags"], 0);
+    assert_eq!(v["contact"], false);
+
+    let (_, enc, schema, _, v) = nth("/pose", 2);
+    assert_eq!(
+        (enc.as_str(), schema.as_str()),
+        ("protobuf", "foxglove.PoseInFrame")
+    );
+    assert_eq!(v["timestamp"], stamp(t_us));
+    assert_eq!(v["frame_id"], "map");
+    let p = &v["pose"];
+    assert_eq!(p["position"], serde_json::json!({"x": x, "y": y, "z": 0.0}));
+    let q = serde_json::json!({"x": 0.0, "y": 0.0, "z": (h / 2.0).sin(), "w": (h / 2.0).cos()});
+    assert_eq!(p["orientation"], q);
+
+    // `/tf`: map -> base_link at the telemetry frame, map -> truth at the truth frame.
+    let (_, enc, schema, _, v) = nth("/tf", 4);
+    assert_eq!(
+        (enc.as_str(), schema.as_str()),
+        ("protobuf", "foxglove.FrameTransform")
+    );
+    assert_eq!(v["timestamp"], stamp(t_us));
+    assert_eq!(
+        (v["parent_frame_id"].as_str(), v["child_frame_id"].as_str()),
+        (Some("map"), Some("base_link"))
+    );
+    assert_eq!(
+        v["translation"],
+        serde_json::json!({"x": x, "y": y, "z": 0.0})
+    );
+    assert_eq!(v["rotation"], q);
+    let (_, _, _, _, v) = nth("/tf", 5);
+    assert_eq!(v["child_frame_id"], "truth");
+    assert_eq!(v["timestamp"], stamp(t_us + 200));
+    assert_eq!(v["translation"]["x"], m(f64::from(tm.pose.x_mm + 7)));
+
+    let (_, enc, schema, _, v) = nth("/truth", 2);
+    assert_eq!(
+        (enc.as_str(), schema.as_str()),
+        ("protobuf", "station.Truth")
+    );
+    let want = serde_json::json!({"robot_time_s": f64::from(tm.time_ms) / 1000.0,
+        "x_m": m(f64::from(tm.pose.x_mm + 7)), "y_m": y, "heading_rad": h, "collisions": 0});
+    assert_eq!(v, want);
+    let (_, _, schema, _, v) = nth("/truth_pose", 2);
+    assert_eq!(schema, "foxglove.PoseInFrame");
+    assert_eq!(v["pose"]["position"]["x"], m(f64::from(tm.pose.x_mm + 7)));
+    assert_eq!(v["timestamp"], stamp(t_us + 200));
+}
+
+/// The file is whole MCAP by the `mcap` crate's strictest reading (every CRC, the summary,
+/// the chunk and message indexes), in both encodings, over a minute at 50 Hz (several chunks).
+#[test]
+fn the_exported_file_passes_every_check_of_the_mcap_reader() {
+    let d = dir("container");
+    std::fs::write(d.join("demo.rec"), demo(60, 50)).unwrap();
+    for enc in ["protobuf", "json"] {
+        let o = station(
+            &[
+                "export",
+                "demo.rec",
+                "--mcap",
+                "demo.mcap",
+                "--force",
+                "--mcap-encoding",
+                enc,
+            ],
+            &d,
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let bytes = std::fs::read(d.join("demo.mcap")).unwrap();
+        let chunks = support::check_container(&bytes);
+        assert!(chunks >= 2, "{enc}: {chunks} chunks");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Whether two decoded messages are equal, numbers to within serde_json's parsing of a
+/// double's shortest text (its default parser may be a unit in the last place off).
+fn same(a: &serde_json::Value, b: &serde_json::Value) -> bool {
+    use serde_json::Value::{Array, Number, Object};
+    match (a, b) {
+        (Number(x), Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            x == y || (x - y).abs() <= 2.0 * f64::EPSILON * x.abs().max(y.abs())
+        }
+        (Array(x), Array(y)) => x.len() == y.len() && x.iter().zip(y).all(|(x, y)| same(x, y)),
+        (Object(x), Object(y)) => {
+            x.len() == y.len() && x.iter().all(|(k, v)| y.get(k).is_some_and(|w| same(v, w)))
+        }
+        _ => a == b,
+    }
+}
+
+/// `--mcap-encoding json` writes every channel as JSON with JSON schemas (exports before issue
+/// 15's binary encoding, for layouts and tools keyed on them), message for message the same
+/// values as the protobuf export; a sensor the robot lacks is null there.
+#[test]
+fn json_encoding_writes_the_same_messages_as_json() {
+    let proto = exported("enc-proto", &[]);
+    let json = exported("enc-json", &["--mcap-encoding", "json"]);
+    assert_eq!(proto.len(), json.len());
+    for (p, j) in proto.iter().zip(&json) {
+        assert_eq!(j.1, "json", "{}", j.0);
+        assert_eq!((&p.0, &p.2, p.3), (&j.0, &j.2, j.3));
+        assert!(same(&p.4, &j.4), "{} at {}: {} != {}", p.0, p.3, p.4, j.4);
+    }
+    let d = dir("enc-schema");
+    std::fs::write(d.join("demo.rec"), demo(1, HZ)).unwrap();
+    let o = station(
+        &[
+            "export",
+            "demo.rec",
+            "--mcap",
+            "demo.mcap",
+            "--mcap-encoding",
+            "json",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(d.join("demo.mcap")).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let tele = summary
+        .channels
+        .values()
+        .find(|c| c.topic == "/telemetry")
+        .unwrap();
+    let schema = tele.schema.as_ref().unwrap();
+    assert_eq!(schema.encoding, "jsonschema");
+    let sch: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
+    let props = &sch["properties"];
+    assert_eq!(props["flags"]["type"], "integer");
+    assert_eq!(props["cycle_overruns"]["type"], "integer");
+    assert_eq!(
+        props["enc_left"]["type"],
+        serde_json::json!(["integer", "null"])
+    );
+    assert_eq!(props["x_m"]["type"], "number");
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -271,11 +494,16 @@ fn mcap_export_carries_the_scene_for_the_3d_panel() {
     let mut first: BTreeMap<String, (String, serde_json::Value, serde_json::Value)> =
         BTreeMap::new();
     let mut count: BTreeMap<String, usize> = BTreeMap::new();
+    let mut telemetry_schema = None;
     for msg in mcap::MessageStream::new(&bytes).unwrap() {
         let msg = msg.unwrap();
         let schema = msg.channel.schema.as_ref().unwrap();
-        let v: serde_json::Value = serde_json::from_slice(&msg.data).unwrap();
-        let sch: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
+        let v = support::message_json(&msg);
+        // A JSON schema as JSON; a protobuf one is read below, by its fields.
+        let sch = serde_json::from_slice(&schema.data).unwrap_or(serde_json::Value::Null);
+        if msg.channel.topic == "/telemetry" {
+            telemetry_schema = Some(support::descriptor_set(&schema.data));
+        }
         *count.entry(msg.channel.topic.clone()).or_default() += 1;
         first
             .entry(msg.channel.topic.clone())
@@ -342,19 +570,29 @@ fn mcap_export_carries_the_scene_for_the_3d_panel() {
         "the walls"
     );
 
-    let (_, tele, sch) = &first["/telemetry"];
-    for absent in ["enc_left", "light", "battery_v", "on_line"] {
+    // The sensors the micro-rato lacks carry no value (protobuf leaves them out; a reading
+    // list is then empty), the ones it has do, even at 0; counters are integers.
+    let (_, tele, _) = &first["/telemetry"];
+    for absent in ["enc_left", "battery_v", "on_line"] {
         assert!(tele[absent].is_null(), "{absent}: {}", tele[absent]);
     }
-    assert!(tele["compass_deg"].is_number() && tele["ir"].is_array());
-    let props = &sch["properties"];
-    assert_eq!(props["flags"]["type"], "integer");
-    assert_eq!(props["cycle_overruns"]["type"], "integer");
-    assert_eq!(
-        props["enc_left"]["type"],
-        serde_json::json!(["integer", "null"])
-    );
-    assert_eq!(props["x_m"]["type"], "number");
+    assert_eq!(tele["light"], serde_json::json!([]));
+    assert!(tele["compass_deg"].is_number() && tele["on_goal"].is_boolean());
+    assert_eq!(tele["ir"].as_array().unwrap().len(), 8);
+    let schema = telemetry_schema.unwrap();
+    let field = |name: &str| {
+        schema["station.Telemetry"]
+            .iter()
+            .find(|f| f.name == name)
+            .unwrap()
+            .clone()
+    };
+    // descriptor.proto's types: 13 uint32, 1 double.
+    assert_eq!(field("flags").ty, 13);
+    assert_eq!(field("cycle_overruns").ty, 13);
+    assert!(field("enc_left").proto3_optional && field("enc_left").ty == 13);
+    assert!(!field("flags").proto3_optional);
+    assert_eq!(field("x_m").ty, 1);
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -384,6 +622,8 @@ fn a_recording_of_two_robots_exports_per_robot_topics_and_csv_files() {
         ["two.mcap", "two.rec", "two.robot1.csv", "two.robot2.csv"]
     );
     let bytes = std::fs::read(d.join("two.mcap")).unwrap();
+    // The second robot's channels are added after the first robot's messages.
+    support::check_container(&bytes);
     let mut per_topic: BTreeMap<String, usize> = BTreeMap::new();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         *per_topic

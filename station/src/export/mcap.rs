@@ -1,8 +1,7 @@
-//! A recording as MCAP, for Foxglove: JSON messages on JSON-schema channels, logged at the
-//! time they crossed the link.
+//! A recording as MCAP, for Foxglove: each message logged at the time it crossed the link.
 //!
 //! Layer: formatting over `export::walk`, writing through the `mcap` crate to any seekable
-//! writer. Channels (all `json`, each with a `jsonschema`):
+//! writer. Channels:
 //! - `/telemetry`: every telemetry frame, the fields of `csv::TelemetryRow` (SI-ish units);
 //! - `/pose`, `/truth_pose`: the believed and the true pose as `foxglove.PoseInFrame` in frame
 //!   `map`, so the 3D panel draws them;
@@ -14,21 +13,26 @@
 //! - `/commands`: the station's own commands (decoded from its recorded bytes), with their
 //!   sequence numbers; `/replies`: the robot's Acks and Nacks naming them.
 //!
+//! Encodings ([`Encoding`]): the topics of every frame (`/telemetry`, `/pose`, `/truth`,
+//! `/truth_pose`, `/tf`) are `protobuf` (`mcap_proto`) by default, or `json` with JSON schemas
+//! as before; the occasional topics are always `json` with a `jsonschema`. Field names are the
+//! same in both, so a Foxglove layout that plots `/telemetry.x_m` reads either.
+//!
 //! `log_time` and `publish_time` are the recording's start (wall clock, from its header) plus
 //! the record's time, in nanoseconds. Chunks are not compressed (no C dependencies). What can
 //! fail: the writer (`ExportError::Mcap`).
 
 use std::collections::BTreeMap;
-use std::io::{Seek, Write};
+use std::io::Write;
 use std::path::Path;
 
-use mcap::records::MessageHeader;
-use mcap::{WriteOptions, Writer};
 use protocol::{LogLevel, Message};
 use serde_json::{json, Value};
 
 use super::csv::TelemetryRow;
+use super::mcap_file::Writer;
 use super::mcap_msg::{Body, PoseInFrame, Truth};
+use super::mcap_proto;
 use super::{walk, Direction, ExportError, Item};
 use crate::link::api::command_text;
 use crate::record::Recording;
@@ -137,29 +141,40 @@ const INTEGER_COLUMNS: &[&str] = &[
     "collisions",
 ];
 
+/// How the topics of every frame are encoded (`station export --mcap-encoding`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Encoding {
+    /// Protocol Buffers: Foxglove's well-known schemas for poses and transforms, the station's
+    /// for telemetry and truth; a quarter of JSON's bytes and far less work to write.
+    #[default]
+    Protobuf,
+    /// JSON text with JSON schemas, as exports before issue 15's binary encoding were.
+    Json,
+}
+
 /// Writes `rec` as MCAP to `w`; returns the number of messages.
-pub fn write<W: Write + Seek>(rec: &Recording, w: W, path: &Path) -> Result<u64, ExportError> {
-    write_robots(&rec.meta, &[("", rec)], w, path)
+pub fn write<W: Write>(
+    rec: &Recording,
+    enc: Encoding,
+    w: W,
+    path: &Path,
+) -> Result<u64, ExportError> {
+    write_robots(&rec.meta, &[("", rec)], enc, w, path)
 }
 
 /// Writes several robots' recordings (the links of one file, `meta` its header) as one MCAP
 /// file, each robot's channels under its prefix ([`topic_name`]); returns the number of
 /// messages. Robots are written one after the other: MCAP readers order by log time.
-pub fn write_robots<W: Write + Seek>(
+pub fn write_robots<W: Write>(
     meta: &crate::record::Meta,
     robots: &[(&str, &Recording)],
+    enc: Encoding,
     w: W,
     path: &Path,
 ) -> Result<u64, ExportError> {
-    let err = |e: mcap::McapError| ExportError::Mcap {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
-    let opts = WriteOptions::new()
-        .compression(None)
-        .profile("")
-        .library(format!("station {}", env!("CARGO_PKG_VERSION")));
-    let mut out = Writer::with_options(w, opts).map_err(err)?;
+    let err = mcap_error(path);
+    let library = format!("station {}", env!("CARGO_PKG_VERSION"));
+    let mut out = Writer::new(w, "", &library).map_err(err)?;
     let mut schemas = BTreeMap::new();
     let mut count = 0;
     let mut first = true;
@@ -169,6 +184,7 @@ pub fn write_robots<W: Write + Seek>(
             &mut schemas,
             prefix,
             rec,
+            enc,
             first.then_some(meta),
             path,
         )?;
@@ -176,6 +192,14 @@ pub fn write_robots<W: Write + Seek>(
     }
     out.finish().map_err(err)?;
     Ok(count)
+}
+
+/// How a failure to write the file is reported.
+fn mcap_error(path: &Path) -> impl Fn(std::io::Error) -> ExportError + Copy + '_ {
+    move |e| ExportError::Mcap {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
 }
 
 /// A robot's topic: `topic` itself for the only robot of a file (today's names), else under
@@ -189,39 +213,51 @@ pub fn topic_name(prefix: &str, topic: &str) -> String {
 }
 
 /// One robot's channels and messages into `out` (and the file's metadata, when given).
-fn write_robot<W: Write + Seek>(
+fn write_robot<W: Write>(
     out: &mut Writer<W>,
-    schemas: &mut BTreeMap<&'static str, u16>,
+    schemas: &mut BTreeMap<&'static str, (u16, bool)>,
     prefix: &str,
     rec: &Recording,
+    enc: Encoding,
     file_meta: Option<&crate::record::Meta>,
     path: &Path,
 ) -> Result<u64, ExportError> {
-    let err = |e: mcap::McapError| ExportError::Mcap {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
-    // Channel ids and per-channel sequence numbers, in `channels()` order.
+    let err = mcap_error(path);
+    // Channel ids, per-channel sequence numbers and whether the channel is protobuf, in
+    // `channels()` order. A schema `mcap_proto` has is binary unless JSON was asked for.
     let mut topics = Vec::new();
     for (topic, name, schema) in channels() {
-        let schema_id = match schemas.get(name) {
-            Some(&id) => id,
+        let (schema_id, protobuf) = match schemas.get(name) {
+            Some(&known) => known,
             None => {
-                let data = serde_json::to_vec(&schema).unwrap_or_default();
-                let id = out.add_schema(name, "jsonschema", &data).map_err(err)?;
-                schemas.insert(name, id);
-                id
+                let binary = match enc {
+                    Encoding::Protobuf => mcap_proto::descriptor_set(name),
+                    Encoding::Json => None,
+                };
+                let known = match binary {
+                    Some(set) => (out.add_schema(name, "protobuf", &set).map_err(err)?, true),
+                    None => {
+                        let data = serde_json::to_vec(&schema).unwrap_or_default();
+                        (
+                            out.add_schema(name, "jsonschema", &data).map_err(err)?,
+                            false,
+                        )
+                    }
+                };
+                schemas.insert(name, known);
+                known
             }
         };
+        let encoding = if protobuf { "protobuf" } else { "json" };
         let id = out
             .add_channel(
                 schema_id,
                 &topic_name(prefix, topic),
-                "json",
+                encoding,
                 &BTreeMap::new(),
             )
             .map_err(err)?;
-        topics.push((topic, id, 0u32));
+        topics.push((topic, id, 0u32, protobuf));
     }
     if let Some(file_meta) = file_meta {
         let meta = serde_json::to_value(file_meta).unwrap_or(Value::Null);
@@ -233,34 +269,26 @@ fn write_robot<W: Write + Seek>(
                     .collect()
             })
             .unwrap_or_default();
-        out.write_metadata(&mcap::records::Metadata {
-            name: "recording".into(),
-            metadata: meta,
-        })
-        .map_err(err)?;
+        out.metadata("recording", &meta).map_err(err)?;
     }
     write_messages(out, &mut topics, rec, path)
 }
 
 /// Every message of `rec` on its channel (`topics`: topic, channel id, messages so far).
-fn write_messages<W: Write + Seek>(
+fn write_messages<W: Write>(
     out: &mut Writer<W>,
-    topics: &mut [(&'static str, u16, u32)],
+    topics: &mut [(&'static str, u16, u32, bool)],
     rec: &Recording,
     path: &Path,
 ) -> Result<u64, ExportError> {
-    let err = |e: mcap::McapError| ExportError::Mcap {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
+    let err = mcap_error(path);
     let base_ns = rec.meta.created_unix_ms.saturating_mul(1_000_000);
     let mut count = 0u64;
     let mut failure = None;
     let mut scene = super::scene::Scene::new(rec);
     let mut qt = super::qt::QtExport::default();
-    // Reused for every item: its messages, and one message's JSON.
+    // Reused for every item: its messages.
     let mut messages = Vec::new();
-    let mut data = Vec::with_capacity(4096);
     walk(rec, |item| {
         if failure.is_some() {
             return;
@@ -272,20 +300,15 @@ fn write_messages<W: Write + Seek>(
         let ns = base_ns.saturating_add(t_us.saturating_mul(1000));
         for (topic, body) in &mut messages {
             // Every topic is in `channels()`; a linear look-up over 14 beats a map's.
-            let Some((_, channel_id, n)) = topics.iter_mut().find(|(t, ..)| t == topic) else {
+            let Some((_, channel_id, n, protobuf)) = topics.iter_mut().find(|(t, ..)| t == topic)
+            else {
                 continue;
             };
             body.stamp(ns);
             *n += 1;
-            let header = MessageHeader {
-                channel_id: *channel_id,
-                sequence: *n,
-                log_time: ns,
-                publish_time: ns,
-            };
-            data.clear();
-            body.write_json(&mut data);
-            if let Err(e) = out.write_to_known_channel(&header, &data) {
+            let protobuf = *protobuf;
+            if let Err(e) = out.message(*channel_id, *n, ns, ns, |data| body.write(protobuf, data))
+            {
                 failure = Some(err(e));
                 return;
             }

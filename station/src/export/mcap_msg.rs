@@ -1,5 +1,6 @@
 //! The bodies of MCAP messages, typed, and their JSON: what `mcap::write` writes for every
-//! topic, through one call (`Body::write_json`) into one reused buffer.
+//! topic, through one call (`Body::write`: protobuf by `mcap_proto` on a binary channel, else
+//! `Body::write_json`) into the chunk's buffer.
 //!
 //! Layer: data and JSON text, no I/O. The topics of every frame (`/telemetry`, `/pose`,
 //! `/truth`, `/truth_pose`, and `/tf` twice) are typed structs written as text directly: building
@@ -16,6 +17,7 @@ use serde::Serialize;
 use serde_json::Value;
 
 use super::csv::TelemetryRow;
+use super::mcap_proto;
 
 /// A message body.
 #[derive(Clone, Debug)]
@@ -50,6 +52,25 @@ impl Body {
 }
 
 impl Body {
+    /// Appends the body in its channel's encoding: `protobuf` for the typed bodies on a binary
+    /// channel (`mcap_proto`), else JSON. The one place a topic's message is written.
+    pub fn write(&self, protobuf: bool, out: &mut Vec<u8>) {
+        if !protobuf {
+            return self.write_json(out);
+        }
+        match self {
+            Body::Telemetry { row, caps } => mcap_proto::telemetry(out, row, |field| {
+                caps.is_none_or(|c| super::scene::robot_has(field, c))
+            }),
+            Body::Pose(p) => mcap_proto::pose_in_frame(out, p),
+            Body::Transform(f) => mcap_proto::frame_transform(out, f),
+            Body::Truth(t) => mcap_proto::truth(out, t),
+            // No binary channel carries these (`mcap_proto::descriptor_set` has no schema for
+            // their topics), so this is never reached; JSON keeps the bytes readable if it is.
+            Body::Json(_) => self.write_json(out),
+        }
+    }
+
     /// Appends the body's JSON (compact, as `serde_json::to_writer` writes it) to `out`.
     pub fn write_json(&self, out: &mut Vec<u8>) {
         match self {
