@@ -524,26 +524,27 @@ impl<'de> Deserialize<'de> for TransferData<'_> {
 }
 
 impl Schema for TransferData<'_> {
-    const SCHEMA: &'static postcard_schema::schema::NamedType = &postcard_schema::schema::NamedType {
-        name: "TransferData",
-        ty: &postcard_schema::schema::DataModelType::Struct(&[
-            &postcard_schema::schema::NamedValue {
-                name: "tag",
-                ty: u8::SCHEMA,
-            },
-            &postcard_schema::schema::NamedValue {
-                name: "offset",
-                ty: u32::SCHEMA,
-            },
-            &postcard_schema::schema::NamedValue {
-                name: "data",
-                ty: &postcard_schema::schema::NamedType {
-                    name: "rest of the payload",
-                    ty: &postcard_schema::schema::DataModelType::Seq(u8::SCHEMA),
+    const SCHEMA: &'static postcard_schema::schema::NamedType =
+        &postcard_schema::schema::NamedType {
+            name: "TransferData",
+            ty: &postcard_schema::schema::DataModelType::Struct(&[
+                &postcard_schema::schema::NamedValue {
+                    name: "tag",
+                    ty: u8::SCHEMA,
                 },
-            },
-        ]),
-    };
+                &postcard_schema::schema::NamedValue {
+                    name: "offset",
+                    ty: u32::SCHEMA,
+                },
+                &postcard_schema::schema::NamedValue {
+                    name: "data",
+                    ty: &postcard_schema::schema::NamedType {
+                        name: "rest of the payload",
+                        ty: &postcard_schema::schema::DataModelType::Seq(u8::SCHEMA),
+                    },
+                },
+            ]),
+        };
 }
 
 /// State of a transfer at the receiver.

@@ -1395,6 +1395,123 @@ mod tests {
         );
     }
 
+    /// Issue 15: a round trip was timed on one chunk at a time, and on a lossy line that
+    /// chunk was often lost (or its answer was), so uploads ran on the 400 ms initial timer.
+    /// Now any newly held unit sent once times one: here the first chunk and the tail's
+    /// first copy are lost, and the tail goes again about a round trip later.
+    #[test]
+    fn round_trips_are_timed_from_any_unit_sent_once_so_a_lost_tail_waits_no_400_ms() {
+        let (clean, ..) = run_lossy(1000, 5, |_, _| false, |_| false);
+        // The first copy of every chunk from 768 on is lost: the last one only a probe or
+        // the timer can find.
+        let seen = core::cell::RefCell::new(std::vec::Vec::new());
+        let (lossy, _, s) = run_lossy(
+            1000,
+            5,
+            |n, offset| {
+                let first = !seen.borrow().contains(&offset);
+                seen.borrow_mut().push(offset);
+                n == 1 || (offset >= 768 && first)
+            },
+            |_| false,
+        );
+        assert!(
+            lossy < clean + 150,
+            "clean {clean} ms, first chunk and tail lost {lossy} ms: {:?}",
+            s.stats()
+        );
+    }
+
+    fn begin(tag: u8, len: u32, crc: u32) -> TransferBegin {
+        TransferBegin {
+            object: ObjectKind::Map,
+            id: 0xABCD,
+            len,
+            crc,
+            tag,
+        }
+    }
+
+    /// PROTOCOL.md §8 "Tags": tag 0 names no transfer; a chunk of another tag, a retired
+    /// kind-8 chunk, or any chunk after a handshake and before a Begin is refused, and the
+    /// receiver's state (a partial object kept for resuming) does not change.
+    #[test]
+    fn bad_tags_are_refused_and_change_nothing() {
+        let data = [9u8; 128];
+        let crc = crc32c(&data);
+        let mut staging = [0u8; 128];
+        let mut rx = Receiver::new();
+        let never = |_: Verified<'_>| -> bool { panic!("nothing to install") };
+        let a = rx.on_begin(&begin(NO_TAG, 128, crc), 128, false);
+        assert_eq!((a.tag, a.next, a.status), (0, 0, TransferStatus::Rejected));
+        assert_eq!(rx.progress(), None, "a refused Begin sets nothing up");
+        rx.on_begin(&begin(3, 128, crc), 128, false);
+        let first = TransferData {
+            tag: 3,
+            offset: 0,
+            data: &data[..64],
+        };
+        assert_eq!(rx.on_chunk(&first, &mut staging, never).next, 64);
+        let held = rx;
+        // Another tag, and the reserved one: `UnknownId` with the chunk's tag, nothing kept.
+        for tag in [4, NO_TAG] {
+            let other = TransferData {
+                tag,
+                offset: 64,
+                data: &[0xEE; 64],
+            };
+            let a = rx.on_chunk(&other, &mut staging, never);
+            assert_eq!((a.tag, a.status), (tag, TransferStatus::UnknownId));
+            assert_eq!(rx, held);
+        }
+        assert_eq!(staging[64], 0, "no byte of a stranger's chunk landed");
+        // The retired kind-8 chunk: refused with tag 0.
+        let retired = TransferChunk {
+            id: 0xABCD,
+            offset: 64,
+            data: &data[64..],
+        };
+        let a = refuse_retired_chunk(&retired);
+        assert_eq!((a.tag, a.next, a.status), (0, 0, TransferStatus::Rejected));
+        // A handshake: the same tag no longer names the transfer, but a Begin of this
+        // session resumes it under its new tag.
+        rx.new_session();
+        let rest = TransferData {
+            tag: 3,
+            offset: 64,
+            data: &data[64..],
+        };
+        assert_eq!(
+            rx.on_chunk(&rest, &mut staging, never).status,
+            TransferStatus::UnknownId
+        );
+        assert_eq!(
+            rx.progress().map(|p| p.2),
+            Some(64),
+            "the partial object is kept"
+        );
+        let a = rx.on_begin(&begin(4, 128, crc), 128, false);
+        assert_eq!((a.tag, a.next), (4, 64), "resumed under the new tag");
+        let rest = TransferData { tag: 4, ..rest };
+        let a = rx.on_chunk(&rest, &mut staging, |v| v.bytes == data);
+        assert_eq!(a.status, TransferStatus::Complete);
+    }
+
+    /// Answers name the transfer by its tag: a sender ignores another transfer's, even one
+    /// that would complete it.
+    #[test]
+    fn a_sender_ignores_answers_with_another_tag() {
+        let bytes = [1u8; 64];
+        let mut s = Sender::for_object(ObjectKind::Map, &bytes, 9).expect("small");
+        assert_eq!(s.begin().tag, 9);
+        s.on_ack(&ack(8, 64, TransferStatus::Complete), 1);
+        assert_eq!(s.outcome(), None);
+        s.on_ack(&ack(9, 64, TransferStatus::Complete), 2);
+        assert_eq!(s.outcome(), Some(Outcome::Complete));
+        assert_eq!(next_tag(255), 1, "tag 0 is never used");
+        assert_eq!(next_tag(NO_TAG), 1);
+    }
+
     #[test]
     fn the_chunk_size_for_a_line_follows_its_byte_loss() {
         assert_eq!(chunk_for_loss(0), MAX_CHUNK as u32);
