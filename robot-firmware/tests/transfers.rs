@@ -131,7 +131,10 @@ fn an_interrupted_upload_resumes_from_the_robots_next() {
     st.run(100);
     assert_eq!(st.map_bytes(), map);
     let held = st.robot.objects().upload_progress().unwrap().2;
-    let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &bytes, 1).unwrap(), &bytes);
+    let (outcome, sent) = st.upload(
+        Sender::for_object(ObjectKind::Map, &bytes, 1).unwrap(),
+        &bytes,
+    );
     assert_eq!(outcome, Outcome::Complete);
     // Only the missing bytes, besides what went behind the Begin before its answer named the
     // resume offset (PROTOCOL.md §8).
@@ -166,7 +169,10 @@ fn a_corrupted_object_is_a_crc_mismatch_and_the_old_map_stays() {
 fn oversize_objects_and_uploaded_regions_are_rejected_at_the_begin() {
     let mut st = Station::new(&MICRO_RATO);
     let huge = vec![0u8; MAP_OBJECT_MAX + 1];
-    let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &huge, 1).unwrap(), &huge);
+    let (outcome, sent) = st.upload(
+        Sender::for_object(ObjectKind::Map, &huge, 1).unwrap(),
+        &huge,
+    );
     // Refused by the Begin's answer: at most what went behind the Begin, and nothing held.
     assert_eq!(outcome, Outcome::Rejected);
     assert!(sent <= EAGER_MAX, "{sent} bytes of a refused object sent");
@@ -301,10 +307,17 @@ fn a_new_session_forgets_the_tag_and_a_new_begin_resumes() {
         In::TAck(a) => Some(*a),
         _ => None,
     });
-    assert_eq!(a.map(|a| (a.tag, a.status)), Some((3, TransferStatus::UnknownId)));
+    assert_eq!(
+        a.map(|a| (a.tag, a.status)),
+        Some((3, TransferStatus::UnknownId))
+    );
     assert_eq!(st.robot.objects().upload_progress().map(|p| p.2), Some(320));
     st.inbox.clear();
-    assert_eq!(upload_part(&mut st, 4, &map, 0), 320, "the new Begin resumes at 320");
+    assert_eq!(
+        upload_part(&mut st, 4, &map, 0),
+        320,
+        "the new Begin resumes at 320"
+    );
     let crc = crc32c(&map);
     for offset in (320..map.len()).step_by(64) {
         st.send(&Message::TransferData(TransferData {

@@ -214,7 +214,9 @@ fn slowest(runs: &[Run]) -> serde_json::Value {
 fn first_chunks(runs: &[Run]) -> serde_json::Value {
     let mut by: std::collections::BTreeMap<u32, Vec<f64>> = Default::default();
     for r in runs {
-        by.entry(r.first_chunk).or_default().push(r.elapsed_ms as f64);
+        by.entry(r.first_chunk)
+            .or_default()
+            .push(r.elapsed_ms as f64);
     }
     by.into_iter()
         .map(|(c, mut ms)| {

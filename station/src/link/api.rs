@@ -40,7 +40,11 @@ pub enum LinkRequest {
 pub enum TransferOut {
     Begin(TransferBegin),
     /// A `TransferData` chunk of the transfer `tag`.
-    Chunk { tag: u8, offset: u32, data: Vec<u8> },
+    Chunk {
+        tag: u8,
+        offset: u32,
+        data: Vec<u8>,
+    },
     Ack(TransferAck),
 }
 
@@ -49,7 +53,11 @@ pub enum TransferOut {
 pub enum TransferIn {
     Begin(TransferBegin),
     /// A `TransferData` chunk of the transfer `tag`.
-    Chunk { tag: u8, offset: u32, data: Vec<u8> },
+    Chunk {
+        tag: u8,
+        offset: u32,
+        data: Vec<u8>,
+    },
     Ack(TransferAck),
 }
 

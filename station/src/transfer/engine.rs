@@ -26,8 +26,7 @@ use std::collections::VecDeque;
 use protocol::object::{kind_of, parse};
 use protocol::transfer::{chunk_for_loss, next_tag, Outcome, Receiver, Sender, NO_TAG};
 use protocol::{
-    AckInfo, Command, Message, ObjectKind, TransferAck, TransferBegin, TransferData,
-    TransferStatus,
+    AckInfo, Command, Message, ObjectKind, TransferAck, TransferBegin, TransferData, TransferStatus,
 };
 
 use super::{Direction, JobId, JobOutcome, JobReport, TransferError, TransferEvent};

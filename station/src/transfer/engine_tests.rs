@@ -95,9 +95,9 @@ impl Bench {
                             to_engine.push(LinkEvent::Transfer(TransferIn::Ack(a)));
                         }
                     }
-                    EngineOut::Frame(TransferOut::Chunk { id, offset, data }) => {
-                        let c = protocol::TransferChunk {
-                            id,
+                    EngineOut::Frame(TransferOut::Chunk { tag, offset, data }) => {
+                        let c = protocol::TransferData {
+                            tag,
                             offset,
                             data: &data,
                         };
@@ -124,7 +124,7 @@ impl Bench {
                         };
                         let outcome = match self.robot.held.clone() {
                             Some(bytes) => {
-                                let s = Sender::for_object(object, &bytes).unwrap();
+                                let s = Sender::for_object(object, &bytes, 1).unwrap();
                                 let b = s.begin();
                                 self.robot.tx = Some((s, bytes));
                                 CommandOutcome::Acked {
@@ -156,8 +156,8 @@ impl Bench {
                 s.poll(t as u32, bytes, |m| {
                     frames.push(match m {
                         Message::TransferBegin(b) => TransferIn::Begin(*b),
-                        Message::TransferChunk(c) => TransferIn::Chunk {
-                            id: c.id,
+                        Message::TransferData(c) => TransferIn::Chunk {
+                            tag: c.tag,
                             offset: c.offset,
                             data: c.data.to_vec(),
                         },
