@@ -350,3 +350,36 @@ fn an_upload_interrupted_by_a_reconnect_resumes() {
     assert_eq!(r.outcome, JobOutcome::Complete);
     assert_eq!(b.robot.held.as_deref(), Some(&bytes[..]));
 }
+
+/// Issue 15: the first upload on a fresh link began before the station had measured the
+/// line's loss, with 224-byte chunks, and kept them until losses halved them one by one. Now
+/// the first measurement caps the running upload's chunk size at once (never raises it).
+#[test]
+fn an_upload_begun_before_the_loss_was_measured_takes_the_first_measurement() {
+    let mut e = TransferEngine::new();
+    e.set_connected(true);
+    e.submit(JobSpec::Upload {
+        object: ObjectKind::Map,
+        bytes: vec![7; 1060],
+    });
+    e.poll(0);
+    assert_eq!(
+        e.upload_chunk(),
+        Some(224),
+        "nothing measured: the largest chunk"
+    );
+    let mut s = crate::link::LinkStats {
+        bytes_in: 800,
+        ..Default::default()
+    };
+    // 10 frames of 80 bytes, 5 of them damaged: about 0.9 % of bytes lost.
+    s.decoder.frames_ok = 5;
+    s.decoder.crc_errors = 5;
+    e.on_link_event(1, &LinkEvent::Stats(Box::new(s.clone())));
+    assert_eq!(e.upload_chunk(), Some(32));
+    // A clean measurement later does not grow it: growth is earned by loss-free progress.
+    s.decoder.frames_ok = 100;
+    s.decoder.crc_errors = 0;
+    e.on_link_event(2, &LinkEvent::Stats(Box::new(s)));
+    assert_eq!(e.upload_chunk(), Some(32));
+}
