@@ -468,9 +468,9 @@ pub struct TransferBegin {
 }
 
 /// Kind 8, retired: protocol 1's chunk, which named the object by its 32-bit id and carried
-/// a length. Still decoded (recordings made before tags hold it) and never sent; a receiver
-/// refuses it (`TransferAck` with tag 0, `Rejected`) and changes nothing. Chunks are
-/// [`TransferData`] (kind 17).
+/// a length. Still decoded (recordings made before tags hold it) and never sent; the robot
+/// refuses it (`TransferAck` with tag 0, `Rejected`) and changes nothing, the station ignores
+/// it. Chunks are [`TransferData`] (kind 17).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
 pub struct TransferChunk<'a> {
     pub id: u32,
