@@ -304,6 +304,7 @@ fn serialize_payload(msg: &Message<'_>, body: &mut [u8]) -> Result<usize, Encode
         Message::Progress(m) => ser(m, body),
         Message::HalTrace(m) => ser(m, body),
         Message::AliceSituation(m) => ser(m, body),
+        Message::TransferData(m) => ser(m, body),
     }
 }
 
@@ -337,6 +338,12 @@ pub fn decode_payload(kind: Kind, payload: &[u8]) -> Result<Message<'_>, Payload
         Kind::Progress => Message::Progress(de::<crate::msg::Progress>(payload)?),
         Kind::HalTrace => Message::HalTrace(de::<crate::msg::HalTrace>(payload)?),
         Kind::AliceSituation => Message::AliceSituation(de::<crate::msg::AliceSituation>(payload)?),
+        Kind::TransferData => {
+            // Tag and offset, then the data to the end of the payload (no length: PROTOCOL.md §6).
+            let ((tag, offset), data) = postcard::take_from_bytes::<(u8, u32)>(payload)
+                .map_err(PayloadError::from_postcard)?;
+            Message::TransferData(crate::msg::TransferData { tag, offset, data })
+        }
     };
     msg.check_limits()
         .map_err(|(field, limit)| PayloadError::FieldTooLong { field, limit })?;

@@ -453,16 +453,24 @@ pub enum ObjectKind {
 
 /// Sender -> receiver: an object of `len` bytes with CRC-32C `crc` follows in chunks.
 /// `id` names the content (the station uses its CRC-32C of the content) so a receiver that
-/// already holds it answers `AlreadyHave` and nothing is sent again.
+/// already holds it answers `AlreadyHave` and nothing is sent again. `tag` (1..=255, chosen
+/// by the sender, different from its previous transfer's) names this transfer in its
+/// `TransferData` chunks and in the receiver's answers: one byte instead of the 5-byte id in
+/// every chunk. Last, so a build from before tags reads this frame as one with a trailing
+/// byte and refuses it ("undecodable payload"), never as another Begin.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
 pub struct TransferBegin {
     pub object: ObjectKind,
     pub id: u32,
     pub len: u32,
     pub crc: u32,
+    pub tag: u8,
 }
 
-/// Sender -> receiver: `data` belongs at `offset` of object `id`.
+/// Kind 8, retired: protocol 1's chunk, which named the object by its 32-bit id and carried
+/// a length. Still decoded (recordings made before tags hold it) and never sent; the robot
+/// refuses it (`TransferAck` with tag 0, `Rejected`) and changes nothing, the station ignores
+/// it. Chunks are [`TransferData`] (kind 17).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
 pub struct TransferChunk<'a> {
     pub id: u32,
@@ -470,15 +478,73 @@ pub struct TransferChunk<'a> {
     pub data: &'a [u8],
 }
 
-/// Receiver -> sender: every byte before `next` of object `id` is held (cumulative ack), and
-/// bit i of `sack` says the 32-byte unit `[next + 32 i, next + 32 i + 32)` past it is held too
-/// (selective ack, PROTOCOL.md §8; 0 in every answer but `Receiving`).
+/// Receiver -> sender: every byte before `next` of the transfer `tag` is held (cumulative
+/// ack), and bit i of `sack` says the 32-byte unit `[next + 32 i, next + 32 i + 32)` past it
+/// is held too (selective ack, PROTOCOL.md §8; 0 in every answer but `Receiving`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Schema)]
 pub struct TransferAck {
-    pub id: u32,
+    pub tag: u8,
     pub next: u32,
     pub status: TransferStatus,
     pub sack: u32,
+}
+
+/// Sender -> receiver (kind 17): `data` belongs at `offset` of the transfer whose
+/// `TransferBegin` carried `tag`. `data` runs to the end of the payload, with no length of
+/// its own (the frame's delimiter bounds it): the payload is `tag`, `offset` as a varint,
+/// then the bytes. Serialized and decoded by hand for that reason (`frame::decode_payload`);
+/// serde's `Deserialize` cannot know where the data ends and refuses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TransferData<'a> {
+    pub tag: u8,
+    pub offset: u32,
+    pub data: &'a [u8],
+}
+
+impl Serialize for TransferData<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeTuple;
+        // A tuple has no length on the wire (postcard): tag, offset, then the bytes as they are.
+        let mut t = s.serialize_tuple(2 + self.data.len())?;
+        t.serialize_element(&self.tag)?;
+        t.serialize_element(&self.offset)?;
+        for b in self.data {
+            t.serialize_element(b)?;
+        }
+        t.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for TransferData<'_> {
+    fn deserialize<D: serde::Deserializer<'de>>(_: D) -> Result<Self, D::Error> {
+        Err(serde::de::Error::custom(
+            "TransferData's data runs to the end of the frame: decode it with frame::decode_payload",
+        ))
+    }
+}
+
+impl Schema for TransferData<'_> {
+    const SCHEMA: &'static postcard_schema::schema::NamedType =
+        &postcard_schema::schema::NamedType {
+            name: "TransferData",
+            ty: &postcard_schema::schema::DataModelType::Struct(&[
+                &postcard_schema::schema::NamedValue {
+                    name: "tag",
+                    ty: u8::SCHEMA,
+                },
+                &postcard_schema::schema::NamedValue {
+                    name: "offset",
+                    ty: u32::SCHEMA,
+                },
+                &postcard_schema::schema::NamedValue {
+                    name: "data",
+                    ty: &postcard_schema::schema::NamedType {
+                        name: "rest of the payload",
+                        ty: &postcard_schema::schema::DataModelType::Seq(u8::SCHEMA),
+                    },
+                },
+            ]),
+        };
 }
 
 /// State of a transfer at the receiver.
@@ -752,6 +818,8 @@ pub enum Message<'a> {
     #[serde(borrow)]
     HalTrace(HalTrace<'a>),
     AliceSituation(AliceSituation),
+    #[serde(borrow)]
+    TransferData(TransferData<'a>),
 }
 
 /// The header's kind byte for each message.
@@ -775,11 +843,12 @@ pub enum Kind {
     Progress = 14,
     HalTrace = 15,
     AliceSituation = 16,
+    TransferData = 17,
 }
 
 impl Kind {
     /// Every kind, in numeric order.
-    pub const ALL: [Kind; 17] = [
+    pub const ALL: [Kind; 18] = [
         Kind::Hello,
         Kind::HelloReply,
         Kind::Heartbeat,
@@ -797,6 +866,7 @@ impl Kind {
         Kind::Progress,
         Kind::HalTrace,
         Kind::AliceSituation,
+        Kind::TransferData,
     ];
 
     /// The kind for a header byte, or `None` for an unknown kind.
@@ -823,6 +893,9 @@ impl Message<'_> {
                 check("HelloReply.firmware", r.firmware, MAX_NAME)?;
                 check("HelloReply.firmware_version", r.firmware_version, MAX_NAME)
             }
+            Message::TransferData(d) if d.data.len() > MAX_CHUNK => {
+                Err(("TransferData.data", MAX_CHUNK))
+            }
             _ => Ok(()),
         }
     }
@@ -847,6 +920,7 @@ impl Message<'_> {
             Message::Progress(_) => Kind::Progress,
             Message::HalTrace(_) => Kind::HalTrace,
             Message::AliceSituation(_) => Kind::AliceSituation,
+            Message::TransferData(_) => Kind::TransferData,
         }
     }
 }

@@ -31,7 +31,8 @@ use core::fmt;
 
 use crate::frame::crc32c;
 use crate::msg::{
-    Message, ObjectKind, TransferAck, TransferBegin, TransferChunk, TransferStatus, MAX_CHUNK,
+    Message, ObjectKind, TransferAck, TransferBegin, TransferChunk, TransferData, TransferStatus,
+    MAX_CHUNK,
 };
 use crate::timing::{TRANSFER_RETRY_MS, TRANSFER_WINDOW};
 
@@ -49,9 +50,29 @@ pub const MAX_RESTARTS: u8 = 5;
 /// The retransmission timeout never goes below this, ms: the robot answers within its 1 ms
 /// cycle, so a shorter timer only fires on frames still on the wire.
 pub const MIN_RTO_MS: u32 = 20;
-/// Bytes a chunk frame carries besides its data (COBS, header, CRC, id, offset, length): the
-/// cost [`chunk_for_loss`] weighs against the loss of a longer frame.
-pub const CHUNK_OVERHEAD: u32 = 20;
+/// Bytes a `TransferData` frame carries besides its data (COBS 1, delimiter 1, header 4,
+/// CRC 4, tag 1, offset 2 as a varint past byte 127): the cost [`chunk_for_loss`] weighs
+/// against the loss of a longer frame.
+pub const CHUNK_OVERHEAD: u32 = 13;
+/// The tag no transfer has: a receiver refuses a `TransferBegin` carrying it, and answers a
+/// retired kind-8 chunk with it (nothing to confuse with a transfer in progress).
+pub const NO_TAG: u8 = 0;
+
+/// The tag a sender uses after `prev`: the next value, skipping [`NO_TAG`], so two transfers
+/// in a row never share one (a late answer to the previous one is not taken for this one's).
+pub const fn next_tag(prev: u8) -> u8 {
+    match prev.wrapping_add(1) {
+        NO_TAG => 1,
+        t => t,
+    }
+}
+
+/// The answer to a retired protocol-1 chunk (kind 8, named by a 32-bit id): refused, with
+/// [`NO_TAG`], and nothing changed. Its sender is a build from before tags, which the
+/// handshake refuses already; this keeps a raw client's frame from being read as anything.
+pub const fn refuse_retired_chunk(_: &TransferChunk<'_>) -> TransferAck {
+    ack(NO_TAG, 0, TransferStatus::Rejected)
+}
 /// Chunks acknowledged with no loss before the chunk size grows by one unit.
 const GROW_AFTER: u8 = 8;
 
@@ -93,6 +114,8 @@ enum RxState {
     Receiving {
         object: ObjectKind,
         id: u32,
+        /// The sender's name for this transfer (its chunks and our answers carry it).
+        tag: u8,
         len: u32,
         crc: u32,
         next: u32,
@@ -101,7 +124,7 @@ enum RxState {
     },
     /// The last transfer ended; its answer is repeated to late or duplicated chunks.
     Finished {
-        id: u32,
+        tag: u8,
         next: u32,
         status: TransferStatus,
     },
@@ -119,9 +142,9 @@ impl Default for Receiver {
     }
 }
 
-fn ack(id: u32, next: u32, status: TransferStatus) -> TransferAck {
+const fn ack(tag: u8, next: u32, status: TransferStatus) -> TransferAck {
     TransferAck {
-        id,
+        tag,
         next,
         status,
         sack: 0,
@@ -161,16 +184,16 @@ impl Receiver {
             // transfer is kept for resuming, so then such a chunk gets `UnknownId`.
             if !matches!(self.state, RxState::Receiving { .. }) {
                 self.state = RxState::Finished {
-                    id: b.id,
+                    tag: b.tag,
                     next: b.len,
                     status: TransferStatus::AlreadyHave,
                 };
             }
-            return ack(b.id, b.len, TransferStatus::AlreadyHave);
+            return ack(b.tag, b.len, TransferStatus::AlreadyHave);
         }
         let too_big = usize::try_from(b.len).map_or(true, |len| len > limit);
-        if b.len == 0 || too_big {
-            return ack(b.id, 0, TransferStatus::Rejected);
+        if b.len == 0 || too_big || b.tag == NO_TAG {
+            return ack(b.tag, 0, TransferStatus::Rejected);
         }
         if let RxState::Receiving {
             object,
@@ -179,55 +202,70 @@ impl Receiver {
             crc,
             next,
             sack,
+            ..
         } = self.state
         {
             if (object, id, len, crc) == (b.object, b.id, b.len, b.crc) {
-                // The same object again (a retry or a restarted sender): resume.
+                // The same object again (a retry or a restarted sender): resume, under the
+                // tag this Begin gives (a new sender picks a new one).
+                self.state = RxState::Receiving {
+                    object,
+                    id,
+                    tag: b.tag,
+                    len,
+                    crc,
+                    next,
+                    sack,
+                };
                 return TransferAck {
                     sack,
-                    ..ack(id, next, TransferStatus::Receiving)
+                    ..ack(b.tag, next, TransferStatus::Receiving)
                 };
             }
         }
         self.state = RxState::Receiving {
             object: b.object,
             id: b.id,
+            tag: b.tag,
             len: b.len,
             crc: b.crc,
             next: 0,
             sack: 0,
         };
-        ack(b.id, 0, TransferStatus::Receiving)
+        ack(b.tag, 0, TransferStatus::Receiving)
     }
 
-    /// Answers a `TransferChunk`, writing its data to `staging` when it is new and in the
+    /// Answers a `TransferData` chunk, writing its data to `staging` when it is new and in the
     /// span (at `next`, or past it on the unit grid). When the object is whole and its CRC
     /// matches, calls `install` with it: `true` means installed (`Complete`), `false` refused
     /// as malformed (`Rejected`, old object kept).
     pub fn on_chunk<F>(
         &mut self,
-        c: &TransferChunk<'_>,
+        c: &TransferData<'_>,
         staging: &mut [u8],
         install: F,
     ) -> TransferAck
     where
         F: FnOnce(Verified<'_>) -> bool,
     {
-        let (object, id, len, crc, mut next, mut sack) = match self.state {
+        let (object, id, tag, len, crc, mut next, mut sack) = match self.state {
             RxState::Receiving {
                 object,
                 id,
+                tag,
                 len,
                 crc,
                 next,
                 sack,
-            } if id == c.id => (object, id, len, crc, next, sack),
-            RxState::Finished { id, next, status } if id == c.id => return ack(id, next, status),
-            _ => return ack(c.id, 0, TransferStatus::UnknownId),
+            } if tag == c.tag && tag != NO_TAG => (object, id, tag, len, crc, next, sack),
+            RxState::Finished { tag, next, status } if tag == c.tag && tag != NO_TAG => {
+                return ack(tag, next, status)
+            }
+            _ => return ack(c.tag, 0, TransferStatus::UnknownId),
         };
         let current = TransferAck {
             sack,
-            ..ack(id, next, TransferStatus::Receiving)
+            ..ack(tag, next, TransferStatus::Receiving)
         };
         let end = u64::from(c.offset) + c.data.len() as u64;
         if c.data.is_empty() || c.data.len() > MAX_CHUNK || end > u64::from(len) {
@@ -248,7 +286,7 @@ impl Receiver {
         }
         let Some(slot) = staging.get_mut(start as usize..end as usize) else {
             // The owner's buffer is smaller than the limit it allowed: refuse, never panic.
-            return self.finish(id, 0, TransferStatus::Rejected);
+            return self.finish(tag, 0, TransferStatus::Rejected);
         };
         slot.copy_from_slice(data);
         if ahead > 0 {
@@ -266,6 +304,7 @@ impl Receiver {
             self.state = RxState::Receiving {
                 object,
                 id,
+                tag,
                 len,
                 crc,
                 next,
@@ -273,12 +312,12 @@ impl Receiver {
             };
             return TransferAck {
                 sack,
-                ..ack(id, next, TransferStatus::Receiving)
+                ..ack(tag, next, TransferStatus::Receiving)
             };
         }
         let bytes = staging.get(..len as usize).unwrap_or(&[]);
         if crc32c(bytes) != crc {
-            return self.finish(id, 0, TransferStatus::CrcMismatch);
+            return self.finish(tag, 0, TransferStatus::CrcMismatch);
         }
         let verified = Verified {
             object,
@@ -287,15 +326,15 @@ impl Receiver {
             bytes,
         };
         if install(verified) {
-            self.finish(id, len, TransferStatus::Complete)
+            self.finish(tag, len, TransferStatus::Complete)
         } else {
-            self.finish(id, 0, TransferStatus::Rejected)
+            self.finish(tag, 0, TransferStatus::Rejected)
         }
     }
 
-    fn finish(&mut self, id: u32, next: u32, status: TransferStatus) -> TransferAck {
-        self.state = RxState::Finished { id, next, status };
-        ack(id, next, status)
+    fn finish(&mut self, tag: u8, next: u32, status: TransferStatus) -> TransferAck {
+        self.state = RxState::Finished { tag, next, status };
+        ack(tag, next, status)
     }
 
     /// The transfer in progress: (object, id, bytes held in order, total bytes).
@@ -309,6 +348,27 @@ impl Receiver {
                 ..
             } => Some((object, id, next, len)),
             _ => None,
+        }
+    }
+
+    /// The object of the transfer in progress under `tag`, if there is one.
+    pub fn receiving(&self, tag: u8) -> Option<ObjectKind> {
+        match self.state {
+            RxState::Receiving { object, tag: t, .. } if t == tag && t != NO_TAG => Some(object),
+            _ => None,
+        }
+    }
+
+    /// A new session began (a handshake, PROTOCOL.md §8 "Tags"): chunks are taken only after
+    /// a Begin of this session has tagged the transfer, so a chunk of an earlier session (or
+    /// of an earlier station that used the same tag) is answered `UnknownId` and lands
+    /// nowhere. A partial object is kept for resuming; a finished transfer's answer is
+    /// forgotten.
+    pub fn new_session(&mut self) {
+        match &mut self.state {
+            RxState::Receiving { tag, .. } => *tag = NO_TAG,
+            RxState::Finished { .. } => self.state = RxState::Idle,
+            RxState::Idle => {}
         }
     }
 
@@ -421,10 +481,6 @@ pub struct Sender {
     /// `tx_seq` when the chunk size last shrank: a loss of a unit sent before it is one the
     /// shrinking already answered.
     shrunk_at: u16,
-    /// The chunk whose round trip is timed: its end offset (0: none) and when it went out.
-    /// Only chunks sent once are timed (Karn).
-    timed_end: u32,
-    timed_at: u32,
     /// Smoothed round trip and its mean deviation, ms (RFC 6298); 0: no sample yet.
     srtt_ms: u16,
     rttvar_ms: u16,
@@ -434,10 +490,7 @@ pub struct Sender {
     /// The clocks above are set (at the first `poll`).
     started: bool,
     begin_due: bool,
-    /// When the `TransferBegin` went out, and whether only once (its answer then times a
-    /// round trip, Karn); when the receiver last answered.
-    begin_at: u32,
-    begin_once: bool,
+    /// When the receiver last answered (or the Begin went out).
     last_ack_ms: u32,
     /// Timer expiries in a row: the timeout doubles with each (backoff).
     timeouts: u8,
@@ -468,14 +521,16 @@ pub const MIN_WINDOW_UNITS: u32 = 8;
 
 impl Sender {
     /// A transfer of `len` bytes whose CRC-32C the caller states as `crc` (normally
-    /// `crc32c(bytes)`; a wrong value makes the receiver answer `CrcMismatch`).
-    pub const fn new(object: ObjectKind, id: u32, len: u32, crc: u32) -> Self {
+    /// `crc32c(bytes)`; a wrong value makes the receiver answer `CrcMismatch`), named `tag`
+    /// on the wire (the caller's [`next_tag`] after its previous transfer's).
+    pub const fn new(object: ObjectKind, id: u32, len: u32, crc: u32, tag: u8) -> Self {
         Sender {
             begin: TransferBegin {
                 object,
                 id,
                 len,
                 crc,
+                tag,
             },
             phase: Phase::Begin,
             acked: 0,
@@ -488,16 +543,12 @@ impl Sender {
             sent_at: [0; SPAN_UNITS],
             tx_seq: 0,
             shrunk_at: 0,
-            timed_end: 0,
-            timed_at: 0,
             srtt_ms: 0,
             rttvar_ms: 0,
             deadline_ms: 0,
             progress_ms: 0,
             started: false,
             begin_due: true,
-            begin_at: 0,
-            begin_once: true,
             last_ack_ms: 0,
             timeouts: 0,
             restarts: 0,
@@ -516,16 +567,27 @@ impl Sender {
 
     /// A transfer of `bytes` under the id convention (id = CRC-32C of the bytes); `None` if
     /// the object is longer than `u32::MAX` bytes.
-    pub fn for_object(object: ObjectKind, bytes: &[u8]) -> Option<Self> {
+    pub fn for_object(object: ObjectKind, bytes: &[u8], tag: u8) -> Option<Self> {
         let len = u32::try_from(bytes.len()).ok()?;
         let crc = crc32c(bytes);
-        Some(Sender::new(object, crc, len, crc))
+        Some(Sender::new(object, crc, len, crc, tag))
     }
 
     /// Starts with chunks of `bytes` (rounded down to whole units, `MIN_CHUNK..=MAX_CHUNK`)
     /// instead of the largest: what the owner knows of the line, e.g. [`chunk_for_loss`].
     pub fn set_chunk(&mut self, bytes: u32) {
         self.chunk_units = (bytes / UNIT).clamp(1, u32::from(MAX_CHUNK_UNITS)) as u8;
+    }
+
+    /// Caps the chunk size at `bytes` (whole units, at least one): what the owner learned of
+    /// the line during the transfer, e.g. its first loss measurement ([`chunk_for_loss`]).
+    /// Never grows it: growth is earned by loss-free progress.
+    pub fn limit_chunk(&mut self, bytes: u32) {
+        let units = (bytes / UNIT).clamp(1, u32::from(MAX_CHUNK_UNITS)) as u8;
+        if units < self.chunk_units {
+            self.chunk_units = units;
+            self.clean = 0;
+        }
     }
 
     /// The chunk size in use, bytes.
@@ -640,8 +702,6 @@ impl Sender {
                 return;
             }
             self.begin_due = false;
-            self.begin_once = self.begin_at == 0 && self.begin_once;
-            self.begin_at = now_ms.max(1);
             self.last_ack_ms = now_ms;
         }
         // While the Begin's answer is awaited, new chunks go right behind it (at most
@@ -676,12 +736,12 @@ impl Sender {
             let Some(data) = bytes.get(start as usize..end as usize) else {
                 return;
             };
-            let frame = TransferChunk {
-                id: self.begin.id,
+            let frame = TransferData {
+                tag: self.begin.tag,
                 offset: start,
                 data,
             };
-            if !send(&Message::TransferChunk(frame)) {
+            if !send(&Message::TransferData(frame)) {
                 return;
             }
             if kind == Sent::Fresh {
@@ -717,21 +777,13 @@ impl Sender {
             }
         }
         match kind {
-            Sent::Fresh => {
-                if self.timed_end == 0 {
-                    (self.timed_end, self.timed_at) = (end, now_ms);
-                }
-            }
+            Sent::Fresh => {}
             Sent::Lost | Sent::Probe => {
                 self.lost &= !units(first, last);
                 self.suspect &= !units(first, last);
                 self.stats.resent = self.stats.resent.saturating_add(1);
                 if kind == Sent::Probe {
                     self.stats.probes = self.stats.probes.saturating_add(1);
-                }
-                // The timed chunk may be this one again: its round trip is ambiguous (Karn).
-                if self.timed_end > start && self.timed_end <= end {
-                    self.timed_end = 0;
                 }
             }
         }
@@ -820,7 +872,6 @@ impl Sender {
                 self.lost = self.outstanding() & !self.sacked;
                 self.suspect = self.lost;
                 self.shrink();
-                self.timed_end = 0;
             }
         }
     }
@@ -851,9 +902,9 @@ impl Sender {
         self.rttvar_ms = var.min(u32::from(u16::MAX)) as u16;
     }
 
-    /// Takes the receiver's `TransferAck` into account (acks for other ids are ignored).
+    /// Takes the receiver's `TransferAck` into account (acks for other tags are ignored).
     pub fn on_ack(&mut self, a: &TransferAck, now_ms: u32) {
-        if self.is_done() || a.id != self.begin.id {
+        if self.is_done() || a.tag != self.begin.tag {
             return;
         }
         let outcome = match a.status {
@@ -877,8 +928,6 @@ impl Sender {
                     self.phase = Phase::Begin;
                     self.begin_due = true;
                     (self.acked, self.sent, self.sacked, self.lost, self.suspect) = (0, 0, 0, 0, 0);
-                    (self.begin_at, self.begin_once) = (0, true);
-                    self.timed_end = 0;
                     self.progressed(now_ms);
                     return;
                 }
@@ -906,7 +955,9 @@ impl Sender {
         }
         if self.phase == Phase::Begin {
             // The Begin's answer (or, that lost, the eager chunk's): `next` and `sack` say
-            // what the receiver holds already.
+            // what the receiver holds already. Its round trip is not sampled: a 24-byte
+            // Begin's is a fraction of a full chunk's (measured: the timer then fired and
+            // probes went while chunks were still on the wire, 90 % -> 30 % on a clean line).
             self.phase = Phase::Sending;
             self.slide(next.div_ceil(UNIT));
             (self.acked, self.sent) = (next, self.sent.max(next));
@@ -922,11 +973,20 @@ impl Sender {
         // The latest transmission the receiver's new holdings prove arrived (every copy of a
         // newly held unit was sent at or after its `first_tx`).
         let mut proof: Option<u16> = None;
+        // The newest newly held unit (by its latest copy) times a round trip if every copy of
+        // it is that latest one (sent once, or again after its earlier copy was proven lost):
+        // Karn's rule, and QUIC's "largest acknowledged newly acknowledged" (RFC 9002 §5.1),
+        // so an answer that was lost and made good by a later one never times the wait.
+        let mut timed: Option<(u16, bool, u16)> = None;
         let mut prove = |s: &Self, i: u32| {
             let f = s.first_tx.get(i as usize).copied().unwrap_or(0);
+            let l = s.last_tx.get(i as usize).copied().unwrap_or(0);
             let newer = |a: u16, b: u16| s.tx_seq.wrapping_sub(a) < s.tx_seq.wrapping_sub(b);
             if proof.is_none_or(|p| newer(f, p)) {
                 proof = Some(f);
+            }
+            if timed.is_none_or(|(t, ..)| newer(l, t)) {
+                timed = Some((l, f == l, s.sent_at.get(i as usize).copied().unwrap_or(0)));
             }
         };
         let newly_below = units(0, k) & was_outstanding & !self.sacked;
@@ -952,13 +1012,8 @@ impl Sender {
         self.sacked = sacked;
         self.lost = shift(self.lost, moved) & !sacked & outstanding;
         self.suspect = shift(self.suspect, moved) & self.lost;
-        let timed = self.timed_end;
-        let held = |end: u32| {
-            end <= next || sacked.checked_shr((end - 1 - next) / UNIT).unwrap_or(0) & 1 == 1
-        };
-        if timed != 0 && held(timed) {
-            self.sample(now_ms.wrapping_sub(self.timed_at));
-            self.timed_end = 0;
+        if let Some((_, true, at)) = timed {
+            self.sample(u32::from((now_ms as u16).wrapping_sub(at)));
         }
         // Every unit not held whose latest copy went out before the proven one is lost.
         let mut loss = false;
@@ -1016,7 +1071,7 @@ mod tests {
         let mut offsets = [u32::MAX; 8];
         let mut n = 0;
         s.poll(now, bytes, |m| {
-            if let Message::TransferChunk(c) = m {
+            if let Message::TransferData(c) = m {
                 if let Some(slot) = offsets.get_mut(n) {
                     *slot = c.offset;
                 }
@@ -1030,7 +1085,7 @@ mod tests {
     #[test]
     fn the_sender_waits_for_the_begin_answer_then_fills_the_window() {
         let bytes = [7u8; 1000];
-        let mut s = Sender::for_object(ObjectKind::Map, &bytes).expect("small");
+        let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).expect("small");
         let (n, offs) = frames(&mut s, 0, &bytes);
         assert_eq!(
             (n, offs[1]),
@@ -1039,12 +1094,12 @@ mod tests {
         );
         let (n, _) = frames(&mut s, 1, &bytes);
         assert_eq!(n, 0, "nothing more until the answer");
-        let id = s.begin().id;
-        s.on_ack(&ack(id, 0, TransferStatus::Receiving), 1);
+        let tag = s.begin().tag;
+        s.on_ack(&ack(tag, 0, TransferStatus::Receiving), 1);
         let (n, offs) = frames(&mut s, 1, &bytes);
         assert_eq!(n, 3);
         assert_eq!(offs[..3], [224, 448, 672]);
-        s.on_ack(&ack(id, 224, TransferStatus::Receiving), 2);
+        s.on_ack(&ack(tag, 224, TransferStatus::Receiving), 2);
         let (n, offs) = frames(&mut s, 2, &bytes);
         assert_eq!((n, offs[0]), (1, 896));
     }
@@ -1052,7 +1107,7 @@ mod tests {
     #[test]
     fn the_sender_gives_up_after_five_silent_retry_periods() {
         let bytes = [1u8; 10];
-        let mut s = Sender::for_object(ObjectKind::Plan, &bytes).expect("small");
+        let mut s = Sender::for_object(ObjectKind::Plan, &bytes, 1).expect("small");
         let mut begins = 0;
         for t in (0..10_000).step_by(10) {
             s.poll(t, &bytes, |m| {
@@ -1074,6 +1129,7 @@ mod tests {
             id: 9,
             len: 300,
             crc,
+            tag: 9,
         };
         assert_eq!(
             rx.on_begin(&begin, 100, false).status,
@@ -1081,8 +1137,8 @@ mod tests {
         );
         assert_eq!(rx.on_begin(&begin, 300, false).next, 0);
         let mut staging = [0u8; 300];
-        let chunk = |offset: u32, d: &'static [u8]| TransferChunk {
-            id: 9,
+        let chunk = |offset: u32, d: &'static [u8]| TransferData {
+            tag: 9,
             offset,
             data: d,
         };
@@ -1113,8 +1169,8 @@ mod tests {
         );
         let a = rx.on_chunk(&chunk(224, &[3; 76]), &mut staging, never);
         assert_eq!(a.status, TransferStatus::Complete);
-        let other = TransferChunk {
-            id: 10,
+        let other = TransferData {
+            tag: 10,
             offset: 0,
             data: &[1],
         };
@@ -1136,9 +1192,10 @@ mod tests {
             id: 7,
             len: 64,
             crc,
+            tag: 7,
         };
-        let chunk = TransferChunk {
-            id: 7,
+        let chunk = TransferData {
+            tag: 7,
             offset: 0,
             data: &data,
         };
@@ -1162,11 +1219,12 @@ mod tests {
         let other = TransferBegin {
             id: 8,
             len: 128,
+            tag: 8,
             ..begin
         };
         rx.on_begin(&other, 128, false);
-        let half = TransferChunk {
-            id: 8,
+        let half = TransferData {
+            tag: 8,
             offset: 0,
             data: &data,
         };
@@ -1199,7 +1257,7 @@ mod tests {
         drop_ack: impl Fn(usize) -> bool,
     ) -> (u32, usize, Sender) {
         let bytes: std::vec::Vec<u8> = (0..len).map(|i| i as u8).collect();
-        let mut s = Sender::for_object(ObjectKind::Map, &bytes).expect("small");
+        let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).expect("small");
         let mut rx = Receiver::new();
         let mut staging = std::vec![0u8; len];
         let mut to_rx: std::collections::VecDeque<ToRx> = Default::default();
@@ -1218,7 +1276,7 @@ mod tests {
             s.poll(now, &bytes, |m| {
                 match m {
                     Message::TransferBegin(_) => to_rx.push_back((now + delay_ms, None)),
-                    Message::TransferChunk(c) => {
+                    Message::TransferData(c) => {
                         n += 1;
                         if !drop(n, c.offset) {
                             to_rx.push_back((now + delay_ms, Some((c.offset, c.data.to_vec()))));
@@ -1233,8 +1291,8 @@ mod tests {
                 let a = match f {
                     None => rx.on_begin(&s.begin(), len, false),
                     Some((offset, data)) => {
-                        let c = TransferChunk {
-                            id: s.begin().id,
+                        let c = TransferData {
+                            tag: s.begin().tag,
                             offset,
                             data: &data,
                         };
@@ -1335,6 +1393,123 @@ mod tests {
             lossy.0 < clean.0 + 150,
             "clean {clean:?}, the last chunk lost once {lossy:?}"
         );
+    }
+
+    /// Issue 15: a round trip was timed on one chunk at a time, and on a lossy line that
+    /// chunk was often lost (or its answer was), so uploads ran on the 400 ms initial timer.
+    /// Now any newly held unit sent once times one: here the first chunk and the tail's
+    /// first copy are lost, and the tail goes again about a round trip later.
+    #[test]
+    fn round_trips_are_timed_from_any_unit_sent_once_so_a_lost_tail_waits_no_400_ms() {
+        let (clean, ..) = run_lossy(1000, 5, |_, _| false, |_| false);
+        // The first copy of every chunk from 768 on is lost: the last one only a probe or
+        // the timer can find.
+        let seen = core::cell::RefCell::new(std::vec::Vec::new());
+        let (lossy, _, s) = run_lossy(
+            1000,
+            5,
+            |n, offset| {
+                let first = !seen.borrow().contains(&offset);
+                seen.borrow_mut().push(offset);
+                n == 1 || (offset >= 768 && first)
+            },
+            |_| false,
+        );
+        assert!(
+            lossy < clean + 150,
+            "clean {clean} ms, first chunk and tail lost {lossy} ms: {:?}",
+            s.stats()
+        );
+    }
+
+    fn begin(tag: u8, len: u32, crc: u32) -> TransferBegin {
+        TransferBegin {
+            object: ObjectKind::Map,
+            id: 0xABCD,
+            len,
+            crc,
+            tag,
+        }
+    }
+
+    /// PROTOCOL.md §8 "Tags": tag 0 names no transfer; a chunk of another tag, a retired
+    /// kind-8 chunk, or any chunk after a handshake and before a Begin is refused, and the
+    /// receiver's state (a partial object kept for resuming) does not change.
+    #[test]
+    fn bad_tags_are_refused_and_change_nothing() {
+        let data = [9u8; 128];
+        let crc = crc32c(&data);
+        let mut staging = [0u8; 128];
+        let mut rx = Receiver::new();
+        let never = |_: Verified<'_>| -> bool { panic!("nothing to install") };
+        let a = rx.on_begin(&begin(NO_TAG, 128, crc), 128, false);
+        assert_eq!((a.tag, a.next, a.status), (0, 0, TransferStatus::Rejected));
+        assert_eq!(rx.progress(), None, "a refused Begin sets nothing up");
+        rx.on_begin(&begin(3, 128, crc), 128, false);
+        let first = TransferData {
+            tag: 3,
+            offset: 0,
+            data: &data[..64],
+        };
+        assert_eq!(rx.on_chunk(&first, &mut staging, never).next, 64);
+        let held = rx;
+        // Another tag, and the reserved one: `UnknownId` with the chunk's tag, nothing kept.
+        for tag in [4, NO_TAG] {
+            let other = TransferData {
+                tag,
+                offset: 64,
+                data: &[0xEE; 64],
+            };
+            let a = rx.on_chunk(&other, &mut staging, never);
+            assert_eq!((a.tag, a.status), (tag, TransferStatus::UnknownId));
+            assert_eq!(rx, held);
+        }
+        assert_eq!(staging[64], 0, "no byte of a stranger's chunk landed");
+        // The retired kind-8 chunk: refused with tag 0.
+        let retired = TransferChunk {
+            id: 0xABCD,
+            offset: 64,
+            data: &data[64..],
+        };
+        let a = refuse_retired_chunk(&retired);
+        assert_eq!((a.tag, a.next, a.status), (0, 0, TransferStatus::Rejected));
+        // A handshake: the same tag no longer names the transfer, but a Begin of this
+        // session resumes it under its new tag.
+        rx.new_session();
+        let rest = TransferData {
+            tag: 3,
+            offset: 64,
+            data: &data[64..],
+        };
+        assert_eq!(
+            rx.on_chunk(&rest, &mut staging, never).status,
+            TransferStatus::UnknownId
+        );
+        assert_eq!(
+            rx.progress().map(|p| p.2),
+            Some(64),
+            "the partial object is kept"
+        );
+        let a = rx.on_begin(&begin(4, 128, crc), 128, false);
+        assert_eq!((a.tag, a.next), (4, 64), "resumed under the new tag");
+        let rest = TransferData { tag: 4, ..rest };
+        let a = rx.on_chunk(&rest, &mut staging, |v| v.bytes == data);
+        assert_eq!(a.status, TransferStatus::Complete);
+    }
+
+    /// Answers name the transfer by its tag: a sender ignores another transfer's, even one
+    /// that would complete it.
+    #[test]
+    fn a_sender_ignores_answers_with_another_tag() {
+        let bytes = [1u8; 64];
+        let mut s = Sender::for_object(ObjectKind::Map, &bytes, 9).expect("small");
+        assert_eq!(s.begin().tag, 9);
+        s.on_ack(&ack(8, 64, TransferStatus::Complete), 1);
+        assert_eq!(s.outcome(), None);
+        s.on_ack(&ack(9, 64, TransferStatus::Complete), 2);
+        assert_eq!(s.outcome(), Some(Outcome::Complete));
+        assert_eq!(next_tag(255), 1, "tag 0 is never used");
+        assert_eq!(next_tag(NO_TAG), 1);
     }
 
     #[test]

@@ -143,7 +143,12 @@ fn the_largest_messages_fit_one_256_byte_frame() {
         failsafe_ms: u16::MAX,
         robot_id: u8::MAX,
     });
-    for m in [chunk, log, reply] {
+    let data_chunk = Message::TransferData(TransferData {
+        tag: u8::MAX,
+        offset: u32::MAX,
+        data: &data,
+    });
+    for m in [chunk, data_chunk, log, reply] {
         let mut buf = [0u8; MAX_FRAME];
         let n = encode(1, &m, &mut buf).unwrap_or_else(|e| panic!("{:?}: {e}", m.kind()));
         assert!(n <= MAX_FRAME);
@@ -164,6 +169,51 @@ fn an_oversized_payload_is_refused_by_the_encoder() {
     assert_eq!(
         encode(0, &Message::Heartbeat(Heartbeat { time_ms: 1 }), &mut small),
         Err(EncodeError::OutputTooSmall)
+    );
+}
+
+/// PROTOCOL.md §6 kind 17: a chunk costs 13 bytes besides its data at an offset past 127
+/// (COBS 1, delimiter 1, header 4, CRC 4, tag 1, offset 2): the 5-byte id and the 2-byte
+/// length of the retired kind-8 chunk made it 19, and capped a clean line's map upload at
+/// 88 % of the line rate (issue 15).
+#[test]
+fn a_transfer_data_chunk_costs_13_bytes_besides_its_data_and_its_length_comes_from_the_frame() {
+    let data = [0x5A; MAX_CHUNK];
+    let m = Message::TransferData(TransferData {
+        tag: 7,
+        offset: 896,
+        data: &data,
+    });
+    let mut buf = [0u8; MAX_FRAME];
+    let n = encode(300, &m, &mut buf).expect("fits");
+    assert_eq!(n - MAX_CHUNK, 13);
+    let mut dec = FrameDecoder::new();
+    let mut got = None;
+    if let Feed::Frame { frame, .. } = dec.feed(&buf[..n]) {
+        got = Some(frame.message == m);
+    }
+    assert_eq!(got, Some(true), "decodes to itself");
+    // One byte past the largest chunk: refused both ways, never truncated or misread.
+    let long = [1u8; MAX_CHUNK + 1];
+    let too_long = Message::TransferData(TransferData {
+        tag: 7,
+        offset: 0,
+        data: &long,
+    });
+    assert!(matches!(
+        encode(1, &too_long, &mut buf),
+        Err(EncodeError::FieldTooLong { .. })
+    ));
+    let mut payload = vec![7u8, 0];
+    payload.extend_from_slice(&long);
+    assert!(matches!(
+        protocol::frame::decode_payload(Kind::TransferData, &payload),
+        Err(PayloadError::FieldTooLong { .. })
+    ));
+    // A payload that ends inside the offset is truncated, not a chunk.
+    assert_eq!(
+        protocol::frame::decode_payload(Kind::TransferData, &[7, 0x80]),
+        Err(PayloadError::Truncated)
     );
 }
 

@@ -206,10 +206,10 @@ fn signing_costs_13_bytes_and_the_budget_still_fits_every_frame_the_link_sends()
     assert_eq!((n_plain, signed.len()), (76, 89));
     assert_eq!(MAX_SIGNED_PAYLOAD, 233);
     // The widest transfer chunk of an object under 16 KB (the robot's largest is 3124 bytes):
-    // id 5 bytes, offset 2, length 2, data 224.
+    // tag 1 byte, offset 2, data 224.
     let data = [0xa5u8; MAX_CHUNK];
-    let chunk = Message::TransferChunk(TransferChunk {
-        id: u32::MAX,
+    let chunk = Message::TransferData(TransferData {
+        tag: u8::MAX,
         offset: 16_383,
         data: &data,
     });

@@ -11,7 +11,7 @@ use protocol::*;
 #[derive(Clone, Debug)]
 enum Wire {
     Begin(TransferBegin),
-    Chunk { id: u32, offset: u32, data: Vec<u8> },
+    Chunk { tag: u8, offset: u32, data: Vec<u8> },
     Ack(TransferAck),
 }
 
@@ -97,8 +97,8 @@ impl Channel {
 fn to_wire(m: &Message<'_>) -> Wire {
     match m {
         Message::TransferBegin(b) => Wire::Begin(*b),
-        Message::TransferChunk(c) => Wire::Chunk {
-            id: c.id,
+        Message::TransferData(c) => Wire::Chunk {
+            tag: c.tag,
             offset: c.offset,
             data: c.data.to_vec(),
         },
@@ -135,9 +135,9 @@ impl Station {
                     .is_some_and(|(id, crc, _)| (*id, *crc) == (b.id, b.crc));
                 Some(Wire::Ack(self.rx.on_begin(&b, self.staging.len(), have)))
             }
-            Wire::Chunk { id, offset, data } => {
-                let c = TransferChunk {
-                    id,
+            Wire::Chunk { tag, offset, data } => {
+                let c = TransferData {
+                    tag,
                     offset,
                     data: &data,
                 };
@@ -170,7 +170,7 @@ fn run(
     let mut t = start_ms;
     while !sender.is_done() && t < start_ms + limit_ms {
         sender.poll(t, bytes, |m| {
-            if let Message::TransferChunk(c) = m {
+            if let Message::TransferData(c) = m {
                 chunk_bytes += c.data.len();
             }
             down.push(t, to_wire(m));
@@ -201,7 +201,7 @@ fn object(len: usize, seed: u32) -> Vec<u8> {
 fn check_one(len: usize, seed: u32, down: Faults, up: Faults, wrong_crc: bool) -> Outcome {
     let bytes = object(len, seed);
     let crc = crc32c(&bytes) ^ u32::from(wrong_crc);
-    let mut sender = Sender::new(ObjectKind::Map, crc32c(&bytes), len as u32, crc);
+    let mut sender = Sender::new(ObjectKind::Map, crc32c(&bytes), len as u32, crc, 1);
     let mut station = Station::new(4096);
     let old = (1, 2, vec![9u8; 7]);
     station.installed = Some(old.clone());
@@ -268,10 +268,10 @@ proptest! {
         let mut station = Station::new(4096);
         let mut d = Channel::new(down, seed);
         let mut u = Channel::new(up, !seed);
-        let mut first = Sender::for_object(ObjectKind::Plan, &bytes).unwrap();
+        let mut first = Sender::for_object(ObjectKind::Plan, &bytes, 1).unwrap();
         let (t, _) = run(&mut first, &bytes, &mut station, &mut d, &mut u, 0, cut_ms);
         // The first sender is torn down; its frames still in flight arrive late.
-        let mut second = Sender::for_object(ObjectKind::Plan, &bytes).unwrap();
+        let mut second = Sender::for_object(ObjectKind::Plan, &bytes, 2).unwrap();
         run(&mut second, &bytes, &mut station, &mut d, &mut u, t, 600_000);
         let outcome = second.outcome().expect("ends");
         if let Some((_, _, got)) = &station.installed {
@@ -305,7 +305,7 @@ fn a_restarted_sender_sends_only_the_missing_bytes() {
     let bytes = object(2000, 3);
     let mut station = Station::new(4096);
     let (mut d, mut u) = (Channel::new(CLEAN, 1), Channel::new(CLEAN, 2));
-    let mut first = Sender::for_object(ObjectKind::Map, &bytes).unwrap();
+    let mut first = Sender::for_object(ObjectKind::Map, &bytes, 1).unwrap();
     let mut t = 0;
     while station
         .rx
@@ -324,7 +324,7 @@ fn a_restarted_sender_sends_only_the_missing_bytes() {
     }
     let held = station.rx.progress().unwrap().2;
     assert!((1000..2000).contains(&held));
-    let mut second = Sender::for_object(ObjectKind::Map, &bytes).unwrap();
+    let mut second = Sender::for_object(ObjectKind::Map, &bytes, 2).unwrap();
     let (_, sent) = run(&mut second, &bytes, &mut station, &mut d, &mut u, t, 10_000);
     assert_eq!(second.outcome(), Some(Outcome::Complete));
     // Only the missing bytes travel again, besides what went behind the Begin before its
@@ -342,10 +342,10 @@ fn an_object_the_receiver_holds_is_not_sent_again() {
     let bytes = object(1500, 4);
     let mut station = Station::new(4096);
     let (mut d, mut u) = (Channel::new(CLEAN, 1), Channel::new(CLEAN, 2));
-    let mut s = Sender::for_object(ObjectKind::Map, &bytes).unwrap();
+    let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).unwrap();
     run(&mut s, &bytes, &mut station, &mut d, &mut u, 0, 10_000);
     assert_eq!(s.outcome(), Some(Outcome::Complete));
-    let mut again = Sender::for_object(ObjectKind::Map, &bytes).unwrap();
+    let mut again = Sender::for_object(ObjectKind::Map, &bytes, 2).unwrap();
     let (_, sent) = run(
         &mut again,
         &bytes,
@@ -368,15 +368,15 @@ fn a_receiver_that_refuses_or_forgets_is_reported() {
     let bytes = object(5000, 5);
     let mut station = Station::new(4096);
     let (mut d, mut u) = (Channel::new(CLEAN, 1), Channel::new(CLEAN, 2));
-    let mut s = Sender::for_object(ObjectKind::Map, &bytes).unwrap();
+    let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).unwrap();
     run(&mut s, &bytes, &mut station, &mut d, &mut u, 0, 10_000);
     assert_eq!(s.outcome(), Some(Outcome::Rejected), "5000 bytes > 4096");
     assert!(station.installed.is_none());
 
     // A receiver that answers every chunk UnknownId (it keeps losing the transfer).
     let bytes = object(500, 6);
-    let mut s = Sender::for_object(ObjectKind::Map, &bytes).unwrap();
-    let id = s.begin().id;
+    let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).unwrap();
+    let tag = s.begin().tag;
     let mut t = 0;
     while !s.is_done() && t < 100_000 {
         let mut began = false;
@@ -391,7 +391,7 @@ fn a_receiver_that_refuses_or_forgets_is_reported() {
         };
         s.on_ack(
             &TransferAck {
-                id,
+                tag,
                 next: 0,
                 status,
                 sack: 0,
@@ -402,7 +402,7 @@ fn a_receiver_that_refuses_or_forgets_is_reported() {
     }
     assert_eq!(s.outcome(), Some(Outcome::UnknownId));
     // Bytes that no longer match the announced length end the transfer at once.
-    let mut s = Sender::for_object(ObjectKind::Map, &bytes).unwrap();
+    let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).unwrap();
     s.poll(0, &bytes[..10], |_| true);
     assert_eq!(s.outcome(), Some(Outcome::ObjectChanged));
 }

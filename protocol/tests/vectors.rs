@@ -157,13 +157,14 @@ fn vectors() -> Vec<(&'static str, u16, Message<'static>)> {
                 id: 0x1234_5678,
                 len: 293,
                 crc: 0x1234_5678,
+                tag: 5,
             }),
         ),
         (
             "transfer-chunk",
             45,
-            Message::TransferChunk(TransferChunk {
-                id: 0x1234_5678,
+            Message::TransferData(TransferData {
+                tag: 5,
                 offset: 224,
                 data: &[0, 1, 2, 0, 255],
             }),
@@ -172,7 +173,7 @@ fn vectors() -> Vec<(&'static str, u16, Message<'static>)> {
             "transfer-ack",
             46,
             Message::TransferAck(TransferAck {
-                id: 0x1234_5678,
+                tag: 5,
                 next: 64,
                 status: TransferStatus::Receiving,
                 sack: 0b1011,

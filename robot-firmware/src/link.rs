@@ -308,6 +308,7 @@ impl Link {
                 }
                 m @ (Message::TransferBegin(_)
                 | Message::TransferChunk(_)
+                | Message::TransferData(_)
                 | Message::TransferAck(_))
                     if st.session.is_some() =>
                 {

@@ -495,6 +495,7 @@ impl<K: Kit> Core<K> {
                 // The new session's station asks again for what it wants; a partial upload
                 // is kept so that it can resume.
                 self.objects.abort_download();
+                self.objects.new_session();
                 Response::Nothing
             }
             Inbound::Command { command, .. } => Response::Reply(self.apply(command, now_ms)),
@@ -508,7 +509,7 @@ impl<K: Kit> Core<K> {
             Message::TransferBegin(b) => {
                 let ack = match self.upload_refusal(b.object) {
                     Some(status) => TransferAck {
-                        id: b.id,
+                        tag: b.tag,
                         next: 0,
                         status,
                         sack: 0,
@@ -519,21 +520,24 @@ impl<K: Kit> Core<K> {
             }
             // A calibration begun before `Mode::CalibrateLight` must not land in the middle of
             // one: the chunk is refused and the partial upload kept for later.
-            Message::TransferChunk(c)
+            Message::TransferData(c)
                 if let Some(status) = self
                     .objects
-                    .upload_progress()
-                    .filter(|(_, id, ..)| *id == c.id)
-                    .and_then(|(o, ..)| self.upload_refusal(o)) =>
+                    .uploading(c.tag)
+                    .and_then(|o| self.upload_refusal(o)) =>
             {
                 Response::Send(Message::TransferAck(TransferAck {
-                    id: c.id,
+                    tag: c.tag,
                     next: 0,
                     status,
                     sack: 0,
                 }))
             }
-            Message::TransferChunk(c) => {
+            // Protocol 1's chunk, named by id: refused, nothing changed (PROTOCOL.md §8).
+            Message::TransferChunk(c) => Response::Send(Message::TransferAck(
+                protocol::transfer::refuse_retired_chunk(c),
+            )),
+            Message::TransferData(c) => {
                 let (ack, installed) = self.objects.on_chunk(c, self.light_cal.get_mut());
                 if let Some(i) = installed {
                     self.installed(i);

@@ -27,7 +27,7 @@ use protocol::object::{
 use protocol::transfer::{Outcome, Receiver, Sender, Verified};
 use protocol::{
     crc32c, AckInfo, Message, NackReason, ObjectKind, PointMm, TransferAck, TransferBegin,
-    TransferChunk,
+    TransferData,
 };
 
 use crate::nav::{
@@ -88,6 +88,8 @@ pub struct Objects {
     out: [u8; OBJECT_CAPACITY],
     tx: Option<Sender>,
     last_download: Option<Outcome>,
+    /// The tag of the last download's `TransferBegin`: the next one uses the one after.
+    last_tag: u8,
 }
 
 impl Default for Objects {
@@ -112,6 +114,7 @@ impl Objects {
             out: [0; OBJECT_CAPACITY],
             tx: None,
             last_download: None,
+            last_tag: protocol::transfer::NO_TAG,
         }
     }
 
@@ -333,7 +336,8 @@ impl Objects {
         };
         let crc = crc32c(self.out.get(..n).unwrap_or(&[]));
         let len = u32::try_from(n).map_err(|_| NackReason::CapacityExceeded)?;
-        self.tx = Some(Sender::new(object, id, len, crc));
+        self.last_tag = protocol::transfer::next_tag(self.last_tag);
+        self.tx = Some(Sender::new(object, id, len, crc, self.last_tag));
         Ok(AckInfo::Object {
             object,
             id,
@@ -373,6 +377,17 @@ impl Objects {
         self.tx = None;
     }
 
+    /// A new session: an upload's partial object is kept for resuming, but only a Begin of
+    /// this session names it again (PROTOCOL.md §8 "Tags").
+    pub fn new_session(&mut self) {
+        self.rx.new_session();
+    }
+
+    /// The object of the upload in progress under `tag`.
+    pub fn uploading(&self, tag: u8) -> Option<ObjectKind> {
+        self.rx.receiving(tag)
+    }
+
     /// Answers an upload's `TransferBegin`. The robot takes maps up to 64 x 64, plans and
     /// light calibrations; it computes regions itself and refuses them.
     pub fn on_begin(&mut self, b: &TransferBegin) -> TransferAck {
@@ -393,11 +408,11 @@ impl Objects {
         self.rx.on_begin(b, limit, have)
     }
 
-    /// Answers an upload's `TransferChunk`; installs the object when it is whole and verified
+    /// Answers an upload's `TransferData`; installs the object when it is whole and verified
     /// (a light calibration into `light`).
     pub fn on_chunk(
         &mut self,
-        c: &TransferChunk<'_>,
+        c: &TransferData<'_>,
         mut light: Option<&mut LightCalibration>,
     ) -> (TransferAck, Option<Installed>) {
         let mut installed = None;

@@ -78,7 +78,7 @@ fn the_same_map_uploaded_again_is_already_held_and_nothing_more_is_sent() {
     let (_, map, _, _) = micro_rato_map();
     let mut st = Station::new(&KHEPERA);
     assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
-    let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &map).unwrap(), &map);
+    let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &map, 1).unwrap(), &map);
     assert_eq!(outcome, Outcome::AlreadyHave);
     // Only what went behind the Begin before its answer (PROTOCOL.md §8), never the object.
     assert!(
@@ -102,7 +102,7 @@ fn an_interrupted_upload_resumes_from_the_robots_next() {
     bytes.truncate(n);
     let mut st = Station::new(&MICRO_RATO);
     assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
-    let mut first = Sender::for_object(ObjectKind::Map, &bytes).unwrap();
+    let mut first = Sender::for_object(ObjectKind::Map, &bytes, 1).unwrap();
     // Two chunks (448 bytes) get through, then the line takes no more: the scripted line
     // delivers at once, so without a limit the whole window would land in one millisecond.
     let mut chunks = 0;
@@ -111,7 +111,7 @@ fn an_interrupted_upload_resumes_from_the_robots_next() {
             break;
         }
         first.poll(st.now_ms(), &bytes, |m| {
-            if matches!(m, Message::TransferChunk(_)) {
+            if matches!(m, Message::TransferData(_)) {
                 if chunks == 2 {
                     return false;
                 }
@@ -131,7 +131,10 @@ fn an_interrupted_upload_resumes_from_the_robots_next() {
     st.run(100);
     assert_eq!(st.map_bytes(), map);
     let held = st.robot.objects().upload_progress().unwrap().2;
-    let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &bytes).unwrap(), &bytes);
+    let (outcome, sent) = st.upload(
+        Sender::for_object(ObjectKind::Map, &bytes, 1).unwrap(),
+        &bytes,
+    );
     assert_eq!(outcome, Outcome::Complete);
     // Only the missing bytes, besides what went behind the Begin before its answer named the
     // resume offset (PROTOCOL.md §8).
@@ -152,7 +155,7 @@ fn a_corrupted_object_is_a_crc_mismatch_and_the_old_map_stays() {
     other[40] ^= 0x01;
     // The bytes changed after their CRC was taken (id and CRC of the original).
     let id = crc32c(&map) ^ 1;
-    let sender = Sender::new(ObjectKind::Map, id, other.len() as u32, crc32c(&map));
+    let sender = Sender::new(ObjectKind::Map, id, other.len() as u32, crc32c(&map), 2);
     assert_eq!(st.upload(sender, &other).0, Outcome::CrcMismatch);
     assert_eq!(st.map_bytes(), map);
     // A well-formed CRC over a malformed object (reserved cell code 3) is refused too.
@@ -166,14 +169,17 @@ fn a_corrupted_object_is_a_crc_mismatch_and_the_old_map_stays() {
 fn oversize_objects_and_uploaded_regions_are_rejected_at_the_begin() {
     let mut st = Station::new(&MICRO_RATO);
     let huge = vec![0u8; MAP_OBJECT_MAX + 1];
-    let (outcome, sent) = st.upload(Sender::for_object(ObjectKind::Map, &huge).unwrap(), &huge);
+    let (outcome, sent) = st.upload(
+        Sender::for_object(ObjectKind::Map, &huge, 1).unwrap(),
+        &huge,
+    );
     // Refused by the Begin's answer: at most what went behind the Begin, and nothing held.
     assert_eq!(outcome, Outcome::Rejected);
     assert!(sent <= EAGER_MAX, "{sent} bytes of a refused object sent");
     assert!(!st.robot.objects().has_map());
     let small = [1u8, 2, 0, 0];
     let (outcome, sent) = st.upload(
-        Sender::for_object(ObjectKind::Regions, &small).unwrap(),
+        Sender::for_object(ObjectKind::Regions, &small, 1).unwrap(),
         &small,
     );
     assert_eq!(outcome, Outcome::Rejected);
@@ -188,10 +194,10 @@ fn oversize_objects_and_uploaded_regions_are_rejected_at_the_begin() {
 }
 
 #[test]
-fn chunks_with_an_unknown_id_are_answered_unknown_id() {
+fn chunks_with_an_unknown_tag_are_answered_unknown_id() {
     let mut st = Station::new(&KHEPERA);
-    st.send(&Message::TransferChunk(TransferChunk {
-        id: 0xdead_beef,
+    st.send(&Message::TransferData(TransferData {
+        tag: 0xbe,
         offset: 0,
         data: &[1, 2, 3],
     }));
@@ -199,12 +205,130 @@ fn chunks_with_an_unknown_id_are_answered_unknown_id() {
     assert_eq!(
         st.inbox.pop_front(),
         Some(In::TAck(TransferAck {
-            id: 0xdead_beef,
+            tag: 0xbe,
             next: 0,
             status: TransferStatus::UnknownId,
             sack: 0,
         }))
     );
+}
+
+/// A 64 x 64 map object of mixed cells: 1060 bytes.
+fn big_map() -> Vec<u8> {
+    let mut big = Grid::new(64, 64, Geometry::SEED_004, vec![0; grid_bytes(64, 64)]).unwrap();
+    for i in 0..64 * 64 {
+        let c = [Cell::Free, Cell::Obstacle, Cell::Unknown][i % 7 % 3];
+        big.set(i % 64, i / 64, c).unwrap();
+    }
+    let mut bytes = vec![0; MAP_OBJECT_MAX];
+    let n = encode_map_object(&big, None, None, &mut bytes).unwrap();
+    bytes.truncate(n);
+    bytes
+}
+
+/// Sends `bytes` as a Map upload under `tag` up to (not including) byte `upto`, in 64-byte
+/// chunks on a clean line; returns the answers' last `next`.
+fn upload_part(st: &mut Station, tag: u8, bytes: &[u8], upto: usize) -> u32 {
+    let crc = crc32c(bytes);
+    st.send(&Message::TransferBegin(TransferBegin {
+        object: ObjectKind::Map,
+        id: crc,
+        len: bytes.len() as u32,
+        crc,
+        tag,
+    }));
+    for offset in (0..upto).step_by(64) {
+        st.send(&Message::TransferData(TransferData {
+            tag,
+            offset: offset as u32,
+            data: &bytes[offset..(offset + 64).min(upto)],
+        }));
+    }
+    st.run(5);
+    let mut next = 0;
+    while let Some(item) = st.inbox.pop_front() {
+        if let In::TAck(a) = item {
+            next = a.next;
+        }
+    }
+    next
+}
+
+/// PROTOCOL.md §8: protocol 1's chunk (kind 8, named by id) is refused with tag 0, and the
+/// upload in progress, its bytes and the map in use are as they were.
+#[test]
+fn a_retired_kind_8_chunk_is_refused_and_changes_nothing() {
+    let map = big_map();
+    let mut st = Station::new(&MICRO_RATO);
+    assert_eq!(upload_part(&mut st, 3, &map, 256), 256);
+    let before = st.robot.objects().upload_progress();
+    st.send(&Message::TransferChunk(TransferChunk {
+        id: crc32c(&map),
+        offset: 256,
+        data: &map[256..480],
+    }));
+    st.run(5);
+    assert_eq!(
+        st.inbox.pop_front(),
+        Some(In::TAck(TransferAck {
+            tag: 0,
+            next: 0,
+            status: TransferStatus::Rejected,
+            sack: 0,
+        }))
+    );
+    assert_eq!(st.robot.objects().upload_progress(), before);
+    assert!(!st.robot.objects().has_map());
+    // The transfer goes on under its tag.
+    assert_eq!(
+        upload_part(&mut st, 3, &map, map.len()),
+        map.len() as u32,
+        "resumed and completed"
+    );
+    assert_eq!(st.map_bytes(), map);
+}
+
+/// PROTOCOL.md §8 "Tags": after a handshake a chunk under the old session's tag lands
+/// nowhere (`UnknownId`); a Begin of the new session resumes the bytes held.
+#[test]
+fn a_new_session_forgets_the_tag_and_a_new_begin_resumes() {
+    let map = big_map();
+    let mut st = Station::new(&MICRO_RATO);
+    assert_eq!(upload_part(&mut st, 3, &map, 320), 320);
+    st.handshake(8);
+    st.inbox.clear();
+    st.send(&Message::TransferData(TransferData {
+        tag: 3,
+        offset: 320,
+        data: &map[320..384],
+    }));
+    st.run(5);
+    let a = st.inbox.iter().find_map(|i| match i {
+        In::TAck(a) => Some(*a),
+        _ => None,
+    });
+    assert_eq!(
+        a.map(|a| (a.tag, a.status)),
+        Some((3, TransferStatus::UnknownId))
+    );
+    assert_eq!(st.robot.objects().upload_progress().map(|p| p.2), Some(320));
+    st.inbox.clear();
+    assert_eq!(
+        upload_part(&mut st, 4, &map, 0),
+        320,
+        "the new Begin resumes at 320"
+    );
+    let crc = crc32c(&map);
+    for offset in (320..map.len()).step_by(64) {
+        st.send(&Message::TransferData(TransferData {
+            tag: 4,
+            offset: offset as u32,
+            data: &map[offset..(offset + 64).min(map.len())],
+        }));
+    }
+    st.run(5);
+    assert_eq!(st.map_bytes(), map);
+    assert_eq!(crc32c(&st.map_bytes()), crc);
 }
 
 #[test]

@@ -111,7 +111,7 @@ fn serve_download(app: &mut App, now: &mut u64, bytes: &[u8]) {
     let Command::Download { object, .. } = command else {
         unreachable!()
     };
-    let mut s = Sender::for_object(object, bytes).unwrap();
+    let mut s = Sender::for_object(object, bytes, 1).unwrap();
     let b = s.begin();
     let info = AckInfo::Object {
         object,
@@ -134,8 +134,8 @@ fn serve_download(app: &mut App, now: &mut u64, bytes: &[u8]) {
         s.poll(*now as u32, bytes, |m| {
             frames.push(match *m {
                 Message::TransferBegin(b) => TransferIn::Begin(b),
-                Message::TransferChunk(c) => TransferIn::Chunk {
-                    id: c.id,
+                Message::TransferData(c) => TransferIn::Chunk {
+                    tag: c.tag,
                     offset: c.offset,
                     data: c.data.to_vec(),
                 },

@@ -413,7 +413,7 @@ fn a_corrupted_recording_is_refused_with_its_offset_and_nothing_is_written() {
 /// the micro-rato's missing sensors are null.
 #[test]
 fn mcap_export_carries_the_scene_for_the_3d_panel() {
-    use protocol::{caps, Message, ObjectKind, ProfileId, TransferBegin, TransferChunk};
+    use protocol::{caps, Message, ObjectKind, ProfileId, TransferBegin, TransferData};
     use station::plan::{MapOptions, NavMap, Planner};
     use station::record::synth::{demo_peer, telemetry, Synth};
     use station::record::Meta;
@@ -457,18 +457,20 @@ fn mcap_export_carries_the_scene_for_the_3d_panel() {
     // Sends `bytes` as `object` in 100-byte chunks, the second one lost and sent last.
     let send = |s: &mut Synth, t: &mut u64, object, bytes: &[u8], from_robot: bool| {
         let id = protocol::crc32c(bytes);
+        let tag = 1 + bytes.len() as u8;
         let begin = Message::TransferBegin(TransferBegin {
             object,
             id,
             len: bytes.len() as u32,
             crc: id,
+            tag,
         });
         let mut frames = vec![begin];
         let chunks: Vec<(usize, &[u8])> = bytes.chunks(100).enumerate().collect();
         let order = (0..chunks.len()).filter(|&i| i != 1).chain([1]);
         for i in order {
-            frames.push(Message::TransferChunk(TransferChunk {
-                id,
+            frames.push(Message::TransferData(TransferData {
+                tag,
                 offset: (chunks[i].0 * 100) as u32,
                 data: chunks[i].1,
             }));

@@ -2,7 +2,7 @@
 //! to a recorded download (one `TransferAck` per chunk) are dropped, like its commands.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use protocol::{Message, TransferChunk, PROTOCOL_VERSION};
+use protocol::{Message, TransferData, PROTOCOL_VERSION};
 use station::app::AppOptions;
 use station::record::synth::{demo_peer, Synth};
 use station::record::{Meta, Recording};
@@ -22,8 +22,8 @@ fn downloading(chunks: u32) -> Recording {
     for i in 0..chunks {
         s.from_robot(
             10_000 + u64::from(i) * 100_000,
-            &Message::TransferChunk(TransferChunk {
-                id: 42,
+            &Message::TransferData(TransferData {
+                tag: 42,
                 offset: i * 64,
                 data: &data,
             }),

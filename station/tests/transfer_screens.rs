@@ -109,7 +109,7 @@ fn serve_download(app: &mut App, now: &mut u64, bytes: &[u8]) -> usize {
     let Command::Download { object, .. } = command else {
         unreachable!()
     };
-    let mut s = Sender::for_object(object, bytes).unwrap();
+    let mut s = Sender::for_object(object, bytes, 1).unwrap();
     let b = s.begin();
     let info = AckInfo::Object {
         object,
@@ -160,8 +160,8 @@ impl IntoIn for Message<'_> {
     fn into_owned_in(self) -> TransferIn {
         match self {
             Message::TransferBegin(b) => TransferIn::Begin(b),
-            Message::TransferChunk(c) => TransferIn::Chunk {
-                id: c.id,
+            Message::TransferData(c) => TransferIn::Chunk {
+                tag: c.tag,
                 offset: c.offset,
                 data: c.data.to_vec(),
             },
@@ -252,15 +252,15 @@ fn keys_upload_plan_on_the_robot_and_execute_its_plan() {
     })));
     // The upload is still the running job; the plan's download waits its turn. End the
     // upload as a robot would (already held), then serve the plan.
-    let id = frames
+    let tag = frames
         .iter()
         .find_map(|f| match f {
-            TransferOut::Begin(b) => Some(b.id),
+            TransferOut::Begin(b) => Some(b.tag),
             _ => None,
         })
         .unwrap();
     let held = protocol::TransferAck {
-        id,
+        tag,
         next: 0,
         status: protocol::TransferStatus::AlreadyHave,
         sack: 0,

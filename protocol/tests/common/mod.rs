@@ -19,8 +19,15 @@ pub enum OwnedMsg {
         firmware: String,
         version: String,
     },
+    /// The retired kind-8 chunk (still decoded).
     Chunk {
         id: u32,
+        offset: u32,
+        data: Vec<u8>,
+    },
+    /// A `TransferData` chunk (kind 17).
+    Data {
+        tag: u8,
         offset: u32,
         data: Vec<u8>,
     },
@@ -80,6 +87,11 @@ impl OwnedMsg {
             }),
             OwnedMsg::Chunk { id, offset, data } => Message::TransferChunk(TransferChunk {
                 id: *id,
+                offset: *offset,
+                data,
+            }),
+            OwnedMsg::Data { tag, offset, data } => Message::TransferData(TransferData {
+                tag: *tag,
                 offset: *offset,
                 data,
             }),
@@ -354,24 +366,38 @@ pub fn any_message() -> impl Strategy<Value = OwnedMsg> {
             .prop_map(|(cmd_seq, info)| OwnedMsg::Plain(Message::Ack(Ack { cmd_seq, info }))),
         (any::<u16>(), nack_reason())
             .prop_map(|(cmd_seq, reason)| OwnedMsg::Plain(Message::Nack(Nack { cmd_seq, reason }))),
-        (object(), any::<u32>(), any::<u32>(), any::<u32>()).prop_map(|(object, id, len, crc)| {
-            OwnedMsg::Plain(Message::TransferBegin(TransferBegin {
-                object,
-                id,
-                len,
-                crc,
-            }))
-        }),
+        (
+            object(),
+            any::<u32>(),
+            any::<u32>(),
+            any::<u32>(),
+            any::<u8>()
+        )
+            .prop_map(|(object, id, len, crc, tag)| {
+                OwnedMsg::Plain(Message::TransferBegin(TransferBegin {
+                    object,
+                    id,
+                    len,
+                    crc,
+                    tag,
+                }))
+            }),
         (
             any::<u32>(),
             any::<u32>(),
             proptest::collection::vec(any::<u8>(), 0..=MAX_CHUNK)
         )
             .prop_map(|(id, offset, data)| OwnedMsg::Chunk { id, offset, data }),
-        (any::<u32>(), any::<u32>(), transfer_status(), any::<u32>()).prop_map(
-            |(id, next, status, sack)| {
+        (
+            any::<u8>(),
+            any::<u32>(),
+            proptest::collection::vec(any::<u8>(), 0..=MAX_CHUNK)
+        )
+            .prop_map(|(tag, offset, data)| OwnedMsg::Data { tag, offset, data }),
+        (any::<u8>(), any::<u32>(), transfer_status(), any::<u32>()).prop_map(
+            |(tag, next, status, sack)| {
                 OwnedMsg::Plain(Message::TransferAck(TransferAck {
-                    id,
+                    tag,
                     next,
                     status,
                     sack,

@@ -144,7 +144,8 @@ pub enum In {
     Ack(u16, AckInfo),
     Nack(u16, NackReason),
     Begin(TransferBegin),
-    Chunk(u32, u32, Vec<u8>),
+    /// A `TransferData` chunk: tag, offset, data.
+    Chunk(u8, u32, Vec<u8>),
     TAck(TransferAck),
 }
 
@@ -162,6 +163,8 @@ pub struct Station {
     pub last_tx_ms: u64,
     /// Frames the lossy line ate, both ways.
     pub lost: usize,
+    /// The last upload's tag.
+    pub tag: u8,
 }
 
 impl Station {
@@ -190,16 +193,23 @@ impl Station {
             telemetry: None,
             last_tx_ms: 0,
             lost: 0,
+            tag: 0,
         };
-        s.send(&Message::Hello(Hello {
+        s.handshake(7);
+        s
+    }
+
+    /// A handshake with session nonce `session` (a new session when it differs from the
+    /// last one).
+    pub fn handshake(&mut self, session: u32) {
+        self.send(&Message::Hello(Hello {
             fingerprint: FINGERPRINT,
             protocol: PROTOCOL_VERSION,
-            session: 7,
+            session,
             station: "test",
         }));
-        s.run(5);
-        assert!(s.robot.link().connected());
-        s
+        self.run(5);
+        assert!(self.robot.link().connected());
     }
 
     pub fn now_ms(&self) -> u32 {
@@ -263,7 +273,7 @@ impl Station {
                 Message::Ack(a) => In::Ack(a.cmd_seq, a.info),
                 Message::Nack(n) => In::Nack(n.cmd_seq, n.reason),
                 Message::TransferBegin(b) => In::Begin(b),
-                Message::TransferChunk(c) => In::Chunk(c.id, c.offset, c.data.to_vec()),
+                Message::TransferData(c) => In::Chunk(c.tag, c.offset, c.data.to_vec()),
                 Message::TransferAck(a) => In::TAck(a),
                 Message::Event(e) => {
                     self.events.push(e);
@@ -309,7 +319,7 @@ impl Station {
         for _ in 0..60_000 {
             let now = self.now_ms();
             sender.poll(now, bytes, |m| {
-                if let Message::TransferChunk(c) = m {
+                if let Message::TransferData(c) = m {
                     sent += c.data.len();
                 }
                 self.send(m);
@@ -329,7 +339,10 @@ impl Station {
     }
 
     pub fn upload_object(&mut self, object: ObjectKind, bytes: &[u8]) -> Outcome {
-        self.upload(Sender::for_object(object, bytes).unwrap(), bytes)
+        // A new transfer gets the tag after the last one's (PROTOCOL.md §8): a reused tag's
+        // eager chunk, its Begin lost, would be answered the last transfer's `Complete`.
+        self.tag = protocol::transfer::next_tag(self.tag);
+        self.upload(Sender::for_object(object, bytes, self.tag).unwrap(), bytes)
             .0
     }
 
@@ -347,9 +360,9 @@ impl Station {
             while let Some(item) = self.inbox.pop_front() {
                 let ack = match item {
                     In::Begin(b) => rx.on_begin(&b, staging.len(), false),
-                    In::Chunk(id, offset, data) => {
-                        let c = TransferChunk {
-                            id,
+                    In::Chunk(tag, offset, data) => {
+                        let c = TransferData {
+                            tag,
                             offset,
                             data: &data,
                         };

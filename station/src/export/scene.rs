@@ -57,6 +57,9 @@ pub struct Scene {
     arena: Option<Value>,
     caps: Option<u32>,
     partial: BTreeMap<u32, Partial>,
+    /// The object id each direction's latest `TransferBegin` tagged: `TransferData` names
+    /// its transfer by that tag (PROTOCOL.md §8), [from the robot, to the robot].
+    tagged: [Option<(u8, u32)>; 2],
     placement: Option<Placement>,
 }
 
@@ -115,9 +118,16 @@ impl Scene {
                     Body::Transform(FrameTransform::from_map("truth", &t.pose)),
                 ));
             }
-            (_, Message::TransferBegin(b)) => self.begin(b.id, b.object, b.len, b.crc),
-            (_, Message::TransferChunk(c)) => {
-                if let Some(bytes) = self.chunk(c.id, c.offset, c.data) {
+            (d, Message::TransferBegin(b)) => {
+                self.tagged[usize::from(*d == Direction::ToRobot)] = Some((b.tag, b.id));
+                self.begin(b.id, b.object, b.len, b.crc);
+            }
+            (d, Message::TransferData(c)) => {
+                let id = match self.tagged[usize::from(*d == Direction::ToRobot)] {
+                    Some((tag, id)) if tag == c.tag => id,
+                    _ => return,
+                };
+                if let Some(bytes) = self.chunk(id, c.offset, c.data) {
                     self.publish(&bytes, out);
                 }
             }

@@ -39,7 +39,12 @@ pub enum LinkRequest {
 #[derive(Clone, Debug, PartialEq)]
 pub enum TransferOut {
     Begin(TransferBegin),
-    Chunk { id: u32, offset: u32, data: Vec<u8> },
+    /// A `TransferData` chunk of the transfer `tag`.
+    Chunk {
+        tag: u8,
+        offset: u32,
+        data: Vec<u8>,
+    },
     Ack(TransferAck),
 }
 
@@ -47,7 +52,12 @@ pub enum TransferOut {
 #[derive(Clone, Debug, PartialEq)]
 pub enum TransferIn {
     Begin(TransferBegin),
-    Chunk { id: u32, offset: u32, data: Vec<u8> },
+    /// A `TransferData` chunk of the transfer `tag`.
+    Chunk {
+        tag: u8,
+        offset: u32,
+        data: Vec<u8>,
+    },
     Ack(TransferAck),
 }
 

@@ -230,9 +230,9 @@ impl LinkMachine {
         }
         let msg = match t {
             TransferOut::Begin(b) => Message::TransferBegin(*b),
-            TransferOut::Chunk { id, offset, data } => {
-                Message::TransferChunk(protocol::TransferChunk {
-                    id: *id,
+            TransferOut::Chunk { tag, offset, data } => {
+                Message::TransferData(protocol::TransferData {
+                    tag: *tag,
                     offset: *offset,
                     data,
                 })
@@ -782,8 +782,8 @@ impl From<Message<'_>> for Owned {
                 text: printable(l.text).into_owned(),
             },
             Message::TransferBegin(b) => Owned::Transfer(TransferIn::Begin(b)),
-            Message::TransferChunk(c) => Owned::Transfer(TransferIn::Chunk {
-                id: c.id,
+            Message::TransferData(c) => Owned::Transfer(TransferIn::Chunk {
+                tag: c.tag,
                 offset: c.offset,
                 data: c.data.to_vec(),
             }),
@@ -791,7 +791,11 @@ impl From<Message<'_>> for Owned {
             Message::Heartbeat(h) => Owned::Heartbeat(h.time_ms),
             // The hardware trace is kept with the link's bytes by a recording and read by
             // `station retrace`; the live views have no use for it.
-            Message::Hello(_) | Message::Command(_) | Message::HalTrace(_) => Owned::Other,
+            // Protocol 1's chunk (kind 8, retired): no robot of this build sends it.
+            Message::Hello(_)
+            | Message::Command(_)
+            | Message::HalTrace(_)
+            | Message::TransferChunk(_) => Owned::Other,
         }
     }
 }

@@ -24,10 +24,9 @@
 use std::collections::VecDeque;
 
 use protocol::object::{kind_of, parse};
-use protocol::transfer::{chunk_for_loss, Outcome, Receiver, Sender};
+use protocol::transfer::{chunk_for_loss, next_tag, Outcome, Receiver, Sender, NO_TAG};
 use protocol::{
-    AckInfo, Command, Message, ObjectKind, TransferAck, TransferBegin, TransferChunk,
-    TransferStatus,
+    AckInfo, Command, Message, ObjectKind, TransferAck, TransferBegin, TransferData, TransferStatus,
 };
 
 use super::{Direction, JobId, JobOutcome, JobReport, TransferError, TransferEvent};
@@ -143,6 +142,8 @@ pub struct TransferEngine {
     /// Bytes in a million the line loses, estimated from the robot's frames (`Stats`): an
     /// upload starts with the chunk size that carries most on such a line.
     line_loss_ppm: Option<u32>,
+    /// The tag of the last upload's `TransferBegin`: the next upload uses the one after.
+    last_tag: u8,
 }
 
 impl Default for TransferEngine {
@@ -165,8 +166,8 @@ impl std::fmt::Debug for TransferEngine {
 fn frame(m: &Message<'_>) -> Option<TransferOut> {
     match m {
         Message::TransferBegin(b) => Some(TransferOut::Begin(*b)),
-        Message::TransferChunk(c) => Some(TransferOut::Chunk {
-            id: c.id,
+        Message::TransferData(c) => Some(TransferOut::Chunk {
+            tag: c.tag,
             offset: c.offset,
             data: c.data.to_vec(),
         }),
@@ -190,12 +191,13 @@ impl TransferEngine {
             out: Vec::new(),
             events: VecDeque::new(),
             line_loss_ppm: None,
+            last_tag: NO_TAG,
         }
     }
 
     /// A sender for `b`, starting with the chunk size the line's loss calls for.
     fn sender(&self, b: TransferBegin) -> Sender {
-        let mut s = Sender::new(b.object, b.id, b.len, b.crc);
+        let mut s = Sender::new(b.object, b.id, b.len, b.crc, b.tag);
         if let Some(ppm) = self.line_loss_ppm {
             s.set_chunk(chunk_for_loss(ppm));
         }
@@ -265,6 +267,14 @@ impl TransferEngine {
         }
     }
 
+    /// The running upload's chunk size in bytes (it adapts to losses), for reports.
+    pub fn upload_chunk(&self) -> Option<u32> {
+        match &self.active.as_ref()?.phase {
+            Phase::Upload { sender, .. } => Some(sender.chunk()),
+            _ => None,
+        }
+    }
+
     /// Ends the running job and every queued one with `Cancelled`.
     pub fn cancel_all(&mut self, now_ms: u64) {
         self.finish(now_ms, JobOutcome::Failed(TransferError::Cancelled), None);
@@ -280,6 +290,7 @@ impl TransferEngine {
         match ev {
             LinkEvent::Connection(Connection::Connected(_)) => {
                 self.connected = true;
+                self.rx.new_session();
                 self.reconnected(now_ms);
                 false
             }
@@ -293,6 +304,15 @@ impl TransferEngine {
             LinkEvent::Stats(s) => {
                 if let Some(ppm) = byte_loss_ppm(s) {
                     self.line_loss_ppm = Some(ppm);
+                    // An upload begun before the line's loss was measured (the first on a
+                    // fresh link) takes the measurement as soon as it comes.
+                    if let Some(Active {
+                        phase: Phase::Upload { sender, .. },
+                        ..
+                    }) = self.active.as_mut()
+                    {
+                        sender.limit_chunk(chunk_for_loss(ppm));
+                    }
                 }
                 false
             }
@@ -306,7 +326,7 @@ impl TransferEngine {
                     TransferIn::Ack(ack) => {
                         if let Some(a) = self.active.as_mut() {
                             if let Phase::Upload { sender, .. } = &mut a.phase {
-                                if ack.id == sender.begin().id
+                                if ack.tag == sender.begin().tag
                                     && ack.status == TransferStatus::Receiving
                                 {
                                     a.robot_receiving = true;
@@ -316,8 +336,8 @@ impl TransferEngine {
                         }
                     }
                     TransferIn::Begin(b) => self.on_begin(now_ms, b),
-                    TransferIn::Chunk { id, offset, data } => {
-                        self.on_chunk(now_ms, *id, *offset, data);
+                    TransferIn::Chunk { tag, offset, data } => {
+                        self.on_chunk(now_ms, *tag, *offset, data);
                     }
                 }
                 self.poll(now_ms);
@@ -345,11 +365,18 @@ impl TransferEngine {
             return;
         }
         let phase = match spec {
-            JobSpec::Upload { object, bytes } => match Sender::for_object(object, &bytes) {
-                Some(sender) => Phase::Upload {
-                    sender: Box::new(self.sender(sender.begin())),
-                    bytes,
-                },
+            JobSpec::Upload { object, bytes } => match Sender::for_object(object, &bytes, NO_TAG) {
+                Some(sender) => {
+                    self.last_tag = next_tag(self.last_tag);
+                    let begin = TransferBegin {
+                        tag: self.last_tag,
+                        ..sender.begin()
+                    };
+                    Phase::Upload {
+                        sender: Box::new(self.sender(begin)),
+                        bytes,
+                    }
+                }
                 None => {
                     let e = TransferError::TooLarge {
                         len: bytes.len() as u64,
@@ -585,11 +612,13 @@ impl TransferEngine {
                 ..
             } if object == a.object => {
                 a.phase = Phase::Receiving {
+                    // The robot's Begin gives the tag.
                     info: TransferBegin {
                         object,
                         id,
                         len,
                         crc,
+                        tag: NO_TAG,
                     },
                     have,
                     last_frame_ms: now_ms,
@@ -640,7 +669,7 @@ impl TransferEngine {
                 0
             };
             let ack = TransferAck {
-                id: b.id,
+                tag: b.tag,
                 next,
                 status,
                 sack: 0,
@@ -697,8 +726,8 @@ impl TransferEngine {
         }
     }
 
-    fn on_chunk(&mut self, now_ms: u64, id: u32, offset: u32, data: &[u8]) {
-        let chunk = TransferChunk { id, offset, data };
+    fn on_chunk(&mut self, now_ms: u64, tag: u8, offset: u32, data: &[u8]) {
+        let chunk = TransferData { tag, offset, data };
         let mut got = None;
         // Every chunk is answered, ours or not: the receiver repeats a finished transfer's
         // answer and says `UnknownId` to anything else, which stops a stray sender.
@@ -721,7 +750,7 @@ impl TransferEngine {
         else {
             return;
         };
-        if info.id != id {
+        if info.tag != tag || tag == NO_TAG {
             return;
         }
         *last_frame_ms = now_ms;

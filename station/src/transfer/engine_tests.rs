@@ -95,9 +95,9 @@ impl Bench {
                             to_engine.push(LinkEvent::Transfer(TransferIn::Ack(a)));
                         }
                     }
-                    EngineOut::Frame(TransferOut::Chunk { id, offset, data }) => {
-                        let c = protocol::TransferChunk {
-                            id,
+                    EngineOut::Frame(TransferOut::Chunk { tag, offset, data }) => {
+                        let c = protocol::TransferData {
+                            tag,
                             offset,
                             data: &data,
                         };
@@ -124,7 +124,7 @@ impl Bench {
                         };
                         let outcome = match self.robot.held.clone() {
                             Some(bytes) => {
-                                let s = Sender::for_object(object, &bytes).unwrap();
+                                let s = Sender::for_object(object, &bytes, 1).unwrap();
                                 let b = s.begin();
                                 self.robot.tx = Some((s, bytes));
                                 CommandOutcome::Acked {
@@ -156,8 +156,8 @@ impl Bench {
                 s.poll(t as u32, bytes, |m| {
                     frames.push(match m {
                         Message::TransferBegin(b) => TransferIn::Begin(*b),
-                        Message::TransferChunk(c) => TransferIn::Chunk {
-                            id: c.id,
+                        Message::TransferData(c) => TransferIn::Chunk {
+                            tag: c.tag,
                             offset: c.offset,
                             data: c.data.to_vec(),
                         },
@@ -349,4 +349,37 @@ fn an_upload_interrupted_by_a_reconnect_resumes() {
     let r = b.run(job, 10_000);
     assert_eq!(r.outcome, JobOutcome::Complete);
     assert_eq!(b.robot.held.as_deref(), Some(&bytes[..]));
+}
+
+/// Issue 15: the first upload on a fresh link began before the station had measured the
+/// line's loss, with 224-byte chunks, and kept them until losses halved them one by one. Now
+/// the first measurement caps the running upload's chunk size at once (never raises it).
+#[test]
+fn an_upload_begun_before_the_loss_was_measured_takes_the_first_measurement() {
+    let mut e = TransferEngine::new();
+    e.set_connected(true);
+    e.submit(JobSpec::Upload {
+        object: ObjectKind::Map,
+        bytes: vec![7; 1060],
+    });
+    e.poll(0);
+    assert_eq!(
+        e.upload_chunk(),
+        Some(224),
+        "nothing measured: the largest chunk"
+    );
+    let mut s = crate::link::LinkStats {
+        bytes_in: 800,
+        ..Default::default()
+    };
+    // 10 frames of 80 bytes, 5 of them damaged: about 0.9 % of bytes lost.
+    s.decoder.frames_ok = 5;
+    s.decoder.crc_errors = 5;
+    e.on_link_event(1, &LinkEvent::Stats(Box::new(s.clone())));
+    assert_eq!(e.upload_chunk(), Some(32));
+    // A clean measurement later does not grow it: growth is earned by loss-free progress.
+    s.decoder.frames_ok = 100;
+    s.decoder.crc_errors = 0;
+    e.on_link_event(2, &LinkEvent::Stats(Box::new(s)));
+    assert_eq!(e.upload_chunk(), Some(32));
 }
