@@ -213,6 +213,9 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
 /// or torn) is refused unless `salvage`, which keeps the records before the damage.
 pub(crate) fn open_whole(path: &Path, salvage: bool) -> anyhow::Result<Recording> {
     let rec = Recording::open(path)?;
+    if let Some(w) = rec.meta.schema_warning() {
+        eprintln!("station: {}: {w}", path.display());
+    }
     if let Some(d) = &rec.damage {
         let n = rec.records.len();
         if !salvage {

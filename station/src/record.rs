@@ -236,6 +236,24 @@ impl Meta {
         }
     }
 
+    /// A warning when the recording was made with another message schema than this
+    /// station's (its fingerprint, PROTOCOL.md §3): frames whose layout changed since then do
+    /// not decode (they are counted as undecodable), and the reader should know why. `None`
+    /// when the schemas are the same, or the file names none (written by a test tool).
+    pub fn schema_warning(&self) -> Option<String> {
+        let ours = crate::link::machine::hex(&protocol::FINGERPRINT);
+        (!self.fingerprint.is_empty() && self.fingerprint != ours).then(|| {
+            format!(
+                "recorded with message schema {} (protocol {}); this station's is {ours} \
+                 (protocol {}): frames whose layout changed since do not decode and are \
+                 counted as undecodable",
+                crate::terminal_text::printable_text(&self.fingerprint),
+                self.protocol,
+                protocol::PROTOCOL_VERSION
+            )
+        })
+    }
+
     /// Metadata for a recording of several ports starting now: `port` names them all.
     pub fn now_links(ports: &[String], baud: u32) -> Meta {
         Meta {
@@ -688,6 +706,27 @@ pub fn parse_record(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A recording of another schema is said to be one (its undecodable frames explained);
+    /// this station's own, or one naming none, is not; a hostile fingerprint reaches the
+    /// terminal without its control characters.
+    #[test]
+    fn a_recording_of_another_message_schema_is_flagged() {
+        let now = Meta::now("p", 115_200);
+        assert_eq!(now.schema_warning(), None);
+        assert_eq!(Meta::default().schema_warning(), None);
+        let old = Meta {
+            fingerprint: "2104a2c0f39dd1a0\x1b[2J".into(),
+            ..now
+        };
+        let w = old.schema_warning().expect("a warning");
+        assert!(w.contains("2104a2c0f39dd1a0"), "{w}");
+        assert!(
+            w.contains(&crate::link::machine::hex(&protocol::FINGERPRINT)),
+            "{w}"
+        );
+        assert!(!w.contains('\x1b'), "{w:?}");
+    }
 
     fn sample() -> Vec<u8> {
         let mut b = encode_header(&Meta {

@@ -61,6 +61,9 @@ fn parse_speed(s: &str) -> Result<f64, String> {
 pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
     let rec = Recording::open(&args.file)?;
     let file = args.file.display().to_string();
+    if let Some(w) = rec.meta.schema_warning() {
+        eprintln!("station: {file}: {w}");
+    }
     if (args.json || args.summary) && rec.link_count() > 1 {
         let s = super::links::summarize_links(&rec);
         if args.json {
