@@ -186,6 +186,14 @@ fn make_link(link: &Path, target: &Path) -> Result<PathBuf, PtyError> {
     Ok(link.to_path_buf())
 }
 
+/// `poll` with a timeout to the microsecond (`ppoll`): the serving loop wakes when a byte's
+/// last bit leaves the line, and a timeout in whole milliseconds (`poll`'s) cut waits under
+/// one to none at all and others by up to a millisecond.
+fn poll_for(fds: &mut [nix::poll::PollFd], timeout: std::time::Duration) -> nix::Result<i32> {
+    let t = nix::sys::time::TimeSpec::from_duration(timeout);
+    nix::poll::ppoll(fds, Some(t), None)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -258,12 +266,4 @@ mod tests {
         assert_eq!(std::fs::read(&link).expect("file kept"), b"precious");
         let _ = std::fs::remove_dir_all(&dir);
     }
-}
-
-/// `poll` with a timeout to the microsecond (`ppoll`): the serving loop wakes when a byte's
-/// last bit leaves the line, and a timeout in whole milliseconds (`poll`'s) cut waits under
-/// one to none at all and others by up to a millisecond.
-fn poll_for(fds: &mut [nix::poll::PollFd], timeout: std::time::Duration) -> nix::Result<i32> {
-    let t = nix::sys::time::TimeSpec::from_duration(timeout);
-    nix::poll::ppoll(fds, Some(t), None)
 }
