@@ -21,6 +21,7 @@ pub mod pty;
 pub mod rng;
 pub mod scenario;
 pub mod sensors;
+pub mod sent_bytes;
 pub mod sim;
 pub mod uart;
 pub mod unsupervised_places;

@@ -38,11 +38,31 @@ pub trait Device {
     fn to_robot_dropped(&self) -> u64 {
         0
     }
-    /// Simulated time (µs) by which the serving loop must look again when no byte arrives
-    /// from the station: the next millisecond while bytes are on the wire, else the next thing
-    /// the robot does on its own (its control cycle) or `IDLE_LOOK` at the latest.
+    /// Simulated time (µs) at which the serving loop must run the next step when no byte
+    /// arrives from the station. The robot acts at the start of a step, so a step runs as soon
+    /// as the clock reaches its start: `now_us()` itself while bytes are on the wire, else the
+    /// next thing the robot does on its own (its control cycle) or `IDLE_LOOK_US` on at the
+    /// latest.
     fn next_due_us(&self) -> u64 {
-        self.now_us() + 1000
+        self.now_us()
+    }
+    /// Moves the bytes on the wire on to `now_us` (at most the start of the next step) without
+    /// stepping the robot, so that bytes that completed since the last step reach the robot's
+    /// receive FIFO before its next step reads it.
+    fn sync_line(&mut self, _now_us: u64) {}
+    /// Bytes from the station that reached the line at simulated `at_us`.
+    fn push_inbound_at(&mut self, bytes: &[u8], _at_us: u64) {
+        self.push_inbound(bytes);
+    }
+    /// Bytes the robot's serial port had finished sending by `until_us`, appended to `out`
+    /// (a step moves the line on to its end, up to a millisecond ahead of the clock).
+    fn take_outbound_until(&mut self, _until_us: u64, out: &mut Vec<u8>) {
+        self.take_outbound(out);
+    }
+    /// When the next frame already on its way to the station ends (its delimiter's last bit),
+    /// simulated µs; the serving loop hands it over then. `None`: no frame end is pending.
+    fn next_frame_end_us(&self) -> Option<u64> {
+        None
     }
     /// Gives the robot its link key (PROTOCOL.md §13); `serve` calls it before the first byte.
     fn set_link_key(&mut self, _key: Option<&[u8; protocol::sign::KEY_LEN]>) {}
@@ -167,16 +187,14 @@ impl Jitter {
     }
 }
 
-/// Wall time between two pty polls in real-time mode while bytes are on the wire.
-const TICK: Duration = Duration::from_millis(1);
 /// Longest simulated time between two looks while the wire is idle: the most a frame the
 /// robot sends unprompted (telemetry, an event) can leave late, about 46 byte times at
 /// 115 200 baud. Bytes from the station wake the loop at once whatever this is.
 pub const IDLE_LOOK_US: u64 = 4_000;
 /// Simulated milliseconds between pty polls at maximum speed.
-const MAX_SPEED_BATCH_MS: u32 = 20;
+pub(crate) const MAX_SPEED_BATCH_MS: u32 = 20;
 /// Most simulated steps one tick may catch up, so a stalled host does not freeze the pty.
-const MAX_CATCH_UP_MS: u32 = 200;
+pub(crate) const MAX_CATCH_UP_MS: u32 = 200;
 
 /// Serves `dev` until `stop` is set. The pty is created here, so the slave path is reported
 /// through `on_ready` (called again with the new path after each replug).
@@ -191,27 +209,45 @@ pub fn serve<D: Device>(
     let wall0 = Instant::now();
     let sim0 = dev.now_us();
     let mut clock = CycleClock::new(dev.cycles());
+    let real_time = match opts.speed {
+        Speed::Factor(f) => Some(RealTime::new(wall0, sim0, f)),
+        Speed::Max => None,
+    };
 
     while !stop.load(Ordering::Relaxed) {
-        // 1. Advance simulated time.
-        let steps = steps_due(opts.speed, wall0, sim0, dev.now_us());
-        for _ in 0..steps {
-            dev.step_ms();
-            if matches!(opts.speed, Speed::Factor(_)) {
-                clock.observe(dev.cycles());
+        // 1. Advance simulated time: in real time, every step whose start the clock has
+        // reached (the robot acts at a step's start), moving the wire on to it first.
+        let now_us = match &real_time {
+            Some(rt) => {
+                let now = rt.sim_now();
+                step_until(dev, now, &mut |d| clock.observe(d.cycles()));
+                now
             }
-        }
+            None => {
+                for _ in 0..MAX_SPEED_BATCH_MS {
+                    dev.step_ms();
+                }
+                dev.now_us()
+            }
+        };
         let t_s = (dev.now_us() - sim0) as f64 * 1e-6;
         // 2. Unplug / replug; 3. station -> robot; 4. robot -> station.
         end.plug(t_s, on_ready)?;
-        end.exchange(dev, t_s);
+        let take_until = if real_time.is_some() {
+            now_us
+        } else {
+            u64::MAX
+        };
+        end.exchange(dev, t_s, now_us, take_until);
 
-        if let Speed::Factor(f) = opts.speed {
-            // Driven by the next event (a byte due on the wire, the robot's next cycle, or
-            // bytes from the station, which wake the wait at once) instead of every 1 ms: an
-            // idle link costs a few wake-ups, and a command is read as it comes.
-            let due_us = dev.next_due_us().saturating_sub(dev.now_us());
-            let wait = Duration::from_secs_f64(due_us as f64 * 1e-6 / f).max(TICK / 4);
+        if let Some(rt) = &real_time {
+            // Driven by the next event (a step due, a frame's last byte leaving the line, or
+            // bytes from the station, which wake the wait at once): an idle link costs a few
+            // wake-ups, a command is read as it comes and its answer handed over as its last
+            // bit leaves.
+            let wait = rt
+                .wall_at(next_look_us(dev))
+                .saturating_duration_since(Instant::now());
             match end.pty() {
                 Some(p) => p.wait_input(wait),
                 None => std::thread::sleep(wait),
@@ -225,18 +261,55 @@ pub fn serve<D: Device>(
     Ok(stats)
 }
 
-/// Simulated milliseconds to step now: as many as the wall clock is ahead (at most
-/// `MAX_CATCH_UP_MS`), or a batch at maximum speed.
-pub(crate) fn steps_due(speed: Speed, wall0: Instant, sim0: u64, now_us: u64) -> u32 {
-    match speed {
-        Speed::Max => MAX_SPEED_BATCH_MS,
-        Speed::Factor(f) => {
-            let target = sim0 + (wall0.elapsed().as_secs_f64() * f * 1e6) as u64;
-            let behind_ms = target.saturating_sub(now_us) / 1000;
-            u32::try_from(behind_ms)
-                .unwrap_or(u32::MAX)
-                .min(MAX_CATCH_UP_MS)
+/// Runs every step of `dev` whose start simulated `now_us` has reached (the robot acts at a
+/// step's start), moving the wire on to each start first so the robot reads what completed by
+/// then; at most `MAX_CATCH_UP_MS` steps. `after_step` sees the device after each.
+pub(crate) fn step_until<D: Device>(dev: &mut D, now_us: u64, after_step: &mut dyn FnMut(&D)) {
+    let mut steps = 0;
+    while dev.now_us() <= now_us && steps < MAX_CATCH_UP_MS {
+        dev.sync_line(dev.now_us());
+        dev.step_ms();
+        after_step(dev);
+        steps += 1;
+    }
+}
+
+/// When the serving loop must look next, simulated µs: the next step due, or the moment the
+/// next frame towards the station ends, whichever comes first.
+pub(crate) fn next_look_us<D: Device>(dev: &D) -> u64 {
+    dev.next_due_us()
+        .min(dev.next_frame_end_us().unwrap_or(u64::MAX))
+}
+
+/// Simulated time against the wall clock, to the microsecond, at `factor` times real time.
+/// The serving loops run a step as soon as the clock reaches its start and hand bytes over as
+/// they complete: in whole milliseconds the robot acted up to 1 ms late, and its bytes were
+/// held to the next millisecond (issue 15).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RealTime {
+    wall0: Instant,
+    sim0: u64,
+    factor: f64,
+}
+
+impl RealTime {
+    pub(crate) fn new(wall0: Instant, sim0: u64, factor: f64) -> RealTime {
+        RealTime {
+            wall0,
+            sim0,
+            factor,
         }
+    }
+
+    /// Simulated µs now.
+    pub(crate) fn sim_now(&self) -> u64 {
+        self.sim0 + (self.wall0.elapsed().as_secs_f64() * self.factor * 1e6) as u64
+    }
+
+    /// The wall-clock moment of simulated `sim_us`.
+    pub(crate) fn wall_at(&self, sim_us: u64) -> Instant {
+        let us = sim_us.saturating_sub(self.sim0) as f64 / self.factor;
+        self.wall0 + Duration::from_secs_f64(us.clamp(0.0, 1e12) * 1e-6)
     }
 }
 
@@ -341,8 +414,16 @@ impl Endpoint {
         Ok(())
     }
 
-    /// Moves bytes both ways between the pty and `dev` through the fault injectors.
-    pub(crate) fn exchange<D: Device>(&mut self, dev: &mut D, t_s: f64) {
+    /// Moves bytes both ways between the pty and `dev` through the fault injectors: what the
+    /// station wrote reaches the line at simulated `now_us`, and what the robot's port had
+    /// finished sending by `take_until_us` goes to the station.
+    pub(crate) fn exchange<D: Device>(
+        &mut self,
+        dev: &mut D,
+        t_s: f64,
+        now_us: u64,
+        take_until_us: u64,
+    ) {
         // Station -> robot.
         self.inbound.clear();
         if let Some(p) = &self.pty {
@@ -356,12 +437,12 @@ impl Endpoint {
         self.faulted.clear();
         self.to_robot.apply(&self.inbound, t_s, &mut self.faulted);
         if !self.faulted.is_empty() {
-            dev.push_inbound(&self.faulted);
+            dev.push_inbound_at(&self.faulted, now_us);
         }
 
         // Robot -> station.
         self.outbound.clear();
-        dev.take_outbound(&mut self.outbound);
+        dev.take_outbound_until(take_until_us, &mut self.outbound);
         self.faulted.clear();
         self.from_robot
             .apply(&self.outbound, t_s, &mut self.faulted);
@@ -512,14 +593,30 @@ impl Device for crate::sim::Sim {
     }
 
     fn take_outbound(&mut self, out: &mut Vec<u8>) {
+        self.take_outbound_until(u64::MAX, out);
+    }
+
+    fn take_outbound_until(&mut self, until_us: u64, out: &mut Vec<u8>) {
         let mut buf = [0u8; 1024];
         loop {
-            let n = self.uart_mut().take_outbound_into(&mut buf);
+            let n = self.uart_mut().take_outbound_until(until_us, &mut buf);
             if n == 0 {
                 return;
             }
             out.extend_from_slice(buf.get(..n).unwrap_or(&[]));
         }
+    }
+
+    fn push_inbound_at(&mut self, bytes: &[u8], at_us: u64) {
+        self.uart_mut().push_inbound_at(bytes, at_us);
+    }
+
+    fn sync_line(&mut self, now_us: u64) {
+        crate::sim::Sim::sync_line(self, now_us);
+    }
+
+    fn next_frame_end_us(&self) -> Option<u64> {
+        self.uart().next_frame_end_us()
     }
 
     fn cycles(&self) -> u32 {
@@ -533,10 +630,10 @@ impl Device for crate::sim::Sim {
     fn next_due_us(&self) -> u64 {
         let now = self.now_us();
         if !self.uart().idle() {
-            return now + 1000;
+            return now;
         }
         let cycle = self.robot().timing().next_cycle_us;
-        cycle.clamp(now + 1000, now + IDLE_LOOK_US)
+        cycle.clamp(now, now + IDLE_LOOK_US)
     }
 
     fn set_link_key(&mut self, key: Option<&[u8; protocol::sign::KEY_LEN]>) {
@@ -639,7 +736,7 @@ mod tests {
 
     /// The serving loop used to wake every millisecond whatever happened; now an idle wire
     /// lets it sleep until the robot's next cycle (at most `IDLE_LOOK_US`), and bytes on the
-    /// wire bring back the 1 ms steps that move them.
+    /// wire bring back the 1 ms steps that move them (each due as the clock reaches its start).
     #[test]
     fn an_idle_wire_lets_the_loop_sleep_and_bytes_on_it_bring_back_1_ms_steps() {
         let arena = crate::builtin::micro_rato_99(&crate::arena::LoadOptions::default()).unwrap();
@@ -650,16 +747,65 @@ mod tests {
         for _ in 0..200 {
             sim.step();
             let due = sim.next_due_us() - sim.now_us();
-            assert!((1000..=IDLE_LOOK_US).contains(&due), "{due} us");
-            idle_dues += usize::from(due > 1000);
+            assert!((0..=IDLE_LOOK_US).contains(&due), "{due} us");
+            idle_dues += usize::from(due >= 1000);
         }
         assert!(
             idle_dues > 100,
-            "only {idle_dues} of 200 looks were later than 1 ms"
+            "only {idle_dues} of 200 looks were 1 ms or more ahead"
         );
-        // A station's bytes on their way in: stepped every millisecond until delivered.
+        // A station's bytes on their way in: the next step is due at once.
         Device::push_inbound(&mut sim, &[0u8; 40]);
-        assert_eq!(sim.next_due_us() - sim.now_us(), 1000);
+        assert_eq!(sim.next_due_us(), sim.now_us());
+    }
+
+    /// Issue 15: the robot's answer to a command reaches the station as its bytes allow, not
+    /// on millisecond boundaries. The loop used to step a millisecond only once the clock had
+    /// passed its end (the robot acting up to 1 ms late) and to hand over bytes only at those
+    /// ends: a Stop's round trip took up to 2 ms more than its 2.1-2.4 ms of bytes. In
+    /// simulated time, driven as `serve` drives it (its `step_until`, `next_look_us` and the
+    /// exchange's clock), for commands arriving at every tenth of a millisecond: never faster
+    /// than the wire, and at most the robot's 1 ms step later.
+    #[test]
+    fn a_command_is_answered_as_soon_as_its_bytes_and_the_robots_step_allow() {
+        use protocol::{encode, Command, Message, MAX_FRAME};
+        let arena = crate::builtin::micro_rato_99(&crate::arena::LoadOptions::default()).unwrap();
+        let cfg = crate::sim::SimConfig::new(&robot_firmware::MICRO_RATO);
+        let mut sim = crate::sim::Sim::new(arena, cfg).unwrap();
+        let baud = f64::from(sim.uart().baud());
+        let byte_us = |n: usize| n as f64 * 10.0 * 1e6 / baud;
+        let mut frame = [0u8; MAX_FRAME];
+        for (i, offset_us) in (0..10u64).map(|i| (i, 100 * i + 37)).collect::<Vec<_>>() {
+            // No session: the robot is quiet, and answers Nack NoHandshake (a reply all the
+            // same, as long as an Ack).
+            let n = encode(i as u16, &Message::Command(Command::Stop), &mut frame).unwrap();
+            let at = 20_000 * (i + 1) + offset_us;
+            step_until(&mut sim, at, &mut |_| {});
+            Device::push_inbound_at(&mut sim, frame.get(..n).unwrap(), at);
+            let mut out = Vec::new();
+            let mut t = at;
+            let mut looks = 0;
+            while !out.contains(&0) {
+                t = next_look_us(&sim).max(t);
+                step_until(&mut sim, t, &mut |_| {});
+                Device::take_outbound_until(&mut sim, t, &mut out);
+                looks += 1;
+                assert!(
+                    t < at + 10_000 && looks < 1000,
+                    "no answer 10 ms after a command at {at} us ({looks} looks)"
+                );
+            }
+            let wire = byte_us(n) + byte_us(out.len());
+            let took = (t - at) as f64;
+            assert!(
+                took >= wire,
+                "answered in {took} us, faster than its {wire:.0} us of bytes"
+            );
+            assert!(
+                took <= wire + 1000.0 + 2.0,
+                "answered in {took} us: more than its {wire:.0} us of bytes and a 1 ms step"
+            );
+        }
     }
 
     /// Bytes from the station end the loop's wait at once (it used to sleep its 1 ms out).

@@ -45,6 +45,24 @@ impl<D: Device> Device for PoweredByStation<D> {
     fn take_outbound(&mut self, out: &mut Vec<u8>) {
         self.dev.take_outbound(out);
     }
+    // The robot's own clock counts from power-on: times from the loop lose the held span.
+    fn push_inbound_at(&mut self, bytes: &[u8], at_us: u64) {
+        self.on |= !bytes.is_empty();
+        self.dev
+            .push_inbound_at(bytes, at_us.saturating_sub(self.held_us));
+    }
+    fn take_outbound_until(&mut self, until_us: u64, out: &mut Vec<u8>) {
+        self.dev
+            .take_outbound_until(until_us.saturating_sub(self.held_us), out);
+    }
+    fn sync_line(&mut self, now_us: u64) {
+        if self.on {
+            self.dev.sync_line(now_us.saturating_sub(self.held_us));
+        }
+    }
+    fn next_frame_end_us(&self) -> Option<u64> {
+        self.dev.next_frame_end_us().map(|t| t + self.held_us)
+    }
     fn cycles(&self) -> u32 {
         self.dev.cycles()
     }

@@ -104,10 +104,9 @@ impl Pty {
     /// With no station attached the master reports a hang-up at once: then this just sleeps,
     /// so the serving loop does not spin.
     pub fn wait_input(&self, timeout: std::time::Duration) {
-        use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
-        let ms = u16::try_from(timeout.as_millis()).unwrap_or(u16::MAX);
+        use nix::poll::{PollFd, PollFlags};
         let mut fds = [PollFd::new(self.master.as_fd(), PollFlags::POLLIN)];
-        let ready = poll(&mut fds, PollTimeout::from(ms));
+        let ready = poll_for(&mut fds, timeout);
         let hung_up = fds
             .first()
             .and_then(PollFd::revents)
@@ -122,7 +121,6 @@ impl Pty {
     /// wait, and with none left this just sleeps, so the serving loop does not spin.
     pub fn wait_any(ptys: &[&Pty], timeout: std::time::Duration) {
         use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
-        let ms = u16::try_from(timeout.as_millis()).unwrap_or(u16::MAX);
         let mut fds: Vec<PollFd> = ptys
             .iter()
             .map(|p| PollFd::new(p.master.as_fd(), PollFlags::POLLIN))
@@ -143,7 +141,7 @@ impl Pty {
             .filter(|(_, f)| !hung(f))
             .map(|(p, _)| PollFd::new(p.master.as_fd(), PollFlags::POLLIN))
             .collect();
-        if live.is_empty() || poll(&mut live, PollTimeout::from(ms)).is_err() {
+        if live.is_empty() || poll_for(&mut live, timeout).is_err() {
             std::thread::sleep(timeout);
         }
     }
@@ -186,6 +184,14 @@ fn make_link(link: &Path, target: &Path) -> Result<PathBuf, PtyError> {
     }
     std::os::unix::fs::symlink(target, link).map_err(|e| err(e.to_string()))?;
     Ok(link.to_path_buf())
+}
+
+/// `poll` with a timeout to the microsecond (`ppoll`): the serving loop wakes when a byte's
+/// last bit leaves the line, and a timeout in whole milliseconds (`poll`'s) cut waits under
+/// one to none at all and others by up to a millisecond.
+fn poll_for(fds: &mut [nix::poll::PollFd], timeout: std::time::Duration) -> nix::Result<i32> {
+    let t = nix::sys::time::TimeSpec::from_duration(timeout);
+    nix::poll::ppoll(fds, Some(t), None)
 }
 
 #[cfg(test)]

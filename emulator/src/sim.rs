@@ -483,6 +483,14 @@ impl Sim {
         self.hal.uart.tick(self.hal.now_us, &self.truth);
     }
 
+    /// Moves the wire on to `now_us` (at most this step's start), the robot not stepping: the
+    /// serving loop calls it before each step, so the robot reads what completed by then
+    /// (bytes from the station reach the line when they come, after the last step moved the
+    /// wire to its end). A second call for the same time changes nothing.
+    pub fn sync_line(&mut self, now_us: u64) {
+        self.hal.uart.tick(now_us, &self.truth);
+    }
+
     /// Tells this robot where the other robots of its world are now (a fleet does, before
     /// each step): its sensors see them and its body cannot enter them. Alone: none.
     pub fn set_neighbours(&mut self, neighbours: impl IntoIterator<Item = Neighbour>) {

@@ -41,6 +41,7 @@ use protocol::{encode, EmuTruth, Feed, FrameDecoder, Message, Pose as WirePose, 
 use thiserror::Error;
 
 use crate::arena::Pose;
+use crate::sent_bytes::SentBytes;
 
 /// Default line rate.
 pub const DEFAULT_BAUD: u32 = 115_200;
@@ -164,7 +165,9 @@ pub struct Uart {
     truth_pending: VecDeque<(EmuTruth, Option<u64>)>,
     /// The robot's last byte on the wire did not end a frame: only its bytes may follow.
     robot_mid_frame: bool,
-    outbound: VecDeque<u8>,
+    /// Sent bytes with the time each completed: the serving loop steps ahead of the wall
+    /// clock by up to a millisecond and hands the station only what is complete.
+    outbound: SentBytes,
     /// Bit-clock position of the TX line (bits since time 0).
     tx_bits: u64,
     inbound: VecDeque<u8>,
@@ -204,7 +207,7 @@ impl Uart {
             truth_queue: VecDeque::with_capacity(MAX_FRAME),
             truth_pending: VecDeque::with_capacity(TRUTH_BACKLOG),
             robot_mid_frame: false,
-            outbound: VecDeque::new(),
+            outbound: SentBytes::default(),
             tx_bits: 0,
             inbound: VecDeque::new(),
             rx_fifo: VecDeque::with_capacity(RX_FIFO),
@@ -277,16 +280,41 @@ impl Uart {
 
     /// Host: every byte whose transmission completed since the last take.
     pub fn take_outbound(&mut self) -> Vec<u8> {
-        self.outbound.drain(..).collect()
+        self.outbound.take_all()
     }
 
     /// Host: moves up to `buf.len()` transmitted bytes into `buf`; returns how many.
     pub fn take_outbound_into(&mut self, buf: &mut [u8]) -> usize {
-        let n = buf.len().min(self.outbound.len());
-        for (slot, b) in buf.iter_mut().zip(self.outbound.drain(..n)) {
-            *slot = b;
+        self.outbound.take_into(buf)
+    }
+
+    /// Host: moves into `buf` the transmitted bytes whose last bit had left by `now_us`
+    /// (the line may have been moved on further, `tick` to the end of a step); returns how
+    /// many.
+    pub fn take_outbound_until(&mut self, now_us: u64, buf: &mut [u8]) -> usize {
+        let bits = self.line_bits(now_us);
+        self.outbound.take_until(bits, buf)
+    }
+
+    /// Host: when the next frame delimiter already on the line completes, µs (rounded up):
+    /// the moment a station can next decode a whole frame. `None` when no transmitted byte
+    /// waiting to be taken is a delimiter.
+    pub fn next_frame_end_us(&self) -> Option<u64> {
+        let bits = self.outbound.done_bits_of_first(0)?;
+        let us = (u128::from(bits) * 1_000_000).div_ceil(u128::from(self.baud));
+        u64::try_from(us).ok()
+    }
+
+    /// Host: queues bytes to send to the robot that reached the line at `at_us`: on an idle
+    /// line their first bit starts then, not at the line's last tick (which may be up to a
+    /// millisecond either side). Returns how many fitted, as `push_inbound`.
+    pub fn push_inbound_at(&mut self, bytes: &[u8], at_us: u64) -> usize {
+        if self.inbound.is_empty() && !bytes.is_empty() {
+            // The line banks no bits while idle: `tick_rx` starts it at the later of its last
+            // byte's end and this.
+            self.rx_idle_us = Some(at_us);
         }
-        n
+        self.push_inbound(bytes)
     }
 
     /// Host: transmitted bytes waiting to be taken.
@@ -364,7 +392,7 @@ impl Uart {
                 self.outbound.pop_front();
                 self.stats.outbound_dropped += 1;
             }
-            self.outbound.push_back(byte);
+            self.outbound.push(byte, self.tx_bits);
         }
         if starved {
             // Nothing the line may carry now (truth may be waiting for the rest of a robot

@@ -21,6 +21,7 @@
 
 pub mod action;
 pub mod app;
+pub mod awaited_replies;
 pub mod builtin;
 pub mod calibrate;
 pub mod calibrate_odometry;

@@ -30,6 +30,7 @@ use tokio::time::Instant;
 
 use crate::action::Action;
 use crate::app::App;
+use crate::awaited_replies::AwaitedReplies;
 use crate::fleet::{self, Fleet, Member};
 use crate::link::RunningLink;
 use crate::record::live::TuiRecorder;
@@ -204,8 +205,11 @@ async fn event_loop(
     // Made once: a signal future made afresh on every wake-up costs more than the wake-up.
     let stop_signal = signals.recv();
     tokio::pin!(stop_signal);
+    // A link redraw waits while a command's answer is on its way (`awaited_replies`).
+    let mut awaited = AwaitedReplies::default();
     let result = loop {
-        if dirty && (urgent || last_draw.elapsed() >= frame) {
+        let holding = awaited.hold_redraw(Instant::now());
+        if dirty && (urgent || (last_draw.elapsed() >= frame && !holding)) {
             fleet.sync_overlay();
             if let Err(e) = terminal.draw(|f| ui::render(fleet.app(), f)) {
                 break Err(e);
@@ -241,10 +245,10 @@ async fn event_loop(
             },
             Some((i, ev)) = next_link_event(links) => {
                 // Everything already queued in one go: one wake-up, one redraw decision.
-                on_link(fleet, recorder, i, ev);
+                on_link(fleet, recorder, &mut awaited, i, ev);
                 for (i, link) in links.iter_mut().enumerate() {
                     while let Ok(ev) = link.events.try_recv() {
-                        on_link(fleet, recorder, i, ev);
+                        on_link(fleet, recorder, &mut awaited, i, ev);
                     }
                 }
                 // The tap's records carry their own times: taking them here, with the
@@ -267,13 +271,16 @@ async fn event_loop(
                 let every = if driving { DRIVING_TICK } else { IDLE_TICK };
                 tick.as_mut().reset(pace::slot_at_or_before(Instant::now()) + every);
             }
-            () = &mut redraw, if dirty => {}
+            // While held, the answer's event or the tick (within `awaited_replies::HOLD`)
+            // wakes the loop instead.
+            () = &mut redraw, if dirty && !holding => {}
             () = &mut stop_signal => break Ok(()),
         }
         // Each robot's commands and transfers to its own link.
-        for (m, link) in fleet.members.iter_mut().zip(links.iter()) {
+        for (i, (m, link)) in fleet.members.iter_mut().zip(links.iter()).enumerate() {
             for (id, command) in m.app.take_outbox() {
                 link.handle.submit_with_id(id, command);
+                awaited.sent(i, id, Instant::now());
             }
             for t in m.app.transfers.take_frames() {
                 link.handle.transfer(t);
@@ -290,7 +297,16 @@ async fn event_loop(
 
 /// One link event from robot `i`: to the recorder (connection changes of every link it
 /// records: all of them), then to the fleet.
-fn on_link(fleet: &mut Fleet, recorder: &mut TuiRecorder, i: usize, ev: crate::link::LinkEvent) {
+fn on_link(
+    fleet: &mut Fleet,
+    recorder: &mut TuiRecorder,
+    awaited: &mut AwaitedReplies,
+    i: usize,
+    ev: crate::link::LinkEvent,
+) {
+    if let crate::link::LinkEvent::CommandDone { id, .. } = &ev {
+        awaited.answered(i, *id);
+    }
     if let Some(note) = recorder.on_event_of(i, &ev) {
         fleet.update(Action::Recording(note));
     }

@@ -11,12 +11,15 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use serde::Serialize;
 
 use super::Fleet;
-use crate::link::{steps_due, CycleClock, Device, Endpoint, ServeOptions, ServeStats, Speed};
+use crate::link::{
+    CycleClock, Device, Endpoint, RealTime, ServeOptions, ServeStats, Speed, MAX_CATCH_UP_MS,
+    MAX_SPEED_BATCH_MS,
+};
 use crate::pty::{Pty, PtyError};
 
 /// The path of robot `robot`'s (1-based) `--link` symlink in a fleet of `robots`.
@@ -87,31 +90,58 @@ pub fn serve(
         .map(|s| CycleClock::new(s.cycles()))
         .collect();
 
+    let real_time = match speed {
+        Speed::Factor(f) => Some(RealTime::new(wall0, sim0, f)),
+        Speed::Max => None,
+    };
     while !stop.load(Ordering::Relaxed) {
-        for _ in 0..steps_due(speed, wall0, sim0, fleet.now_us()) {
-            fleet.step();
-            if matches!(speed, Speed::Factor(_)) {
-                for (c, s) in clocks.iter_mut().zip(fleet.sims()) {
-                    c.observe(s.cycles());
+        // As the one-robot loop (`link::serve`): every step whose start the clock has reached,
+        // each robot's wire moved on to it first.
+        let now_us = match &real_time {
+            Some(rt) => {
+                let now = rt.sim_now();
+                let mut steps = 0;
+                while fleet.now_us() <= now && steps < MAX_CATCH_UP_MS {
+                    let t = fleet.now_us();
+                    for s in fleet.sims_mut() {
+                        s.sync_line(t);
+                    }
+                    fleet.step();
+                    for (c, s) in clocks.iter_mut().zip(fleet.sims()) {
+                        c.observe(s.cycles());
+                    }
+                    steps += 1;
                 }
+                now
             }
-        }
+            None => {
+                for _ in 0..MAX_SPEED_BATCH_MS {
+                    fleet.step();
+                }
+                fleet.now_us()
+            }
+        };
         let t_s = (fleet.now_us() - sim0) as f64 * 1e-6;
+        let take_until = if real_time.is_some() {
+            now_us
+        } else {
+            u64::MAX
+        };
         for (i, (end, sim)) in ends.iter_mut().zip(fleet.sims_mut()).enumerate() {
             end.plug(t_s, &mut |p| on_ready(i, p))?;
-            end.exchange(sim, t_s);
+            end.exchange(sim, t_s, now_us, take_until);
         }
-        if let Speed::Factor(f) = speed {
-            let now = fleet.now_us();
-            let due_us = fleet
+        if let Some(rt) = &real_time {
+            let due = fleet
                 .sims()
                 .iter()
-                .map(|s| s.next_due_us())
+                .map(|s| {
+                    s.next_due_us()
+                        .min(s.next_frame_end_us().unwrap_or(u64::MAX))
+                })
                 .min()
-                .unwrap_or(now + 1000)
-                .saturating_sub(now);
-            let wait =
-                Duration::from_secs_f64(due_us as f64 * 1e-6 / f).max(Duration::from_micros(250));
+                .unwrap_or(now_us + 1000);
+            let wait = rt.wall_at(due).saturating_duration_since(Instant::now());
             let ptys: Vec<&Pty> = ends.iter().filter_map(Endpoint::pty).collect();
             Pty::wait_any(&ptys, wait);
         }

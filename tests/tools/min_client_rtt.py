@@ -1,0 +1,185 @@
+#!/usr/bin/env python3
+"""A minimal client on the robot's serial port: the round trip of a Stop command.
+
+Issue 15's row "a minimal client on the pty": the floor that the station's own code adds to.
+It handshakes (the Hello of PROTOCOL.md §10's vector, whose fingerprint must match the robot's
+build: refresh it if the schema changes), sets the telemetry rate, then sends Stop commands at
+random moments (not synchronised with the robot's telemetry, as a teleop key is) and times each
+from the write to the Ack's delimiter. Prints p50 / p99 / max in ms, and with --json one line.
+
+    min_client_rtt.py PORT [--hz 50] [--n 200] [--gap-ms 20-60] [--json]
+
+Standard library only. Exit 1 when the robot does not answer.
+"""
+
+import argparse
+import json
+import os
+import random
+import select
+import sys
+import termios
+import time
+import tty
+
+HELLO_WIRE = bytes.fromhex(
+    "02 01 01 01 1a 01 bc 25 1e 97 d5 c9 64 01 ee ff 83 06 07 73 74 61 74 69 6f 6e ae 4b 5b 2c 00"
+)
+
+
+def crc32c(data):
+    crc = 0xFFFFFFFF
+    for b in data:
+        crc ^= b
+        for _ in range(8):
+            crc = (crc >> 1) ^ (0x82F63B78 if crc & 1 else 0)
+    return crc ^ 0xFFFFFFFF
+
+
+def cobs(data):
+    out = bytearray()
+    block = bytearray()
+    for b in data:
+        if b == 0:
+            out.append(len(block) + 1)
+            out += block
+            block = bytearray()
+        else:
+            block.append(b)
+            if len(block) == 254:
+                out.append(255)
+                out += block
+                block = bytearray()
+    out.append(len(block) + 1)
+    out += block
+    return bytes(out) + b"\x00"
+
+
+def uncobs(data):
+    out = bytearray()
+    i = 0
+    while i < len(data):
+        code = data[i]
+        if code == 0:
+            return None
+        out += data[i + 1 : i + code]
+        i += code
+        if code < 255 and i < len(data):
+            out.append(0)
+    return bytes(out)
+
+
+def frame(kind, seq, payload):
+    raw = bytes([1, kind, seq & 0xFF, seq >> 8]) + payload
+    return cobs(raw + crc32c(raw).to_bytes(4, "little"))
+
+
+def varint(n):
+    out = bytearray()
+    while True:
+        b = n & 0x7F
+        n >>= 7
+        if n:
+            out.append(b | 0x80)
+        else:
+            out.append(b)
+            return bytes(out)
+
+
+class Port:
+    def __init__(self, path):
+        self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+        tty.setraw(self.fd)
+        self.buf = bytearray()
+
+    def frames(self, timeout):
+        """Decoded frames (kind, seq, payload) read within `timeout` s, with the time each
+        delimiter was read; returns as soon as at least one is whole."""
+        end = time.monotonic() + timeout
+        got = []
+        while not got:
+            left = end - time.monotonic()
+            if left <= 0:
+                return got
+            r, _, _ = select.select([self.fd], [], [], left)
+            if not r:
+                continue
+            now = time.monotonic()
+            try:
+                self.buf += os.read(self.fd, 4096)
+            except BlockingIOError:
+                continue
+            while b"\x00" in self.buf:
+                i = self.buf.index(0)
+                enc = bytes(self.buf[:i])
+                del self.buf[: i + 1]
+                raw = uncobs(enc) if enc else None
+                if raw and len(raw) >= 8 and crc32c(raw[:-4]) == int.from_bytes(raw[-4:], "little"):
+                    got.append((raw[1], raw[2] | raw[3] << 8, raw[4:-4], now))
+        return got
+
+    def write(self, b):
+        os.write(self.fd, b)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("port")
+    ap.add_argument("--hz", type=int, default=50)
+    ap.add_argument("--n", type=int, default=200)
+    ap.add_argument("--gap-ms", default="20-60")
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args()
+    lo, hi = (float(x) for x in a.gap_ms.split("-"))
+    p = Port(a.port)
+    seq = 0
+    p.write(b"\x00" + HELLO_WIRE)
+    seq += 1
+    deadline = time.monotonic() + 3
+    while time.monotonic() < deadline:
+        if any(k == 1 for k, *_ in p.frames(0.5)):
+            break
+    else:
+        print("no HelloReply", file=sys.stderr)
+        return 1
+    # SetTelemetryRate(hz): Command index 10.
+    p.write(frame(4, seq, bytes([10, a.hz])))
+    seq += 1
+    time.sleep(0.3)
+    p.frames(0.05)
+    rtts = []
+    lost = 0
+    for _ in range(a.n):
+        time.sleep(random.uniform(lo, hi) / 1000)
+        me = seq
+        seq += 1
+        f = frame(4, me, bytes([2]))
+        t0 = time.monotonic()
+        p.write(f)
+        done = None
+        end = t0 + 0.5
+        while done is None and time.monotonic() < end:
+            for kind, s, payload, t in p.frames(end - time.monotonic()):
+                # Ack (5) / Nack (6): cmd_seq is the payload's first varint.
+                if kind in (5, 6) and payload[: len(varint(me))] == varint(me):
+                    done = t
+        if done is None:
+            lost += 1
+        else:
+            rtts.append((done - t0) * 1000)
+    if not rtts:
+        print("no Ack", file=sys.stderr)
+        return 1
+    rtts.sort()
+    q = lambda f: rtts[min(len(rtts) - 1, int(f * len(rtts)))]
+    out = {"n": len(rtts), "lost": lost, "p50_ms": q(0.5), "p99_ms": q(0.99), "max_ms": rtts[-1],
+           "min_ms": rtts[0], "hz": a.hz, "deciles_ms": [round(q(i / 10), 2) for i in range(1, 10)]}
+    if a.json:
+        print(json.dumps(out))
+    else:
+        print("n {n} lost {lost}: min {min_ms:.2f} p50 {p50_ms:.2f} p99 {p99_ms:.2f} max {max_ms:.2f} ms; deciles {deciles_ms}".format(**out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
