@@ -2,8 +2,8 @@
 """A minimal client on the robot's serial port: the round trip of a Stop command.
 
 Issue 15's row "a minimal client on the pty": the floor that the station's own code adds to.
-It handshakes (the Hello of PROTOCOL.md §10's vector, whose fingerprint must match the robot's
-build: refresh it if the schema changes), sets the telemetry rate, then sends Stop commands at
+It handshakes (the Hello of PROTOCOL.md §10's vector, read from protocol/PROTOCOL.md, so its
+fingerprint is this build's), sets the telemetry rate, then sends Stop commands at
 random moments (not synchronised with the robot's telemetry, as a teleop key is) and times each
 from the write to the Ack's delimiter. Prints p50 / p99 / max in ms, and with --json one line.
 
@@ -22,9 +22,19 @@ import termios
 import time
 import tty
 
-HELLO_WIRE = bytes.fromhex(
-    "02 01 01 01 1a 01 bc 25 1e 97 d5 c9 64 01 ee ff 83 06 07 73 74 61 74 69 6f 6e ae 4b 5b 2c 00"
-)
+def hello_wire():
+    """The wire bytes of PROTOCOL.md §10's `hello` vector, read from the document beside this
+    repository's protocol crate, so the fingerprint is always this build's (a fixed copy goes
+    stale, and the robot refuses it, whenever the message set changes)."""
+    doc = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "protocol", "PROTOCOL.md")
+    with open(doc, encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    start = next(i for i, l in enumerate(lines) if l.startswith("vector `hello`:"))
+    wire = next(l for l in lines[start:] if l.strip().startswith("wire:"))
+    return bytes.fromhex(wire.split(":", 1)[1])
+
+
+HELLO_WIRE = hello_wire()
 
 
 def crc32c(data):
