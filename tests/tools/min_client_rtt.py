@@ -22,6 +22,8 @@ import termios
 import time
 import tty
 
+from wire import cobs as cobs_raw, crc32c
+
 def hello_wire():
     """The wire bytes of PROTOCOL.md §10's `hello` vector, read from the document beside this
     repository's protocol crate, so the fingerprint is always this build's (a fixed copy goes
@@ -37,32 +39,9 @@ def hello_wire():
 HELLO_WIRE = hello_wire()
 
 
-def crc32c(data):
-    crc = 0xFFFFFFFF
-    for b in data:
-        crc ^= b
-        for _ in range(8):
-            crc = (crc >> 1) ^ (0x82F63B78 if crc & 1 else 0)
-    return crc ^ 0xFFFFFFFF
-
-
 def cobs(data):
-    out = bytearray()
-    block = bytearray()
-    for b in data:
-        if b == 0:
-            out.append(len(block) + 1)
-            out += block
-            block = bytearray()
-        else:
-            block.append(b)
-            if len(block) == 254:
-                out.append(255)
-                out += block
-                block = bytearray()
-    out.append(len(block) + 1)
-    out += block
-    return bytes(out) + b"\x00"
+    """A COBS frame with its delimiter."""
+    return cobs_raw(data) + b"\x00"
 
 
 def uncobs(data):

@@ -6,24 +6,7 @@ import json
 import struct
 
 from generate import crc32c, header, record, varint, write
-
-
-def cobs(raw):
-    out, block = bytearray(), bytearray()
-    for b in raw:
-        if b == 0:
-            out.append(len(block) + 1)
-            out += block
-            block = bytearray()
-        else:
-            block.append(b)
-            if len(block) == 254:
-                out.append(255)
-                out += block
-                block = bytearray()
-    out.append(len(block) + 1)
-    out += block
-    return bytes(out)
+from wire import cobs
 
 
 def frame(kind, seq, payload):

@@ -1,0 +1,31 @@
+"""The link's two checks in Python, one place for the project's scripts (the bad-input
+corpus's generators and the minimal client): CRC-32C (PROTOCOL.md §2, Castagnoli, reflected,
+init and final xor 0xFFFFFFFF) and COBS (§2; the 0x00 delimiter is the caller's)."""
+
+
+def crc32c(data):
+    crc = 0xFFFFFFFF
+    for b in data:
+        crc ^= b
+        for _ in range(8):
+            crc = (crc >> 1) ^ (0x82F63B78 if crc & 1 else 0)
+    return crc ^ 0xFFFFFFFF
+
+
+def cobs(raw):
+    """COBS-encodes `raw` (no delimiter)."""
+    out, block = bytearray(), bytearray()
+    for b in raw:
+        if b == 0:
+            out.append(len(block) + 1)
+            out += block
+            block = bytearray()
+        else:
+            block.append(b)
+            if len(block) == 254:
+                out.append(255)
+                out += block
+                block = bytearray()
+    out.append(len(block) + 1)
+    out += block
+    return bytes(out)
