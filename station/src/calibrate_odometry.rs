@@ -74,6 +74,22 @@ pub struct Change {
     pub restore_failed: Option<String>,
 }
 
+impl Change {
+    /// Parameter `id`, in force `before`, measured `measured`: nothing set yet.
+    fn new(id: u16, before: f32, measured: f32) -> Change {
+        Change {
+            name: robot_firmware::params::info(id).map_or("?", |p| p.name),
+            id,
+            before,
+            measured,
+            after: None,
+            refused: None,
+            restored: None,
+            restore_failed: None,
+        }
+    }
+}
+
 /// What the run gave.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Report {
@@ -212,16 +228,7 @@ async fn calibrate(
                 .into_iter()
                 .zip(before)
                 .zip(measured)
-                .map(|((id, before), measured)| Change {
-                    name: robot_firmware::params::info(id).map_or("?", |p| p.name),
-                    id,
-                    before,
-                    measured,
-                    after: None,
-                    refused: None,
-                    restored: None,
-                    restore_failed: None,
-                })
+                .map(|((id, before), measured)| Change::new(id, before, measured))
                 .collect();
             ok = args.dry_run || apply(&mut report.changes, |c| link.handle.call(c)).await;
         }
@@ -484,16 +491,7 @@ mod tests {
             (param::ODO_WHEEL_RATIO_PPM, 0.0, -3650.0),
         ]
         .into_iter()
-        .map(|(id, before, measured)| Change {
-            name: "x",
-            id,
-            before,
-            measured,
-            after: None,
-            refused: None,
-            restored: None,
-            restore_failed: None,
-        })
+        .map(|(id, before, measured)| Change::new(id, before, measured))
         .collect()
     }
 

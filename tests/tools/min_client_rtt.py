@@ -22,7 +22,7 @@ import termios
 import time
 import tty
 
-from wire import cobs as cobs_raw, crc32c
+from wire import cobs as cobs_raw, crc32c, varint
 
 def hello_wire():
     """The wire bytes of PROTOCOL.md §10's `hello` vector, read from the document beside this
@@ -61,18 +61,6 @@ def uncobs(data):
 def frame(kind, seq, payload):
     raw = bytes([1, kind, seq & 0xFF, seq >> 8]) + payload
     return cobs(raw + crc32c(raw).to_bytes(4, "little"))
-
-
-def varint(n):
-    out = bytearray()
-    while True:
-        b = n & 0x7F
-        n >>= 7
-        if n:
-            out.append(b | 0x80)
-        else:
-            out.append(b)
-            return bytes(out)
 
 
 class Port:

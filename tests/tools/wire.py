@@ -29,3 +29,16 @@ def cobs(raw):
     out.append(len(block) + 1)
     out += block
     return bytes(out)
+
+
+def varint(n):
+    """A LEB128 varint, as postcard writes unsigned integers (PROTOCOL.md §5)."""
+    out = bytearray()
+    while True:
+        b = n & 0x7F
+        n >>= 7
+        if n:
+            out.append(b | 0x80)
+        else:
+            out.append(b)
+            return bytes(out)

@@ -20,19 +20,7 @@ import struct
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
-from wire import crc32c  # noqa: E402  (one CRC for every script: tests/tools/wire.py)
-
-
-def varint(n):
-    out = bytearray()
-    while True:
-        b = n & 0x7F
-        n >>= 7
-        if n:
-            out.append(b | 0x80)
-        else:
-            out.append(b)
-            return bytes(out)
+from wire import crc32c, varint  # noqa: E402  (one CRC and varint for every script: tests/tools/wire.py)
 
 
 def write(path, data):
