@@ -137,34 +137,46 @@ pub fn equilibrium(seed: u64, params: &Params) -> Result<ExperimentReport, Strin
 
 /// §4.5.1: eps_o at 0.1, the base value, and 0.005, with eps_n = eps_o / 10 as the thesis.
 pub fn eps_o(seed: u64, params: &Params) -> Result<ExperimentReport, String> {
-    let mut runs = Vec::new();
-    let mut wall = 0.0;
-    for eps in [0.1, params.eps_o, 0.005] {
-        let r = one(seed, STATIC_SAMPLES, params, |o| {
-            o.params.eps_o = eps;
-            o.params.eps_n = eps / 10.0;
-        })?;
-        wall += r.wall_s;
-        runs.push(RunSummary::of(&format!("eps_o={eps}"), &r, LATE_FROM));
-    }
-    Ok(report("eps-o", seed, params, runs, wall))
+    let values = [0.1, params.eps_o, 0.005];
+    eps_o_runs("eps-o", seed, params, &values, STATIC_SAMPLES, LATE_FROM)
 }
 
 /// §4.5.1 "even the position and orientation correlation fails, when the test ... is
 /// continued": the base eps_o and 0.005 (eps_n = eps_o / 10) over [`CONTINUED_SAMPLES`], the
 /// late part from [`STATIC_SAMPLES`] on.
 pub fn eps_o_continued(seed: u64, params: &Params) -> Result<ExperimentReport, String> {
+    let values = [params.eps_o, 0.005];
+    eps_o_runs(
+        "eps-o-continued",
+        seed,
+        params,
+        &values,
+        CONTINUED_SAMPLES,
+        STATIC_SAMPLES,
+    )
+}
+
+/// One run per eps_o in `values` (eps_n = eps_o / 10, as §4.5.1 changes them together), each
+/// `samples` long, summarised from `late_from` on: the body of both eps_o experiments.
+fn eps_o_runs(
+    experiment: &'static str,
+    seed: u64,
+    params: &Params,
+    values: &[f64],
+    samples: u64,
+    late_from: u64,
+) -> Result<ExperimentReport, String> {
     let mut runs = Vec::new();
     let mut wall = 0.0;
-    for eps in [params.eps_o, 0.005] {
-        let r = one(seed, CONTINUED_SAMPLES, params, |o| {
+    for &eps in values {
+        let r = one(seed, samples, params, |o| {
             o.params.eps_o = eps;
             o.params.eps_n = eps / 10.0;
         })?;
         wall += r.wall_s;
-        runs.push(RunSummary::of(&format!("eps_o={eps}"), &r, STATIC_SAMPLES));
+        runs.push(RunSummary::of(&format!("eps_o={eps}"), &r, late_from));
     }
-    Ok(report("eps-o-continued", seed, params, runs, wall))
+    Ok(report(experiment, seed, params, runs, wall))
 }
 
 /// §4.5.3: both correlations, without the position correlation, without the orientation one.
