@@ -20,5 +20,5 @@ pub mod situation;
 
 pub use model::{QtModel, Sample, Stats};
 pub use network::{Cell, Network};
-pub use params::{OrMethod, ParamError, Params};
+pub use params::{OrMethod, ParamError, Params, PosDistance};
 pub use situation::Pose;

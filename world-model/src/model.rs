@@ -4,10 +4,17 @@
 //! 1. dead reckoning: the odometry's motion since the last sample (in the odometry's own robot
 //!    frame) is applied to the internal pose, which is the corrected one;
 //! 2. correlation (§4.2.4) against the network built so far: the internal position moves by
-//!    eps_pos towards an estimate from the winner's topological neighbourhood (weighted by
-//!    update counts and inverse situation distances), the heading by eps_or towards the
-//!    orientation that makes the light pattern's principal axis match the geometrically
-//!    nearest cell's (eq. 9-10);
+//!    eps_pos towards p_est, the positions of the current situation's winner (within
+//!    g_search) and its topological neighbours weighted by ln(2 + u_i) exp(-d_i^2/d_acc^2)
+//!    (the thesis: "using the sensor-distances d_i ... and the number of updates u_i", no
+//!    formula; d_i over light and touch only by default, `pos_distance`); then, if
+//!    `or_pos_tolerance` trusts the position, the heading by eps_or towards the orientation
+//!    that aligns the light ring with the geometrically nearest cell's (eq. 9; within
+//!    `or_radius`; eq. 10's principal axis is `or_method=axis`, the default aligns the
+//!    whole ring). Nothing in §4.2.4 keeps a correlation from pulling the pose towards
+//!    cells beyond a thin wall: the winner's neighbourhood is one side's only while the
+//!    winner is, and the thesis limits neither the correction (beyond the fractions) nor
+//!    the estimate's spread;
 //! 3. the situation at the corrected pose joins the learning set, and the situations `l` to
 //!    `l + k - 1` samples old are each presented once, so every situation is presented `k`
 //!    times, the first time `l` samples after it was taken (the delay keeps a situation from
@@ -20,7 +27,7 @@ use std::collections::VecDeque;
 use serde::Serialize;
 
 use crate::network::Network;
-use crate::params::{OrMethod, ParamError, Params};
+use crate::params::{OrMethod, ParamError, Params, PosDistance};
 use crate::situation::{axis_difference, principal_axis, ring_shift, situation, Pose, Weights};
 
 /// One sensor sample as the robot gives it.
@@ -195,37 +202,25 @@ impl QtModel {
             return;
         }
         let p = self.params.clone();
-        let at = (self.pose.x, self.pose.y);
-        if p.eps_pos > 0.0 {
-            let mut s = std::mem::take(&mut self.buf);
-            situation(&p, sample.light, sample.touch, self.pose, &mut s);
-            if let Some((w, d)) = self.net.winner(&s, at, p.g_search, &mut self.scratch) {
-                let _ = d;
-                let mut members = vec![w];
-                if let Some(c) = self.net.cell(w) {
-                    members.extend(c.edges.iter().map(|e| e.0));
-                }
-                // Weights from the sensor part only: the position part of the distance was
-                // measured from the very position being corrected, and would vote for it.
-                let sensor = p.lights + p.touches;
-                let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
-                for id in members {
-                    let Some(c) = self.net.cell(id) else { continue };
-                    let d = self.net.distance_part(&c.s, &s, sensor);
-                    let u = c.updates as f64;
-                    let wt = (1.0 + u).ln_1p() * (-(d * d) / (p.d_acc * p.d_acc)).exp();
-                    let (x, y) = self.net.position(id);
-                    sx += wt * x;
-                    sy += wt * y;
-                    sw += wt;
-                }
-                if sw > 0.0 {
-                    self.pose.x += p.eps_pos * (sx / sw - self.pose.x);
-                    self.pose.y += p.eps_pos * (sy / sw - self.pose.y);
-                    self.stats.pos_corrections += 1;
-                }
-            }
-            self.buf = s;
+        let gate = p.or_pos_tolerance.is_finite() && p.eps_or > 0.0;
+        let estimate = if p.eps_pos > 0.0 || gate {
+            self.position_estimate(sample)
+        } else {
+            None
+        };
+        // §4.2.4: the orientation is correlated only "assuming the current position is
+        // correct to within a certain tolerance": the map's estimate is the only witness.
+        let trusted = !gate
+            || estimate.is_some_and(|(x, y)| {
+                (x - self.pose.x).hypot(y - self.pose.y) <= p.or_pos_tolerance
+            });
+        if let (true, Some((x, y))) = (p.eps_pos > 0.0, estimate) {
+            self.pose.x += p.eps_pos * (x - self.pose.x);
+            self.pose.y += p.eps_pos * (y - self.pose.y);
+            self.stats.pos_corrections += 1;
+        }
+        if !trusted {
+            return;
         }
         if p.eps_or > 0.0 {
             let at = (self.pose.x, self.pose.y);
@@ -260,6 +255,42 @@ impl QtModel {
                 self.buf = light;
             }
         }
+    }
+
+    /// §4.2.4's p_est: the positions of the current situation's winner and its topological
+    /// neighbours, each weighted by its update count and its distance d_i to the situation.
+    fn position_estimate(&mut self, sample: &Sample) -> Option<(f64, f64)> {
+        let p = &self.params;
+        let at = (self.pose.x, self.pose.y);
+        let mut s = std::mem::take(&mut self.buf);
+        situation(p, sample.light, sample.touch, self.pose, &mut s);
+        let mut out = None;
+        if let Some((w, _)) = self.net.winner(&s, at, p.g_search, &mut self.scratch) {
+            let mut members = vec![w];
+            if let Some(c) = self.net.cell(w) {
+                members.extend(c.edges.iter().map(|e| e.0));
+            }
+            let part = match p.pos_distance {
+                PosDistance::Situation => s.len(),
+                PosDistance::Sensor => p.lights + p.touches,
+            };
+            let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
+            for id in members {
+                let Some(c) = self.net.cell(id) else { continue };
+                let d = self.net.distance_part(&c.s, &s, part);
+                let u = c.updates as f64;
+                let wt = (1.0 + u).ln_1p() * (-(d * d) / (p.d_acc * p.d_acc)).exp();
+                let (x, y) = self.net.position(id);
+                sx += wt * x;
+                sy += wt * y;
+                sw += wt;
+            }
+            if sw > 0.0 {
+                out = Some((sx / sw, sy / sw));
+            }
+        }
+        self.buf = s;
+        out
     }
 
     fn adapt(&mut self, s: &[f64], first: bool) {
@@ -470,5 +501,46 @@ mod tests {
         assert_eq!(p.a_red, Params::default().a_red);
         p.validate().expect("still valid");
         assert!(p.set("or_method", "axis").is_ok());
+        assert!(p.set("pos_distance", "situation").is_ok());
+        assert_eq!(p.pos_distance, PosDistance::Situation);
+        assert!(p.set("pos_distance", "both").is_err());
+        assert!(p.set("or_pos_tolerance", "-1").is_err());
+        assert!(p.set("or_pos_tolerance", "NaN").is_err());
+        assert!(p.set("or_pos_tolerance", "inf").is_ok());
+    }
+
+    /// §4.2.4's "correct to within a certain tolerance": at a zero tolerance the heading is
+    /// never corrected (the map's estimate never agrees exactly), the position still is.
+    #[test]
+    fn the_orientation_correlation_waits_for_a_trusted_position() {
+        let walk = |tolerance: f64| {
+            let p = Params {
+                or_pos_tolerance: tolerance,
+                ..Params::default()
+            };
+            let mut m = QtModel::new(p, Pose::default()).expect("valid");
+            let touch = vec![false; 24];
+            for i in 0..200 {
+                // Out and back along a line, so the second pass meets the first's cells.
+                let x = 0.05 * f64::from(if i < 100 { i } else { 200 - i });
+                let light = ring(x, 0.0);
+                let odometry = Pose {
+                    x,
+                    y: 0.0,
+                    heading: 0.0,
+                };
+                let s = Sample {
+                    light: &light,
+                    touch: &touch,
+                    odometry,
+                };
+                m.observe(&s).expect("valid sample");
+            }
+            m.stats().clone()
+        };
+        let gated = walk(0.0);
+        assert!(gated.pos_corrections > 0);
+        assert_eq!(gated.or_corrections, 0);
+        assert!(walk(f64::INFINITY).or_corrections > 0);
     }
 }
