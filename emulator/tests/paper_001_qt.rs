@@ -188,7 +188,11 @@ fn turning_either_correlation_off_loses_consistency_under_the_drift() {
 /// or_radius 0.05, 0.08, 0.1: 6, 4, 4. With exact odometry the count falls as the heading
 /// estimate's cell comes nearer: or_radius 0.05 8 (0.15, the default, 4), eps_or = 0 10,
 /// `or_pos_tolerance=0.2` 8, `or_method=axis` 4; a cell up to 15 cm away turns the lamps'
-/// bearings by parallax (our reading of that dependence). What the thesis saw, "the
+/// bearings by parallax (our reading of that dependence). Correcting the position only
+/// from a winner the network accepts (d_opt <= d_acc, tried and not kept: the thesis is
+/// silent) removes the exact-odometry folds (2 of 10 close after 2000) but not the drifted
+/// ones (4 clear), and costs the position (1.35 against 0.84 m with both correlations,
+/// seeds 1-10). What the thesis saw, "the
 /// absolute position error between the two sides of the gap is larger than it would be
 /// without the splitting wall", is the sides drifting apart, not folding: our light rings
 /// keep the sides apart by what 6-9 cm of position weigh (above), so a drifted frame folds
