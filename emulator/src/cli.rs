@@ -535,6 +535,11 @@ pub struct RunArgs {
     /// first-over-fifth factors without any learning).
     #[arg(long = "no-learning")]
     pub no_learning: bool,
+    /// alice-navigation: the map keeps learning during the test runs (cells adapt, grow and
+    /// go as while exploring: the thesis's world model has no separate application phase)
+    /// instead of being frozen as §5.3's static maps.
+    #[arg(long = "adapting-map")]
+    pub adapting_map: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
