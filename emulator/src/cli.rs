@@ -540,6 +540,10 @@ pub struct RunArgs {
     /// instead of being frozen as §5.3's static maps.
     #[arg(long = "adapting-map")]
     pub adapting_map: bool,
+    /// alice-navigation: a counterfactual to judge the navigator: during the test runs the
+    /// internal pose is held at the truth (carried into the map's frame) after every sample.
+    #[arg(long = "true-pose")]
+    pub true_pose: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

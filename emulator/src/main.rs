@@ -327,6 +327,7 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
     }
     options.learn = !args.no_learning;
     options.static_map = !args.adapting_map;
+    options.true_pose = args.true_pose;
     let r = navigation(&options)?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);

@@ -75,6 +75,11 @@ pub struct NavOptions {
     /// memory throughout, which shows what the first-over-fifth factors are without any
     /// learning).
     pub learn: bool,
+    /// A counterfactual to judge the navigator, never the experiment itself: during the test
+    /// runs the model's internal pose is set after every sample to the true pose carried into
+    /// the map's frame (the inverse of the judge's fit), a localisation that holds exactly.
+    /// It separates what the lost localisation costs from what the planner and the memory do.
+    pub true_pose: bool,
     /// The model's parameters.
     pub params: Params,
 }
@@ -91,6 +96,7 @@ impl NavOptions {
             static_map: true,
             step_base: StepBase::Cell,
             learn: true,
+            true_pose: false,
             params,
         }
     }
@@ -280,6 +286,8 @@ struct Robot {
     fit: Option<MapFit>,
     /// Truth, to judge only: the correlations since the tally was last taken.
     tally: Tally,
+    /// The `true_pose` counterfactual is on (once the exploration is done).
+    true_pose: bool,
 }
 
 /// A cell's internal position and its place in the world.
@@ -326,6 +334,13 @@ impl MapFit {
             .sum::<f64>()
             / n;
         Some(fit)
+    }
+
+    /// The inverse of [`MapFit::world`].
+    fn internal(&self, w: (f64, f64)) -> (f64, f64) {
+        let (s, c) = (-self.rotation).sin_cos();
+        let (x, y) = (w.0 - self.to.0, w.1 - self.to.1);
+        (c * x - s * y + self.from.0, s * x + c * y + self.from.1)
     }
 
     fn world(&self, p: (f64, f64)) -> (f64, f64) {
@@ -402,6 +417,11 @@ impl Robot {
             })
             .map_err(|e| e.to_string())?;
         self.samples += 1;
+        if let Some(fit) = self.fit.filter(|_| self.true_pose) {
+            let (x, y) = fit.internal((self.body.at.x, self.body.at.y));
+            let heading = super::wrap(self.body.heading - fit.rotation);
+            self.model.relocate(Pose { x, y, heading });
+        }
         self.judge(&light);
         Ok(free)
     }
@@ -662,6 +682,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         places: HashMap::new(),
         fit: None,
         tally: Tally::default(),
+        true_pose: false,
     };
     r.explore(o.explore_samples)?;
     let or_explored = r.model.stats().or_corrections;
@@ -714,6 +735,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
     let path_m = gap(away, hp);
     let (cells, edges) = (net.len(), net.edges().count());
     r.fit = fit;
+    r.true_pose = o.true_pose;
     r.body.curve = o.static_drift_deg_per_m.to_radians();
     if o.static_map {
         r.model
@@ -821,5 +843,10 @@ mod tests {
         moved[3].1 .0 += 1.0;
         assert!(MapFit::new(&moved).expect("fit").residual_m > 0.2);
         assert!(MapFit::new(&pairs[..2]).is_none());
+        let back = fit.internal(fit.world((2.0, 3.0)));
+        assert!(
+            (back.0 - 2.0).abs() < 1e-9 && (back.1 - 3.0).abs() < 1e-9,
+            "{back:?}"
+        );
     }
 }
