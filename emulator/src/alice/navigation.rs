@@ -28,6 +28,13 @@
 //! internal pose, carried through that transform, is from the true pose (position and
 //! heading): a step aimed at a cell's internal position can only reach the cell when these
 //! are small.
+//!
+//! Sample by sample the truth also judges the correlations ([`CorrelationJudge`]): which gate
+//! stops the orientation correlation, and how far the winner (the centre of the position
+//! correlation's neighbourhood) is from the internal pose and its place from the truth. Two
+//! options separate the causes: `static_map = false` lets the map keep learning during the
+//! test runs, and `true_pose` holds the internal pose at the truth in the map's frame, a
+//! counterfactual that shows what the planner and the memory do when the localisation holds.
 
 use std::collections::HashMap;
 
