@@ -284,6 +284,7 @@ fn pooled(r: &[NavReport], f: fn(&TestRun) -> f64) -> f64 {
 ///   map's edges, drawn between the cells' internal positions, lead into obstacles, and the
 ///   memory (536 (winner, sub-goal) pairs for those 3711 steps, about 7 drives a pair) does
 ///   not learn its way around them within five runs. Why not is open.
+///
 /// Tolerance: pooled time factor >= 2 and refinement factor >= 3 over seeds 1-4, and both
 /// above the control's.
 #[test]
