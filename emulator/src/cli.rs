@@ -544,6 +544,19 @@ pub struct RunArgs {
     /// internal pose is held at the truth (carried into the map's frame) after every sample.
     #[arg(long = "true-pose")]
     pub true_pose: bool,
+    /// alice-navigation: what a step's geometric command is measured from: the map's edge from
+    /// the winner cell (`cell`, the default) or the internal pose (`pose`).
+    #[arg(long = "step-from", value_enum, default_value_t = StepFromArg::Cell)]
+    pub step_from: StepFromArg,
+}
+
+/// `--step-from` (see `emulator::alice::navigation::StepBase`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StepFromArg {
+    /// The map's edge from the winner cell to the sub-goal.
+    Cell,
+    /// From the internal pose to the sub-goal.
+    Pose,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
