@@ -535,6 +535,28 @@ pub struct RunArgs {
     /// first-over-fifth factors without any learning).
     #[arg(long = "no-learning")]
     pub no_learning: bool,
+    /// alice-navigation: the map keeps learning during the test runs (cells adapt, grow and
+    /// go as while exploring: the thesis's world model has no separate application phase)
+    /// instead of being frozen as §5.3's static maps.
+    #[arg(long = "adapting-map")]
+    pub adapting_map: bool,
+    /// alice-navigation: a counterfactual to judge the navigator: during the test runs the
+    /// internal pose is held at the truth (carried into the map's frame) after every sample.
+    #[arg(long = "true-pose")]
+    pub true_pose: bool,
+    /// alice-navigation: what a step's geometric command is measured from: the map's edge from
+    /// the winner cell (`cell`, the default) or the internal pose (`pose`).
+    #[arg(long = "step-from", value_enum, default_value_t = StepFromArg::Cell)]
+    pub step_from: StepFromArg,
+}
+
+/// `--step-from` (see `emulator::alice::navigation::StepBase`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StepFromArg {
+    /// The map's edge from the winner cell to the sub-goal.
+    Cell,
+    /// From the internal pose to the sub-goal.
+    Pose,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -326,6 +326,12 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
         options.static_drift_deg_per_m = d;
     }
     options.learn = !args.no_learning;
+    options.static_map = !args.adapting_map;
+    options.true_pose = args.true_pose;
+    options.step_base = match args.step_from {
+        emulator::cli::StepFromArg::Cell => emulator::alice::navigation::StepBase::Cell,
+        emulator::cli::StepFromArg::Pose => emulator::alice::navigation::StepBase::Pose,
+    };
     let r = navigation(&options)?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
@@ -343,10 +349,13 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
         r.options.static_drift_deg_per_m,
         r.wall_s
     );
-    println!("run  reached  samples  refinements  reversals  steps  failed  blocked");
+    println!(
+        "run  reached  samples  refinements  reversals  steps  failed  blocked  pose_err_m  \
+         heading_err_deg  or_applies"
+    );
     for (i, t) in r.runs.iter().enumerate() {
         println!(
-            "{:>3}  {:>7}  {:>7}  {:>11}  {:>9}  {:>5}  {:>6}  {:>7}",
+            "{:>3}  {:>7}  {:>7}  {:>11}  {:>9}  {:>5}  {:>6}  {:>7}  {:>10.2}  {:>15.1}  {:>10.3}",
             i + 1,
             t.legs.iter().filter(|l| l.reached).count(),
             t.samples,
@@ -354,7 +363,10 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
             t.reversals,
             t.legs.iter().map(|l| l.steps).sum::<u32>(),
             t.legs.iter().map(|l| l.failed).sum::<u32>(),
-            t.legs.iter().map(|l| l.blocked).sum::<u32>()
+            t.legs.iter().map(|l| l.blocked).sum::<u32>(),
+            t.localisation_error_m,
+            t.heading_error_deg,
+            t.correlation.or_applies
         );
     }
     let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));

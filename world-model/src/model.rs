@@ -115,6 +115,12 @@ impl QtModel {
         self.pose
     }
 
+    /// Put the internal pose at `p` (a known pose from outside the model; the emulator's
+    /// navigation uses it for a counterfactual that holds the pose at the truth).
+    pub fn relocate(&mut self, p: Pose) {
+        self.pose = p;
+    }
+
     /// The winner of the latest first presentation (the cell the robot is "at").
     pub fn winner(&self) -> Option<u32> {
         self.winner

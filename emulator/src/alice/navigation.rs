@@ -28,13 +28,21 @@
 //! internal pose, carried through that transform, is from the true pose (position and
 //! heading): a step aimed at a cell's internal position can only reach the cell when these
 //! are small.
+//!
+//! Sample by sample the truth also judges the correlations ([`CorrelationJudge`]): which gate
+//! stops the orientation correlation, and how far the winner (the centre of the position
+//! correlation's neighbourhood) is from the internal pose and its place from the truth. Two
+//! options separate the causes: `static_map = false` lets the map keep learning during the
+//! test runs, and `true_pose` holds the internal pose at the truth in the map's frame, a
+//! counterfactual that shows what the planner and the memory do when the localisation holds.
 
 use std::collections::HashMap;
 
 use serde::Serialize;
 use world_model::execute::Executor;
 use world_model::navigate::Planner;
-use world_model::{Params, Pose, QtModel, Sample};
+use world_model::situation::{ring_shift, rotate_to_world};
+use world_model::{OrMethod, Params, Pose, QtModel, Sample};
 
 use super::arena::alice;
 use super::body::{Body, SPEED_M_S, SUBSTEPS, TURN_RAD_S};
@@ -74,6 +82,11 @@ pub struct NavOptions {
     /// memory throughout, which shows what the first-over-fifth factors are without any
     /// learning).
     pub learn: bool,
+    /// A counterfactual to judge the navigator, never the experiment itself: during the test
+    /// runs the model's internal pose is set after every sample to the true pose carried into
+    /// the map's frame (the inverse of the judge's fit), a localisation that holds exactly.
+    /// It separates what the lost localisation costs from what the planner and the memory do.
+    pub true_pose: bool,
     /// The model's parameters.
     pub params: Params,
 }
@@ -90,6 +103,7 @@ impl NavOptions {
             static_map: true,
             step_base: StepBase::Cell,
             learn: true,
+            true_pose: false,
             params,
         }
     }
@@ -153,6 +167,69 @@ pub struct TestRun {
     pub localisation_error_m: f64,
     /// Both legs' heading error after a step (see `Leg`), mean over steps, degrees.
     pub heading_error_deg: f64,
+    /// The correlations judged from the truth over the run's samples.
+    pub correlation: CorrelationJudge,
+}
+
+/// The correlations (§4.2.4) judged from the truth over a stretch of samples, at the internal
+/// pose after each sample (never used by the robot). For the `shift` orientation method (the
+/// default) each sample is sorted by the gate that decides it: the orientation correlation
+/// applies; no cell lies within `or_radius` of the internal position; no turn within
+/// `or_max_shift` aligns the light ring with the nearest cell's (a heading error beyond the
+/// search, or a flat ring); the best turn leaves a residual above `or_max_residual` (the
+/// nearest cell's ring is another place's). The position correlation's estimate comes from the
+/// winner's neighbourhood, and the winner search weighs the position: how far the winner cell
+/// is from the internal pose, and how far the place where it won while exploring is from the
+/// truth, show whether that estimate can pull the pose back.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct CorrelationJudge {
+    /// Samples judged.
+    pub samples: u64,
+    /// Fraction of the samples on which the orientation correlation applies.
+    pub or_applies: f64,
+    /// Fraction with no cell within `or_radius` of the internal position.
+    pub or_no_cell: f64,
+    /// Fraction with no aligning turn within `or_max_shift`.
+    pub or_no_turn: f64,
+    /// Fraction whose best turn leaves too large a residual.
+    pub or_residual: f64,
+    /// Fraction with a whisker touching.
+    pub touching: f64,
+    /// Mean distance from the winner cell's internal position to the internal pose, metres.
+    pub winner_to_pose_m: f64,
+    /// Mean distance from the true position to the winner's place (the mean true position
+    /// where it won while exploring), metres.
+    pub winner_place_to_truth_m: f64,
+}
+
+/// Counts behind a [`CorrelationJudge`].
+#[derive(Clone, Debug, Default)]
+struct Tally {
+    samples: u64,
+    applies: u64,
+    no_cell: u64,
+    no_turn: u64,
+    residual: u64,
+    touching: u64,
+    winner_to_pose: (f64, u64),
+    winner_place: (f64, u64),
+}
+
+impl Tally {
+    fn judge(&self) -> CorrelationJudge {
+        let n = self.samples.max(1) as f64;
+        let mean = |(sum, k): (f64, u64)| sum / k.max(1) as f64;
+        CorrelationJudge {
+            samples: self.samples,
+            or_applies: self.applies as f64 / n,
+            or_no_cell: self.no_cell as f64 / n,
+            or_no_turn: self.no_turn as f64 / n,
+            or_residual: self.residual as f64 / n,
+            touching: self.touching as f64 / n,
+            winner_to_pose_m: mean(self.winner_to_pose),
+            winner_place_to_truth_m: mean(self.winner_place),
+        }
+    }
 }
 
 /// The experiment's report.
@@ -181,6 +258,8 @@ pub struct NavReport {
     pub or_corrections_exploring: f64,
     /// See `or_corrections_exploring`.
     pub or_corrections_testing: f64,
+    /// The correlations judged from the truth over the exploration (see `TestRun`).
+    pub exploring: CorrelationJudge,
     /// The test runs in order.
     pub runs: Vec<TestRun>,
     /// First run over the run after four (index 4): time, refinements, reversals
@@ -212,6 +291,10 @@ struct Robot {
     places: HashMap<u32, (f64, f64, u32)>,
     /// Truth, to judge only: the map's frame in the world, once the exploration is done.
     fit: Option<MapFit>,
+    /// Truth, to judge only: the correlations since the tally was last taken.
+    tally: Tally,
+    /// The `true_pose` counterfactual is on (once the exploration is done).
+    true_pose: bool,
 }
 
 /// A cell's internal position and its place in the world.
@@ -258,6 +341,13 @@ impl MapFit {
             .sum::<f64>()
             / n;
         Some(fit)
+    }
+
+    /// The inverse of [`MapFit::world`].
+    fn internal(&self, w: (f64, f64)) -> (f64, f64) {
+        let (s, c) = (-self.rotation).sin_cos();
+        let (x, y) = (w.0 - self.to.0, w.1 - self.to.1);
+        (c * x - s * y + self.from.0, s * x + c * y + self.from.1)
     }
 
     fn world(&self, p: (f64, f64)) -> (f64, f64) {
@@ -334,7 +424,58 @@ impl Robot {
             })
             .map_err(|e| e.to_string())?;
         self.samples += 1;
+        if let Some(fit) = self.fit.filter(|_| self.true_pose) {
+            let (x, y) = fit.internal((self.body.at.x, self.body.at.y));
+            let heading = super::wrap(self.body.heading - fit.rotation);
+            self.model.relocate(Pose { x, y, heading });
+        }
+        self.judge(&light);
         Ok(free)
+    }
+
+    /// Add this sample to the truth's tally (see [`CorrelationJudge`]).
+    fn judge(&mut self, light: &[f64]) {
+        let p = self.model.params();
+        let net = self.model.network();
+        let pose = self.model.pose();
+        let t = &mut self.tally;
+        t.samples += 1;
+        if self.touch.iter().any(|&b| b) {
+            t.touching += 1;
+        }
+        let mut scratch = Vec::new();
+        if p.or_method == OrMethod::Shift {
+            match net.nearest((pose.x, pose.y), p.or_radius, &mut scratch) {
+                None => t.no_cell += 1,
+                Some((near, _)) => {
+                    let mut ring = Vec::new();
+                    rotate_to_world(light, pose.heading, &mut ring);
+                    let stored = net.cell(near).map_or(&[][..], |c| &c.s[..p.lights]);
+                    if ring_shift(&ring, stored, p.or_max_shift, p.or_max_residual).is_some() {
+                        t.applies += 1;
+                    } else if ring_shift(&ring, stored, p.or_max_shift, f64::INFINITY).is_some() {
+                        t.residual += 1;
+                    } else {
+                        t.no_turn += 1;
+                    }
+                }
+            }
+        }
+        if let Some(w) = self.model.winner().filter(|&w| net.cell(w).is_some()) {
+            let (x, y) = net.position(w);
+            t.winner_to_pose.0 += (x - pose.x).hypot(y - pose.y);
+            t.winner_to_pose.1 += 1;
+            if let Some(&(sx, sy, k)) = self.places.get(&w) {
+                let k = f64::from(k);
+                t.winner_place.0 += (sx / k - self.body.at.x).hypot(sy / k - self.body.at.y);
+                t.winner_place.1 += 1;
+            }
+        }
+    }
+
+    /// The tally since it was last taken, judged; the tally starts again.
+    fn take_judge(&mut self) -> CorrelationJudge {
+        std::mem::take(&mut self.tally).judge()
     }
 
     fn explore(&mut self, samples: u64) -> Result<(), String> {
@@ -547,9 +688,12 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         samples: 0,
         places: HashMap::new(),
         fit: None,
+        tally: Tally::default(),
+        true_pose: false,
     };
     r.explore(o.explore_samples)?;
     let or_explored = r.model.stats().or_corrections;
+    let exploring = r.take_judge();
     let net = r.model.network();
     let pairs: Vec<_> = net
         .cells()
@@ -598,6 +742,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
     let path_m = gap(away, hp);
     let (cells, edges) = (net.len(), net.edges().count());
     r.fit = fit;
+    r.true_pose = o.true_pose;
     r.body.curve = o.static_drift_deg_per_m.to_radians();
     if o.static_map {
         r.model
@@ -611,6 +756,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
     // Get to the start of the test path first (not measured; the memory learns already, as
     // it would on any drive).
     r.leg(home, &mut exec, o.leg_cap, o.step_base)?;
+    r.take_judge();
     let (or_before, testing_from) = (r.model.stats().or_corrections, r.samples);
     let mut runs = Vec::new();
     for _ in 0..o.runs {
@@ -628,6 +774,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
                 / steps
         };
         runs.push(TestRun {
+            correlation: r.take_judge(),
             localisation_error_m: weighted(|l| l.localisation_error_m),
             heading_error_deg: weighted(|l| l.heading_error_deg),
             samples: legs.iter().map(|l| l.samples).sum(),
@@ -648,6 +795,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         path_m,
         map_rotation_deg: fit.map_or(0.0, |f| f.rotation.to_degrees()),
         map_fit_residual_m: fit.map_or(0.0, |f| f.residual_m),
+        exploring,
         or_corrections_exploring: or_explored as f64 / o.explore_samples.max(1) as f64,
         or_corrections_testing: (r.model.stats().or_corrections - or_before) as f64
             / (r.samples - testing_from).max(1) as f64,
@@ -702,5 +850,10 @@ mod tests {
         moved[3].1 .0 += 1.0;
         assert!(MapFit::new(&moved).expect("fit").residual_m > 0.2);
         assert!(MapFit::new(&pairs[..2]).is_none());
+        let back = fit.internal(fit.world((2.0, 3.0)));
+        assert!(
+            (back.0 - 2.0).abs() < 1e-9 && (back.1 - 3.0).abs() < 1e-9,
+            "{back:?}"
+        );
     }
 }
