@@ -28,8 +28,7 @@ use protocol::{AckInfo, Command, EmuTruth, Event, EventCode, Mode, Telemetry};
 use crate::action::Action;
 use crate::link::api::{command_text, param_name, refusal_text};
 use crate::link::{
-    CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats, PeerInfo,
-    SendWhen,
+    CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats, PeerInfo, SendWhen,
 };
 use arena::ArenaOverlay;
 use history::{EncoderUnwrap, History, Track};

@@ -71,11 +71,14 @@ fn teleop_repeats_keep_their_rate_and_a_key_press_goes_at_once() {
     t.keys(&["+", "+"]);
     t.keys(&["F5"]);
     t.wait_for("telemetry at 50 Hz", WAIT, |s| {
-        s.iter()
-            .any(|r| ["49.0 Hz", "50.0 Hz", "51.0 Hz"].iter().any(|h| r.contains(h)))
+        s.iter().any(|r| {
+            ["49.0 Hz", "50.0 Hz", "51.0 Hz"]
+                .iter()
+                .any(|h| r.contains(h))
+        })
     });
     t.keys(&["R"]);
-    t.wait_text("recording to", WAIT);
+    t.wait_text("● REC", WAIT);
     // Let the station learn the robot's burst (a second of telemetry), then drive.
     std::thread::sleep(Duration::from_secs(1));
     t.keys(&["Up"]);
@@ -90,16 +93,25 @@ fn teleop_repeats_keep_their_rate_and_a_key_press_goes_at_once() {
     t.keys(&["Space"]);
     std::thread::sleep(Duration::from_millis(300));
     t.keys(&["R"]);
-    t.wait_text("recording saved:", WAIT);
+    t.wait_for("the recording saved", WAIT, |s| {
+        s.first().is_some_and(|h| !h.contains("REC"))
+    });
     t.keys(&["q"]);
     let _ = emu.kill();
     let _ = emu.wait();
 
-    let files: Vec<PathBuf> = std::fs::read_dir(&d)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "rec"))
-        .collect();
+    let recordings = || -> Vec<PathBuf> {
+        std::fs::read_dir(&d)
+            .unwrap()
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "rec"))
+            .collect()
+    };
+    let end = std::time::Instant::now() + WAIT;
+    while recordings().is_empty() && std::time::Instant::now() < end {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let files = recordings();
     assert_eq!(files.len(), 1, "{files:?}");
     let rec = Recording::open(&files[0]).unwrap();
     let sent = teleops(&rec);
@@ -121,8 +133,12 @@ fn teleop_repeats_keep_their_rate_and_a_key_press_goes_at_once() {
     );
     assert!(longest < 250_000, "a gap of {longest} µs: {gaps:?}");
 
-    // Each press: its new speed written at once (the key's moment on the recording's clock,
-    // to the millisecond, plus tmux delivering the key), well before the next repeat.
+    // Each press: its new speed written at once. The recording's clock and ours differ by
+    // an offset known only to tens of milliseconds (`created_unix_ms` is taken apart from the
+    // recording's start), so what is checked is that every press took the same time from the
+    // key to the port (tmux's delivery and the machine's load apart): a press that waited
+    // for the next tick (32 ms grid) or repeat (96 ms) would spread over those. That a press
+    // is never held for a quiet line is pinned by the machine's and the app's unit tests.
     let mut delays = Vec::new();
     for (i, at) in presses.iter().enumerate() {
         let v = 50 * (i as i16 + 2);
@@ -133,11 +149,14 @@ fn teleop_repeats_keep_their_rate_and_a_key_press_goes_at_once() {
             .unwrap_or_else(|| panic!("no teleop at {v} mm/s: {sent:?}"));
         delays.push(first.0 as i64 - key_us as i64);
     }
-    eprintln!("key to write, ms: {:?}", delays.iter().map(|d| d / 1000).collect::<Vec<_>>());
-    let mut sorted = delays.clone();
-    sorted.sort_unstable();
+    let spread = delays.iter().max().unwrap() - delays.iter().min().unwrap();
+    eprintln!(
+        "key to write, ms (one unknown offset for all): {:?}, spread {:.1} ms",
+        delays.iter().map(|d| d / 1000).collect::<Vec<_>>(),
+        spread as f64 / 1000.0
+    );
     assert!(
-        sorted[2] < 50_000 && sorted[4] < 96_000,
-        "key presses written {delays:?} µs after the key"
+        spread < 25_000,
+        "key presses written {delays:?} µs after the key (plus one offset)"
     );
 }

@@ -174,11 +174,7 @@ impl LinePhase {
         {
             return None;
         }
-        let lag = self
-            .lag_us
-            .iter()
-            .filter_map(|w| w.get(now_us))
-            .max()?;
+        let lag = self.lag_us.iter().filter_map(|w| w.get(now_us)).max()?;
         // The end of the last telemetry's burst, in our µs, and the period, both signed.
         let end0 = last.robot_ms.saturating_mul(1000).saturating_add(lag);
         let p = i64::try_from(period).ok()?;
@@ -186,11 +182,7 @@ impl LinePhase {
         let margin = MARGIN_US as i64;
         // The first burst whose end (plus the margin) is not yet past.
         let behind = now - margin - end0;
-        let k = if behind <= 0 {
-            0
-        } else {
-            (behind + p - 1) / p
-        };
+        let k = if behind <= 0 { 0 } else { (behind + p - 1) / p };
         let release = end0 + k * p + margin;
         let previous = release - p;
         if k > 0 && now - previous <= NOW_WINDOW_US as i64 {
@@ -243,7 +235,11 @@ mod tests {
                 self.robot_ms(k),
                 stamp + self.tel_us + late,
             );
-            p.observe(Periodic::Truth, self.robot_ms(k), stamp + self.truth_us + late);
+            p.observe(
+                Periodic::Truth,
+                self.robot_ms(k),
+                stamp + self.truth_us + late,
+            );
         }
     }
 
@@ -281,7 +277,11 @@ mod tests {
         let start = line.offset_us + 50 * line.period_us;
         for into in [0, 1_000, 5_000, 7_000, 7_400] {
             let at = p.quiet_at(start + into);
-            assert_eq!(at, line.end(50) + MARGIN_US, "asked {into} µs into the burst");
+            assert_eq!(
+                at,
+                line.end(50) + MARGIN_US,
+                "asked {into} µs into the burst"
+            );
         }
         // Just after the margin: at once.
         let just_after = line.end(50) + MARGIN_US + 1_000;
@@ -301,11 +301,7 @@ mod tests {
             let stamp = line.offset_us + k * line.period_us;
             let tel = stamp + line.tel_us;
             let truth = stamp + line.truth_us;
-            p.observe(
-                Periodic::Telemetry,
-                line.robot_ms(k),
-                tel + paced_late(tel),
-            );
+            p.observe(Periodic::Telemetry, line.robot_ms(k), tel + paced_late(tel));
             p.observe(Periodic::Truth, line.robot_ms(k), truth + paced_late(truth));
         }
         // Ask at every 100 µs across two periods: the release is after the burst's true end
@@ -335,7 +331,11 @@ mod tests {
         }
         let now = line.end(20) - 2_000;
         let late = p.quiet_at(now);
-        assert_eq!(late, line.end(20) + 9_000 + MARGIN_US, "the best of the late reads");
+        assert_eq!(
+            late,
+            line.end(20) + 9_000 + MARGIN_US,
+            "the best of the late reads"
+        );
         line.feed(&mut p, 20, 0);
         assert_eq!(p.quiet_at(now), line.end(20) + MARGIN_US);
     }

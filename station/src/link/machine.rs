@@ -726,7 +726,8 @@ impl LinkMachine {
                 return;
             };
             let seq = self.send(now_ms, &Message::Command(command));
-            self.commands.sent(id, seq, command, self.now_us.max(now_ms * 1000));
+            self.commands
+                .sent(id, seq, command, self.now_us.max(now_ms * 1000));
         }
     }
 

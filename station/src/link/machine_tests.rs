@@ -973,5 +973,9 @@ fn a_repeat_goes_at_once_when_no_burst_is_known() {
         w_mrad_s: 0,
     };
     m.submit_when(50_000, 1, teleop, SendWhen::QuietLine);
-    assert_eq!(commands_sent(&mut m).len(), 1, "no telemetry: nothing to wait for");
+    assert_eq!(
+        commands_sent(&mut m).len(),
+        1,
+        "no telemetry: nothing to wait for"
+    );
 }
