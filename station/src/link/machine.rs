@@ -8,6 +8,9 @@
 //! - commands are sent only in a handshaken session; one submitted otherwise fails at once
 //!   with `NotConnected`, and the ones in flight when the session ends fail with `LinkLost`;
 //! - every submitted command produces exactly one `CommandDone`;
+//! - a command submitted `SendWhen::QuietLine` (a teleop repeat) may wait until the robot's
+//!   periodic burst has left the line (`line_phase`), `line_phase::MAX_HOLD_US` at most; the
+//!   others never wait for it;
 //! - no two commands of one session share a sequence number, so the robot's remembered reply
 //!   to one can never answer another (PROTOCOL.md §7): once `RENEW_AFTER_FRAMES` frames have
 //!   gone out since the handshake, new commands wait, and when none is in flight the station
