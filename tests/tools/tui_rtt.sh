@@ -9,7 +9,10 @@
 # /proc/PID/stat and the voluntary + involuntary context switches of all its threads from
 # /proc/PID/task/*/status. Prints one line per run, with the machine's load (`uptime`):
 #
-#   tests/tools/tui_rtt.sh [--bin DIR] [--seconds 30] [--runs 1] [--idle] [--json]
+#   tests/tools/tui_rtt.sh [--bin DIR] [--seconds 30] [--runs 1] [--idle] [--json] [--record DIR]
+#
+# --record DIR also records the link from the TUI (`R`) over the window, keeps it as
+# DIR/tui-rtt-N.rec and prints every round trip's summary from it (tui_rtt_trace.py).
 #
 # DIR holds the release binaries `station` and `robot-emulator` (default:
 # $CARGO_TARGET_DIR/release, else target/release). Needs tmux. Measure without `nice`: this
@@ -21,6 +24,7 @@ seconds=30
 runs=1
 idle=0
 json=0
+record=""
 while [ $# -gt 0 ]; do
     case "$1" in
         --bin) bin="$2"; shift 2 ;;
@@ -28,7 +32,8 @@ while [ $# -gt 0 ]; do
         --runs) runs="$2"; shift 2 ;;
         --idle) idle=1; shift ;;
         --json) json=1; shift ;;
-        -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+        --record) record="$2"; shift 2 ;;
+        -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
         *) echo "tui_rtt.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
     esac
 done
@@ -69,7 +74,8 @@ for run in $(seq 1 "$runs"); do
     "$bin/robot-emulator" --speed 1 --link "$port" >"$work/emulator.log" 2>&1 &
     emu=$!
     for _ in $(seq 1 100); do [ -e "$port" ] && break; sleep 0.1; done
-    tmux -L "$sock" -f /dev/null new-session -d -s main -x 120 -y 40 \
+    rm -f "$work"/*.rec
+    tmux -L "$sock" -f /dev/null new-session -d -s main -x 120 -y 40 -c "$work" \
         "'$bin/station' --port '$port'; sleep 30"
     if ! wait_screen "● " 20; then
         echo "tui_rtt.sh: the station did not connect; its screen:" >&2
@@ -81,6 +87,7 @@ for run in $(seq 1 "$runs"); do
     sleep 0.3
     keys +
     sleep 1
+    if [ -n "$record" ]; then keys R; sleep 0.3; fi
     [ "$idle" = 1 ] || keys Up
     load=$(uptime | sed 's/.*load average: //')
     t0=$(cpu_ticks "$pid")
@@ -88,6 +95,7 @@ for run in $(seq 1 "$runs"); do
     sleep "$seconds"
     t1=$(cpu_ticks "$pid")
     s1=$(switches "$pid")
+    if [ -n "$record" ]; then keys R; sleep 0.5; fi
     keys F5
     sleep 0.5
     rtt=$(screen | grep -o 'RTT [^│]*' | head -n 1 | sed 's/ *$//')
@@ -106,6 +114,11 @@ for run in $(seq 1 "$runs"); do
         exit 1
     fi
     mode=$([ "$idle" = 1 ] && echo idle || echo teleop)
+    if [ -n "$record" ]; then
+        mkdir -p "$record"
+        for f in "$work"/*.rec; do [ -e "$f" ] && mv "$f" "$record/tui-rtt-$run.rec"; done
+        [ -e "$record/tui-rtt-$run.rec" ] && python3 "$(dirname "$0")/tui_rtt_trace.py" "$record/tui-rtt-$run.rec" >&2
+    fi
     if [ "$json" = 1 ]; then
         p50=$(echo "$rtt" | sed -n 's/.*p50 \([0-9.]*\) ms.*/\1/p')
         p99=$(echo "$rtt" | sed -n 's/.*p99 \([0-9.]*\) ms.*/\1/p')

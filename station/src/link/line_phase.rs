@@ -15,7 +15,9 @@
 //! the delay of a frame read the moment it arrived, late reads only ever being later. One such
 //! minimum per frame kind (telemetry, truth) gives when each frame of the next burst will have
 //! arrived (`robot time + period + lag`); the burst ends with the latest. The period is the
-//! smallest step between telemetry times (a frame the robot skipped only doubles a step).
+//! median of the last `STEPS` steps between telemetry times: a frame the robot skipped, or the
+//! odd step of a rate change (the robot sends at once on `SetTelemetryRate`), is one step of
+//! eight; a minimum over a window kept such a 3 ms step for seconds.
 //!
 //! `quiet_at` answers for a command asked at `now`: at once when no burst is known (no
 //! telemetry, too few frames yet, a silent robot) or when the next burst ends more than
@@ -39,6 +41,8 @@ pub const WINDOW_US: u64 = 2_000_000;
 /// Telemetry frames of a session before a burst is predicted: the first few may all have been
 /// read late (a paced read samples a 20 ms period at 4 ms spacings, so five see every phase).
 pub const MIN_FRAMES: u32 = 8;
+/// Steps between telemetry times the period is the median of.
+pub const STEPS: usize = 8;
 /// A telemetry stream silent for this many periods is not predicted any more.
 const STALE_PERIODS: u64 = 3;
 
@@ -100,8 +104,9 @@ struct Last {
 pub struct LinePhase {
     last: Option<Last>,
     frames: u32,
-    /// Steps between telemetry times, robot ms.
-    period_ms: WindowMin,
+    /// The last `STEPS` steps between telemetry times, robot ms (a ring; 0 = none yet).
+    steps_ms: [u32; STEPS],
+    next_step: usize,
     /// `receipt µs - robot time µs`, per `Periodic` kind.
     lag_us: [WindowMin; 2],
 }
@@ -124,7 +129,10 @@ impl LinePhase {
                     return self.observe(kind, robot_ms, now_us);
                 }
                 if step > 0 {
-                    self.period_ms.push(i64::from(step), now_us);
+                    if let Some(slot) = self.steps_ms.get_mut(self.next_step) {
+                        *slot = step;
+                    }
+                    self.next_step = (self.next_step + 1) % STEPS;
                 }
                 last.robot_ms + i64::from(step)
             }
@@ -154,10 +162,14 @@ impl LinePhase {
         }
     }
 
-    /// The telemetry period, µs, once measured.
-    pub fn period_us(&self, now_us: u64) -> Option<u64> {
-        let p = self.period_ms.get(now_us)?;
-        u64::try_from(p).ok().filter(|&p| p > 0).map(|p| p * 1000)
+    /// The telemetry period, µs, once three steps are measured: their median.
+    pub fn period_us(&self) -> Option<u64> {
+        let mut steps: Vec<u32> = self.steps_ms.iter().copied().filter(|&s| s > 0).collect();
+        if steps.len() < 3 {
+            return None;
+        }
+        steps.sort_unstable();
+        steps.get(steps.len() / 2).map(|&p| u64::from(p) * 1000)
     }
 
     /// When a command asked for at `now_us` that may wait for a quiet line should go: `now_us`
@@ -168,7 +180,7 @@ impl LinePhase {
 
     fn next_quiet(&self, now_us: u64) -> Option<u64> {
         let last = self.last?;
-        let period = self.period_us(now_us)?;
+        let period = self.period_us()?;
         if self.frames < MIN_FRAMES
             || now_us.saturating_sub(last.at_us) > STALE_PERIODS.saturating_mul(period)
         {
@@ -353,13 +365,40 @@ mod tests {
             t_us += u64::from(step) * 1000;
             p.observe(Periodic::Telemetry, robot, t_us + 5_000);
         }
-        assert_eq!(p.period_us(t_us), Some(20_000));
+        assert_eq!(p.period_us(), Some(20_000));
         let now = t_us + 5_000 + 10_000;
         assert_eq!(p.quiet_at(now), t_us + 20_000 + 5_000 + MARGIN_US);
         // A restart (the clock goes back to zero): everything is measured afresh.
         p.observe(Periodic::Telemetry, 3, t_us + 30_000);
-        assert_eq!(p.period_us(t_us + 30_000), None);
+        assert_eq!(p.period_us(), None);
         assert_eq!(p.quiet_at(t_us + 31_000), t_us + 31_000);
+    }
+
+    #[test]
+    fn a_rate_change_is_followed_and_its_odd_step_ignored() {
+        // 10 Hz, then the rate set to 50 Hz 37 ms after a frame: the robot sends at once
+        // (a 37 ms step), then every 20 ms.
+        let mut p = LinePhase::default();
+        let lag = 1_000_000 + 5_400;
+        let mut robot = 0u32;
+        for _ in 0..10 {
+            robot += 100;
+            p.observe(Periodic::Telemetry, robot, u64::from(robot) * 1000 + lag);
+        }
+        assert_eq!(p.period_us(), Some(100_000));
+        robot += 37;
+        p.observe(Periodic::Telemetry, robot, u64::from(robot) * 1000 + lag);
+        for _ in 0..5 {
+            robot += 20;
+            p.observe(Periodic::Telemetry, robot, u64::from(robot) * 1000 + lag);
+        }
+        assert_eq!(p.period_us(), Some(20_000), "five of eight steps at 20 ms");
+        // The same the other way: a short step among 50 Hz ones is outvoted at once.
+        robot += 3;
+        p.observe(Periodic::Telemetry, robot, u64::from(robot) * 1000 + lag);
+        assert_eq!(p.period_us(), Some(20_000));
+        let now = u64::from(robot) * 1000 + lag + 10_000;
+        assert_eq!(p.quiet_at(now), now + 10_000 + MARGIN_US);
     }
 
     #[test]
