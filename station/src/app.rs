@@ -28,7 +28,7 @@ use protocol::{AckInfo, Command, EmuTruth, Event, EventCode, Mode, Telemetry};
 use crate::action::Action;
 use crate::link::api::{command_text, param_name, refusal_text};
 use crate::link::{
-    CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats, PeerInfo,
+    CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats, PeerInfo, SendWhen,
 };
 use arena::ArenaOverlay;
 use history::{EncoderUnwrap, History, Track};
@@ -258,6 +258,8 @@ pub struct App {
     /// The last floor line the robot reported crossing (its count), for the correction after.
     lines_crossed: Option<i32>,
     outbox: Vec<(CommandId, Command)>,
+    /// The outbox's teleop repeats: they may wait for a quiet line (`SendWhen::QuietLine`).
+    repeats: Vec<CommandId>,
 }
 
 /// What the app remembers about a command until its outcome.
@@ -320,6 +322,7 @@ impl App {
             rate_asked: None,
             lines_crossed: None,
             outbox: Vec::new(),
+            repeats: Vec::new(),
         };
         // An importer's warning is never silent: the file may not be what the user thinks.
         for w in warnings {
@@ -330,7 +333,26 @@ impl App {
 
     /// Commands to send, with the ids their outcomes will carry; empties the outbox.
     pub fn take_outbox(&mut self) -> Vec<(CommandId, Command)> {
+        self.repeats.clear();
         std::mem::take(&mut self.outbox)
+    }
+
+    /// `take_outbox`, with when each command should go: a teleop repeat's moment within its
+    /// period does not matter, so it may wait for a quiet line; everything the operator asked
+    /// for now (a key press included) goes at once.
+    pub fn take_outbox_timed(&mut self) -> Vec<(CommandId, Command, SendWhen)> {
+        let repeats = std::mem::take(&mut self.repeats);
+        self.take_outbox()
+            .into_iter()
+            .map(|(id, c)| {
+                let when = if repeats.contains(&id) {
+                    SendWhen::QuietLine
+                } else {
+                    SendWhen::Now
+                };
+                (id, c, when)
+            })
+            .collect()
     }
 
     pub fn connected(&self) -> bool {
@@ -500,7 +522,8 @@ impl App {
             .last_sent_ms
             .is_none_or(|t| now_ms.saturating_sub(t) + TELEOP_SLACK_MS >= TELEOP_PERIOD_MS);
         if self.teleop.driving && due {
-            self.send_teleop();
+            let id = self.send_teleop();
+            self.repeats.push(id);
         }
         self.transfers_tick();
     }
@@ -539,15 +562,15 @@ impl App {
         t.v_mm_s = t.v_mm_s.saturating_add(dv).clamp(-V_MAX, V_MAX);
         t.w_mrad_s = t.w_mrad_s.saturating_add(dw).clamp(-W_MAX, W_MAX);
         t.driving = true;
-        self.send_teleop();
+        let _ = self.send_teleop();
     }
 
-    fn send_teleop(&mut self) {
+    fn send_teleop(&mut self) -> CommandId {
         self.teleop.last_sent_ms = Some(self.now_ms);
         self.send(Command::Teleop {
             v_mm_s: self.teleop.v_mm_s,
             w_mrad_s: self.teleop.w_mrad_s,
-        });
+        })
     }
 
     fn stop_driving(&mut self) {

@@ -127,6 +127,35 @@ fn driving_repeats_teleop_at_10_hz_until_space_stops_it() {
 }
 
 #[test]
+fn a_teleop_repeat_may_wait_for_a_quiet_line_and_a_key_press_goes_at_once() {
+    let mut app = connected_app();
+    app.update(Action::Drive { dv: V_STEP, dw: 0 });
+    let press = app.take_outbox_timed();
+    assert_eq!(press.len(), 1);
+    assert_eq!(press[0].2, SendWhen::Now, "a key press");
+    app.update(Action::Tick { now_ms: 100 });
+    let repeat = app.take_outbox_timed();
+    assert_eq!(repeat.len(), 1);
+    assert!(matches!(repeat[0].1, Command::Teleop { .. }));
+    assert_eq!(repeat[0].2, SendWhen::QuietLine, "a repeat");
+    // A press and a stop in the same wake-up as a repeat go at once; the repeat may wait.
+    app.update(Action::Tick { now_ms: 200 });
+    app.update(Action::Drive { dv: V_STEP, dw: 0 });
+    app.update(Action::StopDriving);
+    let whens: Vec<SendWhen> = app.take_outbox_timed().iter().map(|c| c.2).collect();
+    assert_eq!(
+        whens,
+        vec![SendWhen::QuietLine, SendWhen::Now, SendWhen::Now]
+    );
+    // Taken without timing, nothing is left marked.
+    app.update(Action::Drive { dv: V_STEP, dw: 0 });
+    app.update(Action::Tick { now_ms: 400 });
+    let _ = app.take_outbox();
+    app.update(Action::Drive { dv: V_STEP, dw: 0 });
+    assert_eq!(app.take_outbox_timed()[0].2, SendWhen::Now);
+}
+
+#[test]
 fn a_lost_link_stops_teleop_and_a_reconnect_does_not_resume_it() {
     let mut app = connected_app();
     app.update(Action::Drive { dv: V_STEP, dw: 0 });

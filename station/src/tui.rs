@@ -278,8 +278,8 @@ async fn event_loop(
         }
         // Each robot's commands and transfers to its own link.
         for (i, (m, link)) in fleet.members.iter_mut().zip(links.iter()).enumerate() {
-            for (id, command) in m.app.take_outbox() {
-                link.handle.submit_with_id(id, command);
+            for (id, command, when) in m.app.take_outbox_timed() {
+                link.handle.submit_when(id, command, when);
                 awaited.sent(i, id, Instant::now());
             }
             for t in m.app.transfers.take_frames() {

@@ -27,12 +27,25 @@ pub enum LinkRequest {
         id: CommandId,
         command: Command,
         reply: Option<oneshot::Sender<CommandOutcome>>,
+        when: SendWhen,
     },
     /// Send a transfer frame as is (no windowing yet: the transfer engine that drives these
     /// belongs to the map/plan transfer work).
     Transfer(TransferOut),
     /// Close the port and end the task.
     Shutdown,
+}
+
+/// When a submitted command goes out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SendWhen {
+    /// At once: what the operator asked for now (a key press, a mode, a parameter).
+    #[default]
+    Now,
+    /// Right after the robot's next periodic burst if one is near (`link::line_phase`), so
+    /// its answer does not queue behind it: for a command whose moment within its period
+    /// does not matter, a teleop repeat. Held `line_phase::MAX_HOLD_US` at most.
+    QuietLine,
 }
 
 /// An outgoing transfer frame, owned.

@@ -6,7 +6,9 @@
 //! `COMMAND_ATTEMPTS` sends have gone unanswered. Invariant: every command that enters the
 //! table leaves it exactly once (answered, expired, superseded or drained), so every caller
 //! gets exactly one outcome. A newer `Teleop` supersedes older unanswered ones: resending a
-//! stale velocity would only fight the operator's latest key.
+//! stale velocity would only fight the operator's latest key. A queued command may be held
+//! until a given time (`enqueue_at`, a teleop repeat waiting for a quiet line); the others
+//! pass it.
 
 use std::collections::VecDeque;
 
@@ -25,25 +27,45 @@ pub struct InFlight {
     pub seq: u16,
     pub command: Command,
     pub last_sent_ms: u64,
+    /// The first send, µs: a first-send round trip is timed from it.
+    pub first_sent_us: u64,
     pub sends: u32,
+}
+
+/// A command waiting for a slot, and not to be sent before `not_before_us`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Queued {
+    id: CommandId,
+    command: Command,
+    not_before_us: u64,
 }
 
 /// The queue and the in-flight slots.
 #[derive(Debug, Default)]
 pub struct CommandTable {
-    queue: VecDeque<(CommandId, Command)>,
+    queue: VecDeque<Queued>,
     in_flight: Vec<InFlight>,
 }
 
 impl CommandTable {
     /// Queues a command; returns the older teleops it supersedes (already removed).
     pub fn enqueue(&mut self, id: CommandId, command: Command) -> Vec<(CommandId, Command)> {
+        self.enqueue_at(id, command, 0)
+    }
+
+    /// `enqueue`, not to be sent before `not_before_us`.
+    pub fn enqueue_at(
+        &mut self,
+        id: CommandId,
+        command: Command,
+        not_before_us: u64,
+    ) -> Vec<(CommandId, Command)> {
         let mut superseded = Vec::new();
         if matches!(command, Command::Teleop { .. }) {
-            self.queue.retain(|&(qid, c)| {
-                let stale = matches!(c, Command::Teleop { .. });
+            self.queue.retain(|q| {
+                let stale = matches!(q.command, Command::Teleop { .. });
                 if stale {
-                    superseded.push((qid, c));
+                    superseded.push((q.id, q.command));
                 }
                 !stale
             });
@@ -55,26 +77,40 @@ impl CommandTable {
                 !stale
             });
         }
-        self.queue.push_back((id, command));
+        self.queue.push_back(Queued {
+            id,
+            command,
+            not_before_us,
+        });
         superseded
     }
 
-    /// The next queued command if a slot is free; the caller sends it and calls `sent`.
-    pub fn next_to_send(&mut self) -> Option<(CommandId, Command)> {
-        if self.in_flight.len() < MAX_IN_FLIGHT {
-            self.queue.pop_front()
-        } else {
-            None
+    /// The next queued command that may go at `now_us`, if a slot is free; the caller sends
+    /// it and calls `sent`.
+    pub fn next_to_send(&mut self, now_us: u64) -> Option<(CommandId, Command)> {
+        if self.in_flight.len() >= MAX_IN_FLIGHT {
+            return None;
         }
+        let i = self.queue.iter().position(|q| q.not_before_us <= now_us)?;
+        self.queue.remove(i).map(|q| (q.id, q.command))
     }
 
-    /// Records the first send of a command under sequence number `seq`.
-    pub fn sent(&mut self, id: CommandId, seq: u16, command: Command, now_ms: u64) {
+    /// When the earliest held command may go (µs), if one waits only for its time.
+    pub fn next_release_us(&self) -> Option<u64> {
+        if self.in_flight.len() >= MAX_IN_FLIGHT {
+            return None;
+        }
+        self.queue.iter().map(|q| q.not_before_us).min()
+    }
+
+    /// Records the first send of a command under sequence number `seq`, at `now_us`.
+    pub fn sent(&mut self, id: CommandId, seq: u16, command: Command, now_us: u64) {
         self.in_flight.push(InFlight {
             id,
             seq,
             command,
-            last_sent_ms: now_ms,
+            last_sent_ms: now_us / 1000,
+            first_sent_us: now_us,
             sends: 1,
         });
     }
@@ -114,7 +150,7 @@ impl CommandTable {
             .drain(..)
             .map(|f| (f.id, f.command))
             .collect();
-        all.extend(self.queue.drain(..));
+        all.extend(self.queue.drain(..).map(|q| (q.id, q.command)));
         all
     }
 
@@ -145,21 +181,21 @@ mod tests {
             t.enqueue(id, Command::SetMode(Mode::Idle));
         }
         let mut sent = Vec::new();
-        while let Some((id, c)) = t.next_to_send() {
+        while let Some((id, c)) = t.next_to_send(0) {
             t.sent(id, id as u16, c, 0);
             sent.push(id);
         }
         assert_eq!(sent, (0..8).collect::<Vec<_>>());
         assert_eq!(t.queued(), 2);
         assert!(t.answer(3).is_some());
-        assert_eq!(t.next_to_send().map(|(id, _)| id), Some(8));
+        assert_eq!(t.next_to_send(0).map(|(id, _)| id), Some(8));
     }
 
     #[test]
     fn a_command_is_resent_every_200_ms_and_expires_after_five_sends() {
         let mut t = CommandTable::default();
         t.enqueue(1, Command::Stop);
-        let (id, c) = t.next_to_send().expect("slot");
+        let (id, c) = t.next_to_send(0).expect("slot");
         t.sent(id, 42, c, 0);
         let mut resends = 0;
         let mut now = 0;
@@ -189,12 +225,36 @@ mod tests {
         };
         t.enqueue(1, teleop);
         t.enqueue(2, Command::Stop);
-        let (id, c) = t.next_to_send().expect("slot");
+        let (id, c) = t.next_to_send(0).expect("slot");
         t.sent(id, 10, c, 0);
         t.enqueue(3, teleop);
         let gone = t.enqueue(4, teleop);
         assert_eq!(gone.iter().map(|g| g.0).collect::<Vec<_>>(), vec![3]);
         assert_eq!(t.in_flight(), 0, "teleop 1 was superseded by teleop 3");
         assert_eq!(t.queued(), 2, "stop and the newest teleop remain");
+    }
+
+    #[test]
+    fn a_held_command_waits_for_its_time_and_the_others_pass_it() {
+        let mut t = CommandTable::default();
+        let teleop = Command::Teleop {
+            v_mm_s: 100,
+            w_mrad_s: 0,
+        };
+        t.enqueue_at(1, teleop, 5_000);
+        t.enqueue(2, Command::Stop);
+        assert_eq!(t.next_release_us(), Some(0), "the stop may go at once");
+        assert_eq!(t.next_to_send(1_000).map(|(id, _)| id), Some(2));
+        assert_eq!(t.next_to_send(1_000), None, "the teleop is held");
+        assert_eq!(t.next_release_us(), Some(5_000));
+        let (id, c) = t.next_to_send(5_000).expect("released");
+        assert_eq!(id, 1);
+        t.sent(id, 7, c, 5_000);
+        // A held repeat supersedes the teleop unanswered, and a key press the held repeat.
+        let gone = t.enqueue_at(3, teleop, 9_000);
+        assert_eq!(gone.iter().map(|g| g.0).collect::<Vec<_>>(), vec![1]);
+        let gone = t.enqueue(4, teleop);
+        assert_eq!(gone.iter().map(|g| g.0).collect::<Vec<_>>(), vec![3]);
+        assert_eq!(t.next_to_send(5_001).map(|(id, _)| id), Some(4));
     }
 }

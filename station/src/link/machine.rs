@@ -8,6 +8,9 @@
 //! - commands are sent only in a handshaken session; one submitted otherwise fails at once
 //!   with `NotConnected`, and the ones in flight when the session ends fail with `LinkLost`;
 //! - every submitted command produces exactly one `CommandDone`;
+//! - a command submitted `SendWhen::QuietLine` (a teleop repeat) may wait until the robot's
+//!   periodic burst has left the line (`line_phase`), `line_phase::MAX_HOLD_US` at most; the
+//!   others never wait for it;
 //! - no two commands of one session share a sequence number, so the robot's remembered reply
 //!   to one can never answer another (PROTOCOL.md §7): once `RENEW_AFTER_FRAMES` frames have
 //!   gone out since the handshake, new commands wait, and when none is in flight the station
@@ -31,11 +34,12 @@ use protocol::{
 };
 
 use super::api::{
-    CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, PeerInfo, TransferIn,
-    TransferOut,
+    CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, PeerInfo, SendWhen,
+    TransferIn, TransferOut,
 };
 use super::clock::RobotClock;
 use super::commands::{CommandTable, InFlight};
+use super::line_phase::{LinePhase, Periodic};
 use super::stats::{LinkStats, StatsCollector};
 use crate::terminal_text::printable;
 
@@ -89,11 +93,16 @@ pub struct LinkMachine {
     next_stats_ms: u64,
     /// The robot's clock rate: heartbeats go out every 250 ms of the robot's time.
     robot_clock: RobotClock,
+    /// When the robot's line towards us is next quiet, for `SendWhen::QuietLine` commands.
+    line_phase: LinePhase,
     auth: LinkAuth,
     /// Signed frames are decoded without a key and not verified (replaying a recording).
     trust_signatures: bool,
     /// The wall clock at `now_ms` = 0, in signing ticks (PROTOCOL.md §13).
     epoch_ticks: u64,
+    /// The time of the call being handled, µs (the `_us` entry points give it whole; the
+    /// others in milliseconds): round trips are timed with it.
+    now_us: u64,
 }
 
 impl LinkMachine {
@@ -120,9 +129,11 @@ impl LinkMachine {
             last_tx_ms: 0,
             next_stats_ms: 0,
             robot_clock: RobotClock::default(),
+            line_phase: LinePhase::default(),
             auth: LinkAuth::new(None, STATION_LINK),
             trust_signatures: false,
             epoch_ticks: 0,
+            now_us: 0,
         }
     }
 
@@ -208,6 +219,19 @@ impl LinkMachine {
 
     /// Submits a command. Its outcome arrives as a `CommandDone` event.
     pub fn submit(&mut self, now_ms: u64, id: CommandId, command: Command) {
+        self.submit_us(now_ms.saturating_mul(1000), id, command);
+    }
+
+    /// `submit` at `now_us` microseconds.
+    pub fn submit_us(&mut self, now_us: u64, id: CommandId, command: Command) {
+        self.submit_when(now_us, id, command, SendWhen::Now);
+    }
+
+    /// `submit_us`, the command going out `when` says: a `QuietLine` one may be held until
+    /// the robot's next periodic burst has passed (`line_phase`); `poll_us` sends it then
+    /// (`next_release_us`).
+    pub fn submit_when(&mut self, now_us: u64, id: CommandId, command: Command, when: SendWhen) {
+        let now_ms = self.at(now_us);
         self.stats.commands.submitted += 1;
         if !self.connected() && self.renewal_since_ms.is_none() {
             self.finish(
@@ -217,7 +241,11 @@ impl LinkMachine {
             );
             return;
         }
-        for (old, c) in self.commands.enqueue(id, command) {
+        let not_before_us = match when {
+            SendWhen::Now => 0,
+            SendWhen::QuietLine => self.line_phase.quiet_at(now_us),
+        };
+        for (old, c) in self.commands.enqueue_at(id, command, not_before_us) {
             self.finish(old, c, CommandOutcome::Failed(CommandFailure::Superseded));
         }
         self.pump(now_ms);
@@ -244,6 +272,12 @@ impl LinkMachine {
 
     /// Feeds bytes read from the port.
     pub fn receive(&mut self, now_ms: u64, bytes: &[u8]) {
+        self.receive_us(now_ms.saturating_mul(1000), bytes);
+    }
+
+    /// `receive` at `now_us` microseconds: round trips are then timed to the microsecond.
+    pub fn receive_us(&mut self, now_us: u64, bytes: &[u8]) {
+        let now_ms = self.at(now_us);
         self.stats.bytes_in += bytes.len() as u64;
         let mut input = bytes;
         loop {
@@ -273,6 +307,12 @@ impl LinkMachine {
 
     /// Runs the timers: hello retries, heartbeats, command retries, link timeout, statistics.
     pub fn poll(&mut self, now_ms: u64) {
+        self.poll_us(now_ms.saturating_mul(1000));
+    }
+
+    /// `poll` at `now_us` microseconds.
+    pub fn poll_us(&mut self, now_us: u64) {
+        let now_ms = self.at(now_us);
         if self
             .renewal_since_ms
             .is_some_and(|t| now_ms.saturating_sub(t) >= u64::from(LINK_TIMEOUT_MS))
@@ -315,6 +355,12 @@ impl LinkMachine {
         }
     }
 
+    /// Takes the time of the call being handled; returns it in whole milliseconds.
+    fn at(&mut self, now_us: u64) -> u64 {
+        self.now_us = now_us;
+        now_us / 1000
+    }
+
     /// When `poll` next has work (absolute ms).
     pub fn next_deadline(&self) -> u64 {
         let mut t = self.next_stats_ms;
@@ -333,6 +379,17 @@ impl LinkMachine {
             }
         }
         t
+    }
+
+    /// When a queued command may go (µs; past if it may already), if one waits only for
+    /// its time (a command held for a quiet line): `poll_us` sends it then. Exact, not on any
+    /// timer grid: its moment is the point. `None` while commands wait for a slot or a
+    /// renewal instead (an answer or the renewal's handshake sends them).
+    pub fn next_release_us(&self) -> Option<u64> {
+        if !self.connected() || self.session_frames >= RENEW_AFTER_FRAMES {
+            return None;
+        }
+        self.commands.next_release_us()
     }
 
     /// A statistics snapshot now.
@@ -388,6 +445,7 @@ impl LinkMachine {
         self.renewal_since_ms = None;
         let session = self.next_nonce();
         self.robot_clock.reset();
+        self.line_phase.reset();
         self.stats.robot_seq.reset();
         self.stats.truth_seq.reset();
         // The robot signs on from our Hello's timestamp (PROTOCOL.md §13), so nothing it
@@ -518,11 +576,13 @@ impl LinkMachine {
             Owned::HelloReply(r) => self.on_hello_reply(now_ms, r),
             Owned::Telemetry(t) => {
                 self.observe_robot_clock(t.time_ms, now_ms);
+                self.observe_burst(Periodic::Telemetry, t.time_ms);
                 self.stats.telemetry(now_ms);
                 self.events.push_back(LinkEvent::Telemetry(t));
             }
             Owned::Truth(t) => {
                 self.observe_robot_clock(t.time_ms, now_ms);
+                self.observe_burst(Periodic::Truth, t.time_ms);
                 self.events.push_back(LinkEvent::Truth(t));
             }
             Owned::Heartbeat(time_ms) => self.observe_robot_clock(time_ms, now_ms),
@@ -533,7 +593,8 @@ impl LinkMachine {
                 Some(f) => {
                     let rtt_ms = now_ms.saturating_sub(f.last_sent_ms);
                     if f.sends == 1 {
-                        self.stats.rtt_sample(rtt_ms);
+                        self.stats
+                            .rtt_sample_us(self.now_us.saturating_sub(f.first_sent_us));
                     }
                     let outcome = CommandOutcome::Acked {
                         info: a.info,
@@ -568,6 +629,14 @@ impl LinkMachine {
     fn observe_robot_clock(&mut self, robot_ms: u32, now_ms: u64) {
         if self.connected() {
             self.robot_clock.observe(robot_ms, now_ms);
+        }
+    }
+
+    /// The robot's periodic frames time its bursts (`line_phase`); only our session's, as
+    /// for the clock: a backlog read in one instant would say nothing of the line.
+    fn observe_burst(&mut self, kind: Periodic, robot_ms: u32) {
+        if self.connected() {
+            self.line_phase.observe(kind, robot_ms, self.now_us);
         }
     }
 
@@ -656,11 +725,12 @@ impl LinkMachine {
     /// Sends queued commands while slots are free.
     fn pump(&mut self, now_ms: u64) {
         while self.connected() && !self.renew_if_due(now_ms) {
-            let Some((id, command)) = self.commands.next_to_send() else {
+            let Some((id, command)) = self.commands.next_to_send(self.now_us) else {
                 return;
             };
             let seq = self.send(now_ms, &Message::Command(command));
-            self.commands.sent(id, seq, command, now_ms);
+            self.commands
+                .sent(id, seq, command, self.now_us.max(now_ms * 1000));
         }
     }
 

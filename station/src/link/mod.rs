@@ -5,11 +5,13 @@
 //! `task` does the I/O around it and reconnects; `transport` is the byte-stream seam with a
 //! real serial implementation (`serial`) and an in-memory one (`memory`); `sim` runs the real
 //! robot firmware on the far end of an in-memory port, for tests and demos; `robot_ids` finds
-//! two links whose robots state the same id.
+//! two links whose robots state the same id; `line_phase` predicts when the robot's line
+//! towards us is quiet, for commands that may wait for it.
 
 pub mod api;
 pub mod clock;
 pub mod commands;
+pub mod line_phase;
 pub mod machine;
 pub mod memory;
 pub mod paced;
@@ -22,7 +24,7 @@ pub mod transport;
 
 pub use api::{
     CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkRequest, PeerInfo,
-    TransferIn, TransferOut,
+    SendWhen, TransferIn, TransferOut,
 };
 pub use machine::{LinkMachine, MachineConfig};
 pub use stats::LinkStats;

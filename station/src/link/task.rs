@@ -19,7 +19,9 @@ use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::sync::{mpsc, oneshot};
 use tokio::time::Instant;
 
-use super::api::{CommandFailure, CommandId, CommandOutcome, LinkEvent, LinkRequest, TransferOut};
+use super::api::{
+    CommandFailure, CommandId, CommandOutcome, LinkEvent, LinkRequest, SendWhen, TransferOut,
+};
 use super::machine::{LinkMachine, MachineConfig};
 use super::transport::{Connector, Transport};
 
@@ -89,10 +91,16 @@ impl LinkHandle {
 
     /// Submits a command under the caller's id.
     pub fn submit_with_id(&self, id: CommandId, command: Command) {
+        self.submit_when(id, command, SendWhen::Now);
+    }
+
+    /// Submits a command under the caller's id, to go out `when` says.
+    pub fn submit_when(&self, id: CommandId, command: Command, when: SendWhen) {
         let _ = self.requests.send(LinkRequest::Command {
             id,
             command,
             reply: None,
+            when,
         });
     }
 
@@ -104,6 +112,7 @@ impl LinkHandle {
             id,
             command,
             reply: Some(tx),
+            when: SendWhen::Now,
         };
         if self.requests.send(req).is_err() {
             return CommandOutcome::Failed(CommandFailure::Shutdown);
@@ -192,6 +201,11 @@ impl Task {
         self.t0.elapsed().as_millis() as u64
     }
 
+    /// The task's clock in microseconds: the machine times round trips with it.
+    fn now_us(&self) -> u64 {
+        u64::try_from(self.t0.elapsed().as_micros()).unwrap_or(u64::MAX)
+    }
+
     async fn run<C: Connector>(mut self, mut connector: C) {
         loop {
             let now = self.now_ms();
@@ -258,6 +272,10 @@ impl Task {
             if self.opts.paced {
                 deadline = crate::pace::slot_at_or_after(deadline);
             }
+            // A command held for a quiet line goes at its moment, off the grid.
+            if let Some(at) = self.machine.next_release_us() {
+                deadline = deadline.min(self.t0 + Duration::from_micros(at));
+            }
             tokio::select! {
                 r = port.read(&mut buf) => match r {
                     Ok(0) => return Ended::Closed(format!("{} closed", connector.name())),
@@ -265,8 +283,8 @@ impl Task {
                         let bytes = buf.get(..n).unwrap_or(&[]);
                         heard = true;
                         self.tap(TapDirection::FromRobot, bytes);
-                        let now = self.now_ms();
-                        self.machine.receive(now, bytes);
+                        let now = self.now_us();
+                        self.machine.receive_us(now, bytes);
                     }
                     Err(e) => return Ended::Closed(format!("{}: {e}", connector.name())),
                 },
@@ -277,8 +295,8 @@ impl Task {
                     }
                 }
                 _ = tokio::time::sleep_until(deadline) => {
-                    let now = self.now_ms();
-                    self.machine.poll(now);
+                    let now = self.now_us();
+                    self.machine.poll_us(now);
                 }
                 _ = presence.tick() => {
                     let heard = std::mem::take(&mut heard) && self.opts.paced;
@@ -292,19 +310,24 @@ impl Task {
 
     /// Handles one request; false means stop.
     fn handle_request(&mut self, req: Option<LinkRequest>) -> bool {
-        let now = self.now_ms();
+        let now_us = self.now_us();
         match req {
             None | Some(LinkRequest::Shutdown) => false,
-            Some(LinkRequest::Command { id, command, reply }) => {
+            Some(LinkRequest::Command {
+                id,
+                command,
+                reply,
+                when,
+            }) => {
                 if let Some(r) = reply {
                     self.replies.insert(id, r);
                 }
-                self.machine.submit(now, id, command);
+                self.machine.submit_when(now_us, id, command, when);
                 self.forward();
                 true
             }
             Some(LinkRequest::Transfer(t)) => {
-                self.machine.send_transfer(now, &t);
+                self.machine.send_transfer(now_us / 1000, &t);
                 true
             }
         }

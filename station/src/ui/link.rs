@@ -185,7 +185,7 @@ fn lines(app: &App) -> Vec<Line<'static>> {
             l("RTT "),
             Span::raw(match (s.rtt_ms.p50, s.rtt_ms.p99) {
                 (Some(a), Some(b)) => {
-                    format!("p50 {a:.0} ms  p99 {b:.0} ms  (n={})", s.rtt_ms.samples)
+                    format!("p50 {a:.1} ms  p99 {b:.1} ms  (n={})", s.rtt_ms.samples)
                 }
                 _ => "no samples yet".into(),
             }),
