@@ -211,7 +211,10 @@ pub fn serve<D: Device>(
     let sim0 = dev.now_us();
     let mut clock = CycleClock::new(dev.cycles());
     let real_time = match opts.speed {
-        Speed::Factor(f) => Some(RealTime::new(wall0, sim0, f)),
+        Speed::Factor(f) => {
+            precise_wake_ups();
+            Some(RealTime::new(wall0, sim0, f))
+        }
         Speed::Max => None,
     };
 
@@ -280,6 +283,16 @@ pub(crate) fn step_until<D: Device>(dev: &mut D, now_us: u64, after_step: &mut d
 pub(crate) fn next_look_us<D: Device>(dev: &D) -> u64 {
     dev.next_due_us()
         .min(dev.next_frame_end_us().unwrap_or(u64::MAX))
+}
+
+/// Asks the kernel to wake this thread on time: its timer slack (50 µs by default on Linux,
+/// by which a timed wait may end late so wake-ups can be grouped) becomes 1 µs. The real-time
+/// serving loops sleep until a reply's last bit leaves the line; the default slack made the
+/// hand-over of every answer about 50 µs late (issue 15). Best effort: elsewhere, or if the
+/// kernel refuses, waits stay as they were.
+pub(crate) fn precise_wake_ups() {
+    #[cfg(target_os = "linux")]
+    let _ = nix::sys::prctl::set_timerslack(1_000);
 }
 
 /// Simulated time against the wall clock, to the microsecond, at `factor` times real time.

@@ -91,7 +91,10 @@ pub fn serve(
         .collect();
 
     let real_time = match speed {
-        Speed::Factor(f) => Some(RealTime::new(wall0, sim0, f)),
+        Speed::Factor(f) => {
+            crate::link::precise_wake_ups();
+            Some(RealTime::new(wall0, sim0, f))
+        }
         Speed::Max => None,
     };
     while !stop.load(Ordering::Relaxed) {
