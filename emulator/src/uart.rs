@@ -419,9 +419,14 @@ impl Uart {
             }
             self.outbound.push(byte, self.tx_bits);
         }
-        let nothing_waits =
-            self.tx_fifo.is_empty() && self.truth_queue.is_empty() && self.truth_pending.is_empty();
-        if starved || nothing_waits {
+        if self.tx_fifo.is_empty() && self.truth_queue.is_empty() && !self.robot_mid_frame {
+            // The line is free and the robot has queued nothing: an owed truth frame starts at
+            // the line's position even when less than a byte's time is left before `now_us`,
+            // so that a byte the robot writes after this tick neither starts before it was
+            // written nor ahead of a truth frame the line had already begun.
+            self.start_truth_frame();
+        }
+        if starved || (self.tx_fifo.is_empty() && self.truth_queue.is_empty()) {
             // Nothing the line may carry now (truth may be waiting for the rest of a robot
             // frame): it idles, banking no bits. Also when less than a byte's time has passed
             // since the last byte: a byte written after this tick (the robot answering a frame
