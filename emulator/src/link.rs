@@ -237,12 +237,8 @@ pub fn serve<D: Device>(
         let t_s = (dev.now_us() - sim0) as f64 * 1e-6;
         // 2. Unplug / replug; 3. station -> robot; 4. robot -> station.
         end.plug(t_s, on_ready)?;
-        let take_until = if real_time.is_some() {
-            now_us
-        } else {
-            u64::MAX
-        };
-        end.exchange(dev, t_s, now_us, take_until);
+        let (line_us, take_until) = exchange_clock(real_time.as_ref(), now_us);
+        end.exchange(dev, t_s, line_us, take_until);
 
         if let Some(rt) = &real_time {
             // Driven by the next event (a step due, a frame's last byte leaving the line, or
@@ -263,6 +259,23 @@ pub fn serve<D: Device>(
     stats.wall_s = wall0.elapsed().as_secs_f64();
     stats.cycle_period_us = clock.jitter(dev.cycle_us());
     Ok(stats)
+}
+
+/// The simulated moments of an exchange with the pty: when the station's bytes read now
+/// reached the line, and until when the robot's bytes may be handed over. In real time the
+/// clock is read again after the steps (catching up can take a fraction of a millisecond
+/// under load): bytes read then were stamped with the moment before the steps, so a
+/// command seemed to arrive before it was written and was answered faster than its bytes
+/// allow (a minimal client saw 1.74 ms for 2.0 ms of bytes, issue 15). At maximum speed: the
+/// step reached, and everything sent.
+pub(crate) fn exchange_clock(real_time: Option<&RealTime>, now_us: u64) -> (u64, u64) {
+    match real_time {
+        Some(rt) => {
+            let t = rt.sim_now().max(now_us);
+            (t, t)
+        }
+        None => (now_us, u64::MAX),
+    }
 }
 
 /// Runs every step of `dev` whose start simulated `now_us` has reached (the robot acts at a

@@ -125,14 +125,10 @@ pub fn serve(
             }
         };
         let t_s = (fleet.now_us() - sim0) as f64 * 1e-6;
-        let take_until = if real_time.is_some() {
-            now_us
-        } else {
-            u64::MAX
-        };
         for (i, (end, sim)) in ends.iter_mut().zip(fleet.sims_mut()).enumerate() {
             end.plug(t_s, &mut |p| on_ready(i, p))?;
-            end.exchange(sim, t_s, now_us, take_until);
+            let (line_us, take_until) = crate::link::exchange_clock(real_time.as_ref(), now_us);
+            end.exchange(sim, t_s, line_us, take_until);
         }
         if let Some(rt) = &real_time {
             let due = fleet
