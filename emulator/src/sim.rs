@@ -5,7 +5,9 @@
 //! runner (`scenario`) and the station's built-in emulator drive a [`Sim`]. One
 //! [`Sim::step`] is one millisecond: `Robot::step` with the clock at `t` (it runs its control
 //! cycle itself when due and reads the sensors then), then the physics from `t` to `t + 1 ms`
-//! under the motor command in force, then the UART up to `t + 1 ms`.
+//! under the motor command in force, then the UART up to `t + 1 ms`, with a further pass of
+//! `Robot::step` at each moment within the step when a frame from the station completes (a
+//! real robot's receive path acts on a frame when its delimiter arrives, issue 15).
 //!
 //! Invariants: the ground truth (pose, collisions, wheel bias) is never given to the
 //! firmware: it sees only what `Hal` returns, and the truth leaves the emulator only through
@@ -47,6 +49,11 @@ pub fn wheel_speed_error(rng: &mut SimRng, sigma: f64) -> f64 {
 
 /// One simulation step, microseconds.
 pub const STEP_US: u64 = 1000;
+/// Most extra passes of the robot's main loop in one step, one at each frame from the
+/// station that completes mid-step (`Sim::step`): at 115200 baud a frame of at least 4 bytes
+/// takes 0.35 ms, so real traffic needs 3; the bound keeps a flood of delimiters (untrusted
+/// bytes) from multiplying the cost of a step, up to 10 Mbaud's 1000 bytes a millisecond.
+pub const PASSES_PER_STEP: usize = 16;
 const STEP_S: f64 = 1e-3;
 
 /// How a run is set up. [`SimConfig::new`] gives the defaults.
@@ -475,12 +482,44 @@ impl Sim {
 
     /// Advances one millisecond.
     pub fn step(&mut self) {
+        let start = self.hal.now_us;
         self.robot.step(&mut self.hal);
         self.hal.advance();
         self.record_truth();
         // The id in force now (an operator may set it), so truth names the robot as it does.
         self.truth.robot_id = self.robot.config().robot_id;
-        self.hal.uart.tick(self.hal.now_us, &self.truth);
+        let end = self.hal.now_us;
+        self.pass_at_frame_ends(start, end);
+        self.hal.uart.tick(end, &self.truth);
+    }
+
+    /// Runs a pass of the robot's main loop (`Robot::step`, which services the link on every
+    /// call and runs the control cycle only when due) at each moment within the step
+    /// `(start, end)` when a frame from the station completes: a real robot's receive path
+    /// acts on a frame when its delimiter arrives (an RX interrupt, or a main loop polling
+    /// the UART far faster than the control cycle), not at the next millisecond (issue 15:
+    /// that added 0.5 ms on average to every command's round trip). The line is moved on to
+    /// that moment first, so the reply starts on the wire then. Times come from the UART's
+    /// bit clock, so the run stays a function of the simulated clock and its inputs. The
+    /// physics moves in whole steps, already done for this one: a motor command given
+    /// mid-step takes effect at its end, within the simulation's 1 ms resolution. A station
+    /// sending delimiters faster than frames (a flood of zeros) gets at most
+    /// `PASSES_PER_STEP` such passes a step; the rest wait for the next step's start.
+    fn pass_at_frame_ends(&mut self, start: u64, end: u64) {
+        for _ in 0..PASSES_PER_STEP {
+            let Some(at) = self
+                .hal
+                .uart
+                .next_inbound_frame_end_us()
+                .filter(|&t| t > start && t < end)
+            else {
+                return;
+            };
+            self.hal.uart.tick(at, &self.truth);
+            self.hal.now_us = at;
+            self.robot.step(&mut self.hal);
+            self.hal.now_us = end;
+        }
     }
 
     /// Moves the wire on to `now_us` (at most this step's start), the robot not stepping: the

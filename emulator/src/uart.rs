@@ -305,6 +305,23 @@ impl Uart {
         u64::try_from(us).ok()
     }
 
+    /// Robot side: when the next frame delimiter on its way to the robot completes (its last
+    /// bit received, so a tick to then puts it in the receive FIFO), µs rounded up: the moment
+    /// a robot whose receive path reacts to a delimiter (an RX interrupt, or a main loop far
+    /// faster than the control cycle) can act on a whole frame. `None` when no byte still on
+    /// its way in is a delimiter.
+    pub fn next_inbound_frame_end_us(&self) -> Option<u64> {
+        let index = u64::try_from(self.inbound.iter().position(|&b| b == 0)?).ok()?;
+        // As `tick_rx` moves the line: an idle line starts no earlier than it became busy.
+        let start = match self.rx_idle_us {
+            Some(t) => self.rx_bits.max(self.bit_at_or_after(t)),
+            None => self.rx_bits,
+        };
+        let bits = start.saturating_add((index + 1).saturating_mul(BITS_PER_BYTE));
+        let us = (u128::from(bits) * 1_000_000).div_ceil(u128::from(self.baud));
+        u64::try_from(us).ok()
+    }
+
     /// Host: queues bytes to send to the robot that reached the line at `at_us`: on an idle
     /// line their first bit starts then, not at the line's last tick (which may be up to a
     /// millisecond either side). Returns how many fitted, as `push_inbound`.
@@ -340,6 +357,14 @@ impl Uart {
         u64::try_from(bits).unwrap_or(u64::MAX)
     }
 
+    /// The first bit boundary at or after `us`: where a byte written to an idle line then
+    /// starts (a whole bit of the line's clock, never before it was written, so no answer
+    /// leaves sooner than its command's and its own bytes allow).
+    fn bit_at_or_after(&self, us: u64) -> u64 {
+        let bits = (u128::from(us) * u128::from(self.baud)).div_ceil(1_000_000);
+        u64::try_from(bits).unwrap_or(u64::MAX)
+    }
+
     /// Moves bytes on both lines up to `now_us`; `truth` supplies true poses for `EmuTruth`.
     pub fn tick(&mut self, now_us: u64, truth: &TruthHistory) {
         let tx_idle =
@@ -360,7 +385,7 @@ impl Uart {
     fn tick_tx(&mut self, now_us: u64, avail: u64, truth: &TruthHistory) {
         if let Some(t) = self.tx_idle_us.take() {
             // Idle line: time passed without banking bits.
-            self.tx_bits = self.tx_bits.max(self.line_bits(t));
+            self.tx_bits = self.tx_bits.max(self.bit_at_or_after(t));
         }
         let mut starved = false;
         while self.tx_bits.saturating_add(BITS_PER_BYTE) <= avail {
@@ -394,9 +419,18 @@ impl Uart {
             }
             self.outbound.push(byte, self.tx_bits);
         }
-        if starved {
+        if self.tx_fifo.is_empty() && self.truth_queue.is_empty() && !self.robot_mid_frame {
+            // The line is free and the robot has queued nothing: an owed truth frame starts at
+            // the line's position even when less than a byte's time is left before `now_us`,
+            // so that a byte the robot writes after this tick neither starts before it was
+            // written nor ahead of a truth frame the line had already begun.
+            self.start_truth_frame();
+        }
+        if starved || (self.tx_fifo.is_empty() && self.truth_queue.is_empty()) {
             // Nothing the line may carry now (truth may be waiting for the rest of a robot
-            // frame): it idles, banking no bits.
+            // frame): it idles, banking no bits. Also when less than a byte's time has passed
+            // since the last byte: a byte written after this tick (the robot answering a frame
+            // mid-step) starts no earlier than now.
             self.tx_idle_us = Some(now_us);
         }
     }
@@ -431,7 +465,7 @@ impl Uart {
 
     fn tick_rx(&mut self, now_us: u64, avail: u64) {
         if let Some(t) = self.rx_idle_us.take() {
-            self.rx_bits = self.rx_bits.max(self.line_bits(t));
+            self.rx_bits = self.rx_bits.max(self.bit_at_or_after(t));
         }
         while self.rx_bits.saturating_add(BITS_PER_BYTE) <= avail {
             let Some(b) = self.inbound.pop_front() else {

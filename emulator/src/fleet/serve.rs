@@ -91,7 +91,10 @@ pub fn serve(
         .collect();
 
     let real_time = match speed {
-        Speed::Factor(f) => Some(RealTime::new(wall0, sim0, f)),
+        Speed::Factor(f) => {
+            crate::link::precise_wake_ups();
+            Some(RealTime::new(wall0, sim0, f))
+        }
         Speed::Max => None,
     };
     while !stop.load(Ordering::Relaxed) {
@@ -122,14 +125,10 @@ pub fn serve(
             }
         };
         let t_s = (fleet.now_us() - sim0) as f64 * 1e-6;
-        let take_until = if real_time.is_some() {
-            now_us
-        } else {
-            u64::MAX
-        };
         for (i, (end, sim)) in ends.iter_mut().zip(fleet.sims_mut()).enumerate() {
             end.plug(t_s, &mut |p| on_ready(i, p))?;
-            end.exchange(sim, t_s, now_us, take_until);
+            let (line_us, take_until) = crate::link::exchange_clock(real_time.as_ref(), now_us);
+            end.exchange(sim, t_s, line_us, take_until);
         }
         if let Some(rt) = &real_time {
             let due = fleet
