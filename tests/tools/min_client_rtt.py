@@ -24,7 +24,7 @@ import termios
 import time
 import tty
 
-from wire import cobs as cobs_raw, crc32c, varint
+from wire import cobs as cobs_raw, crc32c, uncobs, varint
 
 def hello_wire():
     """The wire bytes of PROTOCOL.md §10's `hello` vector, read from the document beside this
@@ -48,18 +48,6 @@ def cobs(data):
     return cobs_raw(data) + b"\x00"
 
 
-def uncobs(data):
-    out = bytearray()
-    i = 0
-    while i < len(data):
-        code = data[i]
-        if code == 0:
-            return None
-        out += data[i + 1 : i + code]
-        i += code
-        if code < 255 and i < len(data):
-            out.append(0)
-    return bytes(out)
 
 
 def frame(kind, seq, payload):

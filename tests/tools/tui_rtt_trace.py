@@ -20,19 +20,12 @@ import json
 import struct
 import sys
 
+from wire import read_varint, uncobs
+
 KIND_NAMES = {3: "telemetry", 4: "command", 5: "ack", 6: "nack", 10: "event", 11: "log",
               12: "truth", 13: "localization", 14: "progress"}
 
 
-def varint(b, i):
-    n, shift = 0, 0
-    while True:
-        x = b[i]
-        i += 1
-        n |= (x & 0x7F) << shift
-        if not x & 0x80:
-            return n, i
-        shift += 7
 
 
 def records(data):
@@ -42,25 +35,14 @@ def records(data):
     meta_len, = struct.unpack_from("<I", data, 12)
     at = 16 + meta_len + 4
     while at < len(data):
-        t_us, p = varint(data, at)
+        t_us, p = read_varint(data, at)
         code = data[p]
         p += 2 if version >= 2 else 1
-        n, p = varint(data, p)
+        n, p = read_varint(data, p)
         yield t_us, code, data[p:p + n]
         at = p + n + 4
 
 
-def uncobs(enc):
-    out, i = bytearray(), 0
-    while i < len(enc):
-        code = enc[i]
-        if code == 0:
-            return None
-        out += enc[i + 1:i + code]
-        i += code
-        if code < 0xFF and i < len(enc):
-            out.append(0)
-    return bytes(out)
 
 
 def frames(chunks):
@@ -99,7 +81,7 @@ def main():
     for i, (t, kind, _, payload) in enumerate(from_robot):
         if kind != 5:
             continue
-        cmd_seq, _ = varint(payload, 0)
+        cmd_seq, _ = read_varint(payload, 0)
         w = sent.pop(cmd_seq, None)
         if w is None or t < w:
             continue
