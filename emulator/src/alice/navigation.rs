@@ -367,7 +367,8 @@ enum Motion {
 
 impl Robot {
     /// One sample: move for 1/3 s, read the sensors, feed the model. Returns false when the
-    /// drive was stopped (blocked body or a front whisker).
+    /// drive was stopped, which only a blocked body does: a front whisker's touch does not
+    /// stop it (stopping on one was tried: 58 of 100 legs reached, seeds 1-10).
     fn sample(&mut self, motion: &mut Motion) -> Result<bool, String> {
         let dt = 1.0 / SAMPLES_PER_S / SUBSTEPS as f64;
         let mut free = true;
