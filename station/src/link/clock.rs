@@ -74,6 +74,15 @@ impl RobotClock {
         self.rate
     }
 
+    /// Whether the robot's clock is measured and runs at ours (within `TOLERANCE` either way):
+    /// a real robot's does. Predictions that turn the robot's times into ours
+    /// (`line_phase`) hold only then; an emulator at ten times real time puts its bursts ten
+    /// times closer than its stamps say.
+    pub fn runs_at_our_rate(&self) -> bool {
+        self.rate
+            .is_some_and(|r| (1.0 / TOLERANCE..=TOLERANCE).contains(&r))
+    }
+
     /// Our ms between two heartbeats: 250 ms of the robot's time.
     pub fn heartbeat_period_ms(&self) -> u64 {
         let period = u64::from(HEARTBEAT_PERIOD_MS);
@@ -97,6 +106,7 @@ mod tests {
             c.observe((t + t % 7) as u32, t + 30);
         }
         assert_eq!(c.heartbeat_period_ms(), 250);
+        assert!(c.runs_at_our_rate());
     }
 
     #[test]
@@ -110,6 +120,7 @@ mod tests {
         assert!((10..=40).contains(&early), "{early} ms");
         c.observe(10_000, 1_000);
         assert_eq!(c.heartbeat_period_ms(), 25);
+        assert!(!c.runs_at_our_rate());
         // As fast as the machine allows: capped.
         c.reset();
         c.observe(0, 0);

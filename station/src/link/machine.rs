@@ -9,8 +9,9 @@
 //!   with `NotConnected`, and the ones in flight when the session ends fail with `LinkLost`;
 //! - every submitted command produces exactly one `CommandDone`;
 //! - a command submitted `SendWhen::QuietLine` (a teleop repeat) may wait until the robot's
-//!   periodic burst has left the line (`line_phase`), `line_phase::MAX_HOLD_US` at most; the
-//!   others never wait for it;
+//!   periodic burst has left the line (`line_phase`), `line_phase::MAX_HOLD_US` at most, and
+//!   only while the robot's clock is measured to run at ours (`RobotClock::runs_at_our_rate`);
+//!   the others never wait for it;
 //! - no two commands of one session share a sequence number, so the robot's remembered reply
 //!   to one can never answer another (PROTOCOL.md §7): once `RENEW_AFTER_FRAMES` frames have
 //!   gone out since the handshake, new commands wait, and when none is in flight the station
@@ -243,7 +244,13 @@ impl LinkMachine {
         }
         let not_before_us = match when {
             SendWhen::Now => 0,
-            SendWhen::QuietLine => self.line_phase.quiet_at(now_us),
+            // The burst is predicted from the robot's stamps: on a robot whose clock runs
+            // faster than ours (an emulator at `--speed 10`) they mislead, and the repeat
+            // goes at once, as it did before the line was timed.
+            SendWhen::QuietLine if self.robot_clock.runs_at_our_rate() => {
+                self.line_phase.quiet_at(now_us)
+            }
+            SendWhen::QuietLine => now_us,
         };
         for (old, c) in self.commands.enqueue_at(id, command, not_before_us) {
             self.finish(old, c, CommandOutcome::Failed(CommandFailure::Superseded));

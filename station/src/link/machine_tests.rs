@@ -979,3 +979,37 @@ fn a_repeat_goes_at_once_when_no_burst_is_known() {
         "no telemetry: nothing to wait for"
     );
 }
+
+#[test]
+fn a_repeat_goes_at_once_when_the_robots_clock_runs_faster_than_ours() {
+    // An emulator at ten times real time: a burst stamped every 20 ms of its clock comes every
+    // 2 ms of ours. Read through the stamps, the next burst would seem 20 ms away and a
+    // repeat asked for 3 ms after the last one would be held for 17 ms.
+    let mut m = machine();
+    connect(&mut m);
+    let base = 1_000_000;
+    let mut last_truth_us = 0;
+    for k in 0..40u64 {
+        let stamp_us = base + k * 2_000;
+        let time_ms = (k * 20) as u32;
+        let t = Telemetry {
+            time_ms,
+            ..Telemetry::default()
+        };
+        m.receive_us(stamp_us + 540, &frame(100, &Message::Telemetry(t)));
+        let truth = EmuTruth {
+            time_ms,
+            ..EmuTruth::default()
+        };
+        last_truth_us = stamp_us + 720;
+        m.receive_us(last_truth_us, &frame(101, &Message::EmuTruth(truth)));
+    }
+    sent(&mut m);
+    let teleop = Command::Teleop {
+        v_mm_s: 100,
+        w_mrad_s: 0,
+    };
+    m.submit_when(last_truth_us + 3_000, 1, teleop, SendWhen::QuietLine);
+    assert_eq!(commands_sent(&mut m).len(), 1, "not held");
+    assert_eq!(m.next_release_us(), None);
+}
