@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use robot_firmware::{Profile, ALICE, KHEPERA, MICRO_RATO};
 
+use crate::alice::navigation::StepBase;
 use crate::fault::{FaultConfig, Stall};
 use crate::fleet::RobotSpec;
 use crate::link::{EmulatorOptions, ServeOptions, Speed};
@@ -546,17 +547,8 @@ pub struct RunArgs {
     pub true_pose: bool,
     /// alice-navigation: what a step's geometric command is measured from: the map's edge from
     /// the winner cell (`cell`, the default) or the internal pose (`pose`).
-    #[arg(long = "step-from", value_enum, default_value_t = StepFromArg::Cell)]
-    pub step_from: StepFromArg,
-}
-
-/// `--step-from` (see `emulator::alice::navigation::StepBase`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum StepFromArg {
-    /// The map's edge from the winner cell to the sub-goal.
-    Cell,
-    /// From the internal pose to the sub-goal.
-    Pose,
+    #[arg(long = "step-from", value_enum, default_value_t = StepBase::Cell)]
+    pub step_from: StepBase,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

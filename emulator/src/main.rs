@@ -328,10 +328,7 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
     options.learn = !args.no_learning;
     options.static_map = !args.adapting_map;
     options.true_pose = args.true_pose;
-    options.step_base = match args.step_from {
-        emulator::cli::StepFromArg::Cell => emulator::alice::navigation::StepBase::Cell,
-        emulator::cli::StepFromArg::Pose => emulator::alice::navigation::StepBase::Pose,
-    };
+    options.step_base = args.step_from;
     let r = navigation(&options)?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);

@@ -257,9 +257,8 @@ pub struct App {
     rate_asked: Option<(CommandId, u8)>,
     /// The last floor line the robot reported crossing (its count), for the correction after.
     lines_crossed: Option<i32>,
-    outbox: Vec<(CommandId, Command)>,
-    /// The outbox's teleop repeats: they may wait for a quiet line (`SendWhen::QuietLine`).
-    repeats: Vec<CommandId>,
+    /// Commands to send, each with when it may go: a teleop repeat may wait for a quiet line.
+    outbox: Vec<(CommandId, Command, SendWhen)>,
 }
 
 /// What the app remembers about a command until its outcome.
@@ -322,7 +321,6 @@ impl App {
             rate_asked: None,
             lines_crossed: None,
             outbox: Vec::new(),
-            repeats: Vec::new(),
         };
         // An importer's warning is never silent: the file may not be what the user thinks.
         for w in warnings {
@@ -333,26 +331,17 @@ impl App {
 
     /// Commands to send, with the ids their outcomes will carry; empties the outbox.
     pub fn take_outbox(&mut self) -> Vec<(CommandId, Command)> {
-        self.repeats.clear();
-        std::mem::take(&mut self.outbox)
+        self.take_outbox_timed()
+            .into_iter()
+            .map(|(id, c, _)| (id, c))
+            .collect()
     }
 
     /// `take_outbox`, with when each command should go: a teleop repeat's moment within its
     /// period does not matter, so it may wait for a quiet line; everything the operator asked
     /// for now (a key press included) goes at once.
     pub fn take_outbox_timed(&mut self) -> Vec<(CommandId, Command, SendWhen)> {
-        let repeats = std::mem::take(&mut self.repeats);
-        self.take_outbox()
-            .into_iter()
-            .map(|(id, c)| {
-                let when = if repeats.contains(&id) {
-                    SendWhen::QuietLine
-                } else {
-                    SendWhen::Now
-                };
-                (id, c, when)
-            })
-            .collect()
+        std::mem::take(&mut self.outbox)
     }
 
     pub fn connected(&self) -> bool {
@@ -522,8 +511,7 @@ impl App {
             .last_sent_ms
             .is_none_or(|t| now_ms.saturating_sub(t) + TELEOP_SLACK_MS >= TELEOP_PERIOD_MS);
         if self.teleop.driving && due {
-            let id = self.send_teleop();
-            self.repeats.push(id);
+            self.send_teleop(SendWhen::QuietLine);
         }
         self.transfers_tick();
     }
@@ -562,15 +550,17 @@ impl App {
         t.v_mm_s = t.v_mm_s.saturating_add(dv).clamp(-V_MAX, V_MAX);
         t.w_mrad_s = t.w_mrad_s.saturating_add(dw).clamp(-W_MAX, W_MAX);
         t.driving = true;
-        let _ = self.send_teleop();
+        self.send_teleop(SendWhen::Now);
     }
 
-    fn send_teleop(&mut self) -> CommandId {
+    /// Sends the teleop in force: a key press `Now`, a repeat `QuietLine`.
+    fn send_teleop(&mut self, when: SendWhen) {
         self.teleop.last_sent_ms = Some(self.now_ms);
-        self.send(Command::Teleop {
+        let command = Command::Teleop {
             v_mm_s: self.teleop.v_mm_s,
             w_mrad_s: self.teleop.w_mrad_s,
-        })
+        };
+        self.send_when(command, when);
     }
 
     fn stop_driving(&mut self) {
@@ -686,8 +676,13 @@ impl App {
         self.rate_asked = Some((id, hz));
     }
 
-    /// Queues a command; returns its id.
+    /// Queues a command to go at once; returns its id.
     fn send(&mut self, command: Command) -> CommandId {
+        self.send_when(command, SendWhen::Now)
+    }
+
+    /// Queues a command to go `when` says; returns its id.
+    fn send_when(&mut self, command: Command, when: SendWhen) -> CommandId {
         let id = self.next_id;
         self.next_id += 1;
         self.pending.insert(
@@ -697,7 +692,7 @@ impl App {
                 quiet: false,
             },
         );
-        self.outbox.push((id, command));
+        self.outbox.push((id, command, when));
         id
     }
 

@@ -109,8 +109,9 @@ impl NavOptions {
     }
 }
 
-/// What a step's geometric command (before the memory's correction) is measured from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+/// What a step's geometric command (before the memory's correction) is measured from; also
+/// `alice-navigation --step-from`'s values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
 pub enum StepBase {
     /// From the internal pose to the sub-goal cell's position.
     Pose,

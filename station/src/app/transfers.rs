@@ -29,7 +29,7 @@ use protocol::{Command, EventCode, Mode, ObjectKind, PointMm};
 use super::log::{Level, Source};
 use super::plan_target::PlanTarget;
 use super::App;
-use crate::link::{CommandOutcome, LinkEvent, TransferOut};
+use crate::link::{CommandOutcome, LinkEvent, SendWhen, TransferOut};
 use crate::plan::{End, MapOptions};
 use crate::transfer::objects::{check_capacity, load_for_upload, plan_waypoints};
 use crate::transfer::{
@@ -383,7 +383,9 @@ impl App {
         for o in self.transfers.engine.take_output() {
             match o {
                 EngineOut::Frame(f) => self.transfers.frames.push(f),
-                EngineOut::Command { id, command } => self.outbox.push((id, command)),
+                EngineOut::Command { id, command } => {
+                    self.outbox.push((id, command, SendWhen::Now))
+                }
             }
         }
         for ev in self.transfers.engine.take_events() {

@@ -164,12 +164,17 @@ impl LinePhase {
 
     /// The telemetry period, µs, once three steps are measured: their median.
     pub fn period_us(&self) -> Option<u64> {
-        let mut steps: Vec<u32> = self.steps_ms.iter().copied().filter(|&s| s > 0).collect();
-        if steps.len() < 3 {
+        // Unmeasured slots are 0 and sort first: the median is of the measured ones.
+        let mut steps = self.steps_ms;
+        steps.sort_unstable();
+        let unmeasured = steps.iter().take_while(|&&s| s == 0).count();
+        let measured = steps.get(unmeasured..)?;
+        if measured.len() < 3 {
             return None;
         }
-        steps.sort_unstable();
-        steps.get(steps.len() / 2).map(|&p| u64::from(p) * 1000)
+        measured
+            .get(measured.len() / 2)
+            .map(|&p| u64::from(p) * 1000)
     }
 
     /// When a command asked for at `now_us` that may wait for a quiet line should go: `now_us`

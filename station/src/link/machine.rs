@@ -220,15 +220,10 @@ impl LinkMachine {
 
     /// Submits a command. Its outcome arrives as a `CommandDone` event.
     pub fn submit(&mut self, now_ms: u64, id: CommandId, command: Command) {
-        self.submit_us(now_ms.saturating_mul(1000), id, command);
+        self.submit_when(now_ms.saturating_mul(1000), id, command, SendWhen::Now);
     }
 
-    /// `submit` at `now_us` microseconds.
-    pub fn submit_us(&mut self, now_us: u64, id: CommandId, command: Command) {
-        self.submit_when(now_us, id, command, SendWhen::Now);
-    }
-
-    /// `submit_us`, the command going out `when` says: a `QuietLine` one may be held until
+    /// `submit` at `now_us` microseconds, the command going out `when` says: a `QuietLine` one may be held until
     /// the robot's next periodic burst has passed (`line_phase`); `poll_us` sends it then
     /// (`next_release_us`).
     pub fn submit_when(&mut self, now_us: u64, id: CommandId, command: Command, when: SendWhen) {
@@ -736,8 +731,8 @@ impl LinkMachine {
                 return;
             };
             let seq = self.send(now_ms, &Message::Command(command));
-            self.commands
-                .sent(id, seq, command, self.now_us.max(now_ms * 1000));
+            // Every entry point set `now_us` (`at`): round trips are timed to the µs.
+            self.commands.sent(id, seq, command, self.now_us);
         }
     }
 
