@@ -59,6 +59,9 @@ impl Grid {
             for v in self.buckets.values() {
                 out.extend_from_slice(v);
             }
+            // A HashMap's order varies from run to run; the candidates' must not (a winner
+            // search keeps the first of equals).
+            out.sort_unstable();
             return;
         }
         for bx in x0..=x1 {
