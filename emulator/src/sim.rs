@@ -4,7 +4,8 @@
 //! Layer: std, the top of the emulator's core; the pty front end, the headless scenario
 //! runner (`scenario`) and the station's built-in emulator drive a [`Sim`]. One
 //! [`Sim::step`] is one millisecond: `Robot::step` with the clock at `t` (it runs its control
-//! cycle itself when due and reads the sensors then), then the physics from `t` to `t + 1 ms`
+//! cycle itself when due and reads the sensors then; skipped while the robot says it has
+//! nothing to do before a later time, `Robot::idle_until_us`, and no byte comes), then the physics from `t` to `t + 1 ms`
 //! under the motor command in force, then the UART up to `t + 1 ms`, with a further pass of
 //! `Robot::step` at each moment within the step when a frame from the station completes (a
 //! real robot's receive path acts on a frame when its delimiter arrives, issue 15).
@@ -351,6 +352,10 @@ fn build_robot(profile: &'static Profile, seed: u64, start: Pose, world: &World)
 pub struct Sim {
     /// The composition the profile uses (`robot_firmware::robot::kit`).
     robot: AnyRobot,
+    /// Until when the robot's passes have nothing to do unless a byte comes
+    /// (`AnyRobot::idle_until_us`; 0: a pass every step). Passes before then are skipped,
+    /// which changes nothing but the time a run takes.
+    robot_idle_until_us: u64,
     hal: SimHal,
     truth: TruthHistory,
     seed: u64,
@@ -470,6 +475,7 @@ impl Sim {
         let robot = build_robot(profile, seed, start, &hal.world);
         let mut sim = Sim {
             robot,
+            robot_idle_until_us: 0,
             hal,
             truth: TruthHistory::default(),
             seed,
@@ -483,7 +489,9 @@ impl Sim {
     /// Advances one millisecond.
     pub fn step(&mut self) {
         let start = self.hal.now_us;
-        self.robot.step(&mut self.hal);
+        if start >= self.robot_idle_until_us || !self.hal.uart.nothing_for_robot() {
+            self.robot_pass();
+        }
         self.hal.advance();
         self.record_truth();
         // The id in force now (an operator may set it), so truth names the robot as it does.
@@ -517,9 +525,15 @@ impl Sim {
             };
             self.hal.uart.tick(at, &self.truth);
             self.hal.now_us = at;
-            self.robot.step(&mut self.hal);
+            self.robot_pass();
             self.hal.now_us = end;
         }
+    }
+
+    /// One pass of the robot's main loop, and when the next one has work.
+    fn robot_pass(&mut self) {
+        self.robot.step(&mut self.hal);
+        self.robot_idle_until_us = self.robot.idle_until_us().unwrap_or(0);
     }
 
     /// Moves the wire on to `now_us` (at most this step's start), the robot not stepping: the
@@ -662,6 +676,8 @@ impl Sim {
 
     /// The firmware, mutably (headless runs command it directly).
     pub fn robot_mut(&mut self) -> &mut AnyRobot {
+        // What the caller changes may give the next pass work.
+        self.robot_idle_until_us = 0;
         &mut self.robot
     }
 

@@ -339,6 +339,11 @@ impl Uart {
         self.outbound.len()
     }
 
+    /// Whether nothing is on its way to the robot: no byte arriving, none received unread.
+    pub fn nothing_for_robot(&self) -> bool {
+        self.inbound.is_empty() && self.rx_fifo.is_empty()
+    }
+
     /// Whether no byte is on its way in either direction (nothing to send, nothing arriving,
     /// nothing received that the robot has not read): stepping then moves no byte.
     pub fn idle(&self) -> bool {

@@ -145,3 +145,61 @@ fn the_same_seed_gives_the_same_micro_rato_run() {
     assert_eq!(a, b);
     assert_ne!(a.truth, c.truth);
 }
+
+/// A robot with no station (a headless run) does nothing between control cycles, and the
+/// simulation skips those passes of its main loop (`Robot::idle_until_us`). The run must be
+/// the one a pass every millisecond gives, bit for bit: here the other run gets a pass every
+/// millisecond because `robot_mut` tells the simulation the robot may have changed.
+#[test]
+fn skipping_the_idle_passes_between_control_cycles_changes_nothing() {
+    let arena = || {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../shared/data/arenas/ciberrato/wallsMicRato99.xml");
+        load(&path, &LoadOptions::default()).unwrap()
+    };
+    let run = |every_ms: bool, profile, arena: Arena, command: Command| {
+        let cfg = SimConfig {
+            seed: 9,
+            start: Some(Pose {
+                x: 0.5,
+                y: 0.5,
+                heading: 0.3,
+            }),
+            slip: 0.01,
+            ..SimConfig::new(profile)
+        };
+        let mut sim = Sim::new(arena, cfg).unwrap();
+        sim.robot_mut().apply(command, 0);
+        let bits = |p: Pose| [p.x.to_bits(), p.y.to_bits(), p.heading.to_bits()];
+        let mut t = Trace {
+            truth: Vec::new(),
+            believed: Vec::new(),
+            collisions: 0,
+            wire: Vec::new(),
+        };
+        for i in 0..12_000u32 {
+            if every_ms {
+                let _ = sim.robot_mut();
+            }
+            sim.step();
+            if i % 10 == 9 {
+                t.truth.push(bits(sim.truth()));
+                t.believed.push(bits(sim.believed()));
+            }
+        }
+        t.collisions = sim.collisions();
+        t.wire = sim.uart_mut().take_outbound();
+        t
+    };
+    let goal = Command::GoTo(PointMm {
+        x_mm: 2500,
+        y_mm: 4500,
+    });
+    let a = run(false, &MICRO_RATO, arena(), goal);
+    assert_ne!(a.truth.first(), a.truth.last(), "the robot drove");
+    assert_eq!(a, run(true, &MICRO_RATO, arena(), goal));
+    let wander = Command::SetMode(Mode::Wander);
+    let a = run(false, &KHEPERA, cluttered_box(), wander);
+    assert_ne!(a.truth.first(), a.truth.last(), "the robot wandered");
+    assert_eq!(a, run(true, &KHEPERA, cluttered_box(), wander));
+}

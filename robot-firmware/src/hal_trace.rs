@@ -16,7 +16,8 @@
 //!
 //! Entry format (a byte stream; varint = unsigned LEB128, zigzag for signed):
 //! - `START` (1): version u8 (1), profile u8, seed u32 LE, start x, y, heading f32 LE,
-//!   steps before tracing varint (0: from power-up), emulated u8, beacon x, y f32, bounds
+//!   steps before tracing varint (the passes made before, 0: from power-up; a robot
+//!   idle between control cycles may make none, `Robot::idle_until_us`), emulated u8, beacon x, y f32, bounds
 //!   min x, min y, max x, max y f32 — what the robot was started with and told.
 //! - `IDLE` (2): n varint, dt varint: n passes of the main loop, each `dt` µs after the one
 //!   before, in which the Hal gave nothing but the clock and took all bytes offered.

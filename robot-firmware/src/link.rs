@@ -347,6 +347,11 @@ impl Link {
     pub fn queued(&self) -> usize {
         self.st.tx.len()
     }
+
+    /// Whether a reply is remembered for a retry (`expire` forgets it in time).
+    pub fn remembers_replies(&self) -> bool {
+        self.st.replies.iter().any(Option::is_some)
+    }
 }
 
 impl LinkState {

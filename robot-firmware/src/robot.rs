@@ -250,6 +250,26 @@ impl<K: Kit> Robot<K> {
         }
     }
 
+    /// Until when (µs) a pass of the main loop has nothing to do unless a byte arrives: the
+    /// next control cycle, while no station's session is open, no reply is remembered, no
+    /// frame or event waits to go, tracing is off and no failsafe is counting down (each of
+    /// those has work at a time of its own). `None`: a pass may have work now. A board may
+    /// sleep until then or its receive interrupt, as a tickless kernel does; the emulator
+    /// skips those passes, each of which found nothing to do (issue 15: they were a seventh
+    /// of a headless run). `count_untraced` then counts the passes made.
+    pub fn idle_until_us(&self) -> Option<u64> {
+        let (link, core) = (&self.link, &self.core);
+        let quiet = !link.connected()
+            && link.queued() == 0
+            && !link.remembers_replies()
+            && core.events.is_empty()
+            && core.config.hal_trace == 0
+            && !self.trace.is_on()
+            && !(core.mode == Mode::Manual && !core.failsafe)
+            && !core.must_stop_now();
+        quiet.then_some(core.timing.next_cycle_us)
+    }
+
     /// Whether the robot declared itself emulated.
     pub fn emulated(&self) -> bool {
         self.core.emulated

@@ -93,6 +93,11 @@ impl AnyRobot {
         each!(self, r => r.step(hal))
     }
 
+    /// Until when a pass has nothing to do unless a byte arrives (`Robot::idle_until_us`).
+    pub fn idle_until_us(&self) -> Option<u64> {
+        each!(self, r => r.idle_until_us())
+    }
+
     /// Executes one command or refuses it (`Core::apply`).
     pub fn apply(&mut self, command: Command, now_ms: u32) -> Reply {
         each!(self, r => r.core.apply(command, now_ms))
