@@ -265,7 +265,7 @@ impl<K: Kit> Robot<K> {
             && core.events.is_empty()
             && core.config.hal_trace == 0
             && !self.trace.is_on()
-            && !(core.mode == Mode::Manual && !core.failsafe)
+            && (core.mode != Mode::Manual || core.failsafe)
             && !core.must_stop_now();
         quiet.then_some(core.timing.next_cycle_us)
     }
