@@ -494,10 +494,10 @@ impl Sim {
         }
         self.hal.advance();
         self.record_truth();
-        // The id in force now (an operator may set it), so truth names the robot as it does.
-        self.truth.robot_id = self.robot.config().robot_id;
         let end = self.hal.now_us;
-        self.pass_at_frame_ends(start, end);
+        if !self.hal.uart.nothing_for_robot() {
+            self.pass_at_frame_ends(start, end);
+        }
         self.hal.uart.tick(end, &self.truth);
     }
 
@@ -534,6 +534,9 @@ impl Sim {
     fn robot_pass(&mut self) {
         self.robot.step(&mut self.hal);
         self.robot_idle_until_us = self.robot.idle_until_us().unwrap_or(0);
+        // The id in force now (an operator may set it), so truth names the robot as it does;
+        // only a pass (or `robot_mut`, which a pass follows) changes it.
+        self.truth.robot_id = self.robot.config().robot_id;
     }
 
     /// Moves the wire on to `now_us` (at most this step's start), the robot not stepping: the
