@@ -28,21 +28,41 @@ KIND_NAMES = {3: "telemetry", 4: "command", 5: "ack", 6: "nack", 10: "event", 11
 
 
 
-def records(data):
+class Cut(Exception):
+    """The recording ends or goes wrong inside a record."""
+
+
+def records(path, data):
+    """(time µs, direction code, bytes) per record; exits naming the file and the byte offset
+    where the recording stops making sense (a cut file, another format)."""
+    def fail(at, what):
+        sys.exit(f"{path}: byte {at}: {what}")
+
     if data[:8] != b"\x89STREC\r\n":
-        sys.exit("not a station recording")
+        fail(0, "not a station recording (no STREC magic)")
+    if len(data) < 16:
+        fail(len(data), "header cut short")
     version, = struct.unpack_from("<H", data, 8)
+    if version not in (1, 2):
+        fail(8, f"recording format {version}, this tool reads 1 and 2")
     meta_len, = struct.unpack_from("<I", data, 12)
     at = 16 + meta_len + 4
+    if at > len(data):
+        fail(16, f"metadata of {meta_len} B runs past the end ({len(data)} B)")
     while at < len(data):
-        t_us, p = read_varint(data, at)
-        code = data[p]
-        p += 2 if version >= 2 else 1
-        n, p = read_varint(data, p)
+        try:
+            t_us, p = read_varint(data, at)
+            if p >= len(data):
+                raise Cut
+            code = data[p]
+            p += 2 if version >= 2 else 1
+            n, p = read_varint(data, p)
+            if p + n + 4 > len(data):
+                raise Cut
+        except (Cut, IndexError):
+            fail(at, "record cut short (the recording ends inside it)")
         yield t_us, code, data[p:p + n]
         at = p + n + 4
-
-
 
 
 def frames(chunks):
@@ -69,8 +89,12 @@ def main():
     ap.add_argument("--slowest", type=int, default=5)
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args()
-    data = open(a.file, "rb").read()
-    recs = list(records(data))
+    try:
+        with open(a.file, "rb") as f:
+            data = f.read()
+    except OSError as e:
+        sys.exit(f"{a.file}: {e.strerror}")
+    recs = list(records(a.file, data))
     to_robot = list(frames((t, d) for t, c, d in recs if c == 1))
     from_robot = list(frames((t, d) for t, c, d in recs if c == 0))
     sent = {}
