@@ -5,7 +5,9 @@
 //! estimate, mode logic, motors) every `Profile::cycle_us`, and schedules telemetry and
 //! heartbeats. Call it as often as the board allows (every millisecond or so): the link is
 //! serviced on every call, so telemetry can run faster than the control cycle (up to 50 Hz)
-//! and a failsafe stop takes effect at once rather than at the next cycle.
+//! and a failsafe stop takes effect at once rather than at the next cycle. When
+//! `Robot::idle_until_us` gives a time, no call before it has work unless a byte arrives: a
+//! board may sleep until then or its receive interrupt (the emulator skips those calls).
 //!
 //! Invariants: the motors move only in a mode a handshaken station (or the firmware's own
 //! autonomy) asked for; a refused command changes nothing; every piece of state has a fixed
