@@ -293,8 +293,8 @@ fn pooled(r: &[NavReport], f: fn(&TestRun) -> f64) -> f64 {
 ///   exploring is 0.87-1.32 m from the truth (exploring: 0.16 and 0.38 m; there the map itself
 ///   follows the robot, the thesis's "mutual stabilizing technique", §4.2.4).
 /// - The orientation correlation then compares the light ring with another place's: it
-///   applies on 29 % of the samples while exploring but on 13, 5, 3, 2, 10 % in runs 1-5; the
-///   residual gate rejects 61-71 % of the samples, and 17-35 % have no aligning turn within
+///   applies on 28 % of the samples while exploring but on 13, 5, 3, 2, 10 % in runs 1-5; the
+///   residual gate rejects 60-71 % of the samples, and 17-35 % have no aligning turn within
 ///   the search (the heading error is already beyond it). The static drift turns the heading
 ///   unopposed, and run 5 starts worse localised than run 1.
 /// - Letting the map keep learning while navigating (`--adapting-map`, the thesis's world

@@ -28,7 +28,9 @@ use serde::Serialize;
 
 use crate::network::Network;
 use crate::params::{OrMethod, ParamError, Params, PosDistance};
-use crate::situation::{axis_difference, principal_axis, ring_shift, situation, Pose, Weights};
+use crate::situation::{
+    axis_difference, principal_axis, ring_shift, situation, Pose, ShiftMiss, Weights,
+};
 
 /// One sensor sample as the robot gives it.
 #[derive(Clone, Debug, PartialEq)]
@@ -58,8 +60,40 @@ pub struct Stats {
     pub misses: u64,
     /// Position corrections applied.
     pub pos_corrections: u64,
-    /// Orientation corrections applied.
+    /// Orientation correlation, one outcome per sample observed while `eps_or > 0`, named for
+    /// the first gate that stopped it, in the order the model applies them (the sum is
+    /// [`Stats::or_reached`]): the position estimate is not within `or_pos_tolerance` of the
+    /// internal position (or there is none while the tolerance is finite).
+    pub or_untrusted: u64,
+    /// See `or_untrusted`: no cell within `or_radius` of the internal position (an empty
+    /// network included, which ends the correlation before the position is judged).
+    pub or_no_cell: u64,
+    /// See `or_untrusted`: the light ring has no pattern to align with the nearest cell's
+    /// (`shift`: the ring is flat, [`ShiftMiss::Flat`]; `axis`: either ring's principal axis
+    /// is missing or less distinct than `or_min_anisotropy`).
+    pub or_no_pattern: u64,
+    /// See `or_untrusted`: `shift` only, no aligning turn within `or_max_shift`
+    /// ([`ShiftMiss::NoTurn`]).
+    pub or_no_turn: u64,
+    /// See `or_untrusted`: `shift` only, the best turn's residual is above `or_max_residual`
+    /// ([`ShiftMiss::Residual`]).
+    pub or_residual: u64,
+    /// See `or_untrusted`: orientation corrections applied.
     pub or_corrections: u64,
+}
+
+impl Stats {
+    /// Samples that reached the orientation correlation: each of them counts in exactly one
+    /// of `or_untrusted`, `or_no_cell`, `or_no_pattern`, `or_no_turn`, `or_residual` and
+    /// `or_corrections`, so this is their sum.
+    pub fn or_reached(&self) -> u64 {
+        self.or_untrusted
+            + self.or_no_cell
+            + self.or_no_pattern
+            + self.or_no_turn
+            + self.or_residual
+            + self.or_corrections
+    }
 }
 
 /// The model: network, internal pose, learning state.
@@ -205,6 +239,9 @@ impl QtModel {
 
     fn correlate(&mut self, sample: &Sample) {
         if self.net.is_empty() {
+            if self.params.eps_or > 0.0 {
+                self.stats.or_no_cell += 1;
+            }
             return;
         }
         let p = self.params.clone();
@@ -225,41 +262,47 @@ impl QtModel {
             self.pose.y += p.eps_pos * (y - self.pose.y);
             self.stats.pos_corrections += 1;
         }
-        if !trusted {
+        if p.eps_or <= 0.0 {
             return;
         }
-        if p.eps_or > 0.0 {
-            let at = (self.pose.x, self.pose.y);
-            if let Some((near, _)) = self.net.nearest(at, p.or_radius, &mut self.scratch) {
-                let mut light = std::mem::take(&mut self.buf);
-                crate::situation::rotate_to_world(sample.light, self.pose.heading, &mut light);
-                let error = match p.or_method {
-                    OrMethod::Axis => {
-                        let cur = principal_axis(&light);
-                        let stored = self
-                            .net
-                            .cell(near)
-                            .and_then(|c| principal_axis(&c.s[..p.lights]));
-                        match (cur, stored) {
-                            (Some((oc, rc)), Some((on, rn)))
-                                if rc >= p.or_min_anisotropy && rn >= p.or_min_anisotropy =>
-                            {
-                                Some(axis_difference(oc, on))
-                            }
-                            _ => None,
-                        }
-                    }
-                    OrMethod::Shift => self.net.cell(near).and_then(|c| {
-                        ring_shift(&light, &c.s[..p.lights], p.or_max_shift, p.or_max_residual)
-                    }),
-                };
-                if let Some(e) = error {
-                    // The world-frame pattern turns with the heading error: undo part of it.
-                    self.pose.heading = wrap(self.pose.heading - p.eps_or * e);
-                    self.stats.or_corrections += 1;
+        // From here on every return counts one outcome (see `Stats::or_untrusted`).
+        if !trusted {
+            self.stats.or_untrusted += 1;
+            return;
+        }
+        let at = (self.pose.x, self.pose.y);
+        let Some(near) = self
+            .net
+            .nearest(at, p.or_radius, &mut self.scratch)
+            .and_then(|(near, _)| self.net.cell(near))
+        else {
+            self.stats.or_no_cell += 1;
+            return;
+        };
+        let stored = &near.s[..p.lights];
+        let mut light = std::mem::take(&mut self.buf);
+        crate::situation::rotate_to_world(sample.light, self.pose.heading, &mut light);
+        let error = match p.or_method {
+            OrMethod::Axis => match (principal_axis(&light), principal_axis(stored)) {
+                (Some((oc, rc)), Some((on, rn)))
+                    if rc >= p.or_min_anisotropy && rn >= p.or_min_anisotropy =>
+                {
+                    Ok(axis_difference(oc, on))
                 }
-                self.buf = light;
+                _ => Err(ShiftMiss::Flat),
+            },
+            OrMethod::Shift => ring_shift(&light, stored, p.or_max_shift, p.or_max_residual),
+        };
+        self.buf = light;
+        match error {
+            Ok(e) => {
+                // The world-frame pattern turns with the heading error: undo part of it.
+                self.pose.heading = wrap(self.pose.heading - p.eps_or * e);
+                self.stats.or_corrections += 1;
             }
+            Err(ShiftMiss::Flat) => self.stats.or_no_pattern += 1,
+            Err(ShiftMiss::NoTurn) => self.stats.or_no_turn += 1,
+            Err(ShiftMiss::Residual) => self.stats.or_residual += 1,
         }
     }
 
@@ -548,5 +591,114 @@ mod tests {
         assert!(gated.pos_corrections > 0);
         assert_eq!(gated.or_corrections, 0);
         assert!(walk(f64::INFINITY).or_corrections > 0);
+    }
+
+    /// Every sample observed while the orientation correlation is on counts in exactly one
+    /// of its outcomes, and each outcome is reachable: a flat ring, a ring turned beyond the
+    /// search, another place's ring, the place's own ring, and an untrusted position.
+    #[test]
+    fn the_orientation_correlation_counts_one_outcome_per_sample() {
+        let touch = vec![false; 24];
+        let walk = |m: &mut QtModel| {
+            for i in 0..200 {
+                let x = 0.05 * f64::from(if i < 100 { i } else { 200 - i });
+                let light = ring(x, 0.0);
+                let odometry = Pose {
+                    x,
+                    y: 0.0,
+                    heading: 0.0,
+                };
+                let s = Sample {
+                    light: &light,
+                    touch: &touch,
+                    odometry,
+                };
+                m.observe(&s).expect("valid sample");
+                assert_eq!(m.stats().or_reached(), m.stats().samples, "{:?}", m.stats());
+            }
+        };
+        let mut m = QtModel::new(Params::default(), Pose::default()).expect("valid");
+        walk(&mut m);
+        let s = m.stats().clone();
+        assert_eq!(s.or_untrusted, 0, "no gate at the default tolerance");
+        assert!(s.or_no_cell >= 1, "the first sample meets an empty network");
+        assert!(s.or_corrections > 0, "{s:?}");
+        // Probes where the walk ended (x = 0.05): the odometry stands still.
+        let here = ring(0.05, 0.0);
+        let mut turned = Vec::new();
+        crate::situation::rotate_to_world(&here, 1.0, &mut turned);
+        let mut opposite = Vec::new();
+        crate::situation::rotate_to_world(&here, std::f64::consts::PI, &mut opposite);
+        let other: Vec<f64> = here.iter().zip(&opposite).map(|(a, b)| a + b).collect();
+        let flat = vec![0.5; 24];
+        type Count = fn(&Stats) -> u64;
+        let probes: [(&[f64], Count); 4] = [
+            (&flat, |s| s.or_no_pattern),
+            (&turned, |s| s.or_no_turn),
+            (&other, |s| s.or_residual),
+            (&here, |s| s.or_corrections),
+        ];
+        let odometry = Pose {
+            x: 0.05,
+            y: 0.0,
+            heading: 0.0,
+        };
+        for (light, count) in probes {
+            let before = m.stats().clone();
+            let s = Sample {
+                light,
+                touch: &touch,
+                odometry,
+            };
+            m.observe(&s).expect("valid sample");
+            let after = m.stats();
+            assert_eq!(count(after), count(&before) + 1, "{before:?} -> {after:?}");
+            assert_eq!(after.or_reached(), before.or_reached() + 1);
+        }
+        // Off: nothing reaches the correlation.
+        m.set_params(Params {
+            eps_or: 0.0,
+            ..Params::default()
+        })
+        .expect("valid");
+        let before = m.stats().or_reached();
+        let s = Sample {
+            light: &here,
+            touch: &touch,
+            odometry,
+        };
+        m.observe(&s).expect("valid sample");
+        assert_eq!(m.stats().or_reached(), before);
+        // A zero tolerance trusts no estimate: every sample is untrusted once the network has
+        // a cell (the first l + 1 samples meet an empty one: the delay l).
+        let p = Params {
+            or_pos_tolerance: 0.0,
+            ..Params::default()
+        };
+        let empty = p.l as u64 + 1;
+        let mut m = QtModel::new(p, Pose::default()).expect("valid");
+        walk(&mut m);
+        let s = m.stats();
+        assert_eq!(
+            (s.or_no_cell, s.or_untrusted),
+            (empty, 200 - empty),
+            "{s:?}"
+        );
+        // The axis method: a flat ring has no axis.
+        let p = Params {
+            or_method: OrMethod::Axis,
+            ..Params::default()
+        };
+        let mut m = QtModel::new(p, Pose::default()).expect("valid");
+        walk(&mut m);
+        let before = m.stats().or_no_pattern;
+        let s = Sample {
+            light: &flat,
+            touch: &touch,
+            odometry,
+        };
+        m.observe(&s).expect("valid sample");
+        assert_eq!(m.stats().or_no_pattern, before + 1);
+        assert_eq!(m.stats().or_reached(), m.stats().samples);
     }
 }

@@ -153,20 +153,39 @@ pub fn principal_axis(readings: &[f64]) -> Option<(f64, f64)> {
     Some((angle, ratio))
 }
 
+/// Why [`ring_shift`] found no turn, in the order it looks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShiftMiss {
+    /// Nothing to align: the current ring is empty or flat (variance below 1e-6), or the two
+    /// rings differ in length.
+    Flat,
+    /// The best turn lies at the edge of the +-`max` search: no minimum within it (a heading
+    /// error beyond the search).
+    NoTurn,
+    /// The best turn's squared residual exceeds `max_residual` times the ring's variance: the
+    /// stored ring is another place's pattern, not a turned copy of this one.
+    Residual,
+}
+
 /// The rotation (radians, within +-`max`) by which ring `cur` is turned against ring `stored`:
 /// the shift minimising the squared difference, searched in quarter-sensor steps and refined
-/// by a parabola through the best step and its neighbours. `None` for flat rings (nothing to
-/// align), rings of different lengths, a best shift at the search's edge, or a best fit
-/// whose squared residual exceeds `max_residual` times the ring's variance (summed).
-pub fn ring_shift(cur: &[f64], stored: &[f64], max: f64, max_residual: f64) -> Option<f64> {
+/// by a parabola through the best step and its neighbours. The error says which check found
+/// none ([`ShiftMiss`]); the best turn does not depend on `max_residual`, so a
+/// [`ShiftMiss::Residual`] at one `max_residual` is a turn at a larger one.
+pub fn ring_shift(
+    cur: &[f64],
+    stored: &[f64],
+    max: f64,
+    max_residual: f64,
+) -> Result<f64, ShiftMiss> {
     let n = cur.len();
     if n == 0 || stored.len() != n {
-        return None;
+        return Err(ShiftMiss::Flat);
     }
     let mean = cur.iter().sum::<f64>() / n as f64;
     let var = cur.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n as f64;
     if var < 1e-6 {
-        return None;
+        return Err(ShiftMiss::Flat);
     }
     let step = TAU / n as f64 / 4.0;
     let k = (max / step).floor() as i64;
@@ -186,11 +205,15 @@ pub fn ring_shift(cur: &[f64], stored: &[f64], max: f64, max_residual: f64) -> O
     let (bi, _) = costs
         .iter()
         .enumerate()
-        .min_by(|a, b| a.1 .1.total_cmp(&b.1 .1))?;
+        .min_by(|a, b| a.1 .1.total_cmp(&b.1 .1))
+        .ok_or(ShiftMiss::NoTurn)?;
     // A minimum at the edge of the search is no minimum; a poor best fit is another place's
     // pattern (a lamp in shadow, a different spot), not a turned copy of this one.
-    if bi == 0 || bi + 1 == costs.len() || costs[bi].1 > max_residual * var * n as f64 {
-        return None;
+    if bi == 0 || bi + 1 == costs.len() {
+        return Err(ShiftMiss::NoTurn);
+    }
+    if costs[bi].1 > max_residual * var * n as f64 {
+        return Err(ShiftMiss::Residual);
     }
     let mut best = costs[bi].0;
     {
@@ -200,7 +223,7 @@ pub fn ring_shift(cur: &[f64], stored: &[f64], max: f64, max_residual: f64) -> O
             best += 0.5 * (l - r) / den * step;
         }
     }
-    Some(best)
+    Ok(best)
 }
 
 /// `a - b` for axes (modulo pi), in (-pi/2, pi/2].
@@ -260,6 +283,42 @@ mod tests {
         rotate_to_world(&base, 0.2, &mut turned);
         let s = ring_shift(&turned, &base, 0.6, 0.25).expect("pattern");
         assert!((s - 0.2).abs() < 0.03, "{s}");
+    }
+
+    /// Each way of finding no turn says which it is.
+    #[test]
+    fn the_ring_shift_says_why_it_found_no_turn() {
+        let base: Vec<f64> = (0..24)
+            .map(|i| (-(((i as f64) - 7.0) / 1.5).powi(2)).exp())
+            .collect();
+        let flat = vec![0.4; 24];
+        assert_eq!(ring_shift(&flat, &base, 0.6, 0.25), Err(ShiftMiss::Flat));
+        assert_eq!(
+            ring_shift(&base, &base[..20], 0.6, 0.25),
+            Err(ShiftMiss::Flat)
+        );
+        assert_eq!(ring_shift(&[], &[], 0.6, 0.25), Err(ShiftMiss::Flat));
+        // Turned by 1 radian, searched within 0.3: the best is the search's edge.
+        let mut turned = Vec::new();
+        rotate_to_world(&base, 1.0, &mut turned);
+        assert_eq!(
+            ring_shift(&turned, &base, 0.3, 0.25),
+            Err(ShiftMiss::NoTurn)
+        );
+        // Another place's ring: the peak plus a second lamp; the best turn is (about: the
+        // interpolation blurs the left-over lamp at a fractional turn) no turn, with the
+        // second lamp left over.
+        let other: Vec<f64> = base
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + (-(((i as f64) - 18.0) / 1.5).powi(2)).exp())
+            .collect();
+        assert_eq!(
+            ring_shift(&other, &base, 0.6, 0.25),
+            Err(ShiftMiss::Residual)
+        );
+        let s = ring_shift(&other, &base, 0.6, f64::INFINITY).expect("any residual");
+        assert!(s.abs() < 0.1, "{s}");
     }
 
     #[test]

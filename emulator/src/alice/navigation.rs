@@ -29,9 +29,10 @@
 //! heading): a step aimed at a cell's internal position can only reach the cell when these
 //! are small.
 //!
-//! Sample by sample the truth also judges the correlations ([`CorrelationJudge`]): which gate
-//! stops the orientation correlation, and how far the winner (the centre of the position
-//! correlation's neighbourhood) is from the internal pose and its place from the truth. Two
+//! Sample by sample the report also follows the correlations ([`CorrelationJudge`]): which gate
+//! stops the orientation correlation (the model's own counts, `world_model::Stats`), and,
+//! judged from the truth, how far the winner (the centre of the position correlation's
+//! neighbourhood) is from the internal pose and its place from the truth. Two
 //! options separate the causes: `static_map = false` lets the map keep learning during the
 //! test runs, and `true_pose` holds the internal pose at the truth in the map's frame, a
 //! counterfactual that shows what the planner and the memory do when the localisation holds.
@@ -41,8 +42,7 @@ use std::collections::HashMap;
 use serde::Serialize;
 use world_model::execute::Executor;
 use world_model::navigate::Planner;
-use world_model::situation::{ring_shift, rotate_to_world};
-use world_model::{OrMethod, Params, Pose, QtModel, Sample};
+use world_model::{Params, Pose, QtModel, Sample, Stats};
 
 use super::arena::alice;
 use super::body::{Body, SPEED_M_S, SUBSTEPS, TURN_RAD_S};
@@ -168,28 +168,38 @@ pub struct TestRun {
     pub localisation_error_m: f64,
     /// Both legs' heading error after a step (see `Leg`), mean over steps, degrees.
     pub heading_error_deg: f64,
-    /// The correlations judged from the truth over the run's samples.
+    /// The correlations over the run's samples (`or_applies` is the orientation correlation
+    /// that would hold the heading against the static drift).
     pub correlation: CorrelationJudge,
 }
 
-/// The correlations (§4.2.4) judged from the truth over a stretch of samples, at the internal
-/// pose after each sample (never used by the robot). For the `shift` orientation method (the
-/// default) each sample is sorted by the gate that decides it: the orientation correlation
-/// applies; no cell lies within `or_radius` of the internal position; no turn within
-/// `or_max_shift` aligns the light ring with the nearest cell's (a heading error beyond the
-/// search, or a flat ring); the best turn leaves a residual above `or_max_residual` (the
-/// nearest cell's ring is another place's). The position correlation's estimate comes from the
-/// winner's neighbourhood, and the winner search weighs the position: how far the winner cell
-/// is from the internal pose, and how far the place where it won while exploring is from the
-/// truth, show whether that estimate can pull the pose back.
+/// The correlations (§4.2.4) over a stretch of samples. The orientation correlation's gates are
+/// the model's own counts (`world_model::Stats`, differences over the stretch), as fractions of
+/// the stretch's samples; each sample ends at one gate, in the order the model applies them: the
+/// position estimate is not trusted (`or_pos_tolerance`); no cell lies within `or_radius` of
+/// the internal position; the light ring has no pattern to align; no turn within
+/// `or_max_shift` aligns the ring with the nearest cell's (a heading error beyond the search);
+/// the best turn leaves a residual above `or_max_residual` (the nearest cell's ring is another
+/// place's); or the correlation applies. They sum to 1 while `eps_or > 0` (all 0 when it is
+/// off). The rest is judged from the truth at the internal pose after each sample (never used
+/// by the robot): the position correlation's estimate comes from the winner's neighbourhood,
+/// and the winner search weighs the position: how far the winner cell is from the internal
+/// pose, and how far the place where it won while exploring is from the truth, show whether
+/// that estimate can pull the pose back.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct CorrelationJudge {
     /// Samples judged.
     pub samples: u64,
-    /// Fraction of the samples on which the orientation correlation applies.
+    /// Fraction of the samples on which the orientation correlation applies (the model's
+    /// orientation corrections per sample).
     pub or_applies: f64,
+    /// Fraction whose position estimate is not within `or_pos_tolerance` (0 at the default,
+    /// no tolerance).
+    pub or_untrusted: f64,
     /// Fraction with no cell within `or_radius` of the internal position.
     pub or_no_cell: f64,
+    /// Fraction whose light ring has no pattern to align (flat; `axis`: no distinct axis).
+    pub or_no_pattern: f64,
     /// Fraction with no aligning turn within `or_max_shift`.
     pub or_no_turn: f64,
     /// Fraction whose best turn leaves too large a residual.
@@ -203,29 +213,39 @@ pub struct CorrelationJudge {
     pub winner_place_to_truth_m: f64,
 }
 
-/// Counts behind a [`CorrelationJudge`].
+/// Counts behind a [`CorrelationJudge`]: the model's counters when the stretch began, and what
+/// only the truth gives.
 #[derive(Clone, Debug, Default)]
 struct Tally {
+    from: Stats,
     samples: u64,
-    applies: u64,
-    no_cell: u64,
-    no_turn: u64,
-    residual: u64,
     touching: u64,
     winner_to_pose: (f64, u64),
     winner_place: (f64, u64),
 }
 
 impl Tally {
-    fn judge(&self) -> CorrelationJudge {
+    /// A tally that starts at the model's counters `from`.
+    fn starting(from: Stats) -> Tally {
+        Tally {
+            from,
+            ..Tally::default()
+        }
+    }
+
+    /// The stretch judged, up to the model's counters `now`.
+    fn judge(&self, now: &Stats) -> CorrelationJudge {
         let n = self.samples.max(1) as f64;
         let mean = |(sum, k): (f64, u64)| sum / k.max(1) as f64;
+        let f = |count: fn(&Stats) -> u64| (count(now) - count(&self.from)) as f64 / n;
         CorrelationJudge {
             samples: self.samples,
-            or_applies: self.applies as f64 / n,
-            or_no_cell: self.no_cell as f64 / n,
-            or_no_turn: self.no_turn as f64 / n,
-            or_residual: self.residual as f64 / n,
+            or_applies: f(|s| s.or_corrections),
+            or_untrusted: f(|s| s.or_untrusted),
+            or_no_cell: f(|s| s.or_no_cell),
+            or_no_pattern: f(|s| s.or_no_pattern),
+            or_no_turn: f(|s| s.or_no_turn),
+            or_residual: f(|s| s.or_residual),
             touching: self.touching as f64 / n,
             winner_to_pose_m: mean(self.winner_to_pose),
             winner_place_to_truth_m: mean(self.winner_place),
@@ -253,13 +273,7 @@ pub struct NavReport {
     pub map_rotation_deg: f64,
     /// See `map_rotation_deg`.
     pub map_fit_residual_m: f64,
-    /// Orientation correlations the model applied while exploring, and during the test
-    /// runs, per sample (the correlation that would hold the heading against the static
-    /// drift).
-    pub or_corrections_exploring: f64,
-    /// See `or_corrections_exploring`.
-    pub or_corrections_testing: f64,
-    /// The correlations judged from the truth over the exploration (see `TestRun`).
+    /// The correlations over the exploration (see `TestRun`).
     pub exploring: CorrelationJudge,
     /// The test runs in order.
     pub runs: Vec<TestRun>,
@@ -292,7 +306,8 @@ struct Robot {
     places: HashMap<u32, (f64, f64, u32)>,
     /// Truth, to judge only: the map's frame in the world, once the exploration is done.
     fit: Option<MapFit>,
-    /// Truth, to judge only: the correlations since the tally was last taken.
+    /// The correlations since the tally was last taken (the model's counters, and the truth to
+    /// judge only).
     tally: Tally,
     /// The `true_pose` counterfactual is on (once the exploration is done).
     true_pose: bool,
@@ -431,37 +446,19 @@ impl Robot {
             let heading = super::wrap(self.body.heading - fit.rotation);
             self.model.relocate(Pose { x, y, heading });
         }
-        self.judge(&light);
+        self.judge();
         Ok(free)
     }
 
-    /// Add this sample to the truth's tally (see [`CorrelationJudge`]).
-    fn judge(&mut self, light: &[f64]) {
-        let p = self.model.params();
+    /// Add this sample's truth to the tally (see [`CorrelationJudge`]; the model counts the
+    /// orientation correlation's gates itself).
+    fn judge(&mut self) {
         let net = self.model.network();
         let pose = self.model.pose();
         let t = &mut self.tally;
         t.samples += 1;
         if self.touch.iter().any(|&b| b) {
             t.touching += 1;
-        }
-        let mut scratch = Vec::new();
-        if p.or_method == OrMethod::Shift {
-            match net.nearest((pose.x, pose.y), p.or_radius, &mut scratch) {
-                None => t.no_cell += 1,
-                Some((near, _)) => {
-                    let mut ring = Vec::new();
-                    rotate_to_world(light, pose.heading, &mut ring);
-                    let stored = net.cell(near).map_or(&[][..], |c| &c.s[..p.lights]);
-                    if ring_shift(&ring, stored, p.or_max_shift, p.or_max_residual).is_some() {
-                        t.applies += 1;
-                    } else if ring_shift(&ring, stored, p.or_max_shift, f64::INFINITY).is_some() {
-                        t.residual += 1;
-                    } else {
-                        t.no_turn += 1;
-                    }
-                }
-            }
         }
         if let Some(w) = self.model.winner().filter(|&w| net.cell(w).is_some()) {
             let (x, y) = net.position(w);
@@ -477,7 +474,10 @@ impl Robot {
 
     /// The tally since it was last taken, judged; the tally starts again.
     fn take_judge(&mut self) -> CorrelationJudge {
-        std::mem::take(&mut self.tally).judge()
+        let now = self.model.stats().clone();
+        let judged = self.tally.judge(&now);
+        self.tally = Tally::starting(now);
+        judged
     }
 
     fn explore(&mut self, samples: u64) -> Result<(), String> {
@@ -694,7 +694,6 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         true_pose: false,
     };
     r.explore(o.explore_samples)?;
-    let or_explored = r.model.stats().or_corrections;
     let exploring = r.take_judge();
     let net = r.model.network();
     let pairs: Vec<_> = net
@@ -759,7 +758,6 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
     // it would on any drive).
     r.leg(home, &mut exec, o.leg_cap, o.step_base)?;
     r.take_judge();
-    let (or_before, testing_from) = (r.model.stats().or_corrections, r.samples);
     let mut runs = Vec::new();
     for _ in 0..o.runs {
         let mut legs: [Leg; 2] = Default::default();
@@ -798,9 +796,6 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         map_rotation_deg: fit.map_or(0.0, |f| f.rotation.to_degrees()),
         map_fit_residual_m: fit.map_or(0.0, |f| f.residual_m),
         exploring,
-        or_corrections_exploring: or_explored as f64 / o.explore_samples.max(1) as f64,
-        or_corrections_testing: (r.model.stats().or_corrections - or_before) as f64
-            / (r.samples - testing_from).max(1) as f64,
         time_factor: factor(&|t| t.samples as f64),
         refinement_factor: factor(&|t| t.refinements as f64),
         reversal_factor: factor(&|t| t.reversals as f64),
