@@ -30,8 +30,7 @@ fn probe() -> Result<(), String> {
     let (mut edges, mut two, mut closed, mut clear) = (vec![], vec![], vec![], 0);
     for seed in 1..=10 {
         let r = dynamic_with(seed, &p, drift)?;
-        let ok = r.gap_edges_at_removal.is_some_and(|g| g <= 1)
-            && r.gap_closed_after.is_some_and(|a| a <= 1500);
+        let ok = r.gap_clear() && r.gap_closed_in_time();
         clear += usize::from(ok);
         edges.push(r.gap_edges_at_removal.map_or(-1, |g| g as i64));
         two.push(r.gap_two_sided_at_removal.map_or(-1, |g| g as i64));

@@ -92,6 +92,29 @@ pub struct ExperimentReport {
     pub wall_s: f64,
 }
 
+/// §4.5.4's dynamic environment, judged: the wall's line is a clear gap at its removal when
+/// at most this many edges cross it (the thesis's figures show none; one stray edge is
+/// tolerated) ...
+pub const GAP_CLEAR_EDGES: usize = 1;
+/// ... and the gap has closed in time when edges cross it within this many situations after
+/// the removal (the thesis: "about 1500").
+pub const GAP_CLOSED_WITHIN: u64 = 1500;
+
+impl ExperimentReport {
+    /// Dynamic experiment: the wall's line was a clear gap when it was removed
+    /// (`GAP_CLEAR_EDGES`).
+    pub fn gap_clear(&self) -> bool {
+        self.gap_edges_at_removal
+            .is_some_and(|g| g <= GAP_CLEAR_EDGES)
+    }
+
+    /// Dynamic experiment: the gap closed within `GAP_CLOSED_WITHIN` situations.
+    pub fn gap_closed_in_time(&self) -> bool {
+        self.gap_closed_after
+            .is_some_and(|a| a <= GAP_CLOSED_WITHIN)
+    }
+}
+
 fn one(
     seed: u64,
     samples: u64,
