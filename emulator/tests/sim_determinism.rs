@@ -85,6 +85,11 @@ fn khepera_run(seed: u64) -> Trace {
 }
 
 fn trace(sim: &mut Sim, ms: u32) -> Trace {
+    trace_with(sim, ms, |_| {})
+}
+
+/// `trace`, calling `each_ms` before every step.
+fn trace_with(sim: &mut Sim, ms: u32, mut each_ms: impl FnMut(&mut Sim)) -> Trace {
     let bits = |p: Pose| [p.x.to_bits(), p.y.to_bits(), p.heading.to_bits()];
     let mut t = Trace {
         truth: Vec::new(),
@@ -93,7 +98,10 @@ fn trace(sim: &mut Sim, ms: u32) -> Trace {
         wire: Vec::new(),
     };
     for _ in 0..ms / 10 {
-        sim.run_for(10);
+        for _ in 0..10 {
+            each_ms(sim);
+            sim.step();
+        }
         t.truth.push(bits(sim.truth()));
         t.believed.push(bits(sim.believed()));
         t.wire.extend(sim.uart_mut().take_outbound());
@@ -170,26 +178,11 @@ fn skipping_the_idle_passes_between_control_cycles_changes_nothing() {
         };
         let mut sim = Sim::new(arena, cfg).unwrap();
         sim.robot_mut().apply(command, 0);
-        let bits = |p: Pose| [p.x.to_bits(), p.y.to_bits(), p.heading.to_bits()];
-        let mut t = Trace {
-            truth: Vec::new(),
-            believed: Vec::new(),
-            collisions: 0,
-            wire: Vec::new(),
-        };
-        for i in 0..12_000u32 {
+        trace_with(&mut sim, 12_000, |sim| {
             if every_ms {
                 let _ = sim.robot_mut();
             }
-            sim.step();
-            if i % 10 == 9 {
-                t.truth.push(bits(sim.truth()));
-                t.believed.push(bits(sim.believed()));
-            }
-        }
-        t.collisions = sim.collisions();
-        t.wire = sim.uart_mut().take_outbound();
-        t
+        })
     };
     let goal = Command::GoTo(PointMm {
         x_mm: 2500,

@@ -558,6 +558,28 @@ mod tests {
         assert!(p.set("or_pos_tolerance", "inf").is_ok());
     }
 
+    /// 200 samples out and back along a line (exact odometry), so the second half meets the
+    /// first's cells; `after` sees the model after each.
+    fn out_and_back(m: &mut QtModel, mut after: impl FnMut(&QtModel)) {
+        let touch = vec![false; 24];
+        for i in 0..200 {
+            let x = 0.05 * f64::from(if i < 100 { i } else { 200 - i });
+            let light = ring(x, 0.0);
+            let odometry = Pose {
+                x,
+                y: 0.0,
+                heading: 0.0,
+            };
+            let s = Sample {
+                light: &light,
+                touch: &touch,
+                odometry,
+            };
+            m.observe(&s).expect("valid sample");
+            after(m);
+        }
+    }
+
     /// §4.2.4's "correct to within a certain tolerance": at a zero tolerance the heading is
     /// never corrected (the map's estimate never agrees exactly), the position still is.
     #[test]
@@ -568,23 +590,7 @@ mod tests {
                 ..Params::default()
             };
             let mut m = QtModel::new(p, Pose::default()).expect("valid");
-            let touch = vec![false; 24];
-            for i in 0..200 {
-                // Out and back along a line, so the second pass meets the first's cells.
-                let x = 0.05 * f64::from(if i < 100 { i } else { 200 - i });
-                let light = ring(x, 0.0);
-                let odometry = Pose {
-                    x,
-                    y: 0.0,
-                    heading: 0.0,
-                };
-                let s = Sample {
-                    light: &light,
-                    touch: &touch,
-                    odometry,
-                };
-                m.observe(&s).expect("valid sample");
-            }
+            out_and_back(&mut m, |_| {});
             m.stats().clone()
         };
         let gated = walk(0.0);
@@ -600,22 +606,9 @@ mod tests {
     fn the_orientation_correlation_counts_one_outcome_per_sample() {
         let touch = vec![false; 24];
         let walk = |m: &mut QtModel| {
-            for i in 0..200 {
-                let x = 0.05 * f64::from(if i < 100 { i } else { 200 - i });
-                let light = ring(x, 0.0);
-                let odometry = Pose {
-                    x,
-                    y: 0.0,
-                    heading: 0.0,
-                };
-                let s = Sample {
-                    light: &light,
-                    touch: &touch,
-                    odometry,
-                };
-                m.observe(&s).expect("valid sample");
+            out_and_back(m, |m| {
                 assert_eq!(m.stats().or_reached(), m.stats().samples, "{:?}", m.stats());
-            }
+            });
         };
         let mut m = QtModel::new(Params::default(), Pose::default()).expect("valid");
         walk(&mut m);

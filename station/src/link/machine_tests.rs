@@ -884,18 +884,34 @@ fn at_the_renewal_point_new_commands_wait_for_those_in_flight_and_the_new_sessio
 /// clock) read 5.4 ms after its stamp, its truth frame 7.2 ms after; the robot's clock reads
 /// 1 s behind ours.
 fn burst(m: &mut LinkMachine, k: u64) {
-    let stamp_us = 1_000_000 + k * 20_000;
-    let time_ms = (k * 20) as u32;
+    burst_at(m, 1_000_000 + k * 20_000, (k * 20) as u32, 5_400, 7_200);
+}
+
+/// A burst stamped `time_ms` by the robot at our `stamp_us`: its telemetry read
+/// `telemetry_after_us` later, its truth frame `truth_after_us` later.
+fn burst_at(
+    m: &mut LinkMachine,
+    stamp_us: u64,
+    time_ms: u32,
+    telemetry_after_us: u64,
+    truth_after_us: u64,
+) {
     let t = Telemetry {
         time_ms,
         ..Telemetry::default()
     };
-    m.receive_us(stamp_us + 5_400, &frame(100, &Message::Telemetry(t)));
+    m.receive_us(
+        stamp_us + telemetry_after_us,
+        &frame(100, &Message::Telemetry(t)),
+    );
     let truth = EmuTruth {
         time_ms,
         ..EmuTruth::default()
     };
-    m.receive_us(stamp_us + 7_200, &frame(101, &Message::EmuTruth(truth)));
+    m.receive_us(
+        stamp_us + truth_after_us,
+        &frame(101, &Message::EmuTruth(truth)),
+    );
 }
 
 /// The commands the station sent (heartbeats and other frames left out).
@@ -991,18 +1007,8 @@ fn a_repeat_goes_at_once_when_the_robots_clock_runs_faster_than_ours() {
     let mut last_truth_us = 0;
     for k in 0..40u64 {
         let stamp_us = base + k * 2_000;
-        let time_ms = (k * 20) as u32;
-        let t = Telemetry {
-            time_ms,
-            ..Telemetry::default()
-        };
-        m.receive_us(stamp_us + 540, &frame(100, &Message::Telemetry(t)));
-        let truth = EmuTruth {
-            time_ms,
-            ..EmuTruth::default()
-        };
+        burst_at(&mut m, stamp_us, (k * 20) as u32, 540, 720);
         last_truth_us = stamp_us + 720;
-        m.receive_us(last_truth_us, &frame(101, &Message::EmuTruth(truth)));
     }
     sent(&mut m);
     let teleop = Command::Teleop {
