@@ -338,11 +338,12 @@ type Pair = ((f64, f64), (f64, f64));
 
 /// The similarity transform that maps internal positions onto the world (least squares over
 /// the cells' places): world = scale R(rotation) (internal - from) + to. The scale is there
-/// because the map's size follows the odometry's translational error (20-25 %, §4.5.3): over
-/// seeds 1-10 the internal map is 4-40 % larger than the world (scale 0.71-0.96), and a rigid
-/// fit left that as residual and put the `true_pose` counterfactual's pose inside the ring of
-/// cells the map has near the walls (17-42 % of the cells then lay where the body cannot
-/// stand; 1-9 of their places do).
+/// because the map's size is not the world's: over seeds 1-10 the internal map is 4-40 %
+/// larger (scale 0.71-0.96; whether from the odometry's 20-25 % translational error or the
+/// model's own updates is not examined), and a rigid fit left that as residual and put the
+/// `true_pose` counterfactual's pose inside the ring of cells the map has near the walls
+/// (17-42 % of the cells' internal positions then lay where the body cannot stand, while
+/// only 1-9 cells' places did).
 #[derive(Clone, Copy, Debug)]
 struct MapFit {
     from: (f64, f64),
