@@ -80,6 +80,14 @@ pub struct Stats {
     pub or_residual: u64,
     /// See `or_untrusted`: orientation corrections applied.
     pub or_corrections: u64,
+    /// Cell moves: adaptation steps that moved the winner or a neighbour by a rate above 0.
+    pub cell_moves: u64,
+    /// Edges created by a winner change (eq. 7, the two cells were not joined).
+    pub edges_created: u64,
+    /// Edges refreshed to confidence 1 by a winner change (eq. 7, already joined).
+    pub edges_refreshed: u64,
+    /// Edges worn by a winner change (eq. 8, each of the new winner's other edges).
+    pub edges_worn: u64,
 }
 
 impl Stats {
@@ -108,6 +116,7 @@ pub struct QtModel {
     learning: VecDeque<Vec<f64>>,
     last_seq_winner: Option<u32>,
     winner: Option<u32>,
+    map_static: bool,
     stats: Stats,
     scratch: Vec<u32>,
     buf: Vec<f64>,
@@ -128,6 +137,7 @@ impl QtModel {
             learning: VecDeque::new(),
             last_seq_winner: None,
             winner: None,
+            map_static: false,
             stats: Stats::default(),
             scratch: Vec::new(),
             buf: Vec::new(),
@@ -163,6 +173,27 @@ impl QtModel {
     /// Counters.
     pub fn stats(&self) -> &Stats {
         &self.stats
+    }
+
+    /// The adaptation rates' current state (eps_o, eps_n): eps_o decays by `eps_delta` on
+    /// every hit and returns to the parameter on a miss, eps_n is the parameter after a miss
+    /// and 0 after a hit.
+    pub fn rates(&self) -> (f64, f64) {
+        (self.eps_o, self.eps_n)
+    }
+
+    /// Whether the map is static (see [`QtModel::set_static`]).
+    pub fn is_static(&self) -> bool {
+        self.map_static
+    }
+
+    /// A static map (§5.3's "static QT-maps"): the learning set is still presented and its
+    /// winner searched (the cell the robot is at), and the correlations still run (they are
+    /// localisation), but nothing of the map changes: no cell moves, none is inserted or
+    /// removed, no edge is created, refreshed or worn, and the cells' update counts, errors
+    /// and the adaptation rates stay as they are.
+    pub fn set_static(&mut self, on: bool) {
+        self.map_static = on;
     }
 
     /// Switch the correlations (the §4.5.3 ablation) or change any parameter that keeps the
@@ -344,14 +375,28 @@ impl QtModel {
 
     fn adapt(&mut self, s: &[f64], first: bool) {
         let p = &self.params;
-        self.stats.adaptations += 1;
         let at = Network::pos_of(s);
+        if self.map_static {
+            // Only the winner of the first presentation: where the robot is.
+            if let (true, Some((w, _))) =
+                (first, self.net.winner(s, at, p.g_search, &mut self.scratch))
+            {
+                self.last_seq_winner = Some(w);
+                self.winner = Some(w);
+            }
+            return;
+        }
+        self.stats.adaptations += 1;
         let found = self.net.winner(s, at, p.g_search, &mut self.scratch);
         let (winner, d_opt) = match found {
             Some((w, d)) if d <= p.rho_s => {
                 let slow = |u: u32| if u >= p.n_fix { p.fix_slowdown } else { 1.0 };
                 let u = self.net.cell(w).map_or(0, |c| c.updates);
-                self.net.move_toward(w, s, self.eps_o * slow(u));
+                let rate = self.eps_o * slow(u);
+                self.net.move_toward(w, s, rate);
+                if rate > 0.0 {
+                    self.stats.cell_moves += 1;
+                }
                 if self.eps_n > 0.0 {
                     let ns: Vec<u32> = self
                         .net
@@ -360,6 +405,7 @@ impl QtModel {
                     for n in ns {
                         let u = self.net.cell(n).map_or(0, |c| c.updates);
                         self.net.move_toward(n, s, self.eps_n * slow(u));
+                        self.stats.cell_moves += 1;
                     }
                 }
                 (w, d)
@@ -400,6 +446,16 @@ impl QtModel {
         if first {
             if let Some(old) = self.last_seq_winner {
                 if old != winner && self.net.cell(winner).is_some() {
+                    if let (Some(c), true) = (self.net.cell(winner), self.net.cell(old).is_some()) {
+                        let joined = c.edges.iter().any(|e| e.0 == old);
+                        let worn = c.edges.len() - usize::from(joined);
+                        self.stats.edges_worn += worn as u64;
+                        if joined {
+                            self.stats.edges_refreshed += 1;
+                        } else {
+                            self.stats.edges_created += 1;
+                        }
+                    }
                     let removed = self.net.winner_changed(winner, old, self.params.a_red);
                     self.stats.removed += removed.len() as u64;
                 }
@@ -578,6 +634,54 @@ mod tests {
             m.observe(&s).expect("valid sample");
             after(m);
         }
+    }
+
+    /// A static map (§5.3): a second walk out and back changes no cell, edge, update count
+    /// or adaptation rate, while the winner still follows the robot and the correlations
+    /// still run; the same walk on a learning map moves cells and creates or refreshes edges.
+    #[test]
+    fn a_static_map_changes_nothing_but_still_localises() {
+        let snapshot = |m: &QtModel| {
+            let net = m.network();
+            net.cells()
+                .map(|(id, c)| (id, c.s.clone(), c.updates, c.d_total, c.edges.clone()))
+                .collect::<Vec<_>>()
+        };
+        let mut m = QtModel::new(Params::default(), Pose::default()).expect("valid");
+        out_and_back(&mut m, |_| {});
+        let mut learning = m.clone();
+        let s = learning.stats().clone();
+        out_and_back(&mut learning, |_| {});
+        let l = learning.stats();
+        assert!(l.edges_created + l.edges_refreshed > s.edges_created + s.edges_refreshed);
+        assert!(l.cell_moves > s.cell_moves, "{l:?}");
+        m.set_static(true);
+        assert!(m.is_static());
+        let (before, stats, rates) = (snapshot(&m), m.stats().clone(), m.rates());
+        let mut winners = std::collections::HashSet::new();
+        out_and_back(&mut m, |m| {
+            winners.extend(m.winner());
+        });
+        assert_eq!(snapshot(&m), before, "the map changed");
+        assert_eq!(m.rates(), rates);
+        let after = m.stats();
+        let learned = |s: &Stats| {
+            [
+                s.adaptations,
+                s.cell_moves,
+                s.edges_created,
+                s.edges_refreshed,
+                s.edges_worn,
+                s.spontaneous + s.statistical + s.removed + s.misses,
+            ]
+        };
+        assert_eq!(learned(after), learned(&stats));
+        assert!(
+            winners.len() > 3,
+            "the winner follows the walk: {winners:?}"
+        );
+        assert!(after.pos_corrections > stats.pos_corrections);
+        assert_eq!(after.or_reached(), after.samples);
     }
 
     /// §4.2.4's "correct to within a certain tolerance": at a zero tolerance the heading is

@@ -189,6 +189,94 @@ pub struct TestRun {
     /// The correlations over the run's samples (`or_applies` is the orientation correlation
     /// that would hold the heading against the static drift).
     pub correlation: CorrelationJudge,
+    /// What of the map changed during the run (judged only, never used by the robot).
+    pub map: MapChanges,
+}
+
+/// What of the model's map changed over a stretch of samples: the model's own counters
+/// (differences of `world_model::Stats`) and a comparison of the network before and after.
+/// Judged only, never used by the robot.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct MapChanges {
+    /// Adaptation steps that moved a cell (winner or neighbour) by a rate above 0.
+    pub cell_moves: u64,
+    /// Cells whose position differs after the stretch (of those there before).
+    pub cells_moved: usize,
+    /// The largest of their displacements, metres.
+    pub max_moved_m: f64,
+    /// Cells inserted (spontaneous and statistical).
+    pub inserted: u64,
+    /// Cells removed.
+    pub removed: u64,
+    /// Edges created, refreshed to 1 and worn by winner changes (eqs. 7-8).
+    pub edges_created: u64,
+    /// See `edges_created`.
+    pub edges_refreshed: u64,
+    /// See `edges_created`.
+    pub edges_worn: u64,
+    /// Edges (cell pairs) present after the stretch and not before, and before and not after.
+    pub edges_new: usize,
+    /// See `edges_new`.
+    pub edges_gone: usize,
+    /// Sum of the cells' update counts added over the stretch.
+    pub updates: u64,
+    /// The adaptation rates (eps_o, eps_n) at the end of the stretch.
+    pub rates: (f64, f64),
+}
+
+/// The map as the judge remembers it: cells' positions and update counts, the edges.
+struct MapSnapshot {
+    stats: Stats,
+    cells: HashMap<u32, ((f64, f64), u32)>,
+    edges: std::collections::HashSet<(u32, u32)>,
+}
+
+impl MapSnapshot {
+    fn new(m: &QtModel) -> Self {
+        let net = m.network();
+        let cells = net
+            .cells()
+            .map(|(id, c)| (id, (net.position(id), c.updates)))
+            .collect();
+        let edges = net
+            .cells()
+            .flat_map(|(id, c)| c.edges.iter().map(move |e| (id.min(e.0), id.max(e.0))))
+            .collect();
+        MapSnapshot {
+            stats: m.stats().clone(),
+            cells,
+            edges,
+        }
+    }
+
+    /// What changed from this snapshot to `m`.
+    fn changes(&self, m: &QtModel) -> MapChanges {
+        let now = MapSnapshot::new(m);
+        let (a, b) = (&self.stats, &now.stats);
+        let mut out = MapChanges {
+            cell_moves: b.cell_moves - a.cell_moves,
+            inserted: b.spontaneous + b.statistical - a.spontaneous - a.statistical,
+            removed: b.removed - a.removed,
+            edges_created: b.edges_created - a.edges_created,
+            edges_refreshed: b.edges_refreshed - a.edges_refreshed,
+            edges_worn: b.edges_worn - a.edges_worn,
+            edges_new: now.edges.difference(&self.edges).count(),
+            edges_gone: self.edges.difference(&now.edges).count(),
+            rates: m.rates(),
+            ..MapChanges::default()
+        };
+        for (id, (p, u)) in &self.cells {
+            if let Some((q, v)) = now.cells.get(id) {
+                let d = (p.0 - q.0).hypot(p.1 - q.1);
+                if d > 0.0 {
+                    out.cells_moved += 1;
+                    out.max_moved_m = out.max_moved_m.max(d);
+                }
+                out.updates += u64::from(v.saturating_sub(*u));
+            }
+        }
+        out
+    }
 }
 
 /// The correlations (§4.2.4) over a stretch of samples. The orientation correlation's gates are
@@ -837,6 +925,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
     r.take_judge();
     let mut runs = Vec::new();
     for _ in 0..o.runs {
+        let snapshot = MapSnapshot::new(&r.model);
         let mut legs: [Leg; 2] = Default::default();
         for (i, target) in [away, home].into_iter().enumerate() {
             let mut leg = r.leg(target, &mut exec, o.leg_cap, o.step_base)?;
@@ -852,6 +941,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         };
         runs.push(TestRun {
             correlation: r.take_judge(),
+            map: snapshot.changes(&r.model),
             localisation_error_m: weighted(|l| l.localisation_error_m),
             heading_error_deg: weighted(|l| l.heading_error_deg),
             samples: legs.iter().map(|l| l.samples).sum(),
