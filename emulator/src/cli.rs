@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use robot_firmware::{Profile, ALICE, KHEPERA, MICRO_RATO};
 
-use crate::alice::navigation::StepBase;
+use crate::alice::navigation::{StepBase, TestMap};
 use crate::fault::{FaultConfig, Stall};
 use crate::fleet::RobotSpec;
 use crate::link::{EmulatorOptions, ServeOptions, Speed};
@@ -536,10 +536,14 @@ pub struct RunArgs {
     /// first-over-fifth factors without any learning).
     #[arg(long = "no-learning")]
     pub no_learning: bool,
-    /// alice-navigation: the map keeps learning during the test runs (cells adapt, grow and
-    /// go as while exploring: the thesis's world model has no separate application phase)
-    /// instead of being frozen as §5.3's static maps.
-    #[arg(long = "adapting-map")]
+    /// alice-navigation: what the map does during the test runs: `frozen` (the default:
+    /// no adaptation or insertion, but winner changes still refresh and create edges),
+    /// `static` (nothing of the map changes; localisation still runs) or `adapting` (it keeps
+    /// learning as while exploring).
+    #[arg(long = "test-map", value_enum, default_value_t = TestMap::Frozen)]
+    pub test_map: TestMap,
+    /// alice-navigation: the same as `--test-map adapting`.
+    #[arg(long = "adapting-map", conflicts_with = "test_map")]
     pub adapting_map: bool,
     /// alice-navigation: a counterfactual to judge the navigator: during the test runs the
     /// internal pose is held at the truth (carried into the map's frame) after every sample.

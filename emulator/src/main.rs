@@ -326,7 +326,11 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
         options.static_drift_deg_per_m = d;
     }
     options.learn = !args.no_learning;
-    options.static_map = !args.adapting_map;
+    options.test_map = if args.adapting_map {
+        emulator::alice::navigation::TestMap::Adapting
+    } else {
+        args.test_map
+    };
     options.true_pose = args.true_pose;
     options.step_base = args.step_from;
     let r = navigation(&options)?;
