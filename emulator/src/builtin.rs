@@ -148,6 +148,8 @@ pub fn load(name: &str, opts: &LoadOptions) -> Result<Arena, ArenaError> {
         forage()
     } else if crate::alice::arena::is_builtin(name) {
         Ok(crate::alice::arena::alice())
+    } else if name == crate::alice::arena::BUILTIN_ALICE_NAVIGATION {
+        Ok(crate::alice::arena::navigation_scene())
     } else {
         crate::arena::load(Path::new(name), opts)
     }

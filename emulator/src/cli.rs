@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use robot_firmware::{Profile, ALICE, KHEPERA, MICRO_RATO};
 
-use crate::alice::navigation::{StepBase, TestMap};
+use crate::alice::navigation::{Drift, Scene, StepBase, TestMap};
 use crate::fault::{FaultConfig, Stall};
 use crate::fleet::RobotSpec;
 use crate::link::{EmulatorOptions, ServeOptions, Speed};
@@ -230,7 +230,8 @@ impl BenchArgs {
 pub struct WorldArgs {
     /// Arena file: CiberRato lab .xml, micromouse maze .txt, ROS map .yaml, or an ASCII grid;
     /// or a built-in one: `builtin:micro-rato-99`, `builtin:forage`, `builtin:floor-grid`,
-    /// `builtin:alice` (the default for `--profile alice`).
+    /// `builtin:alice` (the default for `--profile alice`), `builtin:alice-navigation` (seed 001
+    /// §5.3's corridors, as the thesis describes them).
     #[arg(long, default_value = crate::builtin::MICRO_RATO_99, value_name = "FILE")]
     pub arena: String,
     /// CiberRato grid file with start poses (default: found beside a `...Lab.xml`).
@@ -553,6 +554,16 @@ pub struct RunArgs {
     /// the winner cell (`cell`, the default) or the internal pose (`pose`).
     #[arg(long = "step-from", value_enum, default_value_t = StepBase::Cell)]
     pub step_from: StepBase,
+    /// alice-navigation: the odometry's own drift: `alice` (the default: ALICE's 20-25 %
+    /// translational and up to 0.5 deg/m rotational drift, as in the §4.5 scenarios) or
+    /// `static` (§5.3's simulator: only the static drift of the test runs, `--static-drift`).
+    #[arg(long = "drift", value_enum, default_value_t = Drift::Alice)]
+    pub drift: Drift,
+    /// alice-navigation: where it runs: `pillar` (the default: the §4.5 test scene) or
+    /// `corridors` (§5.3's scene as the thesis describes it: a narrow corridor to a pocket
+    /// upper left, a narrowing one lower left, a rough right wall, jagged obstacles).
+    #[arg(long = "scene", value_enum, default_value_t = Scene::Pillar)]
+    pub scene: Scene,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -333,6 +333,8 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
     };
     options.true_pose = args.true_pose;
     options.step_base = args.step_from;
+    options.drift = args.drift;
+    options.scene = args.scene;
     let r = navigation(&options)?;
     if args.json {
         println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);

@@ -6,7 +6,7 @@
 use emulator::alice::experiments::{
     correlation, dynamic, dynamic_with, eps_o, eps_o_continued, equilibrium, ExperimentReport,
 };
-use emulator::alice::navigation::{navigation, NavOptions, NavReport, TestRun};
+use emulator::alice::navigation::{navigation, Drift, NavOptions, NavReport, Scene, TestRun};
 use world_model::Params;
 
 const SEEDS: [u64; 4] = [1, 2, 3, 4];
@@ -321,6 +321,29 @@ fn pooled(r: &[NavReport], f: fn(&TestRun) -> f64) -> f64 {
 ///   1.58, 1.60, 1.66 against a control of 1.01, 1.00, 1.00. Without the counterfactual
 ///   (`--step-from pose`) 1.41, 1.45, 1.47 against a control of 1.09, 1.07, 1.06, but not run
 ///   by run (runs 1-5: 12,309, 17,673, 15,935, 12,046, 8705 samples) and 73 of 100 legs.
+/// - §5.3's simulator "includes a 2-d model of light distributions as well as a static drift
+///   model" (`--drift static`, our reading: that drift model only, the odometry otherwise
+///   exact but for the turns' 1 %): the map then has the world's scale (the test above) and
+///   run 1 starts better localised (0.42 m, 26.5 degrees, seeds 1-40), but the orientation
+///   correlation does not hold the static drift against the frozen map: 46, 64, 70, 66
+///   degrees in runs 2-5 (1 deg/m: 7 -> 40 degrees over runs 1-5, 0 deg/m: 7 -> 12; seeds
+///   1-20; neither eps_or 0.3, or_max_shift 1.0, or_radius 0.3 nor or_max_residual 0.5 holds
+///   5 deg/m). Seeds 1-40, samples runs 1-5: 25097, 18412, 19012, 18582, 18530 against the
+///   control's 23167, 25634, 32322, 37636, 33818: run 1 over run 5 1.35, 1.44, 1.48 (time,
+///   refinements, reversals; control 0.69, 0.63, 0.61), the control's run 5 over the learned
+///   one 1.83, 2.06, 2.23 (faster in 24 of 40 seeds). So the memory does compensate what the
+///   drift costs (the control slows as the heading is lost, the learned runs 2-5 stay level),
+///   but the thesis's run 1 over run 5 is not there, and the gain is not stable across seed
+///   sets (seeds 1-20: control run 5 over learned 2.44; seeds 21-40: 1.26, 10 of 20 faster).
+///   With the map static (`--test-map static`) 0.86, 0.76, 0.82 (control 0.94, 0.92, 0.89;
+///   seeds 1-20).
+/// - In §5.3's own scene as the thesis describes it (`--scene corridors`: the test path from
+///   between jagged obstacles through a 0.7 m corridor into a pocket and back, the exploration
+///   with wall following; the next test) no gain either, seeds 1-20: with `--drift static`
+///   run 1 over run 5 1.02, 0.99, 0.95 (control 1.23, 1.20, 1.22), 118 of 200 legs (control
+///   123); under ALICE's drift 0.88, 0.90, 0.83 (control 1.09, 1.08, 1.05), 101 legs (control
+///   95). The corridor defeats the steps (legs stuck at the cap in both directions), whatever
+///   the memory has learned.
 ///
 /// Tolerance: pooled time factor >= 2 and refinement factor >= 3 over seeds 1-4, and both
 /// above the control's.
@@ -338,6 +361,63 @@ fn navigation_improves_after_four_runs() {
         lr >= 3.0 && lr > cr,
         "refinement factor {lr} (control {cr})"
     );
+}
+
+/// Why the §5.3 judge finds the internal map larger than the world: ALICE's odometry drift.
+/// The similarity fit's scale (world metres per internal metre, `map_scale`) after the 6000
+/// situations of exploration, seeds 1-10: under ALICE's drift (20-25 % translational, up to
+/// 0.5 degrees/metre rotational) 0.81, 0.96, 0.75, 0.88, 0.71, 0.83, 0.85, 0.82, 0.89, 0.79
+/// (the map 4-40 % larger), cells 0.23-0.35 m from their places after the fit; with the
+/// odometry exact but for the turns' 1 % (`--drift static`) 1.03, 1.00, 1.02, 1.00, 0.97,
+/// 1.04, 0.94, 1.01, 1.01, 1.04, cells 0.15-0.31 m off. Tolerance (seeds 1-4): exact odometry
+/// within 0.9..=1.1 in every seed; ALICE's drift below 0.97 in every seed and 0.9 in the mean.
+#[test]
+fn the_map_is_larger_than_the_world_by_the_odometrys_drift() {
+    let scale = |seed: u64, drift: Drift| {
+        let mut o = NavOptions::new(seed, Params::default());
+        // The exploration and the fit only: no test run, the first leg cut at one sample.
+        o.runs = 0;
+        o.leg_cap = 1;
+        o.drift = drift;
+        navigation(&o).expect("navigation runs").map_scale
+    };
+    let mut sum = 0.0;
+    for seed in SEEDS {
+        let (alice, exact) = (scale(seed, Drift::Alice), scale(seed, Drift::Static));
+        assert!(
+            (0.9..=1.1).contains(&exact),
+            "seed {seed}: exact odometry {exact}"
+        );
+        assert!(alice < 0.97, "seed {seed}: ALICE's drift {alice}");
+        sum += alice;
+    }
+    assert!(
+        sum / SEEDS.len() as f64 <= 0.9,
+        "ALICE's drift: mean {}",
+        sum / 4.0
+    );
+}
+
+/// §5.3's scene as the thesis describes it (`--scene corridors`, `builtin:alice-navigation`):
+/// the exploration, the wanderer with §6.2's wall following, gets through the upper-left
+/// corridor, so the test path's far end is a cell that won in the pocket beyond it. Ours,
+/// the target cell's place from the pocket's centre, seeds 1-8: 0.15, 0.18, 1.02 (the pocket
+/// never entered), 0.26, 0.27, 0.28, 0.25, 0.26 m. Tolerance: within 0.3 m in 3 of seeds 1-4.
+#[test]
+fn the_corridor_scenes_test_path_ends_beyond_the_corridor() {
+    let within = SEEDS
+        .iter()
+        .filter(|&&seed| {
+            let mut o = NavOptions::new(seed, Params::default());
+            o.runs = 0;
+            o.leg_cap = 1;
+            o.scene = Scene::Corridors;
+            o.drift = Drift::Static;
+            let r = navigation(&o).expect("navigation runs");
+            r.target_from_pocket_m.is_some_and(|m| m < 0.3)
+        })
+        .count();
+    assert!(within >= 3, "{within} of 4 seeds end in the pocket");
 }
 
 /// What the navigator does reach: planning over the QT map and executing step by step gets

@@ -30,7 +30,7 @@ pub struct Cli {
     pub port: PortArgs,
     /// An arena file to draw under the map and plan on with P (CiberRato XML, maze text, ROS
     /// YAML, ASCII grid), or a built-in one (`builtin:micro-rato-99`, `builtin:forage`,
-    /// `builtin:floor-grid`, `builtin:alice`).
+    /// `builtin:floor-grid`, `builtin:alice`, `builtin:alice-navigation`).
     /// Without --port the built-in emulator simulates it.
     #[arg(long, value_name = "FILE", global = false)]
     pub arena: Option<PathBuf>,

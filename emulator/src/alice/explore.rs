@@ -2,6 +2,8 @@
 //! (§6.2), fused by priority like its subsumption scheme: straight movement until a whisker
 //! touches, turning away from the touch, and stochastic turns. (The network-based instincts
 //! need the model's state and are not used: the scenarios judge the model, not the explorer.)
+//! Wall following ([`Follower`]) is the §5.3 corridor scene's: the wanderer alone never
+//! entered its corridor; the §4.5 scenarios keep the wanderer, as their figures were measured.
 
 use crate::rng::SimRng;
 
@@ -43,4 +45,70 @@ pub fn decide(touch: &[bool; COUNT], rng: &mut SimRng) -> Move {
         return Move::Turn(if rng.chance(0.5) { a } else { -a });
     }
     Move::Straight
+}
+
+/// Chance that a front contact starts wall following rather than a turn away (ours).
+pub const FOLLOW_P: f64 = 0.5;
+/// Samples a wall is followed before the wanderer takes over again (ours: about 20 s).
+pub const FOLLOW_SAMPLES: u32 = 60;
+/// Samples without a side contact before turning back towards the followed wall (ours).
+pub const FOLLOW_LOST: u32 = 2;
+
+/// §6.2's wall following on top of [`decide`]: a front contact either turns away (the
+/// wanderer) or puts the wall alongside and follows it for a while, turning back towards
+/// it whenever the side whiskers lose it. Narrow passages along a wall (a corridor) are then
+/// explored, which the straight-and-turn-away wanderer alone almost never enters.
+#[derive(Clone, Debug, Default)]
+pub struct Follower {
+    /// Samples left to follow; 0: wandering.
+    left: u32,
+    /// The wall's side: +1 on the left, -1 on the right.
+    side: f64,
+    /// Samples since a side whisker last touched.
+    lost: u32,
+}
+
+impl Follower {
+    /// Decide from this sample's whiskers.
+    pub fn decide(&mut self, touch: &[bool; COUNT], rng: &mut SimRng) -> Move {
+        let bearing = |i: usize| super::wrap(i as f64 * std::f64::consts::TAU / COUNT as f64);
+        let front = touch
+            .iter()
+            .enumerate()
+            .filter(|&(i, &t)| t && bearing(i).abs() < 45f64.to_radians())
+            .map(|(i, _)| bearing(i))
+            .next();
+        if self.left == 0 {
+            if let Some(c) = front {
+                if rng.chance(FOLLOW_P) {
+                    self.left = FOLLOW_SAMPLES;
+                    self.side = if rng.chance(0.5) { 1.0 } else { -1.0 };
+                    self.lost = 0;
+                    // Turn so the contact ends up at 90 degrees on the chosen side.
+                    return Move::Turn(super::wrap(c - self.side * std::f64::consts::FRAC_PI_2));
+                }
+            }
+            return decide(touch, rng);
+        }
+        self.left -= 1;
+        if let Some(c) = front {
+            // A wall ahead (a corner): put it alongside too.
+            self.lost = 0;
+            return Move::Turn(super::wrap(c - self.side * std::f64::consts::FRAC_PI_2));
+        }
+        let side_touch = touch.iter().enumerate().any(|(i, &t)| {
+            let b = bearing(i) * self.side;
+            t && (45f64.to_radians()..=135f64.to_radians()).contains(&b)
+        });
+        if side_touch {
+            self.lost = 0;
+            return Move::Straight;
+        }
+        self.lost += 1;
+        if self.lost >= FOLLOW_LOST {
+            self.lost = 0;
+            return Move::Turn(self.side * 20f64.to_radians());
+        }
+        Move::Straight
+    }
 }
