@@ -342,7 +342,9 @@ fn pooled(r: &[NavReport], f: fn(&TestRun) -> f64) -> f64 {
 ///   with wall following; the next test) no gain either, seeds 1-20: with `--drift static`
 ///   run 1 over run 5 1.02, 0.99, 0.95 (control 1.23, 1.20, 1.22), 118 of 200 legs (control
 ///   123); under ALICE's drift 0.88, 0.90, 0.83 (control 1.09, 1.08, 1.05), 101 legs (control
-///   95). The corridor defeats the steps (legs stuck at the cap in both directions), whatever
+///   95). With the pose held at the truth as well (`--true-pose`): 1.03, 1.00, 1.01 (control
+///   1.03, 1.07, 1.06), 115 of 200 legs (control 97). The corridor defeats the step execution
+///   itself (legs stuck at the cap in both directions), not only the localisation, whatever
 ///   the memory has learned.
 ///
 /// Tolerance: pooled time factor >= 2 and refinement factor >= 3 over seeds 1-4, and both

@@ -91,6 +91,31 @@ pub struct Stats {
 }
 
 impl Stats {
+    /// The counts since `earlier` (a copy taken from the same model before): what a stretch
+    /// of samples did.
+    pub fn since(&self, earlier: &Stats) -> Stats {
+        let d = |now: u64, then: u64| now.saturating_sub(then);
+        Stats {
+            samples: d(self.samples, earlier.samples),
+            adaptations: d(self.adaptations, earlier.adaptations),
+            spontaneous: d(self.spontaneous, earlier.spontaneous),
+            statistical: d(self.statistical, earlier.statistical),
+            removed: d(self.removed, earlier.removed),
+            misses: d(self.misses, earlier.misses),
+            pos_corrections: d(self.pos_corrections, earlier.pos_corrections),
+            or_untrusted: d(self.or_untrusted, earlier.or_untrusted),
+            or_no_cell: d(self.or_no_cell, earlier.or_no_cell),
+            or_no_pattern: d(self.or_no_pattern, earlier.or_no_pattern),
+            or_no_turn: d(self.or_no_turn, earlier.or_no_turn),
+            or_residual: d(self.or_residual, earlier.or_residual),
+            or_corrections: d(self.or_corrections, earlier.or_corrections),
+            cell_moves: d(self.cell_moves, earlier.cell_moves),
+            edges_created: d(self.edges_created, earlier.edges_created),
+            edges_refreshed: d(self.edges_refreshed, earlier.edges_refreshed),
+            edges_worn: d(self.edges_worn, earlier.edges_worn),
+        }
+    }
+
     /// Samples that reached the orientation correlation: each of them counts in exactly one
     /// of `or_untrusted`, `or_no_cell`, `or_no_pattern`, `or_no_turn`, `or_residual` and
     /// `or_corrections`, so this is their sum.
@@ -634,6 +659,26 @@ mod tests {
             m.observe(&s).expect("valid sample");
             after(m);
         }
+    }
+
+    /// `Stats::since` is what a stretch did: a second walk's counts are the whole run's less
+    /// the first walk's, field by field.
+    #[test]
+    fn the_counts_since_a_copy_are_the_stretch_s_own() {
+        let mut m = QtModel::new(Params::default(), Pose::default()).expect("valid");
+        out_and_back(&mut m, |_| {});
+        let first = m.stats().clone();
+        out_and_back(&mut m, |_| {});
+        let d = m.stats().since(&first);
+        assert_eq!(d.samples, 200);
+        assert_eq!(d.adaptations, m.stats().adaptations - first.adaptations);
+        assert_eq!(d.or_reached(), m.stats().or_reached() - first.or_reached());
+        assert_eq!(
+            d.edges_refreshed,
+            m.stats().edges_refreshed - first.edges_refreshed
+        );
+        assert!(d.edges_refreshed > 0, "{d:?}");
+        assert_eq!(m.stats().since(m.stats()), Stats::default());
     }
 
     /// A static map (§5.3): a second walk out and back changes no cell, edge, update count

@@ -298,14 +298,14 @@ impl MapSnapshot {
     /// What changed from this snapshot to `m`.
     fn changes(&self, m: &QtModel) -> MapChanges {
         let now = MapSnapshot::new(m);
-        let (a, b) = (&self.stats, &now.stats);
+        let d = now.stats.since(&self.stats);
         let mut out = MapChanges {
-            cell_moves: b.cell_moves - a.cell_moves,
-            inserted: b.spontaneous + b.statistical - a.spontaneous - a.statistical,
-            removed: b.removed - a.removed,
-            edges_created: b.edges_created - a.edges_created,
-            edges_refreshed: b.edges_refreshed - a.edges_refreshed,
-            edges_worn: b.edges_worn - a.edges_worn,
+            cell_moves: d.cell_moves,
+            inserted: d.spontaneous + d.statistical,
+            removed: d.removed,
+            edges_created: d.edges_created,
+            edges_refreshed: d.edges_refreshed,
+            edges_worn: d.edges_worn,
             edges_new: now.edges.difference(&self.edges).count(),
             edges_gone: self.edges.difference(&now.edges).count(),
             rates: m.rates(),
@@ -389,15 +389,16 @@ impl Tally {
     fn judge(&self, now: &Stats) -> CorrelationJudge {
         let n = self.samples.max(1) as f64;
         let mean = |(sum, k): (f64, u64)| sum / k.max(1) as f64;
-        let f = |count: fn(&Stats) -> u64| (count(now) - count(&self.from)) as f64 / n;
+        let d = now.since(&self.from);
+        let f = |count: u64| count as f64 / n;
         CorrelationJudge {
             samples: self.samples,
-            or_applies: f(|s| s.or_corrections),
-            or_untrusted: f(|s| s.or_untrusted),
-            or_no_cell: f(|s| s.or_no_cell),
-            or_no_pattern: f(|s| s.or_no_pattern),
-            or_no_turn: f(|s| s.or_no_turn),
-            or_residual: f(|s| s.or_residual),
+            or_applies: f(d.or_corrections),
+            or_untrusted: f(d.or_untrusted),
+            or_no_cell: f(d.or_no_cell),
+            or_no_pattern: f(d.or_no_pattern),
+            or_no_turn: f(d.or_no_turn),
+            or_residual: f(d.or_residual),
             touching: self.touching as f64 / n,
             winner_to_pose_m: mean(self.winner_to_pose),
             winner_place_to_truth_m: mean(self.winner_place),
