@@ -39,14 +39,7 @@ pub fn alice() -> Arena {
     a.walls = vec![pillar];
     // Spots at the border, of different strengths, 1 m high (the thesis: "two respectively
     // three light sources are mounted at the border").
-    a.lights = [(0.15, 2.85, 1.0), (2.85, 2.0, 0.8), (1.0, 0.15, 0.6)]
-        .into_iter()
-        .map(|(x, y, i)| Light {
-            position: Point::new(x, y),
-            height_m: 1.0,
-            intensity: i,
-        })
-        .collect();
+    a.lights = lamps([(0.15, 2.85, 1.0), (2.85, 2.0, 0.8), (1.0, 0.15, 0.6)]);
     a.starts = vec![Pose {
         x: 0.6,
         y: 0.6,
@@ -137,14 +130,7 @@ pub fn navigation_scene() -> Arena {
         });
     }
     a.walls = walls;
-    a.lights = [(2.2, 0.1, 1.0), (0.1, 2.9, 0.6), (3.85, 2.9, 0.7)]
-        .into_iter()
-        .map(|(x, y, i)| Light {
-            position: Point::new(x, y),
-            height_m: 1.0,
-            intensity: i,
-        })
-        .collect();
+    a.lights = lamps([(2.2, 0.1, 1.0), (0.1, 2.9, 0.6), (3.85, 2.9, 0.7)]);
     a.starts = vec![Pose {
         x: 3.4,
         y: 1.5,
@@ -160,6 +146,17 @@ pub const NAV_SCENE_M: (f64, f64) = (4.0, 3.0);
 /// The far end of its test path: the pocket beyond the upper-left corridor (truth: the
 /// experimenter's choice of the path, never the robot's).
 pub const CORRIDOR_TARGET: (f64, f64) = (0.65, 2.3);
+
+/// Spots 1 m high at (x, y) with their relative intensities.
+fn lamps<const N: usize>(at: [(f64, f64, f64); N]) -> Vec<Light> {
+    at.into_iter()
+        .map(|(x, y, i)| Light {
+            position: Point::new(x, y),
+            height_m: 1.0,
+            intensity: i,
+        })
+        .collect()
+}
 
 /// A wall 4 cm thick along `a`-`b`.
 fn thick(a: Point, b: Point) -> Wall {
