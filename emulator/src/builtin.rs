@@ -146,10 +146,8 @@ pub fn load(name: &str, opts: &LoadOptions) -> Result<Arena, ArenaError> {
         Ok(floor_grid())
     } else if name == crate::forage::BUILTIN_FORAGE {
         forage()
-    } else if crate::alice::arena::is_builtin(name) {
-        Ok(crate::alice::arena::alice())
-    } else if name == crate::alice::arena::BUILTIN_ALICE_NAVIGATION {
-        Ok(crate::alice::arena::navigation_scene())
+    } else if let Some(a) = crate::alice::arena::builtin(name) {
+        Ok(a)
     } else {
         crate::arena::load(Path::new(name), opts)
     }

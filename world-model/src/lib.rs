@@ -19,6 +19,6 @@ pub mod params;
 pub mod situation;
 
 pub use model::{QtModel, Sample, Stats};
-pub use network::{Cell, Network};
+pub use network::{Cell, Network, WinnerChange};
 pub use params::{OrMethod, ParamError, Params, PosDistance};
 pub use situation::Pose;

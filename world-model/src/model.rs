@@ -470,20 +470,16 @@ impl QtModel {
         }
         if first {
             if let Some(old) = self.last_seq_winner {
-                if old != winner && self.net.cell(winner).is_some() {
-                    if let (Some(c), true) = (self.net.cell(winner), self.net.cell(old).is_some()) {
-                        let joined = c.edges.iter().any(|e| e.0 == old);
-                        let worn = c.edges.len() - usize::from(joined);
-                        self.stats.edges_worn += worn as u64;
-                        if joined {
-                            self.stats.edges_refreshed += 1;
-                        } else {
-                            self.stats.edges_created += 1;
-                        }
+                let change = self.net.winner_changed(winner, old, self.params.a_red);
+                if change.joined {
+                    self.stats.edges_worn += change.worn as u64;
+                    if change.created {
+                        self.stats.edges_created += 1;
+                    } else {
+                        self.stats.edges_refreshed += 1;
                     }
-                    let removed = self.net.winner_changed(winner, old, self.params.a_red);
-                    self.stats.removed += removed.len() as u64;
                 }
+                self.stats.removed += change.removed.len() as u64;
             }
             self.last_seq_winner = Some(winner);
             self.winner = Some(winner);

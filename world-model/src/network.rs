@@ -232,15 +232,18 @@ impl Network {
 
     /// The winner changed from `old` to `new` (eqs. 7-8): a(new, old) = 1, new's m other
     /// edges each lose a_red / m, edges at <= 0 vanish, and a neighbour left with no edge at
-    /// all is removed. Returns the cells removed.
-    pub fn winner_changed(&mut self, new: u32, old: u32, a_red: f64) -> Vec<u32> {
-        let mut removed = Vec::new();
+    /// all is removed. Says what it did (nothing when the two are one cell or either is
+    /// gone).
+    pub fn winner_changed(&mut self, new: u32, old: u32, a_red: f64) -> WinnerChange {
+        let mut change = WinnerChange::default();
         if new == old || self.cell(old).is_none() {
-            return removed;
+            return change;
         }
         let Some(cell) = self.cell(new) else {
-            return removed;
+            return change;
         };
+        change.joined = true;
+        change.created = !cell.edges.iter().any(|e| e.0 == old);
         let others: Vec<(u32, f64)> = cell
             .edges
             .iter()
@@ -248,17 +251,31 @@ impl Network {
             .filter(|(n, _)| *n != old)
             .collect();
         let m = others.len();
+        change.worn = m;
         for (n, w) in others {
             let w = w - a_red / m as f64;
             self.set_edge(new, n, w);
             if w <= 0.0 && self.cell(n).is_some_and(|c| c.edges.is_empty()) {
                 self.remove(n);
-                removed.push(n);
+                change.removed.push(n);
             }
         }
         self.set_edge(new, old, 1.0);
-        removed
+        change
     }
+}
+
+/// What [`Network::winner_changed`] did.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct WinnerChange {
+    /// The two cells were joined to confidence 1 (false: nothing was done).
+    pub joined: bool,
+    /// The edge between them was new (false: an existing one was refreshed).
+    pub created: bool,
+    /// The new winner's other edges, each worn by a_red / m.
+    pub worn: usize,
+    /// Cells removed because they lost their last edge.
+    pub removed: Vec<u32>,
 }
 
 #[cfg(test)]
@@ -285,8 +302,12 @@ mod tests {
         n.set_edge(b, c, 0.5);
         n.set_edge(b, d, 0.05);
         n.set_edge(c, d, 0.5);
-        let removed = n.winner_changed(b, a, 0.2);
-        assert!(removed.is_empty());
+        let change = n.winner_changed(b, a, 0.2);
+        assert!(change.removed.is_empty());
+        assert_eq!(
+            (change.joined, change.created, change.worn),
+            (true, true, 2)
+        );
         let conf = |n: &Network, x: u32, y: u32| {
             n.cell(x)
                 .and_then(|c| c.edges.iter().find(|e| e.0 == y).map(|e| e.1))
@@ -299,8 +320,14 @@ mod tests {
         assert!(n.cell(d).is_some());
         let e = at(&mut n, 1.2, 0.0).expect("room");
         n.set_edge(b, e, 0.01);
-        let removed = n.winner_changed(b, a, 0.2);
-        assert_eq!(removed, vec![e]);
+        let change = n.winner_changed(b, a, 0.2);
+        assert_eq!(change.removed, vec![e]);
+        assert_eq!(
+            (change.created, change.worn),
+            (false, 2),
+            "b-a refreshed; c and e worn"
+        );
+        assert_eq!(n.winner_changed(b, b, 0.2), WinnerChange::default());
         assert!(n.cell(e).is_none() && n.len() == 4);
     }
 

@@ -61,9 +61,17 @@ pub fn gap_wall() -> Wall {
     )
 }
 
-/// The same name resolves in `builtin::load`.
-pub fn is_builtin(name: &str) -> bool {
-    Path::new(name) == Path::new(BUILTIN_ALICE)
+/// The ALICE arena `name` names (`builtin:alice`, `builtin:alice-navigation`), for
+/// `builtin::load`; None for any other name.
+pub fn builtin(name: &str) -> Option<Arena> {
+    let name = Path::new(name);
+    if name == Path::new(BUILTIN_ALICE) {
+        Some(alice())
+    } else if name == Path::new(BUILTIN_ALICE_NAVIGATION) {
+        Some(navigation_scene())
+    } else {
+        None
+    }
 }
 
 /// The §5.3 navigation scene, drawn from the thesis's description (its figure 15 is not in
@@ -81,7 +89,7 @@ pub fn is_builtin(name: &str) -> bool {
 /// a pocket (x 0-1.3, y 1.6-3 m) that only the corridor reaches: the test path's far end is
 /// there ([`CORRIDOR_TARGET`]). The lower-left corridor narrows from 0.95 to 0.6 m between
 /// the floor wall and an inclined wall. The right wall is a zigzag of 6 cm in 15 cm; three
-/// obstacles of 0.12-0.28 m radius have jagged outlines; the start is between them. Lamps: a
+/// obstacles of 0.1-0.25 m radius have jagged outlines; the start is between them. Lamps: a
 /// strong one low on the bottom wall (the open space), one in the pocket's corner shining
 /// along the corridor, one in the upper right behind the obstacles.
 pub fn navigation_scene() -> Arena {

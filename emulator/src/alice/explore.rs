@@ -21,6 +21,11 @@ pub enum Move {
     Turn(f64),
 }
 
+/// Whisker `i`'s direction from forward, radians (not wrapped).
+fn bearing(i: usize) -> f64 {
+    i as f64 * std::f64::consts::TAU / COUNT as f64
+}
+
 /// Decide from this sample's whiskers.
 pub fn decide(touch: &[bool; COUNT], rng: &mut SimRng) -> Move {
     // Whiskers within 75 degrees of forward (indices 0..=5 and 19..=23).
@@ -28,7 +33,7 @@ pub fn decide(touch: &[bool; COUNT], rng: &mut SimRng) -> Move {
     let (mut sx, mut sy, mut any) = (0.0, 0.0, false);
     for (i, &t) in touch.iter().enumerate() {
         if t && front(i) {
-            let a = i as f64 * std::f64::consts::TAU / COUNT as f64;
+            let a = bearing(i);
             sx += a.cos();
             sy += a.sin();
             any = true;
@@ -71,12 +76,13 @@ pub struct Follower {
 impl Follower {
     /// Decide from this sample's whiskers.
     pub fn decide(&mut self, touch: &[bool; COUNT], rng: &mut SimRng) -> Move {
-        let bearing = |i: usize| super::wrap(i as f64 * std::f64::consts::TAU / COUNT as f64);
+        // Whisker directions in (-pi, pi]: left positive, right negative.
+        let dir = |i: usize| super::wrap(bearing(i));
         let front = touch
             .iter()
             .enumerate()
-            .filter(|&(i, &t)| t && bearing(i).abs() < 45f64.to_radians())
-            .map(|(i, _)| bearing(i))
+            .filter(|&(i, &t)| t && dir(i).abs() < 45f64.to_radians())
+            .map(|(i, _)| dir(i))
             .next();
         if self.left == 0 {
             if let Some(c) = front {
@@ -97,7 +103,7 @@ impl Follower {
             return Move::Turn(super::wrap(c - self.side * std::f64::consts::FRAC_PI_2));
         }
         let side_touch = touch.iter().enumerate().any(|(i, &t)| {
-            let b = bearing(i) * self.side;
+            let b = dir(i) * self.side;
             t && (45f64.to_radians()..=135f64.to_radians()).contains(&b)
         });
         if side_touch {

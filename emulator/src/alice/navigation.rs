@@ -32,8 +32,8 @@
 //! Sample by sample the report also follows the correlations ([`CorrelationJudge`]): which gate
 //! stops the orientation correlation (the model's own counts, `world_model::Stats`), and,
 //! judged from the truth, how far the winner (the centre of the position correlation's
-//! neighbourhood) is from the internal pose and its place from the truth. Two
-//! options separate the causes: `test_map` (`TestMap::Adapting`) lets the map keep learning during the
+//! neighbourhood) is from the internal pose and its place from the truth. Two options
+//! separate the causes: `test_map` (`TestMap::Adapting`) lets the map keep learning during the
 //! test runs, and `true_pose` holds the internal pose at the truth in the map's frame, a
 //! counterfactual that shows what the planner and the memory do when the localisation holds.
 
@@ -459,9 +459,8 @@ struct Robot {
     /// The latest whiskers.
     touch: [bool; COUNT],
     samples: u64,
-    /// Truth, to judge only: per cell, the sum of the true positions where it won and how
-    /// often.
-    places: HashMap<u32, (f64, f64, u32)>,
+    /// Truth, to judge only: where each cell won while exploring.
+    places: Places,
     /// Truth, to judge only: the map's frame in the world, once the exploration is done.
     fit: Option<MapFit>,
     /// The correlations since the tally was last taken (the model's counters, and the truth to
@@ -471,6 +470,32 @@ struct Robot {
     true_pose: bool,
 }
 
+/// Truth, to judge only: per cell, the sum of the true positions where it won while exploring
+/// and how often; a cell's place is their mean.
+#[derive(Debug, Default)]
+struct Places(HashMap<u32, (f64, f64, u32)>);
+
+impl Places {
+    fn record(&mut self, cell: u32, at: Point) {
+        let e = self.0.entry(cell).or_insert((0.0, 0.0, 0));
+        e.0 += at.x;
+        e.1 += at.y;
+        e.2 += 1;
+    }
+
+    /// Where `cell` won on average, and how often (None: it never won).
+    fn of(&self, cell: u32) -> Option<((f64, f64), u32)> {
+        let &(x, y, k) = self.0.get(&cell)?;
+        let n = f64::from(k);
+        Some(((x / n, y / n), k))
+    }
+
+    /// `cell`'s place's distance from `to`.
+    fn distance(&self, cell: u32, to: (f64, f64)) -> Option<f64> {
+        self.of(cell).map(|((x, y), _)| (x - to.0).hypot(y - to.1))
+    }
+}
+
 /// A cell's internal position and its place in the world.
 type Pair = ((f64, f64), (f64, f64));
 
@@ -478,10 +503,10 @@ type Pair = ((f64, f64), (f64, f64));
 /// the cells' places): world = scale R(rotation) (internal - from) + to. The scale is there
 /// because the map's size is not the world's: over seeds 1-10 the internal map is 4-40 %
 /// larger (scale 0.71-0.96; the odometry's drift: with the odometry exact, `Drift::Static`,
-/// 0.94-1.04, test `the_map_is_larger_than_the_world_by_the_odometrys_drift`), and a rigid fit left that as residual and put the
-/// `true_pose` counterfactual's pose inside the ring of cells the map has near the walls
-/// (17-42 % of the cells' internal positions then lay where the body cannot stand, while
-/// only 1-9 cells' places did).
+/// 0.94-1.04, test `the_map_is_larger_than_the_world_by_the_odometrys_drift`), and a rigid
+/// fit left that as residual and put the `true_pose` counterfactual's pose inside the ring of
+/// cells the map has near the walls (17-42 % of the cells' internal positions then lay where
+/// the body cannot stand, while only 1-9 cells' places did).
 #[derive(Clone, Copy, Debug)]
 struct MapFit {
     from: (f64, f64),
@@ -641,9 +666,8 @@ impl Robot {
             let (x, y) = net.position(w);
             t.winner_to_pose.0 += (x - pose.x).hypot(y - pose.y);
             t.winner_to_pose.1 += 1;
-            if let Some(&(sx, sy, k)) = self.places.get(&w) {
-                let k = f64::from(k);
-                t.winner_place.0 += (sx / k - self.body.at.x).hypot(sy / k - self.body.at.y);
+            if let Some(d) = self.places.distance(w, (self.body.at.x, self.body.at.y)) {
+                t.winner_place.0 += d;
                 t.winner_place.1 += 1;
             }
         }
@@ -664,10 +688,7 @@ impl Robot {
         for _ in 0..samples {
             self.sample(&mut m)?;
             if let Some(w) = self.model.winner() {
-                let e = self.places.entry(w).or_insert((0.0, 0.0, 0));
-                e.0 += self.body.at.x;
-                e.1 += self.body.at.y;
-                e.2 += 1;
+                self.places.record(w, self.body.at);
             }
             if let Motion::Wander(turn) = &mut m {
                 if turn.abs() <= 1e-9 {
@@ -707,9 +728,8 @@ impl Robot {
         let fit = self.fit?;
         let aim = fit.world(self.model.network().position(sub));
         let outside = !self.body_fits(Point::new(aim.0, aim.1));
-        let beyond = self.places.get(&sub).is_some_and(|&(x, y, k)| {
-            let k = f64::from(k);
-            let (dx, dy) = (x / k - self.body.at.x, y / k - self.body.at.y);
+        let beyond = self.places.of(sub).is_some_and(|((x, y), _)| {
+            let (dx, dy) = (x - self.body.at.x, y - self.body.at.y);
             let turn = super::wrap(dy.atan2(dx) - self.body.heading - bearing);
             let scale = dx.hypot(dy) / dist.max(1e-9);
             turn.abs() > 50f64.to_radians() || !(0.7..=1.4).contains(&scale)
@@ -912,7 +932,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         arena,
         touch: [false; COUNT],
         samples: 0,
-        places: HashMap::new(),
+        places: Places::default(),
         fit: None,
         tally: Tally::default(),
         true_pose: false,
@@ -923,8 +943,8 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
     let pairs: Vec<_> = net
         .cells()
         .filter_map(|(id, _)| {
-            let &(x, y, n) = r.places.get(&id)?;
-            Some((net.position(id), (x / n as f64, y / n as f64)))
+            let (place, _) = r.places.of(id)?;
+            Some((net.position(id), place))
         })
         .collect();
     let fit = MapFit::new(&pairs);
@@ -959,36 +979,29 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         .min_by(|&a, &b| gap(a, (start.x, start.y)).total_cmp(&gap(b, (start.x, start.y))))
         .ok_or("the exploration made no cell in the open")?;
     let hp = net.position(home);
-    let away = match o.scene {
+    // The experimenter's path. The corridor scene's far end is the cell that won nearest the
+    // pocket's centre (truth), among those that won at least `CORRIDOR_TARGET_WINS` times
+    // (the pocket is reached only through the corridor, so its cells win less often than the
+    // median, and a 1.3 m pocket has little room where no whisker touches).
+    let (away, target_from_pocket_m) = match o.scene {
         Scene::Pillar => open
             .iter()
             .copied()
-            .max_by(|&a, &b| gap(a, hp).total_cmp(&gap(b, hp))),
-        // The experimenter's path: the cell that won nearest the pocket's centre (truth),
-        // among those that won at least `CORRIDOR_TARGET_WINS` times (the pocket is reached
-        // only through the corridor, so its cells win less often than the median, and a
-        // 1.3 m pocket has little room where no whisker touches).
-        Scene::Corridors => {
-            let off = |id: u32| {
-                r.places
-                    .get(&id)
-                    .filter(|p| p.2 >= CORRIDOR_TARGET_WINS)
-                    .map_or(f64::INFINITY, |&(x, y, k)| {
-                        let k = f64::from(k);
-                        (x / k - CORRIDOR_TARGET.0).hypot(y / k - CORRIDOR_TARGET.1)
-                    })
-            };
-            net.cells()
-                .map(|(id, _)| id)
-                .min_by(|&a, &b| off(a).total_cmp(&off(b)))
-        }
-    }
-    .ok_or("the exploration made no cell in the open")?;
+            .max_by(|&a, &b| gap(a, hp).total_cmp(&gap(b, hp)))
+            .map(|away| (away, None))
+            .ok_or("the exploration made no cell in the open")?,
+        Scene::Corridors => net
+            .cells()
+            .filter_map(|(id, _)| {
+                let (_, wins) = r.places.of(id)?;
+                let d = r.places.distance(id, CORRIDOR_TARGET)?;
+                (wins >= CORRIDOR_TARGET_WINS).then_some((id, d))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(away, d)| (away, Some(d)))
+            .ok_or("the exploration made no cell that won often enough to end the test path")?,
+    };
     let path_m = gap(away, hp);
-    let target_place_m = r.places.get(&away).map(|&(x, y, k)| {
-        let k = f64::from(k);
-        (x / k - CORRIDOR_TARGET.0).hypot(y / k - CORRIDOR_TARGET.1)
-    });
     let (cells, edges) = (net.len(), net.edges().count());
     r.fit = fit;
     r.true_pose = o.true_pose;
@@ -1046,9 +1059,7 @@ pub fn navigation(o: &NavOptions) -> Result<NavReport, String> {
         start_cell: home,
         target_cell: away,
         path_m,
-        target_from_pocket_m: (o.scene == Scene::Corridors)
-            .then_some(target_place_m)
-            .flatten(),
+        target_from_pocket_m,
         map_rotation_deg: fit.map_or(0.0, |f| f.rotation.to_degrees()),
         map_fit_residual_m: fit.map_or(0.0, |f| f.residual_m),
         map_scale: fit.map_or(1.0, |f| f.scale),
