@@ -204,6 +204,17 @@ fn eps_o_runs(
 
 /// §4.5.3: both correlations, without the position correlation, without the orientation one.
 pub fn correlation(seed: u64, params: &Params) -> Result<ExperimentReport, String> {
+    correlation_with(seed, params, true)
+}
+
+/// [`correlation`] with the odometry's drift on or off (off: the odometry is exact but for 1 %
+/// of each turn, so the runs show what each correlation costs where there is little to
+/// correct; the plain odometry's error is then the run with neither).
+pub fn correlation_with(
+    seed: u64,
+    params: &Params,
+    drift: bool,
+) -> Result<ExperimentReport, String> {
     let mut runs = Vec::new();
     let mut wall = 0.0;
     for (name, pos, or) in [
@@ -214,6 +225,7 @@ pub fn correlation(seed: u64, params: &Params) -> Result<ExperimentReport, Strin
         let r = one(seed, STATIC_SAMPLES, params, |o| {
             o.params.eps_pos = pos;
             o.params.eps_or = or;
+            o.drift = drift;
         })?;
         wall += r.wall_s;
         runs.push(RunSummary::of(name, &r, LATE_FROM));
