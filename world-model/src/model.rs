@@ -5,7 +5,7 @@
 //!    frame) is applied to the internal pose, which is the corrected one;
 //! 2. correlation (§4.2.4) against the network built so far: the internal position moves by
 //!    eps_pos towards p_est, the positions of the current situation's winner (within
-//!    g_search) and its topological neighbours weighted by ln(2 + u_i) exp(-d_i^2/d_acc^2)
+//!    g_search) and its topological neighbours weighted by ln(2 + u_i) exp(-d_i^2/pos_sigma^2)
 //!    (the thesis: "using the sensor-distances d_i ... and the number of updates u_i", no
 //!    formula; d_i over light and touch only by default, `pos_distance`); then, if
 //!    `or_pos_tolerance` trusts the position, the heading by eps_or towards the orientation
@@ -371,21 +371,29 @@ impl QtModel {
         situation(p, sample.light, sample.touch, self.pose, &mut s);
         let mut out = None;
         if let Some((w, _)) = self.net.winner(&s, at, p.g_search, &mut self.scratch) {
-            let mut members = vec![w];
-            if let Some(c) = self.net.cell(w) {
-                members.extend(c.edges.iter().map(|e| e.0));
-            }
+            let net = &self.net;
             let part = match p.pos_distance {
                 PosDistance::Situation => s.len(),
                 PosDistance::Sensor => p.lights + p.touches,
             };
+            let members = || {
+                let edges = net.cell(w).into_iter().flat_map(|c| c.edges.iter());
+                std::iter::once(w)
+                    .chain(edges.map(|e| e.0))
+                    .filter_map(|id| net.cell(id).map(|c| (id, c)))
+            };
+            // The weights are taken relative to the best match, exp(-(d^2 - d_min^2) / sigma^2):
+            // the same estimate, but no weight underflows to zero when every d_i is large.
+            let d_min = members()
+                .map(|(_, c)| net.distance_part(&c.s, &s, part))
+                .fold(f64::INFINITY, f64::min);
             let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
-            for id in members {
-                let Some(c) = self.net.cell(id) else { continue };
-                let d = self.net.distance_part(&c.s, &s, part);
+            for (id, c) in members() {
+                let d = net.distance_part(&c.s, &s, part);
                 let u = c.updates as f64;
-                let wt = (1.0 + u).ln_1p() * (-(d * d) / (p.d_acc * p.d_acc)).exp();
-                let (x, y) = self.net.position(id);
+                let excess = (d * d - d_min * d_min) / (p.pos_sigma * p.pos_sigma);
+                let wt = (1.0 + u).ln_1p() * (-excess).exp();
+                let (x, y) = net.position(id);
                 sx += wt * x;
                 sy += wt * y;
                 sw += wt;
@@ -633,6 +641,67 @@ mod tests {
         assert!(p.set("or_pos_tolerance", "-1").is_err());
         assert!(p.set("or_pos_tolerance", "NaN").is_err());
         assert!(p.set("or_pos_tolerance", "inf").is_ok());
+        assert!(p.set("pos_sigma", "0").is_err());
+        assert!(p.set("pos_sigma", "-0.1").is_err());
+        assert!(p.set("pos_sigma", "inf").is_err());
+        p.set("pos_sigma", "0.1").expect("in range");
+        assert_eq!(p.pos_sigma, 0.1);
+    }
+
+    /// §4.2.4's p_est leans on the cells whose readings match best: three cells 0.3 m apart in
+    /// a row, joined in a chain, the pose at the middle one (so it wins: the search weighs
+    /// the position) and the readings those of the cell at 0.6 m, a lamp 0.8 m off the row. With the default
+    /// `pos_sigma` the estimate is at that cell; with weights as wide as d_acc (the earlier
+    /// default) it is pulled back towards the middle of the chain.
+    #[test]
+    fn the_position_estimate_follows_the_best_matching_cell() {
+        // A lamp just beside the row, so the three places' rings differ clearly.
+        let ring = |x: f64, y: f64| -> Vec<f64> {
+            let bearing = (0.8 - y).atan2(0.3 - x);
+            (0..24)
+                .map(|i| {
+                    let off = wrap(bearing - i as f64 * std::f64::consts::TAU / 24.0);
+                    (-(off * off) / 0.1).exp()
+                })
+                .collect()
+        };
+        let estimate = |pos_sigma: f64| {
+            let p = Params {
+                pos_sigma,
+                ..Params::default()
+            };
+            let mut m = QtModel::new(p.clone(), Pose::default()).expect("valid");
+            let touch = vec![false; 24];
+            let mut ids = Vec::new();
+            for x in [0.0, 0.3, 0.6] {
+                let mut s = Vec::new();
+                let at = Pose {
+                    x,
+                    y: 0.0,
+                    heading: 0.0,
+                };
+                situation(&p, &ring(x, 0.0), &touch, at, &mut s);
+                ids.push(m.net.insert(s, 0.0).expect("room"));
+            }
+            m.net.set_edge(ids[0], ids[1], 1.0);
+            m.net.set_edge(ids[1], ids[2], 1.0);
+            m.relocate(Pose {
+                x: 0.3,
+                y: 0.0,
+                heading: 0.0,
+            });
+            let light = ring(0.6, 0.0);
+            let sample = Sample {
+                light: &light,
+                touch: &touch,
+                odometry: Pose::default(),
+            };
+            m.position_estimate(&sample).expect("an estimate").0
+        };
+        let sharp = estimate(Params::default().pos_sigma);
+        let wide = estimate(0.8);
+        assert!(sharp > 0.55, "default pos_sigma: {sharp}");
+        assert!(wide < 0.5, "pos_sigma 0.8: {wide}");
     }
 
     /// 200 samples out and back along a line (exact odometry), so the second half meets the
