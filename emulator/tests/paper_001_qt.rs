@@ -262,12 +262,10 @@ fn with_the_true_position_the_wall_leaves_a_clear_gap_that_closes_within_1500() 
     }
 }
 
-/// The navigation experiment's exploration, map fit and test path only: no test run, the
-/// leg to the path's start cut at one sample.
+/// The navigation experiment's exploration, map fit and test path only (no test run).
 fn explored(seed: u64, drift: Drift, scene: Scene) -> NavReport {
     let mut o = NavOptions::new(seed, Params::default());
     o.runs = 0;
-    o.leg_cap = 1;
     o.drift = drift;
     o.scene = scene;
     navigation(&o).expect("navigation runs")
