@@ -23,10 +23,7 @@ fn probe() -> Result<(), String> {
     let exact = args.iter().any(|a| a == "exact");
     let mut p = Params::default();
     for kv in args.iter().filter(|a| *a != "exact") {
-        let (k, v) = kv
-            .split_once('=')
-            .ok_or_else(|| format!("{kv:?}: expected exact or NAME=VALUE"))?;
-        p.set(k, v).map_err(|e| e.to_string())?;
+        p.assign(kv).map_err(|e| format!("{e} (or exact)"))?;
     }
     let odometry = if exact {
         "exact odometry"

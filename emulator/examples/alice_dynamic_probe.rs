@@ -22,10 +22,7 @@ fn probe() -> Result<(), String> {
     let drift = args.iter().any(|a| a == "drift");
     let mut p = Params::default();
     for kv in args.iter().filter(|a| *a != "drift") {
-        let (k, v) = kv
-            .split_once('=')
-            .ok_or_else(|| format!("{kv:?}: expected drift or NAME=VALUE"))?;
-        p.set(k, v).map_err(|e| e.to_string())?;
+        p.assign(kv).map_err(|e| format!("{e} (or drift)"))?;
     }
     let (mut edges, mut two, mut closed, mut clear) = (vec![], vec![], vec![], 0);
     for seed in 1..=10 {

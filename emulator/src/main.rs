@@ -304,12 +304,7 @@ fn alice_experiment(task: emulator::cli::TaskArg) -> Option<AliceRun> {
 fn qt_params(args: &RunArgs) -> Result<world_model::Params, String> {
     let mut params = world_model::Params::default();
     for kv in &args.qt_param {
-        let (k, v) = kv
-            .split_once('=')
-            .ok_or_else(|| format!("--qt-param {kv:?}: expected NAME=VALUE"))?;
-        params
-            .set(k, v)
-            .map_err(|e| format!("--qt-param {kv:?}: {e}"))?;
+        params.assign(kv).map_err(|e| format!("--qt-param {e}"))?;
     }
     Ok(params)
 }

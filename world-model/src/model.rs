@@ -642,6 +642,9 @@ mod tests {
         assert!(p.set("or_pos_tolerance", "NaN").is_err());
         assert!(p.set("or_pos_tolerance", "inf").is_ok());
         assert!(p.set("pos_sigma", "0").is_err());
+        assert!(p.assign("pos_sigma").is_err());
+        p.assign("pos_sigma=0.05").expect("an assignment");
+        assert_eq!(p.pos_sigma, 0.05);
         assert!(p.set("pos_sigma", "-0.1").is_err());
         assert!(p.set("pos_sigma", "inf").is_err());
         p.set("pos_sigma", "0.1").expect("in range");

@@ -260,6 +260,16 @@ impl Params {
         Ok(())
     }
 
+    /// [`Params::set`] from one `NAME=VALUE` assignment (a `--qt-param` argument); an error
+    /// quotes the assignment.
+    pub fn assign(&mut self, assignment: &str) -> Result<(), ParamError> {
+        let (name, value) = assignment
+            .split_once('=')
+            .ok_or_else(|| ParamError(format!("{assignment:?}: expected NAME=VALUE")))?;
+        self.set(name, value)
+            .map_err(|e| ParamError(format!("{assignment:?}: {e}")))
+    }
+
     fn set_unchecked(&mut self, name: &str, value: &str) -> Result<(), ParamError> {
         let f = || {
             value
