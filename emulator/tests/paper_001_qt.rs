@@ -410,11 +410,23 @@ fn navigation_improves_after_four_runs() {
 /// 0.5 degrees/metre rotational) 0.92, 1.02, 0.93, 0.89, 0.74, 0.92, 1.01, 0.91, 1.00, 0.84
 /// (mean 0.92: the map up to 35 % larger), cells 0.15-0.34 m from their places after the fit;
 /// with the odometry exact but for the turns' 1 % (`--drift static`) 1.09, 1.09, 1.07, 1.06,
-/// 1.10, 1.09, 1.13, 1.10, 1.07, 1.08 (the position estimate's pull towards the cells that
-/// match best shrinks the map by 6-13 %), cells 0.08-0.15 m off. Before `pos_sigma` (the
-/// estimate's weights as wide as d_acc) the drift's scales were 0.71-0.96 and exact
-/// odometry's 0.94-1.04. Tolerance (seeds 1-4): exact odometry within 0.95..=1.15 in every
-/// seed; ALICE's drift at least 0.05 below it in every seed and at most 0.95 in the mean.
+/// 1.10, 1.09, 1.13, 1.10, 1.07, 1.08 (the map 6-13 % smaller than the world), cells
+/// 0.08-0.15 m off. Before `pos_sigma` (the estimate's weights as wide as d_acc) the drift's
+/// scales were 0.71-0.96 and exact odometry's 0.94-1.04. Tolerance (seeds 1-4): exact
+/// odometry within 0.95..=1.15 in every seed; ALICE's drift at least 0.05 below it in every
+/// seed and at most 0.95 in the mean.
+///
+/// Where the exact odometry's shrink comes from, measured (not asserted here). It forms while
+/// the map is young and relaxes as it settles: mean scale over seeds 1-10 after 1500, 3000,
+/// 6000 and 12000 situations 1.13, 1.10, 1.09, 1.07 (with the wide weights 1.10, 1.06, 1.01,
+/// 0.98). And the position estimate leans away from the walls and the pillar: with a map kept
+/// in the world's frame, p_est lies 5.1 cm (clearance 0.2-0.4 m) and 7.3 cm (0.4-0.6 m)
+/// farther from the nearest obstacle than the robot, pooled over seeds 1-10
+/// (`examples/alice_estimate_bias_probe`). The single best match leans the same
+/// (`pos_sigma=0.005`: 5.1 and 7.2 cm), so the winner itself does: a matching error can pick
+/// a cell on the open side but none beyond the obstacle. Correcting the pose towards such an
+/// estimate pulls the young map inwards. The wide weights lean as far (12.3 and 6.7 cm) and
+/// their map relaxes faster; why, is not examined.
 #[test]
 fn the_map_is_larger_than_the_world_by_the_odometrys_drift() {
     let scale = |seed: u64, drift: Drift| explored(seed, drift, Scene::Pillar).map_scale;

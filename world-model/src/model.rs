@@ -141,6 +141,7 @@ pub struct QtModel {
     learning: VecDeque<Vec<f64>>,
     last_seq_winner: Option<u32>,
     winner: Option<u32>,
+    estimate: Option<(f64, f64)>,
     map_static: bool,
     stats: Stats,
     scratch: Vec<u32>,
@@ -162,6 +163,7 @@ impl QtModel {
             learning: VecDeque::new(),
             last_seq_winner: None,
             winner: None,
+            estimate: None,
             map_static: false,
             stats: Stats::default(),
             scratch: Vec::new(),
@@ -193,6 +195,13 @@ impl QtModel {
     /// The winner of the latest first presentation (the cell the robot is "at").
     pub fn winner(&self) -> Option<u32> {
         self.winner
+    }
+
+    /// §4.2.4's position estimate p_est of the latest sample, when the model made one (the
+    /// position correlation or its trust gate needs it, and a cell won within g_search): what
+    /// the map says the position is, before eps_pos blends it into the internal pose.
+    pub fn last_estimate(&self) -> Option<(f64, f64)> {
+        self.estimate
     }
 
     /// Counters.
@@ -294,6 +303,7 @@ impl QtModel {
     }
 
     fn correlate(&mut self, sample: &Sample) {
+        self.estimate = None;
         if self.net.is_empty() {
             if self.params.eps_or > 0.0 {
                 self.stats.or_no_cell += 1;
@@ -307,6 +317,7 @@ impl QtModel {
         } else {
             None
         };
+        self.estimate = estimate;
         // §4.2.4: the orientation is correlated only "assuming the current position is
         // correct to within a certain tolerance": the map's estimate is the only witness.
         let trusted = !gate
@@ -705,6 +716,34 @@ mod tests {
         let wide = estimate(0.8);
         assert!(sharp > 0.55, "default pos_sigma: {sharp}");
         assert!(wide < 0.5, "pos_sigma 0.8: {wide}");
+    }
+
+    /// `last_estimate` is the p_est the position correlation used: with eps_pos 1 the pose
+    /// jumps onto it; with both correlations off none is made.
+    #[test]
+    fn the_last_estimate_is_the_one_the_correlation_used() {
+        let full = Params {
+            eps_pos: 1.0,
+            ..Params::default()
+        };
+        let mut m = QtModel::new(full, Pose::default()).expect("valid");
+        let mut made = 0;
+        out_and_back(&mut m, |m| {
+            if let Some((x, y)) = m.last_estimate() {
+                made += 1;
+                // x + 1 * (est - x): equal but for the last bit.
+                let off = (m.pose().x - x).hypot(m.pose().y - y);
+                assert!(off < 1e-12, "pose {:?}, estimate {:?}", m.pose(), (x, y));
+            }
+        });
+        assert!(made > 100, "{made} estimates");
+        let off = Params {
+            eps_pos: 0.0,
+            eps_or: 0.0,
+            ..Params::default()
+        };
+        let mut m = QtModel::new(off, Pose::default()).expect("valid");
+        out_and_back(&mut m, |m| assert_eq!(m.last_estimate(), None));
     }
 
     /// 200 samples out and back along a line (exact odometry), so the second half meets the
