@@ -1,6 +1,7 @@
 //! Where seed 001 §4.2.4's position estimate p_est leans: its error against the truth along
-//! the direction away from the nearest obstacle, by the robot's clearance from it. The cause
-//! of the map's shrink with exact odometry (`the_map_is_larger_than_the_world_by_the_odometrys_drift`).
+//! the direction away from the nearest obstacle, by the robot's clearance from it: a likely
+//! source of the map's shrink with exact odometry (see the doc comment of
+//! `the_map_is_larger_than_the_world_by_the_odometrys_drift`, which says what it leaves open).
 //!
 //! `cargo run --release -p emulator --example alice_estimate_bias_probe -- [NAME=VALUE ...]`
 //! runs the §4.5 scene (pillar, ALICE's body, the wanderer) for 6000 situations with exact
@@ -39,6 +40,7 @@ fn probe() -> Result<(), String> {
     for kv in std::env::args().skip(1) {
         p.assign(&kv).map_err(|e| e.to_string())?;
     }
+    // The scene `run_with` drives in (no gap wall: `remove_wall_at` stays None).
     let obstacles = alice().segment_set();
     println!("p_est's error away from the nearest obstacle, metres, by clearance bins of {BIN_M} m (count)");
     let mut pooled = [(0.0f64, 0u64); BINS];
@@ -53,7 +55,11 @@ fn probe() -> Result<(), String> {
                 return;
             };
             let at = Point::new(truth.0, truth.1);
-            let Some(near) = obstacles.nearest(at, f64::INFINITY) else {
+            // The body keeps its centre off every wall, so the direction away is defined.
+            let Some(near) = obstacles
+                .nearest(at, f64::INFINITY)
+                .filter(|n| n.distance > 0.0)
+            else {
                 return;
             };
             let away = at - near.point;
@@ -70,10 +76,13 @@ fn probe() -> Result<(), String> {
         }
         println!("seed {seed:2}: {}", line(&bins));
     }
+    if n == 0 {
+        return Err("no position estimate was made: eps_pos must stay above 0".into());
+    }
     println!("pooled:  {}", line(&pooled));
     println!(
         "mean |p_est - truth| {:.3} m over {n} situations",
-        dist / n.max(1) as f64
+        dist / n as f64
     );
     Ok(())
 }

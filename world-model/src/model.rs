@@ -197,9 +197,10 @@ impl QtModel {
         self.winner
     }
 
-    /// §4.2.4's position estimate p_est of the latest sample, when the model made one (the
-    /// position correlation or its trust gate needs it, and a cell won within g_search): what
-    /// the map says the position is, before eps_pos blends it into the internal pose.
+    /// §4.2.4's position estimate p_est of the latest sample observed (a refused one changes
+    /// nothing), when the model made one (the position correlation or its trust gate needs it,
+    /// and a cell won within g_search): what the map says the position is, before eps_pos
+    /// blends it into the internal pose.
     pub fn last_estimate(&self) -> Option<(f64, f64)> {
         self.estimate
     }
