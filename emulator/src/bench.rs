@@ -39,12 +39,16 @@ use std::time::{Duration, Instant};
 use robot_firmware::Profile;
 use serde::Serialize;
 
+use crate::arena::free_path::{free_path, FreePath};
 use crate::arena::{Arena, LoadOptions};
 use crate::arena_gen::{self, Kind};
 use crate::geometry::Point;
 use crate::rng::SimRng;
 use crate::scenario::{ScenarioOptions, ScenarioReport, Task};
 use crate::sensors::Noise;
+
+pub mod breakdown;
+pub use breakdown::Breakdown;
 
 /// The tasks the benchmark runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -109,13 +113,18 @@ impl ArenaSource {
 
     /// The arena: generated, or loaded as `--arena` would.
     pub fn load(&self) -> Result<Arena, String> {
+        self.load_with_features().map(|(a, _)| a)
+    }
+
+    /// The arena and the features its generator drew it with (none for a file).
+    pub fn load_with_features(&self) -> Result<(Arena, Vec<&'static str>), String> {
         match self {
             ArenaSource::Generated(k, s) => arena_gen::generate(*k, *s)
-                .map(|g| g.arena)
+                .map(|g| (g.arena, g.features))
                 .map_err(|e| e.to_string()),
-            ArenaSource::Named(n) => {
-                crate::builtin::load(n, &LoadOptions::for_simulation()).map_err(|e| e.to_string())
-            }
+            ArenaSource::Named(n) => crate::builtin::load(n, &LoadOptions::for_simulation())
+                .map(|a| (a, Vec::new()))
+                .map_err(|e| e.to_string()),
         }
     }
 }
@@ -350,6 +359,17 @@ pub struct Row {
     pub error: Option<String>,
     /// The odometry calibration before the run (`--calibrate-odometry`).
     pub calibration: Option<crate::scenario::calibrate_odometry::CalibrationReport>,
+    /// Shortest free path from the start to the goal area for this robot, metres
+    /// ([`crate::arena::free_path`]).
+    pub free_path_m: Option<f64>,
+    /// `free_path_m` over the straight line to the goal area.
+    pub detour_ratio: Option<f64>,
+    /// The narrowest gap every route passes, metres.
+    pub bottleneck_m: Option<f64>,
+    /// The last run's ground distance over `free_path_m`.
+    pub route_ratio: Option<f64>,
+    /// The arena's features ([`breakdown::features_of`]).
+    pub features: Vec<&'static str>,
 }
 
 impl Row {
@@ -377,6 +397,11 @@ impl Row {
             firmware_delivered: None,
             error: Some(error),
             calibration: None,
+            free_path_m: None,
+            detour_ratio: None,
+            bottleneck_m: None,
+            route_ratio: None,
+            features: Vec::new(),
         }
     }
 }
@@ -395,7 +420,7 @@ pub fn spread_of(v: Vec<f64>) -> Option<Spread> {
     spread(v)
 }
 
-fn spread(mut v: Vec<f64>) -> Option<Spread> {
+pub(crate) fn spread(mut v: Vec<f64>) -> Option<Spread> {
     if v.is_empty() {
         return None;
     }
@@ -458,6 +483,12 @@ pub struct Summary {
     pub forage: Option<ForageSummary>,
     /// `--calibrate-odometry` only.
     pub calibration: Option<CalibrationSummary>,
+    /// Route driven over the shortest free path, successful runs.
+    pub route_ratio: Option<Spread>,
+    /// Per detour class of the arenas (shortest free path over straight line).
+    pub by_detour: Vec<Breakdown>,
+    /// Per arena feature.
+    pub by_feature: Vec<Breakdown>,
 }
 
 /// The odometry calibrations' figures (`--calibrate-odometry`).
@@ -617,7 +648,9 @@ fn run_checked(
     seed: u64,
     opts: &BenchOptions,
 ) -> Result<Row, (Cause, String)> {
-    let arena = source.load().map_err(|e| (Cause::ImportError, e))?;
+    let (arena, declared) = source
+        .load_with_features()
+        .map_err(|e| (Cause::ImportError, e))?;
     let mut so = ScenarioOptions::new(opts.profile, opts.task.scenario_task());
     so.seed = seed;
     so.timeout_s = opts.timeout_s;
@@ -648,7 +681,19 @@ fn run_checked(
         return Ok(row);
     }
     let start = start_point(&arena, opts.profile).map_err(|e| (Cause::SetupError, e))?;
+    let measured = arena.clone();
     let r = crate::scenario::run_scenario(arena, so).map_err(setup)?;
+    let (to_goal, ended) = routes(&measured, start, &r, opts.profile);
+    row.features = breakdown::features_of(&measured, to_goal.as_ref(), &declared);
+    if let Some(f) = to_goal {
+        row.free_path_m = Some(f.length_m);
+        row.detour_ratio = Some(f.detour_ratio);
+        row.bottleneck_m = Some(f.bottleneck_m);
+    }
+    if let Some(f) = ended.filter(|f| f.length_m > 0.0) {
+        let driven = r.runs.last().map_or(r.distance_m, |x| x.distance_m);
+        row.route_ratio = Some(driven / f.length_m);
+    }
     let started_inside = (start - Point::new(r.goal.x_m, r.goal.y_m)).norm() <= r.tolerance_m;
     let diameter = f64::from(opts.profile.body_diameter_m);
     row.cause = cause_of(&r, started_inside, diameter);
@@ -668,6 +713,31 @@ fn run_checked(
         row.run2_reached = Some(run(1).is_some_and(|x| x.reached));
     }
     Ok(row)
+}
+
+/// The shortest free path from `start` to the runner's goal within its tolerance (the goal's
+/// target area for a beacon search), and, when the run ended in another goal target (a lab
+/// with several beacons: any counts), the one to that target, which the route is judged by.
+fn routes(
+    arena: &Arena,
+    start: Point,
+    r: &ScenarioReport,
+    profile: &Profile,
+) -> (Option<FreePath>, Option<FreePath>) {
+    let radius = f64::from(profile.body_diameter_m) / 2.0;
+    let goal = Point::new(r.goal.x_m, r.goal.y_m);
+    let to_goal = free_path(arena, start, goal, r.tolerance_m, radius);
+    let end = Point::new(r.final_true.x_m, r.final_true.y_m);
+    let search = matches!(r.task, Task::ReachBeacon | Task::ExploreThenPlan);
+    let ended_elsewhere = arena
+        .goal_targets()
+        .find(|t| (end - t.centre).norm() <= t.radius_m)
+        .filter(|t| search && (t.centre - goal).norm() > 1e-6);
+    let ended = match ended_elsewhere {
+        Some(t) => free_path(arena, start, t.centre, t.radius_m, radius),
+        None => to_goal,
+    };
+    (to_goal, ended)
 }
 
 /// Why a scenario run failed (None: it succeeded), from the runner's ground truth:
@@ -789,6 +859,14 @@ pub fn summarise(task: BenchTask, rows: &[Row]) -> Summary {
         plan,
         forage,
         calibration,
+        route_ratio: spread(
+            rows.iter()
+                .filter(|r| r.success)
+                .filter_map(|r| r.route_ratio)
+                .collect(),
+        ),
+        by_detour: breakdown::by_detour(rows),
+        by_feature: breakdown::by_feature(rows),
     }
 }
 
@@ -841,6 +919,12 @@ pub fn render(r: &BenchReport) -> String {
         "  pose error     {} (true vs believed, at the end)\n",
         fmt_spread(s.pose_error_m, "m")
     );
+    if let Some(x) = s.route_ratio {
+        out += &format!(
+            "  route          median {:.2}x, p90 {:.2}x the shortest free path (successful runs)\n",
+            x.median, x.p90
+        );
+    }
     let causes: Vec<String> = Cause::ALL
         .iter()
         .map(|c| {
@@ -871,6 +955,15 @@ pub fn render(r: &BenchReport) -> String {
             ppm(c.true_ratio_ppm),
             ppm(c.residual_ppm)
         );
+    }
+    if s.by_detour.iter().any(|b| b.runs > 0) {
+        out += &breakdown::render(
+            "by detour (shortest free path / straight line):",
+            &s.by_detour,
+        );
+    }
+    if !s.by_feature.is_empty() {
+        out += &breakdown::render("by feature:", &s.by_feature);
     }
     if let Some(f) = s.forage {
         out += &format!(

@@ -195,21 +195,9 @@ impl World {
         self.arena.target().copied()
     }
 
-    /// The target areas a beacon search may end in: those with a beacon inside (CiberRato
-    /// marks each beacon's area with a target), or every target when none has one. A target
-    /// without a beacon beside beaconed ones is a start or home area (CiberRato 2011: the
-    /// robot starts in target 1 and must find target 0), not somewhere to arrive.
+    /// The target areas a beacon search may end in ([`Arena::goal_targets`]).
     pub fn goal_targets(&self) -> impl Iterator<Item = &Target> + '_ {
-        let marks = |t: &Target| {
-            self.beacons
-                .iter()
-                .any(|b| (b.position - t.centre).norm() <= t.radius_m)
-        };
-        let any_marked = self.arena.targets.iter().any(marks);
-        self.arena
-            .targets
-            .iter()
-            .filter(move |t| !any_marked || marks(t))
+        self.arena.goal_targets()
     }
 
     /// True when `p` is inside a goal target circle (edge included): what the ground sensor

@@ -31,6 +31,7 @@
 pub mod ascii;
 pub mod ciberrato;
 mod error;
+pub mod free_path;
 pub mod micromouse;
 mod pgm;
 pub mod raster;
@@ -175,6 +176,24 @@ impl Arena {
     /// The first target area, if any.
     pub fn target(&self) -> Option<&Target> {
         self.targets.first()
+    }
+
+    /// Whether a beacon stands in target `t` (CiberRato marks each beacon's area with one).
+    pub fn beacon_marks(&self, t: &Target) -> bool {
+        self.beacons
+            .iter()
+            .any(|b| (b.position - t.centre).norm() <= t.radius_m)
+    }
+
+    /// The target areas a beacon search may end in: those with a beacon inside, or every
+    /// target when none has one. A target without a beacon beside beaconed ones is a start or
+    /// home area (CiberRato 2011: the robot starts in target 1 and must find target 0), not
+    /// somewhere to arrive.
+    pub fn goal_targets(&self) -> impl Iterator<Item = &Target> + '_ {
+        let any_marked = self.targets.iter().any(|t| self.beacon_marks(t));
+        self.targets
+            .iter()
+            .filter(move |t| !any_marked || self.beacon_marks(t))
     }
 
     /// The four edges of `bounds`, anticlockwise from the lower-left corner.

@@ -110,13 +110,11 @@ pub(crate) fn layout(name: &str, rng: &mut SimRng) -> Layout {
             outline
         })
         .collect();
-    Layout {
-        name: name.to_string(),
-        width_m: w,
-        height_m: h,
+    Layout::plain(
+        name,
+        (w, h),
         walls,
-        beacon: b,
-        target: (b, GOAL_RADIUS_M),
-        starts: vec![[a.x, a.y, heading]],
-    }
+        (b, GOAL_RADIUS_M),
+        vec![[a.x, a.y, heading]],
+    )
 }

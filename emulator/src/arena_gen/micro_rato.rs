@@ -135,15 +135,7 @@ fn labyrinth(name: &str, rng: &mut SimRng) -> Layout {
             starts.push([q.x, q.y, heading]);
         }
     }
-    Layout {
-        name: name.to_string(),
-        width_m: SIDE_M,
-        height_m: SIDE_M,
-        walls,
-        beacon: goal,
-        target: (goal, GOAL_RADIUS_M),
-        starts,
-    }
+    Layout::plain(name, (SIDE_M, SIDE_M), walls, (goal, GOAL_RADIUS_M), starts)
 }
 
 /// Scattered obstacles: 6-14 bars, L's and U's placed at random under the spacing rules.
@@ -193,15 +185,13 @@ fn scattered(name: &str, rng: &mut SimRng) -> Layout {
             shapes.push(s);
         }
     }
-    Layout {
-        name: name.to_string(),
-        width_m: SIDE_M,
-        height_m: SIDE_M,
-        walls: shapes.into_iter().map(|s| s.outline).collect(),
-        beacon: goal,
-        target: (goal, GOAL_RADIUS_M),
+    Layout::plain(
+        name,
+        (SIDE_M, SIDE_M),
+        shapes.into_iter().map(|s| s.outline).collect(),
+        (goal, GOAL_RADIUS_M),
         starts,
-    }
+    )
 }
 
 /// One obstacle at a random place: a bar (some against the outer wall), an L or a U; half

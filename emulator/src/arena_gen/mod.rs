@@ -23,7 +23,9 @@
 mod khepera_box;
 mod maze;
 mod micro_rato;
+pub mod real_like;
 mod shapes;
+mod traps;
 mod xml;
 
 use std::collections::VecDeque;
@@ -50,6 +52,10 @@ pub enum Kind {
     Maze,
     /// Khepera box of 75 x 60 cm or larger with blocks, bars and dead ends (CiberRato XML).
     Box,
+    /// CiberRato/Micro-Rato lab like the real ones: up to 28 x 14 units, long detours (U
+    /// traps, long walls, spirals, combs, `<Row>` mazes), narrow gaps, small targets, several
+    /// beacons, home areas, walls hiding the beacon, odd starts (CiberRato XML).
+    RealLike,
 }
 
 impl Kind {
@@ -59,13 +65,14 @@ impl Kind {
             Kind::MicroRato => "micro-rato",
             Kind::Maze => "maze",
             Kind::Box => "box",
+            Kind::RealLike => "real-like",
         }
     }
 
     /// The robot the arena is made for (its diameter decides solvability).
     pub fn profile(self) -> &'static robot_firmware::Profile {
         match self {
-            Kind::MicroRato => &robot_firmware::MICRO_RATO,
+            Kind::MicroRato | Kind::RealLike => &robot_firmware::MICRO_RATO,
             Kind::Maze | Kind::Box => &robot_firmware::KHEPERA,
         }
     }
@@ -98,13 +105,15 @@ pub struct Generated {
     pub text: ArenaText,
     /// The arena as the importer reads the text.
     pub arena: Arena,
+    /// What the generator drew it with, for reports by feature (real-like arenas).
+    pub features: Vec<&'static str>,
 }
 
 /// Why generation failed.
 #[derive(Debug, thiserror::Error)]
 pub enum GenError {
     /// No attempt was solvable (never seen; kept so a bug cannot loop forever).
-    #[error("no solvable {kind} arena for seed {seed} in {MAX_ATTEMPTS} attempts: {last}")]
+    #[error("no solvable {kind} arena for seed {seed} in every attempt: {last}")]
     Unsolvable {
         /// Kind.
         kind: &'static str,
@@ -138,10 +147,47 @@ pub(crate) struct Layout {
     pub height_m: f64,
     /// Wall polygons, corners in metres.
     pub walls: Vec<Vec<Point>>,
+    /// Each wall's height in CiberRato units (beside `walls`); empty: every wall
+    /// [`xml::LOW_WALL`], below the beacon.
+    pub wall_heights: Vec<f64>,
+    /// `<Row Pos Pattern>` maze rows (CiberRato's own maze notation), after the walls.
+    pub rows: Vec<(u32, String)>,
+    /// The goal beacon (the first in the file, the one the robot is told of).
     pub beacon: Point,
+    /// The goal beacon's target area.
     pub target: (Point, f64),
+    /// Further beacons, each with its own target area of this radius (CiberRato labs with
+    /// several beacons).
+    pub more_beacons: Vec<(Point, f64)>,
+    /// Target areas without a beacon: home or start areas (CiberRato 2011).
+    pub homes: Vec<(Point, f64)>,
     /// Start poses (x, y, heading radians).
     pub starts: Vec<[f64; 3]>,
+}
+
+impl Layout {
+    /// One beacon over its target, plain walls below it.
+    pub fn plain(
+        name: &str,
+        (width_m, height_m): (f64, f64),
+        walls: Vec<Vec<Point>>,
+        target: (Point, f64),
+        starts: Vec<[f64; 3]>,
+    ) -> Layout {
+        Layout {
+            name: name.to_string(),
+            width_m,
+            height_m,
+            walls,
+            wall_heights: Vec::new(),
+            rows: Vec::new(),
+            beacon: target.0,
+            target,
+            more_beacons: Vec::new(),
+            homes: Vec::new(),
+            starts,
+        }
+    }
 }
 
 /// The arena name for a kind and seed: `micro-rato-0007`.
@@ -149,16 +195,41 @@ pub fn arena_name(kind: Kind, seed: u64) -> String {
     format!("{}-{seed:04}", kind.name())
 }
 
+/// Attempts of a real-like arena that must fall in the detour class drawn for its seed; the
+/// rest of [`REAL_LIKE_ATTEMPTS`] take any solvable draw, so a seed never fails for its class.
+const IN_CLASS_ATTEMPTS: u32 = 150;
+/// Attempts of a real-like arena (its classes need more than [`MAX_ATTEMPTS`]).
+const REAL_LIKE_ATTEMPTS: u32 = 200;
+
 /// Generates the arena of `kind` for `seed`.
 pub fn generate(kind: Kind, seed: u64) -> Result<Generated, GenError> {
     let name = arena_name(kind, seed);
     let mut last = String::new();
-    for attempt in 0..MAX_ATTEMPTS {
+    let radius = f64::from(kind.profile().body_diameter_m) / 2.0;
+    // The real-like family's detour class, on a stream of its own (attempts do not move it).
+    let class = real_like::wanted_bucket(&mut SimRng::new(seed, STREAM - 1));
+    let attempts = if kind == Kind::RealLike {
+        REAL_LIKE_ATTEMPTS
+    } else {
+        MAX_ATTEMPTS
+    };
+    for attempt in 0..attempts {
         let mut rng = SimRng::new(seed, STREAM + u64::from(attempt));
+        let mut features = Vec::new();
         let text = match kind {
             Kind::MicroRato => xml::ciberrato(&micro_rato::layout(&name, &mut rng)),
             Kind::Box => xml::ciberrato(&khepera_box::layout(&name, &mut rng)),
             Kind::Maze => ArenaText::Maze(maze::generate(&mut rng)),
+            Kind::RealLike => match real_like::layout(&name, &mut rng, class) {
+                Some(d) => {
+                    features = d.features;
+                    xml::ciberrato(&d.layout)
+                }
+                None => {
+                    last = "a structure broke the spacing rules".to_string();
+                    continue;
+                }
+            },
         };
         let arena = match import(&name, &text) {
             Ok(a) => a,
@@ -167,25 +238,42 @@ pub fn generate(kind: Kind, seed: u64) -> Result<Generated, GenError> {
                 continue;
             }
         };
-        let radius = f64::from(kind.profile().body_diameter_m) / 2.0;
-        match solvable(&arena, radius) {
-            Ok(()) => {
-                return Ok(Generated {
-                    kind,
-                    seed,
-                    attempt,
-                    text,
-                    arena,
-                })
-            }
-            Err(why) => last = why,
+        if let Err(why) = solvable(&arena, radius) {
+            last = why;
+            continue;
         }
+        if kind == Kind::RealLike && attempt < IN_CLASS_ATTEMPTS {
+            let want = real_like::DETOUR_BUCKETS[class].0;
+            match detour_of(&arena, radius) {
+                Some(r) if real_like::detour_bucket(r) == want => {}
+                other => {
+                    last = format!("detour {other:?} is not in class {want}");
+                    continue;
+                }
+            }
+        }
+        return Ok(Generated {
+            kind,
+            seed,
+            attempt,
+            text,
+            arena,
+            features,
+        });
     }
     Err(GenError::Unsolvable {
         kind: kind.name(),
         seed,
         last,
     })
+}
+
+/// The detour ratio from the arena's first start to its goal area for a robot of `radius`.
+pub fn detour_of(arena: &Arena, radius: f64) -> Option<f64> {
+    let start = arena.starts.first()?;
+    let (goal, r) = goal_area(arena)?;
+    arena::free_path::free_path(arena, Point::new(start.x, start.y), goal, r, radius)
+        .map(|f| f.detour_ratio)
 }
 
 /// Reads generated text back through the importers, as a file of that name would be.
@@ -209,7 +297,7 @@ pub fn import(name: &str, text: &ArenaText) -> Result<Arena, ArenaError> {
 
 /// The goal a go-to or search heads for: the first target's centre and radius, else the
 /// marked goal point with no area.
-fn goal_area(arena: &Arena) -> Option<(Point, f64)> {
+pub fn goal_area(arena: &Arena) -> Option<(Point, f64)> {
     arena
         .target()
         .map(|t| (t.centre, t.radius_m))
@@ -343,7 +431,7 @@ mod tests {
 
     #[test]
     fn every_kind_is_deterministic_and_solvable_for_fixed_seeds() {
-        for kind in [Kind::MicroRato, Kind::Maze, Kind::Box] {
+        for kind in [Kind::MicroRato, Kind::Maze, Kind::Box, Kind::RealLike] {
             for seed in 1..=12 {
                 let a = generate(kind, seed).expect("generates");
                 let b = generate(kind, seed).expect("generates");
