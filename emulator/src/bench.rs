@@ -259,6 +259,9 @@ pub struct BenchOptions {
     /// arena ([`crate::scenario::calibrate_odometry`]) and the go-to run starts with the
     /// result set, as an operator who calibrated once and loads the parameter file.
     pub calibrate_odometry: bool,
+    /// Parameters set before every run (id, value), as a station loading a parameter file
+    /// (e.g. `--search`'s `search_mode`).
+    pub params: Vec<(u16, f32)>,
 }
 
 /// Why a run failed.
@@ -655,6 +658,7 @@ fn run_checked(
     so.seed = seed;
     so.timeout_s = opts.timeout_s;
     so.noise = opts.noise;
+    so.params.extend(opts.params.iter().copied());
     let setup = |e: crate::scenario::ScenarioError| (Cause::SetupError, e.to_string());
     let mut row = Row::failed(source.label(), seed, Cause::Timeout, String::new(), 0.0);
     row.error = None;
@@ -665,7 +669,7 @@ fn run_checked(
             crate::scenario::calibrate_odometry::DEFAULT_TIMEOUT_S,
         )
         .map_err(setup)?;
-        so.params = c.params();
+        so.params.extend(c.params());
         row.calibration = Some(c);
     }
     if opts.task == BenchTask::Forage {

@@ -134,6 +134,33 @@ pub struct BenchArgs {
     /// with the measured wheel distance and ratio set.
     #[arg(long)]
     pub calibrate_odometry: bool,
+    /// The search tasks: which Dom Dinis search runs (parameter `search_mode`) [default: the
+    /// firmware's, planned].
+    #[arg(long, value_enum, value_name = "SEARCH")]
+    pub search: Option<SearchArg>,
+}
+
+/// Which Dom Dinis search a run uses (the firmware parameter `search_mode`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SearchArg {
+    /// Seed 004 §5's reactive goal search on a 0.3 m map (the paper's).
+    Reactive,
+    /// Plans on its own 0.15 m map as it goes, unknown cells free (issue 32).
+    Planned,
+}
+
+impl SearchArg {
+    /// The parameter assignment a station would send for it.
+    pub fn param(self) -> (u16, f32) {
+        let mode = match self {
+            SearchArg::Reactive => robot_firmware::explore::SearchMode::Reactive,
+            SearchArg::Planned => robot_firmware::explore::SearchMode::Planned,
+        };
+        (
+            robot_firmware::params::id::SEARCH_MODE,
+            f32::from(mode.code()),
+        )
+    }
 }
 
 /// Most seeds per arena `bench --seeds` takes.
@@ -221,6 +248,7 @@ impl BenchArgs {
             progress: !self.json,
             robots: self.robots,
             calibrate_odometry: self.calibrate_odometry,
+            params: self.search.map(SearchArg::param).into_iter().collect(),
         })
     }
 }
@@ -523,6 +551,10 @@ pub struct RunArgs {
     /// Print the report as one JSON object (otherwise a readable summary).
     #[arg(long)]
     pub json: bool,
+    /// reach-beacon, explore-then-plan: which Dom Dinis search runs (parameter `search_mode`)
+    /// [default: the firmware's, planned].
+    #[arg(long, value_enum, value_name = "SEARCH")]
+    pub search: Option<SearchArg>,
     /// line-correct: true distance to drive, metres.
     #[arg(long, default_value_t = 40.0, value_name = "M")]
     pub distance: f64,
@@ -889,6 +921,7 @@ impl RunArgs {
         o.start = self.world.start_pose();
         o.true_wheel_distance_m = self.world.true_wheel_distance;
         o.slip = self.world.slip;
+        o.params.extend(self.search.map(SearchArg::param));
         Ok(o)
     }
 }

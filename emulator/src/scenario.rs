@@ -551,7 +551,7 @@ fn no_path_run(sim: &Sim) -> RunReport {
 }
 
 /// Tells the firmware its arrival radius: the option, else `min(default, tolerance / 2)`.
-pub(crate) fn set_arrival(
+pub fn set_arrival(
     sim: &mut Sim,
     arrival_m: Option<f64>,
     tolerance_m: f64,
@@ -585,7 +585,7 @@ pub(crate) fn set_params(sim: &mut Sim, params: &[(u16, f32)]) -> Result<(), Sce
     Ok(())
 }
 
-pub(crate) fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), ScenarioError> {
+pub fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), ScenarioError> {
     let now_ms = (sim.now_us() / 1000) as u32;
     match sim.robot_mut().apply(cmd, now_ms) {
         Reply::Ack(_) => Ok(()),

@@ -18,6 +18,7 @@ fn options(task: BenchTask, arenas: Vec<ArenaSource>, seeds: u64) -> BenchOption
         progress: false,
         robots: 1,
         calibrate_odometry: false,
+        params: Vec::new(),
     }
 }
 

@@ -25,9 +25,14 @@
 //!
 //! Pure: pose, readings and time in; motor command and map marks out. Cannot fail or panic.
 
-use crate::behaviour::{units, MotorCommand, XorShift32};
+use crate::behaviour::{MotorCommand, XorShift32};
 use crate::nav::{Cell, Grid};
 use crate::odometry::{wrap_angle, Point, Pose};
+
+pub mod motion;
+pub mod planned;
+
+pub use planned::{Planned, PlannedPhase};
 
 /// Where exploration reads and writes the map, and plans on it.
 pub trait MapMarker {
@@ -43,6 +48,26 @@ pub trait MapMarker {
     fn plan_towards(&mut self, _from: Point, _to: Point) -> Option<Point> {
         None
     }
+    /// The first point to drive to on the grid planner's route from `from` to `to` over free
+    /// and unknown cells, replanned often by the search that plans as it goes
+    /// ([`planned`]); `None` when the map shows no way or there is no planner.
+    fn route_towards(&mut self, _from: Point, _to: Point) -> Option<RouteStep> {
+        None
+    }
+    /// Makes every wall cell farther than `keep_m` from `keep` unknown again (walls that hold
+    /// dead-reckoning errors and close the way).
+    fn forget_walls(&mut self, _keep: Point, _keep_m: f32) {}
+    /// Makes every wall cell within `near_m` of `at` unknown again.
+    fn forget_walls_near(&mut self, _at: Point, _near_m: f32) {}
+}
+
+/// A route's next point and its length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RouteStep {
+    /// The first point to drive to (the farthest one of the route in line of sight).
+    pub waypoint: Point,
+    /// The route's length in steps between cells.
+    pub cells: u32,
 }
 
 impl<S: AsRef<[u8]> + AsMut<[u8]>> MapMarker for Grid<S> {
@@ -62,6 +87,36 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> MapMarker for Grid<S> {
         if self.contains(x, y) {
             // `contains` bounds both coordinates, so the write cannot fail.
             let _ = self.set(x as usize, y as usize, cell);
+        }
+    }
+
+    /// The outermost cells are kept: the planned search's map holds the arena's own wall
+    /// there.
+    fn forget_walls(&mut self, keep: Point, keep_m: f32) {
+        forget_where(self, |c| c.distance_to(keep) > keep_m);
+    }
+
+    fn forget_walls_near(&mut self, at: Point, near_m: f32) {
+        forget_where(self, |c| c.distance_to(at) <= near_m);
+    }
+}
+
+/// Makes the wall cells whose centres `forget` picks unknown, the outermost cells aside.
+fn forget_where<S: AsRef<[u8]> + AsMut<[u8]>>(grid: &mut Grid<S>, forget: impl Fn(Point) -> bool) {
+    let geo = grid.geometry();
+    let cell = geo.cell_size_m();
+    let (w, h) = (usize::from(grid.width()), usize::from(grid.height()));
+    let (ox, oy) = geo.origin_mm();
+    for y in 1..h.saturating_sub(1) {
+        for x in 1..w.saturating_sub(1) {
+            let centre = Point::new(
+                ox as f32 / 1000.0 + (x as f32 + 0.5) * cell,
+                oy as f32 / 1000.0 + (y as f32 + 0.5) * cell,
+            );
+            if grid.get(x, y) == Cell::Obstacle && forget(centre) {
+                // In range by the loops' bounds.
+                let _ = grid.set(x, y, Cell::Unknown);
+            }
         }
     }
 }
@@ -138,6 +193,64 @@ pub struct ExploreParams {
     /// Distance at which cells to either side are sampled to choose a side, metres.
     pub history_probe_m: f32,
     pub ir: IrRange,
+    /// Which search `StartExploration` runs.
+    pub mode: SearchMode,
+    /// The planned search replans at least this often, ms (it learns as it goes).
+    pub replan_ms: u32,
+    /// ... and at most this often when the map gains walls or the way is blocked, ms.
+    pub min_replan_ms: u32,
+    /// A wall ahead is followed when the route's next point lies within this angle of the
+    /// heading (it would drive into it); else the robot turns towards the point, rad.
+    pub follow_cone_rad: f32,
+    /// Following ends when the route's next point lies this far off the heading away from
+    /// the wall, rad.
+    pub leave_rad: f32,
+    /// A route that has not got shorter for this long is taken as the map's errors making
+    /// the robot circle: the far walls are forgotten, ms.
+    pub no_progress_ms: u32,
+    /// Walls within this distance of the robot are kept when the far ones are forgotten, m.
+    pub keep_walls_m: f32,
+    /// When the planned search's map closes every way twice within this time, the reactive
+    /// search drives for this long, ms.
+    pub reactive_ms: u32,
+}
+
+/// Which search exploration runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SearchMode {
+    /// Seed 004 §5, Fig. 4: the paper's reactive goal search (with Bug2's leaving rule and
+    /// plans when it goes round in circles), on the paper's 0.3 m map.
+    Reactive,
+    /// Plans on its own map as it goes, unknown cells free, on a 0.15 m map ([`planned`]).
+    Planned,
+}
+
+impl SearchMode {
+    /// The parameter value (`search_mode`, PROTOCOL.md §16): 0 reactive, 1 planned.
+    pub const fn code(self) -> u8 {
+        match self {
+            SearchMode::Reactive => 0,
+            SearchMode::Planned => 1,
+        }
+    }
+
+    /// The mode of a parameter value; anything but 0 plans.
+    pub const fn from_code(v: u8) -> SearchMode {
+        match v {
+            0 => SearchMode::Reactive,
+            _ => SearchMode::Planned,
+        }
+    }
+
+    /// Map cell size, metres. Seed 004 §5's 0.3 m for the paper's search; the planned
+    /// search needs a finer grid, as a 0.3 m grid shows no gap narrower than 0.6 m as open
+    /// and real labs have gaps of 0.3-0.5 m (issue 32): 0.15 m shows every gap of 0.3 m.
+    pub const fn cell_m(self) -> f32 {
+        match self {
+            SearchMode::Reactive => 0.3,
+            SearchMode::Planned => 0.15,
+        }
+    }
 }
 
 impl Default for ExploreParams {
@@ -159,6 +272,14 @@ impl Default for ExploreParams {
             waypoint_m: 0.15,
             history_probe_m: 0.6,
             ir: IrRange::default(),
+            mode: SearchMode::Planned,
+            replan_ms: 1000,
+            min_replan_ms: 200,
+            follow_cone_rad: 1.0,
+            leave_rad: 0.35,
+            no_progress_ms: 60_000,
+            keep_walls_m: 0.5,
+            reactive_ms: 30_000,
         }
     }
 }
@@ -262,6 +383,7 @@ pub struct Explorer {
     hits: [HitRecord; HIT_MEMORY],
     next_hit: u8,
     touching: bool,
+    planned: Planned,
 }
 
 impl Explorer {
@@ -274,7 +396,13 @@ impl Explorer {
             hits: [HitRecord::default(); HIT_MEMORY],
             next_hit: 0,
             touching: false,
+            planned: Planned::new(),
         }
+    }
+
+    /// The planned search's state (its route's next point).
+    pub fn planned(&self) -> &Planned {
+        &self.planned
     }
 
     pub fn phase(&self) -> ExplorePhase {
@@ -294,17 +422,42 @@ impl Explorer {
     pub fn restart(&mut self) {
         self.phase = ExplorePhase::Seek;
         self.hits = [HitRecord::default(); HIT_MEMORY];
+        self.planned = Planned::new();
     }
 
-    /// One control cycle: marks the map and returns the motor command (nominal units).
+    /// One control cycle of the search `params.mode` selects: marks the map and returns the
+    /// motor command (nominal units).
     pub fn step(&mut self, inp: &ExploreInput<'_>, map: &mut dyn MapMarker) -> MotorCommand {
-        mark_map(inp, &self.params, map);
-        let here = inp.pose.point();
+        let mode = self.params.mode;
+        self.step_as(mode, inp, map)
+    }
+
+    /// One control cycle of a go-to on the map: the planned search towards `inp.goal`
+    /// whatever the search mode. The caller marks the map and decides arrival.
+    pub fn goto_step(&mut self, inp: &ExploreInput<'_>, map: &mut dyn MapMarker) -> MotorCommand {
+        self.count_contact(inp);
+        let p = self.params;
+        self.planned.step(&p, inp, map, false, &mut self.stats)
+    }
+
+    /// Counts a collision when a sensor starts touching a wall.
+    fn count_contact(&mut self, inp: &ExploreInput<'_>) {
         let touching = inp.ir.iter().any(|&(r, _)| r >= self.params.contact_ir);
         if touching && !self.touching {
             self.stats.collisions = self.stats.collisions.wrapping_add(1);
         }
         self.touching = touching;
+    }
+
+    fn step_as(
+        &mut self,
+        mode: SearchMode,
+        inp: &ExploreInput<'_>,
+        map: &mut dyn MapMarker,
+    ) -> MotorCommand {
+        let new_walls = mark_map(inp, &self.params, map) > 0;
+        let here = inp.pose.point();
+        self.count_contact(inp);
         // seed 004 §3: a robot with a ground sensor is in the goal area when the sensor sees
         // it, not when it believes itself near the light.
         let arrived = match inp.ground {
@@ -313,6 +466,13 @@ impl Explorer {
         };
         if arrived {
             self.phase = ExplorePhase::Arrived;
+        }
+        if mode == SearchMode::Planned && self.phase != ExplorePhase::Arrived {
+            if !self.planned.reactive(inp.now_ms) {
+                self.phase = ExplorePhase::Seek;
+                let p = self.params;
+                return self.planned.step(&p, inp, map, new_walls, &mut self.stats);
+            }
         }
         match self.phase {
             ExplorePhase::Arrived => MotorCommand::STOP,
@@ -363,7 +523,7 @@ impl Explorer {
                     away,
                     degraded: periods.max(degraded),
                 };
-                self.follow(inp, side)
+                motion::follow(&self.params, inp, side)
             }
         }
     }
@@ -394,19 +554,13 @@ impl Explorer {
         map.cell_at(ahead) != Some(Cell::Obstacle)
     }
 
-    fn front_blocked(&self, inp: &ExploreInput<'_>) -> bool {
-        inp.ir
-            .iter()
-            .any(|&(r, a)| libm::fabsf(a) < 0.35 && r >= self.params.wall_ir)
-    }
-
     fn seek(&mut self, inp: &ExploreInput<'_>, map: &mut dyn MapMarker) -> MotorCommand {
         let here = inp.pose.point();
         let dir = here.bearing_to(inp.goal);
-        if self.front_blocked(inp) {
+        if motion::front_blocked(&self.params, inp) {
             return self.wall_found(inp, map, dir);
         }
-        self.steer(inp, inp.goal)
+        motion::steer(&self.params, inp, inp.goal)
     }
 
     /// A wall ahead while seeking: go round it on a side chosen from what happened here
@@ -454,7 +608,7 @@ impl Explorer {
             away: false,
             degraded: 0,
         };
-        self.follow(inp, side)
+        motion::follow(&self.params, inp, side)
     }
 
     /// Plans on the robot's own map towards the goal; without a plan, follows the wall on
@@ -493,7 +647,7 @@ impl Explorer {
         since_ms: u32,
     ) -> MotorCommand {
         let here = inp.pose.point();
-        let blocked = self.front_blocked(inp);
+        let blocked = motion::front_blocked(&self.params, inp);
         let stale = inp.now_ms.wrapping_sub(since_ms) >= 3 * self.params.min_follow_ms;
         let mut target = waypoint;
         if blocked || stale || here.distance_to(waypoint) <= self.params.waypoint_m {
@@ -527,31 +681,7 @@ impl Explorer {
             self.note_side(map.index(here), side);
             return self.start_follow(inp, side, here.bearing_to(inp.goal));
         }
-        self.steer(inp, target)
-    }
-
-    /// Heads for `target`: on the spot when it is far off the heading, else proportionally,
-    /// side sensors pushing the robot off walls it passes.
-    fn steer(&self, inp: &ExploreInput<'_>, target: Point) -> MotorCommand {
-        let dir = inp.pose.point().bearing_to(target);
-        let err = wrap_angle(dir - inp.pose.heading);
-        let p = &self.params;
-        if libm::fabsf(err) > 1.0 {
-            let s = if err > 0.0 {
-                p.follow_speed
-            } else {
-                -p.follow_speed
-            };
-            return MotorCommand::new(units(-s), units(s));
-        }
-        let mut push = 0.0;
-        for &(r, a) in inp.ir {
-            if libm::fabsf(a) >= 0.35 && r >= p.wall_ir {
-                push += if a > 0.0 { -1.0 } else { 1.0 };
-            }
-        }
-        let turn = p.heading_gain * err + push * p.heading_gain * 0.5;
-        MotorCommand::new(units(p.seek_speed - turn), units(p.seek_speed + turn))
+        motion::steer(&self.params, inp, target)
     }
 
     /// Records a wall met in `cell`; returns its record as it was before (tries so far).
@@ -628,40 +758,6 @@ impl Explorer {
         }
     }
 
-    /// Wall following with three IR sensors: keep `follow_distance_m` from the wall on `side`;
-    /// turn away on the spot when the front is blocked; curve in when the wall is lost.
-    fn follow(&self, inp: &ExploreInput<'_>, side: WallSide) -> MotorCommand {
-        let p = &self.params;
-        // +1 turns left (counter-clockwise): away from a wall on the right.
-        let away = match side {
-            WallSide::Left => -1.0,
-            WallSide::Right => 1.0,
-        };
-        if self.front_blocked(inp) {
-            let s = p.follow_speed * away;
-            return MotorCommand::new(units(-s), units(s));
-        }
-        let side_reading = inp
-            .ir
-            .iter()
-            .filter(|&&(_, a)| match side {
-                WallSide::Left => a >= 0.35,
-                WallSide::Right => a <= -0.35,
-            })
-            .map(|&(r, _)| r)
-            .max()
-            .unwrap_or(0);
-        // A side sensor at 60 degrees sees the wall at d / sin(60) along its ray.
-        let turn = match p.ir.distance(side_reading) {
-            Some(d) => {
-                let wall = d * 0.866;
-                // Too close: turn away; too far: turn towards.
-                (p.follow_distance_m - wall) * p.follow_gain * away
-            }
-            None => -away * p.follow_speed * 0.6,
-        };
-        MotorCommand::new(units(p.follow_speed - turn), units(p.follow_speed + turn))
-    }
 }
 
 /// A map cell's column and row as bytes (the map is at most 64 x 64).
@@ -670,10 +766,15 @@ fn cell_u8(cell: Option<(i32, i32)>) -> Option<(u8, u8)> {
     Some((u8::try_from(x).ok()?, u8::try_from(y).ok()?))
 }
 
+/// How far inside a seen wall the planned search marks it, m.
+const WALL_DEPTH_M: f32 = 0.05;
+
 /// Marks the cell under the robot free, unknown cells along each IR ray free, and the cell
-/// where a ray sees something an obstacle (never the robot's own cell).
-pub fn mark_map(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) {
+/// where a ray sees something an obstacle (never the robot's own cell); returns the number of
+/// cells that became obstacles.
+pub fn mark_map(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) -> u32 {
     let here = inp.pose.point();
+    let mut walls = 0;
     map.mark(here, Cell::Free);
     for &(reading, angle) in inp.ir {
         let a = inp.pose.heading + angle;
@@ -690,14 +791,29 @@ pub fn mark_map(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMark
             t += 0.05;
         }
         if let Some(d) = seen {
-            // The sensor sits at the body edge; the wall is d beyond it.
-            let r = d + 0.12;
+            // The sensor sits at the body edge; the wall is d beyond it. The planned search
+            // marks the cell a little inside the wall: the cell holding the wall's face is
+            // as likely free space beside it, and on a 0.15 m map marking it closed the gaps
+            // of 0.3-0.4 m the robot drives through.
+            let depth = if p.mode == SearchMode::Planned {
+                WALL_DEPTH_M
+            } else {
+                0.0
+            };
+            let r = d + 0.12 + depth;
             let q = Point::new(here.x + r * c, here.y + r * s);
             if map.index(q) != map.index(here) {
+                let before = map.cell_at(q);
                 map.mark(q, Cell::Obstacle);
+                if before.is_some_and(|b| b != Cell::Obstacle)
+                    && map.cell_at(q) == Some(Cell::Obstacle)
+                {
+                    walls += 1;
+                }
             }
         }
     }
+    walls
 }
 
 #[cfg(test)]

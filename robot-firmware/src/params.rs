@@ -10,6 +10,7 @@ use protocol::NackReason;
 
 use crate::behaviour::ArbiterParams;
 use crate::deadreckon::DeadReckonParams;
+use crate::explore::{ExploreParams, SearchMode};
 use crate::guided::GuidedParams;
 use crate::odometry::OdometryParams;
 use crate::robot::ProgressParams;
@@ -111,10 +112,10 @@ const fn needs(caps: u32, info: ParamInfo) -> ParamInfo {
     }
 }
 
-use protocol::caps::ENCODERS;
+use protocol::caps::{BEACON, COMPASS, ENCODERS};
 
 /// Every parameter, by id.
-pub const PARAMS: [ParamInfo; 36] = [
+pub const PARAMS: [ParamInfo; 37] = [
     pi(
         0,
         "failsafe_ms",
@@ -404,6 +405,18 @@ pub const PARAMS: [ParamInfo; 36] = [
         1.0,
         "1: stream every hardware read as HalTrace frames, for `station retrace` (PROTOCOL.md §17)",
     ),
+    // Issue 32: the paper's reactive search stays selectable for its reproductions.
+    needs(
+        COMPASS | BEACON,
+        pi(
+            35,
+            "search_mode",
+            "",
+            0.0,
+            1.0,
+            "exploration: 1 plans on its own 0.15 m map as it goes (default), 0 is seed 004 §5's reactive search on a 0.3 m map; read when a run starts",
+        ),
+    ),
     needs(
         ENCODERS,
         p(
@@ -456,6 +469,7 @@ pub mod id {
     pub const ODO_WHEEL_DISTANCE_MM: u16 = 5;
     pub const ODO_WHEEL_RATIO_PPM: u16 = 50;
     pub const HAL_TRACE: u16 = 34;
+    pub const SEARCH_MODE: u16 = 35;
 }
 
 /// The description of parameter `id`.
@@ -476,6 +490,8 @@ pub struct Tunables<'a> {
     pub dead_reckon: &'a mut DeadReckonParams,
     pub guided: &'a mut GuidedParams,
     pub progress: &'a mut ProgressParams,
+    /// The search's parameters, on a robot that has one.
+    pub explore: Option<&'a mut ExploreParams>,
 }
 
 enum Slot<'a> {
@@ -484,6 +500,7 @@ enum Slot<'a> {
     I16(&'a mut i16),
     I32(&'a mut i32),
     U8(&'a mut u8),
+    Search(&'a mut SearchMode),
 }
 
 impl Tunables<'_> {
@@ -525,6 +542,7 @@ impl Tunables<'_> {
             33 => Slot::U8(&mut self.robot.robot_id),
             50 => Slot::F32(&mut self.odometry.wheel_ratio_error_ppm),
             34 => Slot::U8(&mut self.robot.hal_trace),
+            35 => Slot::Search(&mut self.explore.as_mut()?.mode),
             _ => return None,
         })
     }
@@ -538,6 +556,7 @@ impl Tunables<'_> {
             // Every i32 parameter's range fits f32 exactly (|v| < 2^24).
             Slot::I32(v) => *v as f32,
             Slot::U8(v) => f32::from(*v),
+            Slot::Search(v) => f32::from(v.code()),
         })
     }
 
@@ -555,6 +574,7 @@ impl Tunables<'_> {
             Slot::I16(v) => *v = value as i16,
             Slot::I32(v) => *v = value as i32,
             Slot::U8(v) => *v = value as u8,
+            Slot::Search(v) => *v = SearchMode::from_code(value as u8),
         }
         self.get(id)
     }
@@ -571,6 +591,7 @@ mod tests {
         let mut dead_reckon = DeadReckonParams::default();
         let mut guided = GuidedParams::default();
         let mut progress = ProgressParams::default();
+        let mut explore = ExploreParams::default();
         f(&mut Tunables {
             progress: &mut progress,
             robot: &mut robot,
@@ -578,6 +599,7 @@ mod tests {
             arbiter: &mut arbiter,
             dead_reckon: &mut dead_reckon,
             guided: &mut guided,
+            explore: Some(&mut explore),
         })
     }
 
@@ -620,6 +642,7 @@ mod tests {
             (id::ROBOT_ID, "robot_id"),
             (id::ODO_WHEEL_DISTANCE_MM, "odo_wheel_distance_mm"),
             (id::ODO_WHEEL_RATIO_PPM, "odo_wheel_ratio_ppm"),
+            (id::SEARCH_MODE, "search_mode"),
         ] {
             assert_eq!(info(i).map(|p| p.name), Some(name));
         }

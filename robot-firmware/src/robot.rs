@@ -726,6 +726,7 @@ impl<K: Kit> Core<K> {
             arbiter: &mut self.arbiter.params,
             dead_reckon: &mut self.dead.params,
             guided: &mut self.guided,
+            explore: self.explorer.get_mut().map(|e| &mut e.params),
         }
     }
 
@@ -1103,6 +1104,9 @@ impl<K: Kit> Core<K> {
         let Some(goal) = self.goal else {
             return MotorCommand::STOP;
         };
+        if let Some(cmd) = K::Explorer::goto(self, goal) {
+            return cmd;
+        }
         let (ir, n) = self.ir_rays();
         let (cmd, phase) = guided_step(self.pose(), goal, &ir[..n], &self.guided);
         if phase == GuidedPhase::Arrived {

@@ -277,9 +277,11 @@ fn place_structure(p: &Plan, s: Structure, rng: &mut SimRng) -> (Point, Point, V
             // The walls between 25 % and 75 % of the long axis, a gap or more apart.
             let lo = la * 0.25;
             let hi = la * 0.75;
+            // Each wall in its own share of the span, jittered so that neighbours keep a gap.
             let step = ((hi - lo) / f64::from(n)).max(gap + t);
+            let slack = ((step - gap - t) / 2.0).max(0.0);
             let at: Vec<f64> = (0..n)
-                .map(|k| lo + step * (f64::from(k) + uniform(rng, 0.3, 0.7)))
+                .map(|k| lo + step * (f64::from(k) + 0.5) + uniform(rng, -slack, slack))
                 .collect();
             let first = at.first().copied().unwrap_or(lo);
             let last = at.last().copied().unwrap_or(hi);

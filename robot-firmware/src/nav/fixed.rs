@@ -254,10 +254,23 @@ impl<
         if fits {
             return self.plan(start, goal).map(Route::Squares);
         }
+        self.grid_route(passable, start, goal).map(Route::Grid)
+    }
+
+    /// The grid planner alone, over `passable` cells, in the region map's bytes (any
+    /// segmentation is gone); its waypoints come from [`wave_route`](Self::wave_route). What
+    /// a search that replans as its map fills in uses: its cost depends on the cells the wave
+    /// covers, not on how the free space cuts into squares.
+    pub fn grid_route(
+        &mut self,
+        passable: Passable,
+        start: GridPoint,
+        goal: GridPoint,
+    ) -> Result<WavePlan, PlanError> {
         self.held = Held::Nothing;
         let plan = wave_plan(&self.grid, passable, start, goal, self.map.bytes_mut())?;
         self.held = Held::Labels(passable);
-        Ok(Route::Grid(plan))
+        Ok(plan)
     }
 
     /// The waypoints of a grid plan the last [`route`](Self::route) made; `None` if the grid

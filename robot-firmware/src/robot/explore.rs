@@ -17,15 +17,15 @@ use protocol::{Mode, NackReason, PointMm};
 
 use super::{Core, Kit, Slot};
 use crate::deadreckon::DegradeEvent;
-use crate::explore::{ExploreInput, ExploreParams, ExplorePhase, ExploreStats, MapMarker};
+use crate::explore::{
+    ExploreInput, ExploreParams, ExplorePhase, ExploreStats, MapMarker, RouteStep, SearchMode,
+};
 use crate::hal::MotorCommand;
-use crate::nav::{grid_bytes, Cell, Geometry, Grid, Passable, Route};
+use crate::nav::{grid_bytes, Cell, Geometry, Grid, GridPoint, Passable, Route};
 use crate::odometry::Point;
 use crate::transfer::Objects;
 use crate::MAP_CAPACITY;
 
-/// Map cell size for exploration (seed 004 §5: the position error is 0.3 m, so the grid is).
-const EXPLORE_CELL_M: f32 = 0.3;
 const GRID_BYTES: usize = grid_bytes(MAP_CAPACITY, MAP_CAPACITY);
 
 impl<K: Kit> Core<K> {
@@ -75,22 +75,39 @@ impl<K: Kit<Explorer = crate::explore::Explorer>> Core<K> {
         Ok(())
     }
 
-    /// An all-unknown map over the dead-reckoning bounds, start and goal marked.
+    /// An all-unknown map over the dead-reckoning bounds, start and goal marked: at the
+    /// search's cell size (seed 004 §5's 0.3 m for the paper's search, 0.15 m for the planned
+    /// one). The planned search's map reaches one cell past the bounds on every side and
+    /// holds that ring as wall: the arena's own wall is known from the start, and a reading
+    /// of it marks a cell of the ring, not the cells along it where the robot drives (on a
+    /// 0.15 m map those marks closed every gap between a wall's end and the arena's wall).
+    /// In an arena too large for 0.15 m, the smallest whole centimetre that fits.
     fn create_exploration_map(&mut self) -> Result<(), NackReason> {
         let b = self.dead.params.bounds;
-        let cells = |span: f32| libm::ceilf(span / EXPLORE_CELL_M - 1e-3).max(1.0);
-        let (w, h) = (cells(b.max.x - b.min.x), cells(b.max.y - b.min.y));
+        let mode = self.explorer.get().map_or(SearchMode::Reactive, |e| e.params.mode);
+        let ring = u16::from(mode == SearchMode::Planned);
+        let (span_x, span_y) = (b.max.x - b.min.x, b.max.y - b.min.y);
         let cap = MAP_CAPACITY as f32;
-        if !(w <= cap && h <= cap) {
+        let inner = cap - 2.0 * f32::from(ring);
+        let mut cell_m = mode.cell_m();
+        if mode == SearchMode::Planned {
+            let fit = libm::ceilf(span_x.max(span_y) / inner * 100.0 - 1e-3) / 100.0;
+            cell_m = cell_m.max(fit);
+        }
+        let cells = |span: f32| libm::ceilf(span / cell_m - 1e-3).max(1.0);
+        let (w, h) = (cells(span_x), cells(span_y));
+        if !(w <= inner && h <= inner) {
             return Err(NackReason::CapacityExceeded);
         }
-        let geometry = Geometry::from_metres(EXPLORE_CELL_M, b.min.x, b.min.y)
+        let margin = cell_m * f32::from(ring);
+        let geometry = Geometry::from_metres(cell_m, b.min.x - margin, b.min.y - margin)
             .map_err(|_| NackReason::CapacityExceeded)?;
         // All unknown: cells over a constant in flash, which `set_map` copies into the robot's
         // grid in place (a 1 KB array here was most of the worst-case stack, issue 15).
         static UNKNOWN: [u8; GRID_BYTES] = [0; GRID_BYTES];
         // Both sides are at most MAP_CAPACITY (checked above), so they fit u16.
-        let grid = Grid::new(w as u16, h as u16, geometry, &UNKNOWN[..])
+        let (w, h) = (w as u16 + 2 * ring, h as u16 + 2 * ring);
+        let grid = Grid::new(w, h, geometry, &UNKNOWN[..])
             .map_err(|_| NackReason::CapacityExceeded)?;
         let here = self.pose();
         let mm = |v: f32| libm::roundf(v * 1000.0) as i32;
@@ -104,6 +121,11 @@ impl<K: Kit<Explorer = crate::explore::Explorer>> Core<K> {
             y_mm: mm(beacon.y),
         };
         self.objects.set_map(&grid, Some(start), Some(goal))?;
+        if ring > 0 {
+            if let Some(g) = self.objects.grid_mut() {
+                wall_round(g);
+            }
+        }
         Ok(())
     }
 
@@ -137,6 +159,33 @@ impl<K: Kit<Explorer = crate::explore::Explorer>> Core<K> {
             return MotorCommand::STOP;
         }
         cmd
+    }
+
+    /// A go-to on the robot's map (issue 32: the search's planner serves go-to too): the route
+    /// over what the map knows, unknown cells free, replanned as it goes, instead of steering
+    /// straight at the point; `None` without a map (guided motion then steers straight).
+    /// Arrival is guided motion's radius; the map is marked as in every mode but exploration
+    /// (`map_as_it_moves`: unknown cells only).
+    pub(super) fn planned_goto(&mut self, goal: Point) -> Option<MotorCommand> {
+        if !self.objects.has_map() {
+            return None;
+        }
+        let pose = self.pose();
+        if pose.point().distance_to(goal) <= self.guided.arrival_m {
+            self.mark_arrived();
+            return Some(MotorCommand::STOP);
+        }
+        let (ir, n) = self.ir_rays();
+        let input = ExploreInput {
+            now_ms: self.cycle_ms,
+            pose,
+            ir: &ir[..n],
+            goal,
+            ground: None,
+            arrival_m: self.guided.arrival_m,
+        };
+        let explorer = self.explorer.get_mut()?;
+        Some(explorer.goto_step(&input, &mut ExploreMap(&mut self.objects)))
     }
 
     /// Seed 004 §4: collisions, dead ends and long wall following lower the confidence xi,
@@ -239,6 +288,77 @@ impl MapMarker for ExploreMap<'_> {
         nav.forget_segmentation();
         point
     }
+
+    /// The grid planner over free and unknown cells (no segmentation: cheap enough to run
+    /// several times a second), to the goal's cell or, when that is a wall, the nearest cell
+    /// that is not.
+    fn route_towards(&mut self, from: Point, to: Point) -> Option<RouteStep> {
+        let nav = self.0.nav_mut();
+        let geo = nav.grid().geometry();
+        let start = geo.metres_to_grid(from.x, from.y);
+        let goal = open_near(nav.grid(), geo.metres_to_grid(to.x, to.y))?;
+        let plan = nav
+            .grid_route(Passable::FreeOrUnknown, start, goal)
+            .ok()?;
+        let next = nav.wave_route(plan)?.waypoints().nth(1)?;
+        let (x, y) = geo.grid_to_metres(next);
+        Some(RouteStep {
+            waypoint: Point::new(x, y),
+            cells: plan.steps,
+        })
+    }
+
+    fn forget_walls(&mut self, keep: Point, keep_m: f32) {
+        if let Some(grid) = self.0.grid_mut() {
+            grid.forget_walls(keep, keep_m);
+        }
+    }
+
+    fn forget_walls_near(&mut self, at: Point, near_m: f32) {
+        if let Some(grid) = self.0.grid_mut() {
+            grid.forget_walls_near(at, near_m);
+        }
+    }
+}
+
+/// Makes the grid's outermost cells walls.
+fn wall_round<S: AsRef<[u8]> + AsMut<[u8]>>(g: &mut Grid<S>) {
+    let (w, h) = (usize::from(g.width()), usize::from(g.height()));
+    for y in 0..h {
+        for x in 0..w {
+            if x == 0 || y == 0 || x + 1 == w || y + 1 == h {
+                // In range by the loops' bounds.
+                let _ = g.set(x, y, Cell::Obstacle);
+            }
+        }
+    }
+}
+
+/// `goal` if its cell is not a wall, else the centre of the nearest such cell within three
+/// cells of it (the goal light's cell can be marked by a reading of its post or a robot).
+fn open_near<S: AsRef<[u8]>>(grid: &Grid<S>, goal: GridPoint) -> Option<GridPoint> {
+    let (gx, gy) = goal.cell();
+    let open = |x: i32, y: i32| {
+        grid.contains(x, y) && grid.get(x as usize, y as usize) != Cell::Obstacle
+    };
+    if open(gx, gy) {
+        return Some(goal);
+    }
+    for r in 1..=3i32 {
+        let mut best: Option<(i32, i32, i32)> = None;
+        for y in gy - r..=gy + r {
+            for x in gx - r..=gx + r {
+                let d = (x - gx) * (x - gx) + (y - gy) * (y - gy);
+                if open(x, y) && best.is_none_or(|b| d < b.2) {
+                    best = Some((x, y, d));
+                }
+            }
+        }
+        if let Some((x, y, _)) = best {
+            return Some(GridPoint::cell_centre(x as u16, y as u16));
+        }
+    }
+    None
 }
 
 #[cfg(test)]

@@ -18,6 +18,7 @@ use super::{AliceState, Core, Forage, LightCalibration, LineCorr};
 use crate::behaviour;
 use crate::explore::Explorer;
 use crate::hal::{Hal, MotorCommand};
+use crate::odometry::Point;
 
 /// A capability's state, or `Absent`.
 pub trait Slot<T> {
@@ -215,6 +216,9 @@ impl LightCalSlot for Absent {
 pub trait ExplorerSlot: Slot<Explorer> + Sized {
     fn start<K: Kit<Explorer = Self>>(core: &mut Core<K>) -> Result<(), NackReason>;
     fn command<K: Kit<Explorer = Self>>(core: &mut Core<K>) -> MotorCommand;
+    /// A compass robot's go-to to `goal` planned on its map; `None` without a map or a
+    /// planner (guided motion then steers straight at the point).
+    fn goto<K: Kit<Explorer = Self>>(core: &mut Core<K>, goal: Point) -> Option<MotorCommand>;
 }
 
 impl ExplorerSlot for Explorer {
@@ -224,6 +228,9 @@ impl ExplorerSlot for Explorer {
     fn command<K: Kit<Explorer = Self>>(core: &mut Core<K>) -> MotorCommand {
         core.explore_command()
     }
+    fn goto<K: Kit<Explorer = Self>>(core: &mut Core<K>, goal: Point) -> Option<MotorCommand> {
+        core.planned_goto(goal)
+    }
 }
 
 impl ExplorerSlot for Absent {
@@ -232,6 +239,9 @@ impl ExplorerSlot for Absent {
     }
     fn command<K: Kit<Explorer = Self>>(_: &mut Core<K>) -> MotorCommand {
         MotorCommand::STOP
+    }
+    fn goto<K: Kit<Explorer = Self>>(_: &mut Core<K>, _: Point) -> Option<MotorCommand> {
+        None
     }
 }
 

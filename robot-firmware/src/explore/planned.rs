@@ -1,0 +1,216 @@
+//! The search that plans on its own map (issue 32): heading for the goal along a route over
+//! the robot's grid map with unknown cells taken as free, replanned as walls appear, the way a
+//! micromouse floods its maze (the incremental form is D* Lite, Koenig and Likhachev 2002;
+//! here the whole wave is redone, which the firmware's 64 x 64 grid makes cheap: see
+//! `robot-firmware/plan-cost.sh`). What the map cannot tell yet is left to seed 004 §5's
+//! reactive behaviours: with nothing known the route is the straight line to the beacon, and
+//! a wall met that the map does not hold is followed, on the side the route turns to, until
+//! the route leads away from it.
+//!
+//! Layer: inside [`super::Explorer`] (`SearchMode::Planned`, the default; the paper's reactive
+//! search is `SearchMode::Reactive`) and behind a compass robot's go-to to a point, which
+//! plans over what it knows the same way instead of steering straight at the point. The map
+//! and its planner are reached through [`MapMarker::route_towards`]; this module holds a few
+//! words of state.
+//!
+//! Replanning: when the map gains a wall cell, when the waypoint is reached, when a wall
+//! blocks the way, and at least every `replan_ms`. When the map shows no way at all (its walls
+//! hold dead-reckoning errors that close a gap), the walls away from the robot are forgotten
+//! and the route planned again; the same when the route has not shortened for
+//! `no_progress_ms` (a map whose errors make the robot circle). Without any route the robot
+//! heads straight for the goal, as the paper's search does.
+//!
+//! Pure: pose, readings, time and the map in; motor command out. Cannot fail or panic.
+
+use super::motion::{follow, front_blocked, steer};
+use super::{ExploreInput, ExploreParams, ExploreStats, MapMarker, WallSide};
+use crate::behaviour::MotorCommand;
+use crate::odometry::{wrap_angle, Point};
+
+/// What the planned search is doing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PlannedPhase {
+    /// Driving to the route's next point.
+    Drive,
+    /// Going round a wall the route runs into (the map does not hold it yet), wall on `side`.
+    Follow { side: WallSide, since_ms: u32 },
+}
+
+/// The planned search's state: the route's next point and when it was planned.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Planned {
+    phase: PlannedPhase,
+    /// The goal the route was planned to (a new goal is planned for at once).
+    goal: Point,
+    waypoint: Option<Point>,
+    planned_ms: u32,
+    /// The shortest route (in cells) seen since `progress_ms`.
+    best_cells: u32,
+    progress_ms: u32,
+    /// When the map last had to be forgotten whole (no way even without its far walls).
+    wiped_ms: Option<u32>,
+    /// Until when the paper's reactive search drives instead (the map keeps misleading).
+    reactive_until_ms: Option<u32>,
+}
+
+impl Default for Planned {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Planned {
+    pub const fn new() -> Self {
+        Planned {
+            phase: PlannedPhase::Drive,
+            goal: Point { x: 0.0, y: 0.0 },
+            waypoint: None,
+            planned_ms: 0,
+            best_cells: u32::MAX,
+            progress_ms: 0,
+            wiped_ms: None,
+            reactive_until_ms: None,
+        }
+    }
+
+    /// Whether the paper's reactive search drives now: the map closed every way twice within
+    /// `reactive_ms` (its walls hold errors that re-form as fast as they are forgotten), so
+    /// for `reactive_ms` the search goes by wall following, which finds a gap by touch.
+    pub fn reactive(&mut self, now_ms: u32) -> bool {
+        match self.reactive_until_ms {
+            Some(t) if now_ms.wrapping_sub(t) < 0x8000_0000 => {
+                self.reactive_until_ms = None;
+                self.phase = PlannedPhase::Drive;
+                self.waypoint = None;
+                false
+            }
+            Some(_) => true,
+            None => false,
+        }
+    }
+
+    pub fn phase(&self) -> PlannedPhase {
+        self.phase
+    }
+
+    /// The route's next point, if there is a route.
+    pub fn waypoint(&self) -> Option<Point> {
+        self.waypoint
+    }
+
+    /// One control cycle towards `inp.goal`; `new_walls` says the map gained wall cells this
+    /// cycle. Arrival is the caller's (the explorer's ground sensor or radius).
+    pub fn step(
+        &mut self,
+        p: &ExploreParams,
+        inp: &ExploreInput<'_>,
+        map: &mut dyn MapMarker,
+        new_walls: bool,
+        stats: &mut ExploreStats,
+    ) -> MotorCommand {
+        let here = inp.pose.point();
+        let blocked = front_blocked(p, inp);
+        let reached = self
+            .waypoint
+            .is_some_and(|w| here.distance_to(w) <= p.waypoint_m);
+        if inp.goal != self.goal {
+            *self = Planned::new();
+            self.goal = inp.goal;
+            self.progress_ms = inp.now_ms;
+        }
+        let since = inp.now_ms.wrapping_sub(self.planned_ms);
+        let due = self.waypoint.is_none()
+            || reached
+            || since >= p.replan_ms
+            || ((new_walls || blocked) && since >= p.min_replan_ms);
+        if due {
+            self.replan(p, inp, map, stats);
+        }
+        let target = self.waypoint.unwrap_or(inp.goal);
+        let bearing = wrap_angle(here.bearing_to(target) - inp.pose.heading);
+        match self.phase {
+            PlannedPhase::Drive => {
+                if blocked && libm::fabsf(bearing) < p.follow_cone_rad {
+                    // The route runs into a wall the map does not show yet: go round it on
+                    // the side the route turns to (to the left: the wall on the right).
+                    let side = if bearing >= 0.0 {
+                        WallSide::Right
+                    } else {
+                        WallSide::Left
+                    };
+                    stats.walls_found = stats.walls_found.wrapping_add(1);
+                    self.phase = PlannedPhase::Follow {
+                        side,
+                        since_ms: inp.now_ms,
+                    };
+                    return follow(p, inp, side);
+                }
+                steer(p, inp, target)
+            }
+            PlannedPhase::Follow { side, since_ms } => {
+                let elapsed = inp.now_ms.wrapping_sub(since_ms);
+                // Away from the wall: the route turns off it (or back past it).
+                let off = match side {
+                    WallSide::Right => bearing,
+                    WallSide::Left => -bearing,
+                };
+                let leaves = off > p.leave_rad || libm::fabsf(bearing) > p.follow_cone_rad * 2.0;
+                if elapsed >= p.min_follow_ms / 2 && !blocked && leaves {
+                    stats.rejoins = stats.rejoins.wrapping_add(1);
+                    self.phase = PlannedPhase::Drive;
+                    return steer(p, inp, target);
+                }
+                follow(p, inp, side)
+            }
+        }
+    }
+
+    /// Plans again; with no way on the map, forgets its far walls and plans once more.
+    fn replan(
+        &mut self,
+        p: &ExploreParams,
+        inp: &ExploreInput<'_>,
+        map: &mut dyn MapMarker,
+        stats: &mut ExploreStats,
+    ) {
+        let here = inp.pose.point();
+        self.planned_ms = inp.now_ms;
+        stats.plans = stats.plans.wrapping_add(1);
+        let stale = inp.now_ms.wrapping_sub(self.progress_ms) >= p.no_progress_ms;
+        let mut step = map.route_towards(here, inp.goal);
+        if step.is_none() {
+            // The way closed under the latest marks, those of the walls around the robot: a
+            // gap it is passing, narrowed by its position's error. Forget them; they are
+            // marked again as it drives on.
+            map.forget_walls_near(here, p.keep_walls_m);
+            step = map.route_towards(here, inp.goal);
+        }
+        if step.is_none() || stale {
+            // Still no way (or the robot circles): the map's walls hold errors. Forget them
+            // all; a second time soon after, let the reactive search find the way.
+            map.forget_walls(here, 0.0);
+            stats.dead_ends = stats.dead_ends.wrapping_add(1);
+            self.best_cells = u32::MAX;
+            self.progress_ms = inp.now_ms;
+            let again = self
+                .wiped_ms
+                .is_some_and(|t| inp.now_ms.wrapping_sub(t) < p.reactive_ms);
+            self.wiped_ms = Some(inp.now_ms);
+            if again {
+                self.reactive_until_ms = Some(inp.now_ms.wrapping_add(p.reactive_ms));
+                stats.timeouts = stats.timeouts.wrapping_add(1);
+            }
+            step = map.route_towards(here, inp.goal);
+        }
+        match step {
+            Some(s) => {
+                if s.cells < self.best_cells {
+                    self.best_cells = s.cells;
+                    self.progress_ms = inp.now_ms;
+                }
+                self.waypoint = Some(s.waypoint);
+            }
+            None => self.waypoint = None,
+        }
+    }
+}
