@@ -53,6 +53,9 @@ fn main() {
     apply(&mut sim, Command::StartExploration, "explore").unwrap();
     let mut track = Vec::new();
     let mut next = 0.0;
+    // Time (ms) spinning (wheels opposite), following, driving, reactive.
+    let (mut spin, mut follow, mut drive, mut reactive) = (0u64, 0u64, 0u64, 0u64);
+    let summary = std::env::var_os("SUMMARY").is_some();
     for i in 0..300_000u64 {
         sim.step();
         let t = i as f64 / 1000.0;
@@ -65,7 +68,21 @@ fn main() {
             let w = sim.robot().dom_dinis().unwrap().core.explorer.planned().waypoint();
             print_map(&sim, &arena, &track, w);
         }
-        if t >= next {
+        let detail = std::env::var("TRACE_FROM")
+            .ok()
+            .and_then(|v| v.parse::<f64>().ok())
+            .is_some_and(|from| t >= from && t < from + 3.0);
+        if detail && i % 50 == 0 {
+            let r = sim.robot().dom_dinis().unwrap();
+            let b = sim.believed();
+            println!(
+                "  {t:.2} true ({:.3},{:.3},{:.2}) bel ({:.3},{:.3},{:.2}) ir {:?} motor {:?} {:?} wp {:?}",
+                p.x, p.y, p.heading, b.x, b.y, b.heading,
+                &r.core.sensors.ir[..3], r.core.motor, r.core.explorer.planned().phase(),
+                r.core.explorer.planned().waypoint().map(|w| (w.x, w.y))
+            );
+        }
+        if t >= next && !summary {
             next += every_s;
             let b = sim.believed();
             let r = sim.robot().dom_dinis().unwrap();
@@ -81,10 +98,40 @@ fn main() {
                 e.stats()
             );
         }
+        {
+            let r = sim.robot().dom_dinis().unwrap();
+            let m = r.core.motor;
+            if m.left == -m.right && m.left != 0 {
+                spin += 1;
+            }
+            match (r.core.explorer.phase(), r.core.explorer.planned().phase()) {
+                (robot_firmware::explore::ExplorePhase::Follow { .. }, _) => reactive += 1,
+                (_, robot_firmware::explore::PlannedPhase::Follow { .. }) => follow += 1,
+                _ => drive += 1,
+            }
+        }
         if sim.robot().arrived() {
-            println!("arrived at {t:.1} s");
+            if !summary {
+                println!("arrived at {t:.1} s");
+            }
             break;
         }
+    }
+    if summary {
+        let e = sim.robot().dom_dinis().unwrap().core.explorer;
+        let g = (sim.truth().x - target.centre.x).hypot(sim.truth().y - target.centre.y);
+        println!(
+            "seed {seed} arrived {} t {:.0} spin {:.0}% follow {:.0}% reactive {:.0}% drive {:.0}% goal {g:.2} pose err {:.2} {:?}",
+            sim.robot().arrived(),
+            sim.now_us() as f64 * 1e-6,
+            100.0 * spin as f64 / (drive + follow + reactive).max(1) as f64,
+            100.0 * follow as f64 / (drive + follow + reactive).max(1) as f64,
+            100.0 * reactive as f64 / (drive + follow + reactive).max(1) as f64,
+            100.0 * drive as f64 / (drive + follow + reactive).max(1) as f64,
+            sim.pose_error_m(),
+            e.stats()
+        );
+        return;
     }
     print_map(&sim, &arena, &track, None);
     println!(

@@ -59,6 +59,11 @@ pub trait MapMarker {
     fn forget_walls(&mut self, _keep: Point, _keep_m: f32) {}
     /// Makes every wall cell within `near_m` of `at` unknown again.
     fn forget_walls_near(&mut self, _at: Point, _near_m: f32) {}
+    /// Whether the straight line from `from` to `to` meets no wall cell of the map (unknown
+    /// cells count as free); `false` off the map.
+    fn clear_line(&self, _from: Point, _to: Point) -> bool {
+        false
+    }
 }
 
 /// A route's next point and its length.
@@ -98,6 +103,20 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> MapMarker for Grid<S> {
 
     fn forget_walls_near(&mut self, at: Point, near_m: f32) {
         forget_where(self, |c| c.distance_to(at) <= near_m);
+    }
+
+    fn clear_line(&self, from: Point, to: Point) -> bool {
+        let geo = self.geometry();
+        let open = |x: i32, y: i32| {
+            self.contains(x, y) && self.get(x as usize, y as usize) != Cell::Obstacle
+        };
+        crate::nav::smooth::line_of_sight_by(
+            self.width(),
+            self.height(),
+            open,
+            geo.metres_to_grid(from.x, from.y),
+            geo.metres_to_grid(to.x, to.y),
+        )
     }
 }
 
@@ -195,6 +214,9 @@ pub struct ExploreParams {
     pub ir: IrRange,
     /// Which search `StartExploration` runs.
     pub mode: SearchMode,
+    /// The planned search's speed on its route with nothing in the sensors' reach (seed 004
+    /// §4: 75 is near the top speed).
+    pub cruise_speed: f32,
     /// The planned search replans at least this often, ms (it learns as it goes).
     pub replan_ms: u32,
     /// ... and at most this often when the map gains walls or the way is blocked, ms.
@@ -210,9 +232,13 @@ pub struct ExploreParams {
     pub no_progress_ms: u32,
     /// Walls within this distance of the robot are kept when the far ones are forgotten, m.
     pub keep_walls_m: f32,
-    /// When the planned search's map closes every way twice within this time, the reactive
-    /// search drives for this long, ms.
+    /// When the planned search's map closes every way twice within this time, or it has not
+    /// moved `stuck_m` in `stuck_ms`, the reactive search drives for this long, ms.
     pub reactive_ms: u32,
+    /// See `reactive_ms`, m.
+    pub stuck_m: f32,
+    /// See `reactive_ms`, ms.
+    pub stuck_ms: u32,
 }
 
 /// Which search exploration runs.
@@ -273,13 +299,16 @@ impl Default for ExploreParams {
             history_probe_m: 0.6,
             ir: IrRange::default(),
             mode: SearchMode::Planned,
+            cruise_speed: 75.0,
             replan_ms: 1000,
             min_replan_ms: 200,
             follow_cone_rad: 1.0,
             leave_rad: 0.35,
-            no_progress_ms: 60_000,
+            no_progress_ms: 6_000_000,
             keep_walls_m: 0.5,
             reactive_ms: 30_000,
+            stuck_m: 0.15,
+            stuck_ms: 15_000,
         }
     }
 }
@@ -766,13 +795,14 @@ fn cell_u8(cell: Option<(i32, i32)>) -> Option<(u8, u8)> {
     Some((u8::try_from(x).ok()?, u8::try_from(y).ok()?))
 }
 
-/// How far inside a seen wall the planned search marks it, m.
-const WALL_DEPTH_M: f32 = 0.05;
 
 /// Marks the cell under the robot free, unknown cells along each IR ray free, and the cell
 /// where a ray sees something an obstacle (never the robot's own cell); returns the number of
 /// cells that became obstacles.
 pub fn mark_map(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) -> u32 {
+    if p.mode == SearchMode::Planned {
+        return planned::mark_visited(inp, p, map);
+    }
     let here = inp.pose.point();
     let mut walls = 0;
     map.mark(here, Cell::Free);
@@ -791,29 +821,29 @@ pub fn mark_map(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMark
             t += 0.05;
         }
         if let Some(d) = seen {
-            // The sensor sits at the body edge; the wall is d beyond it. The planned search
-            // marks the cell a little inside the wall: the cell holding the wall's face is
-            // as likely free space beside it, and on a 0.15 m map marking it closed the gaps
-            // of 0.3-0.4 m the robot drives through.
-            let depth = if p.mode == SearchMode::Planned {
-                WALL_DEPTH_M
-            } else {
-                0.0
-            };
-            let r = d + 0.12 + depth;
-            let q = Point::new(here.x + r * c, here.y + r * s);
+            // The sensor sits at the body edge; the wall is d beyond it.
+            let q = ray_point(inp, angle, d + 0.12);
             if map.index(q) != map.index(here) {
-                let before = map.cell_at(q);
-                map.mark(q, Cell::Obstacle);
-                if before.is_some_and(|b| b != Cell::Obstacle)
-                    && map.cell_at(q) == Some(Cell::Obstacle)
-                {
-                    walls += 1;
-                }
+                walls += mark_wall(map, q);
             }
         }
     }
     walls
+}
+
+/// The point `r` from the robot's centre along the ray at `angle` (radians, left positive).
+pub(crate) fn ray_point(inp: &ExploreInput<'_>, angle: f32, r: f32) -> Point {
+    let a = inp.pose.heading + angle;
+    let here = inp.pose.point();
+    Point::new(here.x + r * libm::cosf(a), here.y + r * libm::sinf(a))
+}
+
+/// Marks the cell at `q` a wall; 1 if it was not one, else 0.
+pub(crate) fn mark_wall(map: &mut dyn MapMarker, q: Point) -> u32 {
+    let before = map.cell_at(q);
+    map.mark(q, Cell::Obstacle);
+    let now = map.cell_at(q);
+    u32::from(before.is_some_and(|b| b != Cell::Obstacle) && now == Some(Cell::Obstacle))
 }
 
 #[cfg(test)]

@@ -11,7 +11,9 @@
 //!   the outer open towards the start), a pocket around the start, a spiral with the beacon
 //!   at its centre, a comb of walls to snake through; or a CiberRato `<Row>` maze.
 //! - Gaps: the least gap between obstacles is drawn per lab, down to 0.32 m (1.33 robot
-//!   diameters; 40 % of labs under 0.45 m), and the structures' passages use it.
+//!   diameters; 40 % of labs under 0.45 m), and the structures' gaps (a wall's end to the
+//!   lab's wall, a comb's turns) use it; their long corridors are 0.45 m or more, as
+//!   CiberRato's `<Row>` corridors (1.8 units) are.
 //! - Targets: radius 0.85-2 units (0.24-0.57 m: down to one robot diameter).
 //! - Beacons: a quarter of the labs have one or two more beacons, each over its own target
 //!   area; a fifth have a home area (a target without a beacon) around the start.
@@ -33,6 +35,10 @@ use crate::rng::SimRng;
 pub const MIN_GAP_M: f64 = 0.32;
 /// A gap under this is "narrow" (the real labs' 21 of 69 with gaps under 0.5 m).
 pub const NARROW_GAP_M: f64 = 0.45;
+/// The narrowest long corridor (a comb's slots, a spiral's or a nested U's corridor):
+/// CiberRato's `<Row>` corridors are 1.8 units (0.51 m); gaps, which are short, go down to
+/// [`MIN_GAP_M`].
+const CORRIDOR_M: f64 = 0.45;
 /// A wall this high (units) hides the 2-unit beacon; CiberRato's default wall height.
 const HIGH_WALL: f64 = 4.0;
 /// Below the beacon.
@@ -278,8 +284,8 @@ fn place_structure(p: &Plan, s: Structure, rng: &mut SimRng) -> (Point, Point, V
             let lo = la * 0.25;
             let hi = la * 0.75;
             // Each wall in its own share of the span, jittered so that neighbours keep a gap.
-            let step = ((hi - lo) / f64::from(n)).max(gap + t);
-            let slack = ((step - gap - t) / 2.0).max(0.0);
+            let step = ((hi - lo) / f64::from(n)).max(CORRIDOR_M + t);
+            let slack = ((step - CORRIDOR_M - t) / 2.0).max(0.0);
             let at: Vec<f64> = (0..n)
                 .map(|k| lo + step * (f64::from(k) + 0.5) + uniform(rng, -slack, slack))
                 .collect();
@@ -322,8 +328,8 @@ fn place_structure(p: &Plan, s: Structure, rng: &mut SimRng) -> (Point, Point, V
             let mut walls = traps::u_around(goal, inner_w, inner_d, -side, t);
             if nested {
                 // The outer U around the inner one, open the other way (towards the start),
-                // a corridor of at least the gap on its three sides.
-                let corridor = uniform(rng, gap, gap + 0.2);
+                // a corridor on its three sides.
+                let corridor = uniform(rng, CORRIDOR_M, CORRIDOR_M + 0.2);
                 let (hw, hd) = traps::u_half_extent(inner_w, inner_d, t);
                 let outer_w = 2.0 * (hw + corridor);
                 let outer_d = 2.0 * (hd + corridor);
@@ -351,7 +357,7 @@ fn place_structure(p: &Plan, s: Structure, rng: &mut SimRng) -> (Point, Point, V
                 uniform(rng, lc * 0.3, lc * 0.7),
             );
             let room = 2.0 * (r + uniform(rng, 0.1, 0.3)) + t;
-            let corridor = uniform(rng, gap, gap + 0.3);
+            let corridor = uniform(rng, CORRIDOR_M, CORRIDOR_M + 0.3);
             let mut walls =
                 traps::spiral(goal, room, corridor, pick(rng, 4, 8), pick(rng, 0, 3), t);
             let goal = shift_into(&mut walls, goal, p);

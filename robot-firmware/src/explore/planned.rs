@@ -22,10 +22,43 @@
 //!
 //! Pure: pose, readings, time and the map in; motor command out. Cannot fail or panic.
 
-use super::motion::{follow, front_blocked, steer};
-use super::{ExploreInput, ExploreParams, ExploreStats, MapMarker, WallSide};
+use super::motion::{follow, front_blocked, steer, steer_at};
+use super::{mark_wall, ray_point, ExploreInput, ExploreParams, ExploreStats, MapMarker, WallSide};
 use crate::behaviour::MotorCommand;
+use crate::nav::Cell;
 use crate::odometry::{wrap_angle, Point};
+
+/// How far inside a seen wall it is marked, m: the cell holding the wall's face is as likely
+/// free space beside it, and on a 0.15 m map marking it closed the gaps of 0.3-0.4 m the
+/// robot drives through.
+const WALL_DEPTH_M: f32 = 0.05;
+/// Cells within this of the robot's centre are ones it stands in, m (half its radius: the
+/// body's own cell and a neighbour it reaches well into).
+const BODY_M: f32 = 0.06;
+
+/// The planned search's map: the cells the robot stands in are free, and stay free (its
+/// centre has been there, so a route may cross them whatever a later reading, shifted by the
+/// position's error, says); each IR reading marks a wall a little inside the wall it sees,
+/// unless that cell is one the robot stood in. Rays mark nothing free: the planner takes
+/// unknown cells as free anyway, and a free cell here means the robot stood in it. Returns
+/// the number of cells that became walls.
+pub fn mark_visited(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) -> u32 {
+    let here = inp.pose.point();
+    for (dx, dy) in [(0.0, 0.0), (BODY_M, 0.0), (-BODY_M, 0.0), (0.0, BODY_M), (0.0, -BODY_M)] {
+        map.mark(Point::new(here.x + dx, here.y + dy), Cell::Free);
+    }
+    let mut walls = 0;
+    for &(reading, angle) in inp.ir {
+        if let Some(d) = p.ir.distance(reading) {
+            // The sensor sits at the body edge; the wall is d beyond it.
+            let q = ray_point(inp, angle, d + 0.12 + WALL_DEPTH_M);
+            if map.cell_at(q).is_some_and(|c| c != Cell::Free) {
+                walls += mark_wall(map, q);
+            }
+        }
+    }
+    walls
+}
 
 /// What the planned search is doing.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,6 +84,9 @@ pub struct Planned {
     wiped_ms: Option<u32>,
     /// Until when the paper's reactive search drives instead (the map keeps misleading).
     reactive_until_ms: Option<u32>,
+    /// Where the robot was when it last moved `stuck_m`, and when.
+    moved_at: Point,
+    moved_ms: u32,
 }
 
 impl Default for Planned {
@@ -70,6 +106,8 @@ impl Planned {
             progress_ms: 0,
             wiped_ms: None,
             reactive_until_ms: None,
+            moved_at: Point { x: 0.0, y: 0.0 },
+            moved_ms: 0,
         }
     }
 
@@ -117,12 +155,28 @@ impl Planned {
             *self = Planned::new();
             self.goal = inp.goal;
             self.progress_ms = inp.now_ms;
+            self.moved_at = here;
+            self.moved_ms = inp.now_ms;
+        }
+        if here.distance_to(self.moved_at) >= p.stuck_m {
+            self.moved_at = here;
+            self.moved_ms = inp.now_ms;
+        } else if inp.now_ms.wrapping_sub(self.moved_ms) >= p.stuck_ms {
+            // Turning on the spot where the route's points and the walls keep the robot from
+            // leaving (a tight corner the map cannot show): the reactive search's wall
+            // following gets it out by touch.
+            self.moved_ms = inp.now_ms;
+            self.reactive_until_ms = Some(inp.now_ms.wrapping_add(p.reactive_ms));
+            stats.timeouts = stats.timeouts.wrapping_add(1);
         }
         let since = inp.now_ms.wrapping_sub(self.planned_ms);
-        let due = self.waypoint.is_none()
-            || reached
-            || since >= p.replan_ms
-            || ((new_walls || blocked) && since >= p.min_replan_ms);
+        // The route's point is kept while the map shows the way to it clear: replanning on
+        // every mark turned the robot to and fro where marks come and go (a narrow gap).
+        let lost = self.waypoint.is_none_or(|w| !map.clear_line(here, w));
+        let due = reached
+            || (lost && (self.waypoint.is_none() || since >= p.min_replan_ms))
+            || (blocked && since >= p.min_replan_ms)
+            || (since >= p.replan_ms && new_walls);
         if due {
             self.replan(p, inp, map, stats);
         }
@@ -145,7 +199,14 @@ impl Planned {
                     };
                     return follow(p, inp, side);
                 }
-                steer(p, inp, target)
+                // Nothing within the sensors' reach and the heading on the route: top speed.
+                let open = inp.ir.iter().all(|&(r, _)| r < p.ir.min_reading);
+                let speed = if open && libm::fabsf(bearing) < 0.3 {
+                    p.cruise_speed
+                } else {
+                    p.seek_speed
+                };
+                steer_at(p, inp, target, speed)
             }
             PlannedPhase::Follow { side, since_ms } => {
                 let elapsed = inp.now_ms.wrapping_sub(since_ms);

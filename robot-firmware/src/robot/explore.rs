@@ -301,6 +301,7 @@ impl MapMarker for ExploreMap<'_> {
             .grid_route(Passable::FreeOrUnknown, start, goal)
             .ok()?;
         let next = nav.wave_route(plan)?.waypoints().nth(1)?;
+        let next = off_walls(nav.grid(), next);
         let (x, y) = geo.grid_to_metres(next);
         Some(RouteStep {
             waypoint: Point::new(x, y),
@@ -318,6 +319,40 @@ impl MapMarker for ExploreMap<'_> {
         if let Some(grid) = self.0.grid_mut() {
             grid.forget_walls_near(at, near_m);
         }
+    }
+
+    fn clear_line(&self, from: Point, to: Point) -> bool {
+        self.0.nav().grid().clear_line(from, to)
+    }
+}
+
+/// A route point moved off the walls next to its cell: half a cell away from each wall cell
+/// beside it (a quarter from one at a corner), at most to the cell's edge. A route's cells
+/// run along the walls it goes round, and a 0.24 m robot's centre cannot be at the centre of
+/// a 0.15 m cell beside a wall; moved, the point is where the robot can be, in the middle of
+/// a gap two cells wide.
+fn off_walls<S: AsRef<[u8]>>(grid: &Grid<S>, p: GridPoint) -> GridPoint {
+    let (cx, cy) = p.cell();
+    let wall = |dx: i32, dy: i32| {
+        let (x, y) = (cx + dx, cy + dy);
+        grid.contains(x, y) && grid.get(x as usize, y as usize) == Cell::Obstacle
+    };
+    let half = crate::nav::UNITS_PER_CELL / 2;
+    let mut push = (0i32, 0i32);
+    for dy in -1..=1i32 {
+        for dx in -1..=1i32 {
+            if (dx, dy) == (0, 0) || !wall(dx, dy) {
+                continue;
+            }
+            let k = if dx != 0 && dy != 0 { half / 2 } else { half };
+            push.0 -= dx * k;
+            push.1 -= dy * k;
+        }
+    }
+    let centre = GridPoint::cell_centre(cx as u16, cy as u16);
+    GridPoint {
+        x: centre.x + push.0.clamp(-half, half),
+        y: centre.y + push.1.clamp(-half, half),
     }
 }
 
