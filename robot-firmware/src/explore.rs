@@ -64,6 +64,11 @@ pub trait MapMarker {
     fn clear_line(&self, _from: Point, _to: Point) -> bool {
         false
     }
+    /// Makes unknown the wall cells one cell thick that alone part `from`'s region from
+    /// `to`'s (unknown cells free); returns how many.
+    fn open_walls_between(&mut self, _from: Point, _to: Point) -> usize {
+        0
+    }
 }
 
 /// A route's next point and its length.
@@ -239,6 +244,9 @@ pub struct ExploreParams {
     pub stuck_m: f32,
     /// See `reactive_ms`, ms.
     pub stuck_ms: u32,
+    /// The planned search goes reactive for `reactive_ms` when the robot has stood in no
+    /// new cell for this long, ms.
+    pub stale_ms: u32,
 }
 
 /// Which search exploration runs.
@@ -309,6 +317,7 @@ impl Default for ExploreParams {
             reactive_ms: 30_000,
             stuck_m: 0.15,
             stuck_ms: 15_000,
+            stale_ms: 45_000,
         }
     }
 }
@@ -484,7 +493,12 @@ impl Explorer {
         inp: &ExploreInput<'_>,
         map: &mut dyn MapMarker,
     ) -> MotorCommand {
-        let new_walls = mark_map(inp, &self.params, map) > 0;
+        let new_walls = if mode == SearchMode::Planned {
+            let p = self.params;
+            self.planned.mark(inp, &p, map) > 0
+        } else {
+            mark_map(inp, &self.params, map) > 0
+        };
         let here = inp.pose.point();
         self.count_contact(inp);
         // seed 004 §3: a robot with a ground sensor is in the goal area when the sensor sees

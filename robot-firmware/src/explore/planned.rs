@@ -43,9 +43,23 @@ const BODY_M: f32 = 0.06;
 /// unknown cells as free anyway, and a free cell here means the robot stood in it. Returns
 /// the number of cells that became walls.
 pub fn mark_visited(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) -> u32 {
+    mark_visited_counting(inp, p, map).0
+}
+
+/// [`mark_visited`], also counting the cells the robot stands in for the first time.
+fn mark_visited_counting(
+    inp: &ExploreInput<'_>,
+    p: &ExploreParams,
+    map: &mut dyn MapMarker,
+) -> (u32, u32) {
     let here = inp.pose.point();
+    let mut fresh = 0;
     for (dx, dy) in [(0.0, 0.0), (BODY_M, 0.0), (-BODY_M, 0.0), (0.0, BODY_M), (0.0, -BODY_M)] {
-        map.mark(Point::new(here.x + dx, here.y + dy), Cell::Free);
+        let q = Point::new(here.x + dx, here.y + dy);
+        if map.cell_at(q).is_some_and(|c| c != Cell::Free) {
+            fresh += 1;
+        }
+        map.mark(q, Cell::Free);
     }
     let mut walls = 0;
     for &(reading, angle) in inp.ir {
@@ -57,7 +71,7 @@ pub fn mark_visited(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn Map
             }
         }
     }
-    walls
+    (walls, fresh)
 }
 
 /// What the planned search is doing.
@@ -87,6 +101,8 @@ pub struct Planned {
     /// Where the robot was when it last moved `stuck_m`, and when.
     moved_at: Point,
     moved_ms: u32,
+    /// When the robot last stood in a cell it had not stood in before.
+    fresh_ms: u32,
 }
 
 impl Default for Planned {
@@ -108,7 +124,18 @@ impl Planned {
             reactive_until_ms: None,
             moved_at: Point { x: 0.0, y: 0.0 },
             moved_ms: 0,
+            fresh_ms: 0,
         }
+    }
+
+    /// Marks the map ([`mark_visited`]); a cell the robot stands in for the first time is
+    /// progress (see `stale_ms`). Returns the number of cells that became walls.
+    pub fn mark(&mut self, inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) -> u32 {
+        let (walls, fresh) = mark_visited_counting(inp, p, map);
+        if fresh > 0 {
+            self.fresh_ms = inp.now_ms;
+        }
+        walls
     }
 
     /// Whether the paper's reactive search drives now: the map closed every way twice within
@@ -157,6 +184,14 @@ impl Planned {
             self.progress_ms = inp.now_ms;
             self.moved_at = here;
             self.moved_ms = inp.now_ms;
+            self.fresh_ms = inp.now_ms;
+        }
+        if inp.now_ms.wrapping_sub(self.fresh_ms) >= p.stale_ms {
+            // Driving round in what it has seen for long: the map keeps sending the robot
+            // back and forth (its marks close a way it has not found by touch yet).
+            self.fresh_ms = inp.now_ms;
+            self.reactive_until_ms = Some(inp.now_ms.wrapping_add(p.reactive_ms));
+            stats.timeouts = stats.timeouts.wrapping_add(1);
         }
         if here.distance_to(self.moved_at) >= p.stuck_m {
             self.moved_at = here;
@@ -239,6 +274,11 @@ impl Planned {
         stats.plans = stats.plans.wrapping_add(1);
         let stale = inp.now_ms.wrapping_sub(self.progress_ms) >= p.no_progress_ms;
         let mut step = map.route_towards(here, inp.goal);
+        if step.is_none() && map.open_walls_between(here, inp.goal) > 0 {
+            // Marks one cell thick closed the last way between the robot's region and the
+            // goal's (a narrow gap, narrowed by the position's error): reopened.
+            step = map.route_towards(here, inp.goal);
+        }
         if step.is_none() {
             // The way closed under the latest marks, those of the walls around the robot: a
             // gap it is passing, narrowed by its position's error. Forget them; they are

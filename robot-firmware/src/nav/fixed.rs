@@ -137,8 +137,9 @@ impl<
         assert!(MB >= packed_bytes(BITS, W as usize * H as usize));
         // Ids 0 ..= R - 1 must stay below the map's and the u16 scratch's markers.
         assert!(R < (1usize << BITS) && R < u16::MAX as usize - 1);
-        // The grid planner runs in the region map's bytes.
+        // The grid planner runs in the region map's bytes, and so does reopening a way.
         assert!(MB >= wave_bytes(W as usize * H as usize));
+        assert!(MB >= super::opening::opening_bytes(W as usize * H as usize));
     };
 
     /// Empty storage: a `W` x `H` grid of unknown cells, not yet segmented.
@@ -271,6 +272,14 @@ impl<
         let plan = wave_plan(&self.grid, passable, start, goal, self.map.bytes_mut())?;
         self.held = Held::Labels(passable);
         Ok(plan)
+    }
+
+    /// Makes unknown the wall cells that alone part `a`'s region from `b`'s
+    /// ([`open_between`](super::opening::open_between)), in the region map's bytes (any
+    /// segmentation or grid plan is gone); returns how many.
+    pub fn open_between(&mut self, passable: Passable, a: GridPoint, b: GridPoint) -> usize {
+        self.held = Held::Nothing;
+        super::opening::open_between(&mut self.grid, passable, a, b, self.map.bytes_mut())
     }
 
     /// The waypoints of a grid plan the last [`route`](Self::route) made; `None` if the grid

@@ -61,6 +61,7 @@ pub mod graph;
 pub mod grid;
 mod heap;
 pub mod ids;
+pub mod opening;
 pub mod paper_map;
 pub mod segment;
 pub mod smooth;
@@ -71,6 +72,7 @@ pub use fixed::{FixedNav, Nav64, Route, NAV64_BYTES};
 pub use graph::{Adjacency, Edge, GraphError, RegionGraph};
 pub use grid::{grid_bytes, Cell, Geometry, Grid, GridError, GridPoint, MAX_SIDE, UNITS_PER_CELL};
 pub use ids::{packed_bytes, IdStore, PackedIds};
+pub use opening::{open_between, opening_bytes};
 pub use segment::{
     max_regions, segment, segment_with, Neighbours, Passable, Regions, SegmentError, Square,
 };

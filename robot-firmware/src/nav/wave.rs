@@ -188,6 +188,12 @@ fn cell_index<S: AsRef<[u8]>>(grid: &Grid<S>, passable: Passable, p: GridPoint) 
     passable.admits(grid.cell_at(i)).then_some(i)
 }
 
+/// Whether the last wave in `scratch` reached cell `i` (after a plan, or after an
+/// `Unreachable` one: then the cells reachable from its goal).
+pub(crate) fn reached(scratch: &[u8], i: usize) -> bool {
+    label(scratch, i) != UNREACHED
+}
+
 #[inline]
 fn label(labels: &[u8], i: usize) -> u8 {
     labels

@@ -324,6 +324,19 @@ impl MapMarker for ExploreMap<'_> {
     fn clear_line(&self, from: Point, to: Point) -> bool {
         self.0.nav().grid().clear_line(from, to)
     }
+
+    fn open_walls_between(&mut self, from: Point, to: Point) -> usize {
+        if self.0.grid_mut().is_none() {
+            return 0;
+        }
+        let nav = self.0.nav_mut();
+        let geo = nav.grid().geometry();
+        let a = geo.metres_to_grid(from.x, from.y);
+        let Some(b) = open_near(nav.grid(), geo.metres_to_grid(to.x, to.y)) else {
+            return 0;
+        };
+        nav.open_between(Passable::FreeOrUnknown, a, b)
+    }
 }
 
 /// A route point moved off the walls next to its cell: half a cell away from each wall cell
