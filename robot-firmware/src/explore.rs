@@ -219,9 +219,6 @@ pub struct ExploreParams {
     pub ir: IrRange,
     /// Which search `StartExploration` runs.
     pub mode: SearchMode,
-    /// The planned search's speed on its route with nothing in the sensors' reach (seed 004
-    /// §4: 75 is near the top speed).
-    pub cruise_speed: f32,
     /// The planned search replans at least this often, ms (it learns as it goes).
     pub replan_ms: u32,
     /// ... and at most this often when the map gains walls or the way is blocked, ms.
@@ -307,7 +304,6 @@ impl Default for ExploreParams {
             history_probe_m: 0.6,
             ir: IrRange::default(),
             mode: SearchMode::Planned,
-            cruise_speed: 75.0,
             replan_ms: 1000,
             min_replan_ms: 200,
             follow_cone_rad: 1.0,

@@ -14,9 +14,9 @@ pub fn front_blocked(p: &ExploreParams, inp: &ExploreInput<'_>) -> bool {
         .any(|&(r, a)| libm::fabsf(a) < 0.35 && r >= p.wall_ir)
 }
 
-/// Heads for `target` at `speed`: on the spot when it is far off the heading, else
-/// proportionally, side sensors pushing the robot off walls it passes.
-pub fn steer_at(p: &ExploreParams, inp: &ExploreInput<'_>, target: Point, speed: f32) -> MotorCommand {
+/// Heads for `target`: on the spot when it is far off the heading, else proportionally,
+/// side sensors pushing the robot off walls it passes.
+pub fn steer(p: &ExploreParams, inp: &ExploreInput<'_>, target: Point) -> MotorCommand {
     let dir = inp.pose.point().bearing_to(target);
     let err = wrap_angle(dir - inp.pose.heading);
     if libm::fabsf(err) > 1.0 {
@@ -34,12 +34,7 @@ pub fn steer_at(p: &ExploreParams, inp: &ExploreInput<'_>, target: Point, speed:
         }
     }
     let turn = p.heading_gain * err + push * p.heading_gain * 0.5;
-    MotorCommand::new(units(speed - turn), units(speed + turn))
-}
-
-/// [`steer_at`] the seeking speed.
-pub fn steer(p: &ExploreParams, inp: &ExploreInput<'_>, target: Point) -> MotorCommand {
-    steer_at(p, inp, target, p.seek_speed)
+    MotorCommand::new(units(p.seek_speed - turn), units(p.seek_speed + turn))
 }
 
 /// Wall following with three IR sensors: keep `follow_distance_m` from the wall on `side`;

@@ -22,7 +22,7 @@
 //!
 //! Pure: pose, readings, time and the map in; motor command out. Cannot fail or panic.
 
-use super::motion::{follow, front_blocked, steer, steer_at};
+use super::motion::{follow, front_blocked, steer};
 use super::{mark_wall, ray_point, ExploreInput, ExploreParams, ExploreStats, MapMarker, WallSide};
 use crate::behaviour::MotorCommand;
 use crate::nav::Cell;
@@ -34,7 +34,7 @@ use crate::odometry::{wrap_angle, Point};
 const WALL_DEPTH_M: f32 = 0.05;
 /// Cells within this of the robot's centre are ones it stands in, m (half its radius: the
 /// body's own cell and a neighbour it reaches well into).
-const BODY_M: f32 = 0.06;
+const BODY_M: f32 = 0.1;
 
 /// The planned search's map: the cells the robot stands in are free, and stay free (its
 /// centre has been there, so a route may cross them whatever a later reading, shifted by the
@@ -234,14 +234,7 @@ impl Planned {
                     };
                     return follow(p, inp, side);
                 }
-                // Nothing within the sensors' reach and the heading on the route: top speed.
-                let open = inp.ir.iter().all(|&(r, _)| r < p.ir.min_reading);
-                let speed = if open && libm::fabsf(bearing) < 0.3 {
-                    p.cruise_speed
-                } else {
-                    p.seek_speed
-                };
-                steer_at(p, inp, target, speed)
+                steer(p, inp, target)
             }
             PlannedPhase::Follow { side, since_ms } => {
                 let elapsed = inp.now_ms.wrapping_sub(since_ms);
