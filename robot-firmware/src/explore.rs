@@ -310,7 +310,7 @@ impl Default for ExploreParams {
             leave_rad: 0.35,
             no_progress_ms: 6_000_000,
             keep_walls_m: 0.5,
-            reactive_ms: 30_000,
+            reactive_ms: 60_000,
             stuck_m: 0.15,
             stuck_ms: 15_000,
             stale_ms: 45_000,
