@@ -220,9 +220,11 @@ impl Hal for SimHal {
         self.line.read()
     }
 
+    /// The goal beacon's channel: the lab's first beacon, whose position the robot is told
+    /// (parameters 21/22); the others, told apart, are not its.
     fn beacon(&mut self) -> Option<BeaconReading> {
         self.beacon
-            .read_any_among(self.world.beacons(), &self.others, self.body.pose())
+            .read_channel(self.world.beacons(), 0, &self.others, self.body.pose())
     }
 
     fn battery_mv(&mut self) -> u16 {

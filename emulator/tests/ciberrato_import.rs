@@ -140,7 +140,7 @@ fn every_beacon_and_target_is_kept_and_the_search_ends_in_a_beaconed_target() {
 }
 
 #[test]
-fn the_beacon_sensor_locks_on_the_nearest_beacon_it_sees() {
+fn the_beacon_sensor_tells_several_beacons_apart_as_ciberrato_does() {
     use emulator::rng::SimRng;
     use emulator::sensors::rato::BeaconSensor;
     let xml = r#"<Lab Width="28" Height="14">
@@ -158,13 +158,17 @@ fn the_beacon_sensor_locks_on_the_nearest_beacon_it_sees() {
         y: 7.0 * U,
         heading,
     };
-    // Facing +x it sees only the far beacon (the near one is behind); facing -x the near one.
-    let far = s.read_any(w.beacons(), pose(0.0)).unwrap();
-    let near = s.read_any(w.beacons(), pose(std::f64::consts::PI)).unwrap();
-    assert!(
-        far.strength > 0 && near.strength > far.strength,
-        "{far:?} {near:?}"
-    );
+    // Facing +x, beacon 0 (the far one) in view; facing -x only beacon 1 (the near one) is:
+    // channel 0 reads nothing there, however strong beacon 1 is (CiberRato's
+    // GetBeaconSensor(id); a receiver locked on the strongest read beacon 1 as the goal).
+    let (east, west) = (pose(0.0), pose(std::f64::consts::PI));
+    let goal_east = s.read_channel(w.beacons(), 0, &[], east).unwrap();
+    let goal_west = s.read_channel(w.beacons(), 0, &[], west).unwrap();
+    let other_west = s.read_channel(w.beacons(), 1, &[], west).unwrap();
+    assert!(goal_east.strength > 0, "{goal_east:?}");
+    assert_eq!(goal_west.strength, 0, "{goal_west:?}");
+    assert!(other_west.strength > goal_east.strength, "{other_west:?}");
+    assert_eq!(s.read_channel(w.beacons(), 2, &[], west).unwrap().strength, 0);
 }
 
 #[test]

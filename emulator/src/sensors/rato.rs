@@ -9,7 +9,9 @@
 //!   [`BeaconModel::strength_at`] curve (so the firmware's distance model is right for a
 //!   nominal sensor) with relative noise. Strength 0 (bearing 0) when the beacon is outside
 //!   the field of view, hidden by a wall taller than the beacon, or farther than the model's
-//!   farthest point (the signal is lost in the background there).
+//!   farthest point (the signal is lost in the background there). With several beacons the
+//!   receiver tells them apart, as CiberRato's sensor does (`GetBeaconSensor(id)`), and reads
+//!   its own: [`BeaconSensor::read_channel`].
 //! - Battery: starts at `start_mv` and drains linearly with time plus a term proportional to
 //!   motor effort; the reading carries Gaussian noise. Micro-rato: starts at 8.0 V, which the
 //!   firmware's default battery scale (7.0 V empty .. 9.0 V full) reads as level 0.5, the
@@ -133,27 +135,19 @@ impl BeaconSensor {
         })
     }
 
-    /// One reading among several beacons: the receiver locks on the strongest signal, the
-    /// nearest beacon it sees (CiberRato gives a robot one sensor per beacon; this robot has
-    /// one receiver). With one beacon, exactly [`BeaconSensor::read`].
-    pub fn read_any(&mut self, beacons: &[WorldBeacon], pose: Pose) -> Option<BeaconReading> {
-        self.read_any_among(beacons, &[], pose)
-    }
-
-    /// [`BeaconSensor::read_any`] with other robots able to hide a beacon
-    /// ([`BeaconSensor::read_among`]).
-    pub fn read_any_among(
+    /// The reading of beacon `id` of several (CiberRato's `GetBeaconSensor(id)`: beacons are
+    /// told apart, numbered in the lab file's order), with other robots able to hide it
+    /// ([`BeaconSensor::read_among`]); no beacon `id`: nothing seen. A receiver that locked on
+    /// the strongest signal instead read the nearer of two beacons while the robot corrected
+    /// its position against the first: pose jumps of the beacons' distance (issue 32).
+    pub fn read_channel(
         &mut self,
         beacons: &[WorldBeacon],
+        id: usize,
         others: &[Disc],
         pose: Pose,
     ) -> Option<BeaconReading> {
-        let seen = beacons
-            .iter()
-            .filter_map(|b| self.sees(b, others, pose).map(|(d, _)| (d, b)))
-            .min_by(|x, y| x.0.total_cmp(&y.0))
-            .map(|(_, b)| b);
-        self.read_among(seen.or(beacons.first()), others, pose)
+        self.read_among(beacons.get(id), others, pose)
     }
 
     /// Distance and bearing (relative to the heading) of a beacon the receiver sees: inside
