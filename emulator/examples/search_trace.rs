@@ -65,7 +65,14 @@ fn main() {
         }
         if dumps.iter().any(|&d| (d - t).abs() < 0.0005) {
             println!("--- map at {t:.1} s");
-            let w = sim.robot().dom_dinis().unwrap().core.explorer.planned().waypoint();
+            let w = sim
+                .robot()
+                .dom_dinis()
+                .unwrap()
+                .core
+                .explorer
+                .planned()
+                .waypoint();
             print_map(&sim, &arena, &track, w);
         }
         let detail = std::env::var("TRACE_FROM")
@@ -168,7 +175,9 @@ fn print_map(
             f64::from(oy) / 1000.0 + (y as f64 + 0.5) * cell,
         )
     };
-    let near = |cx: f64, cy: f64, px: f64, py: f64| (px - cx).abs() < cell / 2.0 && (py - cy).abs() < cell / 2.0;
+    let near = |cx: f64, cy: f64, px: f64, py: f64| {
+        (px - cx).abs() < cell / 2.0 && (py - cy).abs() < cell / 2.0
+    };
     for y in (0..grid.height() as usize).rev() {
         let mut line = String::new();
         for x in 0..grid.width() as usize {

@@ -222,7 +222,14 @@ fn arena_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
                 .unwrap_or("")
                 .to_ascii_lowercase();
             match ext.as_deref() {
-                Some("xml") => !stem.ends_with("grid"),
+                // A grid (start poses) or parameter file beside the labs is none.
+                Some("xml") => {
+                    !stem.ends_with("grid")
+                        && !matches!(
+                            crate::arena::ciberrato::root_element(p).as_deref(),
+                            Some("Grid" | "Parameters")
+                        )
+                }
                 Some("txt" | "yaml" | "yml") => true,
                 _ => false,
             }
@@ -698,7 +705,8 @@ fn run_checked(
         let driven = r.runs.last().map_or(r.distance_m, |x| x.distance_m);
         row.route_ratio = Some(driven / f.length_m);
     }
-    let started_inside = (start - Point::new(r.goal.x_m, r.goal.y_m)).norm() <= r.tolerance_m;
+    let started_inside =
+        r.started_in_target || (start - Point::new(r.goal.x_m, r.goal.y_m)).norm() <= r.tolerance_m;
     let diameter = f64::from(opts.profile.body_diameter_m);
     row.cause = cause_of(&r, started_inside, diameter);
     row.success = row.cause.is_none();

@@ -145,6 +145,18 @@ pub enum SimError {
         /// Robot diameter.
         diameter_m: f64,
     },
+    /// No start pose given, none in the arena, and no free spot that reaches the goal.
+    #[error(
+        "arena {arena:?} gives no start pose (no grid file found with it) and no free spot \
+         outside its goal area from which a {diameter_m} m robot can reach the goal; give \
+         --start X,Y[,DEG] or --grid FILE"
+    )]
+    NoReachableStart {
+        /// Arena name.
+        arena: String,
+        /// Robot diameter.
+        diameter_m: f64,
+    },
     /// Bad lights or floor grid.
     #[error(transparent)]
     World(#[from] WorldError),
@@ -697,17 +709,46 @@ impl Sim {
     }
 }
 
-/// The start pose: given, the arena's first, or a free spot; checked free.
+/// A start for an arena that gives none: [`World::free_spot`]'s first spot from which a robot
+/// of `radius` reaches a goal target or the arena's goal point, outside every goal target
+/// (the first free spot if the arena has no goal). A lab's lower-left corner can be a sealed pocket (issue 32: a start
+/// there could never reach the beacon); no such spot at all is an error that says so.
+fn start_reaching_goal(world: &World, radius: f64) -> Result<Point, SimError> {
+    let arena = world.arena();
+    let targets: Vec<(Point, f64)> = world
+        .goal_targets()
+        .map(|t| (t.centre, t.radius_m))
+        .collect();
+    let goal = arena.goal;
+    let no_spot = || SimError::NoFreeSpot {
+        arena: arena.name.clone(),
+        diameter_m: 2.0 * radius,
+    };
+    if targets.is_empty() && goal.is_none() {
+        return world.free_spot(radius).ok_or_else(no_spot);
+    }
+    let in_goal = |c: Point| {
+        targets.iter().any(|&(t, r)| (c - t).norm() <= r)
+            || goal.is_some_and(|g| (c - g).norm() <= radius)
+    };
+    let reach = crate::arena::reach::Reach::from(arena, radius, in_goal).map_err(|_| no_spot())?;
+    // Outside the goal area: a start inside it has nothing to search for.
+    world
+        .free_spot_where(radius, |p| reach.holds(p) && !world.in_target(p))
+        .ok_or_else(|| SimError::NoReachableStart {
+            arena: arena.name.clone(),
+            diameter_m: 2.0 * radius,
+        })
+}
+
+/// The start pose: given, the arena's first, or (an arena without a start pose, e.g. a lab
+/// whose grid file is missing) the first free spot from which the robot can reach the goal;
+/// checked free.
 pub fn start_pose(world: &World, given: Option<Pose>, radius: f64) -> Result<Pose, SimError> {
     let pose = match given.or_else(|| world.arena().starts.first().copied()) {
         Some(p) => p,
         None => {
-            let p = world
-                .free_spot(radius)
-                .ok_or_else(|| SimError::NoFreeSpot {
-                    arena: world.arena().name.clone(),
-                    diameter_m: 2.0 * radius,
-                })?;
+            let p = start_reaching_goal(world, radius)?;
             Pose {
                 x: p.x,
                 y: p.y,

@@ -237,6 +237,11 @@ impl World {
     /// lower-left corner in steps of the radius, that keeps half a radius of clearance and is
     /// outside the target area (inside it only if nothing else is free). Deterministic.
     pub fn free_spot(&self, radius: f64) -> Option<Point> {
+        self.free_spot_where(radius, |_| true)
+    }
+
+    /// [`World::free_spot`] among the points `accept` takes.
+    pub fn free_spot_where(&self, radius: f64, accept: impl Fn(Point) -> bool) -> Option<Point> {
         if !(radius.is_finite() && radius > 0.0) {
             return None;
         }
@@ -256,7 +261,7 @@ impl World {
                     b.min.x + margin + i as f64 * step,
                     b.min.y + margin + j as f64 * step,
                 );
-                if !self.is_free(p, margin) {
+                if !self.is_free(p, margin) || !accept(p) {
                     continue;
                 }
                 if !self.in_target(p) {

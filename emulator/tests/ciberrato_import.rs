@@ -168,7 +168,10 @@ fn the_beacon_sensor_tells_several_beacons_apart_as_ciberrato_does() {
     assert!(goal_east.strength > 0, "{goal_east:?}");
     assert_eq!(goal_west.strength, 0, "{goal_west:?}");
     assert!(other_west.strength > goal_east.strength, "{other_west:?}");
-    assert_eq!(s.read_channel(w.beacons(), 2, &[], west).unwrap().strength, 0);
+    assert_eq!(
+        s.read_channel(w.beacons(), 2, &[], west).unwrap().strength,
+        0
+    );
 }
 
 #[test]

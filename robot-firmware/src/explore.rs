@@ -506,12 +506,14 @@ impl Explorer {
         if arrived {
             self.phase = ExplorePhase::Arrived;
         }
-        if mode == SearchMode::Planned && self.phase != ExplorePhase::Arrived {
-            if !self.planned.reactive(inp.now_ms) {
-                self.phase = ExplorePhase::Seek;
-                let p = self.params;
-                return self.planned.step(&p, inp, map, new_walls, &mut self.stats);
-            }
+        // The planned search drives unless a reactive spell is on (its own phases then run).
+        let planned = mode == SearchMode::Planned
+            && self.phase != ExplorePhase::Arrived
+            && !self.planned.reactive(inp.now_ms);
+        if planned {
+            self.phase = ExplorePhase::Seek;
+            let p = self.params;
+            return self.planned.step(&p, inp, map, new_walls, &mut self.stats);
         }
         match self.phase {
             ExplorePhase::Arrived => MotorCommand::STOP,
@@ -796,7 +798,6 @@ impl Explorer {
             WallSide::Left
         }
     }
-
 }
 
 /// A map cell's column and row as bytes (the map is at most 64 x 64).
@@ -804,7 +805,6 @@ fn cell_u8(cell: Option<(i32, i32)>) -> Option<(u8, u8)> {
     let (x, y) = cell?;
     Some((u8::try_from(x).ok()?, u8::try_from(y).ok()?))
 }
-
 
 /// Marks the cell under the robot free, unknown cells along each IR ray free, and the cell
 /// where a ray sees something an obstacle (never the robot's own cell); returns the number of

@@ -134,11 +134,105 @@ pub struct FoundGrid {
     pub note: Option<String>,
 }
 
-/// Finds a lab's grid file in its folder: a name from [`grid_names_for`] as spelt, then the
+/// The grid a CiberRato parameter file in the lab's folder pairs with it, as the simulator
+/// pairs them (`<Parameters ... Lab="…" Grid="…"/>`, `cbparamhandler.cpp`): the first such
+/// file, in name order, whose `Lab` names this lab's file; its `Grid` is looked for relative
+/// to the parameter file, then by its name in the lab's folder (competitions ship the paths
+/// relative to the simulator's folder, e.g. `../Labs/x/C1-lab.xml`).
+fn grid_from_parameters(lab: &Path) -> Option<FoundGrid> {
+    let lab_name = lab.file_name()?.to_string_lossy().to_ascii_lowercase();
+    let dir = lab
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .ok()?
+        .flatten()
+        .take(MAX_DIR_ENTRIES)
+        .map(|e| e.path())
+        .filter(|p| {
+            p.extension()
+                .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case("xml"))
+        })
+        .collect();
+    files.sort();
+    for params in files {
+        if root_element(&params).as_deref() != Some("Parameters") {
+            continue;
+        }
+        let Ok(text) = std::fs::read_to_string(&params) else {
+            continue;
+        };
+        let Ok(doc) = Document::parse(&text) else {
+            continue;
+        };
+        let root = doc.root_element();
+        let base = |attr: &str| {
+            root.attribute(attr)
+                .map(|v| Path::new(v.trim()).to_path_buf())
+                .filter(|p| p.file_name().is_some())
+        };
+        let (Some(named_lab), Some(grid)) = (base("Lab"), base("Grid")) else {
+            continue;
+        };
+        let named = named_lab
+            .file_name()
+            .map(|n| n.to_string_lossy().to_ascii_lowercase());
+        if named.as_deref() != Some(lab_name.as_str()) {
+            continue;
+        }
+        let beside_params = params.with_file_name(&grid);
+        let path = if beside_params.is_file() {
+            beside_params
+        } else {
+            dir.join(grid.file_name()?)
+        };
+        if path.is_file() {
+            return Some(FoundGrid {
+                note: Some(format!(
+                    "{}: grid file {} (paired by the parameter file {})",
+                    lab.display(),
+                    path.display(),
+                    params.display()
+                )),
+                path: Some(path),
+            });
+        }
+    }
+    None
+}
+
+/// The name of an XML file's root element, from its first few kilobytes (a lab, a grid or a
+/// parameter file is told apart without parsing it whole); `None` when it is not XML.
+pub fn root_element(path: &Path) -> Option<String> {
+    use std::io::Read as _;
+    let mut head = vec![0u8; 4096];
+    let n = std::fs::File::open(path).ok()?.read(&mut head).ok()?;
+    let text = String::from_utf8_lossy(head.get(..n)?);
+    let mut rest = text.as_ref();
+    loop {
+        let at = rest.find('<')?;
+        rest = &rest[at + 1..];
+        if rest.starts_with('?') || rest.starts_with('!') {
+            continue;
+        }
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == '-')
+            .collect();
+        return (!name.is_empty()).then_some(name);
+    }
+}
+
+/// Finds a lab's grid file in its folder: the one a parameter file pairs with it
+/// ([`grid_from_parameters`]), else a name from [`grid_names_for`] as spelt, then the
 /// same ignoring case (`Ciber2003_Manga1Lab.xml` has `Ciber2003_manga1Grid.xml`), and for a
 /// lab whose name has no `lab` in it, `<name>Grid.xml` or else (`Ciber2001Final.xml`) the
 /// folder's only file whose name contains `grid` or `grd` after a prefix of the lab's name. Reads at most [`MAX_DIR_ENTRIES`] directory entries.
 pub fn find_grid(lab: &Path) -> FoundGrid {
+    if let Some(found) = grid_from_parameters(lab) {
+        return found;
+    }
     let names = grid_names_for(lab);
     // A name without `lab` may still have its grid beside it as `<name>Grid.xml` (the
     // emulator's own `wallsMicRato99Grid.xml`).

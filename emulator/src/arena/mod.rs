@@ -35,6 +35,7 @@ pub mod free_path;
 pub mod micromouse;
 mod pgm;
 pub mod raster;
+pub mod reach;
 pub mod rosmap;
 
 use std::path::{Path, PathBuf};

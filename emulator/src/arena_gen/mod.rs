@@ -28,10 +28,9 @@ mod shapes;
 mod traps;
 mod xml;
 
-use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 
-use crate::arena::{self, rasterise, Arena, ArenaError, Cell, LoadOptions};
+use crate::arena::{self, Arena, ArenaError, LoadOptions};
 use crate::geometry::Point;
 use crate::rng::SimRng;
 
@@ -304,58 +303,25 @@ pub fn goal_area(arena: &Arena) -> Option<(Point, f64)> {
         .or_else(|| arena.goal.map(|g| (g, 0.0)))
 }
 
-/// `Ok` when a robot of `radius` can drive from the arena's first start to its goal area.
+/// `Ok` when a robot of `radius` can drive from the arena's first start to its goal area
+/// ([`crate::arena::reach::Reach`]: the robot may start against a wall, so the free cells whose
+/// centres are within a radius of the start are its seeds; a goal cell is a free one whose
+/// centre lies in the goal area, or within a cell of a point goal).
 pub fn solvable(arena: &Arena, radius: f64) -> Result<(), String> {
     let start = arena.starts.first().ok_or("no start pose")?;
     let (goal, goal_r) = goal_area(arena).ok_or("no goal")?;
-    let cell = radius / 2.0;
-    let map = rasterise(arena, cell, radius).map_err(|e| e.to_string())?;
-    let (w, h) = (map.width as usize, map.height as usize);
-    let free = |c: usize, r: usize| map.cells.get(r * w + c) == Some(&Cell::Free);
-    let centre = |c: usize, r: usize| {
-        Point::new(
-            map.origin[0] + (c as f64 + 0.5) * cell,
-            map.origin[1] + (r as f64 + 0.5) * cell,
-        )
-    };
-    // A goal cell: free, centre in the goal area (a point goal: within half a cell's diagonal).
-    let reach = goal_r.max(cell);
-    let is_goal = |c: usize, r: usize| (centre(c, r) - goal).norm() <= reach;
-    // The robot may start against a wall, so its own cell can be marked; seed the flood from
-    // the free cells whose centres are within a radius of the start.
     let s = Point::new(start.x, start.y);
-    let mut seen = vec![false; w * h];
-    let mut queue = VecDeque::new();
-    for r in 0..h {
-        for c in 0..w {
-            if free(c, r) && (centre(c, r) - s).norm() <= radius {
-                seen[r * w + c] = true;
-                queue.push_back((c, r));
-            }
-        }
-    }
-    if queue.is_empty() {
+    let reach = crate::arena::reach::Reach::from(arena, radius, |c| (c - s).norm() <= radius)
+        .map_err(|e| e.to_string())?;
+    if reach.is_empty() {
         return Err(format!(
             "no free cell around the start ({:.2}, {:.2})",
             s.x, s.y
         ));
     }
-    while let Some((c, r)) = queue.pop_front() {
-        if is_goal(c, r) {
-            return Ok(());
-        }
-        let next = [
-            (c.wrapping_sub(1), r),
-            (c + 1, r),
-            (c, r.wrapping_sub(1)),
-            (c, r + 1),
-        ];
-        for (nc, nr) in next {
-            if nc < w && nr < h && !seen[nr * w + nc] && free(nc, nr) {
-                seen[nr * w + nc] = true;
-                queue.push_back((nc, nr));
-            }
-        }
+    let within = goal_r.max(radius / 2.0);
+    if reach.any(|c| (c - goal).norm() <= within) {
+        return Ok(());
     }
     Err(format!(
         "the goal ({:.2}, {:.2}) cannot be reached from the start ({:.2}, {:.2}) by a {:.3} m robot",

@@ -659,7 +659,7 @@ mod tests {
         let mut classes = std::collections::BTreeMap::new();
         let mut features = std::collections::BTreeSet::new();
         let mut larger = 0;
-        for seed in 1..=40 {
+        for seed in 1..=60 {
             let g = crate::arena_gen::generate(crate::arena_gen::Kind::RealLike, seed)
                 .expect("generates");
             let ratio = crate::arena_gen::detour_of(&g.arena, radius).expect("a route");

@@ -182,9 +182,12 @@ pub fn run_contest(arena: Arena, opts: &ContestOptions) -> Result<ContestReport,
     let mut fleet = Fleet::new(arena, &base, &opts.robots)?;
     let n = fleet.len();
     let starts: Vec<_> = fleet.sims().iter().map(|s| s.truth()).collect();
-    let started_in: Vec<bool> = starts
+    // In any target the search may end in, as `run_scenario` judges a start.
+    let started_in: Vec<bool> = fleet
+        .sims()
         .iter()
-        .map(|s| (s.x - goal.x).hypot(s.y - goal.y) <= target.radius_m)
+        .zip(&starts)
+        .map(|(sim, s)| sim.world().in_target(crate::geometry::Point::new(s.x, s.y)))
         .collect();
     for (i, sim) in fleet.sims_mut().iter_mut().enumerate() {
         let robot = i + 1;

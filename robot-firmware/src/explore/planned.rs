@@ -54,7 +54,13 @@ fn mark_visited_counting(
 ) -> (u32, u32) {
     let here = inp.pose.point();
     let mut fresh = 0;
-    for (dx, dy) in [(0.0, 0.0), (BODY_M, 0.0), (-BODY_M, 0.0), (0.0, BODY_M), (0.0, -BODY_M)] {
+    for (dx, dy) in [
+        (0.0, 0.0),
+        (BODY_M, 0.0),
+        (-BODY_M, 0.0),
+        (0.0, BODY_M),
+        (0.0, -BODY_M),
+    ] {
         let q = Point::new(here.x + dx, here.y + dy);
         if map.cell_at(q).is_some_and(|c| c != Cell::Free) {
             fresh += 1;
@@ -130,7 +136,12 @@ impl Planned {
 
     /// Marks the map ([`mark_visited`]); a cell the robot stands in for the first time is
     /// progress (see `stale_ms`). Returns the number of cells that became walls.
-    pub fn mark(&mut self, inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) -> u32 {
+    pub fn mark(
+        &mut self,
+        inp: &ExploreInput<'_>,
+        p: &ExploreParams,
+        map: &mut dyn MapMarker,
+    ) -> u32 {
         let (walls, fresh) = mark_visited_counting(inp, p, map);
         if fresh > 0 {
             self.fresh_ms = inp.now_ms;

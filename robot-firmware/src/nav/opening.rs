@@ -55,7 +55,10 @@ pub fn open_between<S: AsRef<[u8]> + AsMut<[u8]>>(
     ) {
         return 0;
     }
-    let in_b = |i: usize| kept.get(i / 8).is_some_and(|byte| byte & (1 << (i % 8)) != 0);
+    let in_b = |i: usize| {
+        kept.get(i / 8)
+            .is_some_and(|byte| byte & (1 << (i % 8)) != 0)
+    };
     let (w, h) = (usize::from(grid.width()), usize::from(grid.height()));
     let mut opened = 0;
     for y in 0..h {
@@ -100,17 +103,26 @@ mod tests {
         }
         let (a, b) = (GridPoint::cell_centre(1, 2), GridPoint::cell_centre(7, 2));
         let mut scratch = vec![0u8; opening_bytes(g.len())];
-        assert_eq!(open_between(&mut g, Passable::FreeOrUnknown, a, b, &mut scratch), 5);
+        assert_eq!(
+            open_between(&mut g, Passable::FreeOrUnknown, a, b, &mut scratch),
+            5
+        );
         assert!((0..5).all(|y| g.get(4, y) == Cell::Unknown));
         // Two cells thick: nothing touches both sides.
         for y in 0..5 {
             g.set(4, y, Cell::Obstacle).expect("in grid");
             g.set(5, y, Cell::Obstacle).expect("in grid");
         }
-        assert_eq!(open_between(&mut g, Passable::FreeOrUnknown, a, b, &mut scratch), 0);
+        assert_eq!(
+            open_between(&mut g, Passable::FreeOrUnknown, a, b, &mut scratch),
+            0
+        );
         // Joined already: nothing to open.
         g.set(4, 0, Cell::Unknown).expect("in grid");
         g.set(5, 0, Cell::Unknown).expect("in grid");
-        assert_eq!(open_between(&mut g, Passable::FreeOrUnknown, a, b, &mut scratch), 0);
+        assert_eq!(
+            open_between(&mut g, Passable::FreeOrUnknown, a, b, &mut scratch),
+            0
+        );
     }
 }

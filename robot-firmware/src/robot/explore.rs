@@ -84,7 +84,10 @@ impl<K: Kit<Explorer = crate::explore::Explorer>> Core<K> {
     /// In an arena too large for 0.15 m, the smallest whole centimetre that fits.
     fn create_exploration_map(&mut self) -> Result<(), NackReason> {
         let b = self.dead.params.bounds;
-        let mode = self.explorer.get().map_or(SearchMode::Reactive, |e| e.params.mode);
+        let mode = self
+            .explorer
+            .get()
+            .map_or(SearchMode::Reactive, |e| e.params.mode);
         let ring = u16::from(mode == SearchMode::Planned);
         let (span_x, span_y) = (b.max.x - b.min.x, b.max.y - b.min.y);
         let cap = MAP_CAPACITY as f32;
@@ -107,8 +110,8 @@ impl<K: Kit<Explorer = crate::explore::Explorer>> Core<K> {
         static UNKNOWN: [u8; GRID_BYTES] = [0; GRID_BYTES];
         // Both sides are at most MAP_CAPACITY (checked above), so they fit u16.
         let (w, h) = (w as u16 + 2 * ring, h as u16 + 2 * ring);
-        let grid = Grid::new(w, h, geometry, &UNKNOWN[..])
-            .map_err(|_| NackReason::CapacityExceeded)?;
+        let grid =
+            Grid::new(w, h, geometry, &UNKNOWN[..]).map_err(|_| NackReason::CapacityExceeded)?;
         let here = self.pose();
         let mm = |v: f32| libm::roundf(v * 1000.0) as i32;
         let start = PointMm {
@@ -297,9 +300,7 @@ impl MapMarker for ExploreMap<'_> {
         let geo = nav.grid().geometry();
         let start = geo.metres_to_grid(from.x, from.y);
         let goal = open_near(nav.grid(), geo.metres_to_grid(to.x, to.y))?;
-        let plan = nav
-            .grid_route(Passable::FreeOrUnknown, start, goal)
-            .ok()?;
+        let plan = nav.grid_route(Passable::FreeOrUnknown, start, goal).ok()?;
         let next = nav.wave_route(plan)?.waypoints().nth(1)?;
         let next = off_walls(nav.grid(), next);
         let (x, y) = geo.grid_to_metres(next);
@@ -386,9 +387,8 @@ fn wall_round<S: AsRef<[u8]> + AsMut<[u8]>>(g: &mut Grid<S>) {
 /// cells of it (the goal light's cell can be marked by a reading of its post or a robot).
 fn open_near<S: AsRef<[u8]>>(grid: &Grid<S>, goal: GridPoint) -> Option<GridPoint> {
     let (gx, gy) = goal.cell();
-    let open = |x: i32, y: i32| {
-        grid.contains(x, y) && grid.get(x as usize, y as usize) != Cell::Obstacle
-    };
+    let open =
+        |x: i32, y: i32| grid.contains(x, y) && grid.get(x as usize, y as usize) != Cell::Obstacle;
     if open(gx, gy) {
         return Some(goal);
     }
