@@ -871,6 +871,14 @@ mod tests {
 
     const CLEAR: [(u16, f32); 3] = [(0, 1.047), (0, 0.0), (0, -1.047)];
 
+    /// The paper's reactive search (seed 004 §5), which these tests are about.
+    fn paper() -> ExploreParams {
+        ExploreParams {
+            mode: SearchMode::Reactive,
+            ..ExploreParams::default()
+        }
+    }
+
     fn input<'a>(now_ms: u32, pose: Pose, ir: &'a [(u16, f32)]) -> ExploreInput<'a> {
         ExploreInput {
             now_ms,
@@ -884,7 +892,7 @@ mod tests {
 
     #[test]
     fn in_open_space_it_heads_for_the_goal() {
-        let mut e = Explorer::new(ExploreParams::default(), 1);
+        let mut e = Explorer::new(paper(), 1);
         let mut map = map17();
         let pose = Pose::new(0.5, 2.6, 0.0);
         let cmd = e.step(&input(0, pose, &CLEAR), &mut map);
@@ -897,7 +905,7 @@ mod tests {
 
     #[test]
     fn a_wall_ahead_saves_the_goal_direction_and_starts_following() {
-        let mut e = Explorer::new(ExploreParams::default(), 1);
+        let mut e = Explorer::new(paper(), 1);
         let mut map = map17();
         let pose = Pose::new(0.5, 2.6, 0.0);
         let wall = [(0, 1.047), (600, 0.0), (0, -1.047)];
@@ -928,7 +936,7 @@ mod tests {
                 map.set(x, y, Cell::Free).expect("in map");
             }
         }
-        let mut e = Explorer::new(ExploreParams::default(), 1);
+        let mut e = Explorer::new(paper(), 1);
         let wall = [(0, 1.047), (600, 0.0), (0, -1.047)];
         e.step(&input(0, pose, &wall), &mut map);
         // Unknown ground lies to the right: it turns right, keeping the wall on its left.
@@ -947,7 +955,7 @@ mod tests {
 
     #[test]
     fn following_ends_on_the_line_to_the_goal_nearer_it_not_when_the_heading_comes_back() {
-        let mut e = Explorer::new(ExploreParams::default(), 1);
+        let mut e = Explorer::new(paper(), 1);
         let mut map = map17();
         let wall = [(0, 1.047), (600, 0.0), (0, -1.047)];
         // Hit at (0.5, 2.6), goal (3.0, 2.6): the line to the goal is y = 2.6.
@@ -981,7 +989,7 @@ mod tests {
 
     #[test]
     fn the_same_hit_cell_goes_round_the_other_side_then_plans() {
-        let mut e = Explorer::new(ExploreParams::default(), 1);
+        let mut e = Explorer::new(paper(), 1);
         let mut map = map17();
         let wall = [(0, 1.047), (600, 0.0), (0, -1.047)];
         let hit = Pose::new(0.5, 2.6, 0.0);
@@ -1013,7 +1021,7 @@ mod tests {
             ExploreParams {
                 timeout_min_ms: 1000,
                 timeout_max_ms: 1001,
-                ..ExploreParams::default()
+                ..paper()
             },
             1,
         );
@@ -1035,7 +1043,7 @@ mod tests {
 
     #[test]
     fn the_map_records_free_space_and_the_wall_the_sensors_see() {
-        let mut e = Explorer::new(ExploreParams::default(), 1);
+        let mut e = Explorer::new(paper(), 1);
         let mut map = map17();
         // Robot in cell (1, 8) facing +x; front sensor sees a wall 0.15 m from its body edge:
         // 0.27 m from the centre at x = 0.45 + 0.27 = 0.72, i.e. cell (2, 8).
@@ -1063,7 +1071,7 @@ mod tests {
 
     #[test]
     fn the_goal_area_stops_the_robot() {
-        let mut e = Explorer::new(ExploreParams::default(), 1);
+        let mut e = Explorer::new(paper(), 1);
         let mut map = map17();
         let mut inp = input(0, Pose::new(1.0, 1.0, 0.0), &CLEAR);
         inp.ground = Some(true);
@@ -1075,7 +1083,7 @@ mod tests {
     fn with_a_ground_sensor_only_the_sensor_says_arrived() {
         // 0.3 m from the light, believed: the old 0.5 m goal radius stopped the robot here,
         // outside a goal area of radius 0.29 m.
-        let mut e = Explorer::new(ExploreParams::default(), 1);
+        let mut e = Explorer::new(paper(), 1);
         let mut map = map17();
         let inp = input(0, Pose::new(2.7, 2.6, 0.0), &CLEAR);
         assert_ne!(e.step(&inp, &mut map), MotorCommand::STOP);
@@ -1093,7 +1101,7 @@ mod tests {
 
     #[test]
     fn touching_a_wall_counts_one_collision_per_contact() {
-        let mut e = Explorer::new(ExploreParams::default(), 1);
+        let mut e = Explorer::new(paper(), 1);
         let mut map = map17();
         let touch = [(1000, 1.047), (0, 0.0), (0, -1.047)];
         let pose = Pose::new(1.0, 1.0, 0.0);
