@@ -245,7 +245,7 @@ fn calibrated_odometry_reaches_more_boxes_than_uncalibrated() {
 
 /// Explore-then-plan where the robot's own explored map does not connect its start and the
 /// goal it found: the firmware refuses run 2's plan (`Unreachable` on micro-rato 77,
-/// `BadPoint` on 109, each with its bench seed). That is the robot's failure, counted as
+/// `BadPoint` on 109, each with its bench seed, after the paper's reactive search). That is the robot's failure, counted as
 /// `no_path_on_explored_map`; the runner used to return it as an error, which the bench
 /// counted as a setup error.
 #[test]
@@ -258,6 +258,9 @@ fn a_plan_refused_on_the_explored_map_is_the_robots_failure_not_a_setup_error() 
         // The seed `bench --arenas generated:200` gives this arena (index = seed - 1).
         o.seed = bench::run_seed(1, (arena_seed - 1) as usize, 1);
         o.timeout_s = 300.0;
+        // The paper's reactive search leaves these maps unjoined (the planned one does not).
+        o.params
+            .push((robot_firmware::params::id::SEARCH_MODE, 0.0));
         let r = run_scenario(g.arena, o).expect("the runner reports the refused plan as a run");
         assert_eq!(
             r.runs.len(),

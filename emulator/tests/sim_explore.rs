@@ -19,6 +19,9 @@ fn try_run(task: Task, seed: u64) -> Result<ScenarioReport, ScenarioError> {
     let mut o = ScenarioOptions::new(&MICRO_RATO, task);
     o.seed = seed;
     o.timeout_s = 300.0;
+    // Seed 004 §5's reactive search, the paper's (the firmware plans by default, issue 32).
+    o.params
+        .push((robot_firmware::params::id::SEARCH_MODE, 0.0));
     run_scenario(arena, o)
 }
 

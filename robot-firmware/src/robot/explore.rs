@@ -166,12 +166,15 @@ impl<K: Kit<Explorer = crate::explore::Explorer>> Core<K> {
 
     /// A go-to on the robot's map (issue 32: the search's planner serves go-to too): the route
     /// over what the map knows, unknown cells free, replanned as it goes, instead of steering
-    /// straight at the point; `None` without a map (guided motion then steers straight).
+    /// straight at the point; without a map, the exploration map is made first; `None` if it
+    /// cannot be (guided motion then steers straight).
     /// Arrival is guided motion's radius; the map is marked as in every mode but exploration
     /// (`map_as_it_moves`: unknown cells only).
     pub(super) fn planned_goto(&mut self, goal: Point) -> Option<MotorCommand> {
         if !self.objects.has_map() {
-            return None;
+            // A robot that has mapped nothing yet starts the search's all-unknown map: the
+            // route is then the straight line until walls are met, and goes round them.
+            self.create_exploration_map().ok()?;
         }
         let pose = self.pose();
         if pose.point().distance_to(goal) <= self.guided.arrival_m {
