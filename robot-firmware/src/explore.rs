@@ -515,6 +515,12 @@ impl Explorer {
             let p = self.params;
             return self.planned.step(&p, inp, map, new_walls, &mut self.stats);
         }
+        self.reactive_step(inp, map)
+    }
+
+    /// The paper's reactive search, one cycle in its phase (seed 004 §5, Fig. 4).
+    fn reactive_step(&mut self, inp: &ExploreInput<'_>, map: &mut dyn MapMarker) -> MotorCommand {
+        let here = inp.pose.point();
         match self.phase {
             ExplorePhase::Arrived => MotorCommand::STOP,
             ExplorePhase::Seek => self.seek(inp, map),

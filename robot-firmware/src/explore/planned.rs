@@ -97,6 +97,8 @@ pub struct Planned {
     goal: Point,
     waypoint: Option<Point>,
     planned_ms: u32,
+    /// The last route's length, in steps between cells.
+    route_cells: u32,
     /// The shortest route (in cells) seen since `progress_ms`.
     best_cells: u32,
     progress_ms: u32,
@@ -124,6 +126,7 @@ impl Planned {
             goal: Point { x: 0.0, y: 0.0 },
             waypoint: None,
             planned_ms: 0,
+            route_cells: 0,
             best_cells: u32::MAX,
             progress_ms: 0,
             wiped_ms: None,
@@ -172,6 +175,11 @@ impl Planned {
     /// The route's next point, if there is a route.
     pub fn waypoint(&self) -> Option<Point> {
         self.waypoint
+    }
+
+    /// The last route's length in steps between cells, if it found one.
+    pub fn route_cells(&self) -> Option<u32> {
+        self.waypoint.map(|_| self.route_cells)
     }
 
     /// One control cycle towards `inp.goal`; `new_walls` says the map gained wall cells this
@@ -309,6 +317,7 @@ impl Planned {
         }
         match step {
             Some(s) => {
+                self.route_cells = s.cells;
                 if s.cells < self.best_cells {
                     self.best_cells = s.cells;
                     self.progress_ms = inp.now_ms;

@@ -31,7 +31,7 @@
 
 use protocol::{EventCode, Mode, Progress};
 
-use super::{Core, Kit};
+use super::{Core, Kit, Slot};
 use crate::hal::MotorCommand;
 use crate::odometry::Point;
 use crate::profile::Profile;
@@ -180,11 +180,22 @@ impl<K: Kit> Core<K> {
     pub(super) fn distance_left(&self) -> Option<f32> {
         let here = self.pose().point();
         match self.mode {
-            Mode::GoTo => self.goal.map(|g| here.distance_to(g)),
+            // A go-to on the map (compass robots): along its route, which may lead away from
+            // the point for long (round a wall); else straight to it.
+            Mode::GoTo => self
+                .planned_route_left()
+                .or_else(|| self.goal.map(|g| here.distance_to(g))),
             Mode::ExecutePlan => self.plan_distance_left(here),
             Mode::Explore => Some(here.distance_to(self.dead.params.beacon)),
             _ => None,
         }
+    }
+
+    /// The planned go-to's route length, metres (its cells times the map's cell).
+    fn planned_route_left(&self) -> Option<f32> {
+        let cells = self.explorer.get()?.planned().route_cells()?;
+        let cell_m = self.objects.nav().grid().geometry().cell_size_m();
+        Some(cells as f32 * cell_m)
     }
 
     /// Along the plan: to the next waypoint, then leg by leg to the last; on the final
