@@ -100,7 +100,15 @@ pub struct Manoeuvre {
     origin: Option<[i64; 2]>,
     last_heading: Option<f32>,
     unwrapped: f32,
+    /// The farthest the believed heading has turned the enclosing wall's way (counter-clockwise
+    /// with the wall on the right) since the watch began, radians (see `island`).
+    watch_peak: f32,
 }
+
+/// Turned this far the wrong way for the side since the farthest the right way, the robot is
+/// going round an island: a whole turn. Along an enclosing wall the turns the wrong way (round
+/// a bar's or a dead end's end) undo themselves within half a turn.
+const ISLAND_TURN: f32 = 2.0 * core::f32::consts::PI;
 
 /// The command that starts holding a wall: Manual mode (the holder's teleop follows).
 pub const HOLD: Command = Command::SetMode(Mode::Manual);
@@ -137,7 +145,26 @@ impl Manoeuvre {
             origin: None,
             last_heading: None,
             unwrapped: 0.0,
+            watch_peak: 0.0,
         }
+    }
+
+    /// Whether the robot has turned a whole turn the wrong way for the side since the farthest
+    /// the right way: round a block, whose laps the lap calibrator may never close (a small
+    /// post keeps the side sensor off its wall at every corner, so no lap is seen at all, and
+    /// the robot circled a post beside its start for the whole calibration).
+    fn island(&mut self) -> bool {
+        let way = match self.side {
+            WallSide::Right => 1.0,
+            WallSide::Left => -1.0,
+        };
+        let h = self.unwrapped * way;
+        self.watch_peak = self.watch_peak.max(h);
+        if self.watch_peak - h >= ISLAND_TURN {
+            self.watch_peak = h;
+            return true;
+        }
+        false
     }
 
     /// The first command: Manual mode, for the wall holder's teleop.
@@ -195,22 +222,27 @@ impl Manoeuvre {
                 };
                 let before = self.cal.closed_laps().len();
                 let next = self.cal.observe(sample);
-                if let Some(lap) = self.cal.closed_laps().get(before) {
-                    // A lap the wrong way round for the side (clockwise with the wall on the
-                    // right) went round an island, not along the enclosing wall: leave it,
-                    // or the robot circles it to the end (a small block gives no straight
-                    // wall long enough).
-                    let ccw = self.side == WallSide::Right;
-                    if (lap.turns > 0) != ccw {
-                        self.holder.leave(self.unwrapped);
-                        self.walls.end();
-                    }
+                // A lap the wrong way round for the side (clockwise with the wall on the
+                // right) went round an island, not along the enclosing wall: leave it, or the
+                // robot circles it to the end (a small block gives no straight wall long
+                // enough). Seen by the lap calibrator, or by the turning alone.
+                let ccw = self.side == WallSide::Right;
+                let island_lap = self
+                    .cal
+                    .closed_laps()
+                    .get(before)
+                    .is_some_and(|lap| (lap.turns > 0) != ccw);
+                if self.island() || island_lap {
+                    self.holder.leave(self.unwrapped);
+                    self.walls.end();
+                    self.watch_peak = self.unwrapped * if ccw { 1.0 } else { -1.0 };
                 }
                 match next {
                     Next::Follow(s) if s != self.side => {
                         // Turn round on the spot, so the wall it was following is now on its
                         // other side: the laps go the other way.
                         self.side = s;
+                        self.watch_peak = f32::NEG_INFINITY;
                         self.walls.end();
                         self.holder = holder(s, self.nominal_distance_mm);
                         self.was_holding = false;
