@@ -283,6 +283,9 @@ pub enum Cause {
     WrongArrival,
     /// The start is already within the goal's tolerance.
     StartedInsideTarget,
+    /// No way leads from the start to the goal for this robot (a gap narrower than it):
+    /// nothing the robot can do reaches it.
+    Unreachable,
     /// The arena could not be generated or loaded.
     ImportError,
     /// Explore-then-plan: the robot's own explored map does not connect the start and the
@@ -296,12 +299,13 @@ pub enum Cause {
 
 impl Cause {
     /// Every cause, in report order.
-    pub const ALL: [Cause; 8] = [
+    pub const ALL: [Cause; 9] = [
         Cause::Stuck,
         Cause::Timeout,
         Cause::WrongArrival,
         Cause::NoPathOnExploredMap,
         Cause::StartedInsideTarget,
+        Cause::Unreachable,
         Cause::ImportError,
         Cause::SetupError,
         Cause::Panic,
@@ -315,6 +319,7 @@ impl Cause {
             Cause::WrongArrival => "wrong_arrival",
             Cause::NoPathOnExploredMap => "no_path_on_explored_map",
             Cause::StartedInsideTarget => "started_inside_target",
+            Cause::Unreachable => "unreachable",
             Cause::ImportError => "import_error",
             Cause::SetupError => "setup_error",
             Cause::Panic => "panic",
@@ -670,13 +675,8 @@ fn run_checked(
     let mut row = Row::failed(source.label(), seed, Cause::Timeout, String::new(), 0.0);
     row.error = None;
     if opts.calibrate_odometry {
-        let c = crate::scenario::calibrate_odometry::run_calibration(
-            arena.clone(),
-            &so,
-            crate::scenario::calibrate_odometry::DEFAULT_TIMEOUT_S,
-        )
-        .map_err(setup)?;
-        so.params.extend(c.params());
+        let c = crate::scenario::calibrate_odometry::calibrate_before(&arena, &mut so)
+            .map_err(setup)?;
         row.calibration = Some(c);
     }
     if opts.task == BenchTask::Forage {
@@ -695,7 +695,8 @@ fn run_checked(
     let measured = arena.clone();
     let r = crate::scenario::run_scenario(arena, so).map_err(setup)?;
     let (to_goal, ended) = routes(&measured, start, &r, opts.profile);
-    row.features = breakdown::features_of(&measured, to_goal.as_ref(), &declared);
+    let diameter = f64::from(opts.profile.body_diameter_m);
+    row.features = breakdown::features_of(&measured, to_goal.as_ref(), &declared, diameter);
     if let Some(f) = to_goal {
         row.free_path_m = Some(f.length_m);
         row.detour_ratio = Some(f.detour_ratio);
@@ -707,7 +708,6 @@ fn run_checked(
     }
     let started_inside =
         r.started_in_target || (start - Point::new(r.goal.x_m, r.goal.y_m)).norm() <= r.tolerance_m;
-    let diameter = f64::from(opts.profile.body_diameter_m);
     row.cause = cause_of(&r, started_inside, diameter);
     row.success = row.cause.is_none();
     row.sim_s = Some(r.sim_s);
@@ -760,6 +760,8 @@ pub fn cause_of(r: &ScenarioReport, started_inside: bool, diameter_m: f64) -> Op
     let last = r.runs.last();
     if started_inside {
         Some(Cause::StartedInsideTarget)
+    } else if r.unreachable && !r.reached {
+        Some(Cause::Unreachable)
     } else if r.reached {
         None
     } else if r.arrived {

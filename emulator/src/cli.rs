@@ -555,6 +555,11 @@ pub struct RunArgs {
     /// [default: the firmware's, planned].
     #[arg(long, value_enum, value_name = "SEARCH")]
     pub search: Option<SearchArg>,
+    /// go-to (khepera): before the run the same robot calibrates its odometry in the arena
+    /// (`bench --calibrate-odometry`'s manoeuvre) and the go-to starts with the measured wheel
+    /// distance and ratio set.
+    #[arg(long)]
+    pub calibrate_odometry: bool,
     /// line-correct: true distance to drive, metres.
     #[arg(long, default_value_t = 40.0, value_name = "M")]
     pub distance: f64,
@@ -922,6 +927,15 @@ impl RunArgs {
         o.true_wheel_distance_m = self.world.true_wheel_distance;
         o.slip = self.world.slip;
         o.params.extend(self.search.map(SearchArg::param));
+        if self.calibrate_odometry
+            && (!matches!(task, Task::GoTo(_)) || !profile.has(protocol::caps::ENCODERS))
+        {
+            return Err(
+                "--calibrate-odometry: the odometry calibration is the Khepera go-to's; use \
+                 --task go-to --profile khepera"
+                    .to_string(),
+            );
+        }
         Ok(o)
     }
 }

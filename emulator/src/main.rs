@@ -222,19 +222,44 @@ fn run(args: &RunArgs) -> Result<(), String> {
     if args.task == emulator::cli::TaskArg::OdometryLaps {
         return odometry_laps(args);
     }
-    let opts = args.options()?;
+    let mut opts = args.options()?;
     let arena =
         load_arena(args.world.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
+    let calibration = if args.calibrate_odometry {
+        let c = emulator::scenario::calibrate_odometry::calibrate_before(&arena, &mut opts)
+            .map_err(|e| e.to_string())?;
+        Some(c)
+    } else {
+        None
+    };
     let report = emulator::scenario::run_scenario(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
-        println!("{}", run_json(&report)?);
+        let mut v = serde_json::to_value(&report).map_err(|e| e.to_string())?;
+        if let (Some(obj), Some(c)) = (v.as_object_mut(), &calibration) {
+            obj.insert(
+                "calibration".into(),
+                serde_json::to_value(c).map_err(|e| e.to_string())?,
+            );
+        }
+        println!("{}", run_json(&v)?);
     } else {
+        if let Some(c) = &calibration {
+            println!(
+                "odometry calibration: {} in {:.0} s simulated (wheel ratio {} ppm, distance {} mm)",
+                c.error.as_deref().unwrap_or("done"),
+                c.sim_s,
+                c.wheel_ratio_ppm.map_or("-".into(), |r| format!("{r:.0}")),
+                c.wheel_distance_mm.map_or("-".into(), |d| format!("{d:.3}"))
+            );
+        }
         println!(
             "{}: {} in {:.1} s simulated ({:.3} s wall), {} collisions, {:.2} m travelled, \
              pose error {:.3} m, goal error {:.3} m",
             report.arena,
             if report.started_in_target {
                 "started inside target"
+            } else if report.unreachable && !report.reached {
+                "unreachable (no way to the goal for a robot of this size: a gap narrower than it)"
             } else if report.reached {
                 "reached"
             } else {

@@ -224,6 +224,10 @@ pub struct ScenarioReport {
     /// The search task's robot started inside the target area: nothing to search for, so the
     /// run is no success whatever it reports (the summary says "started inside target").
     pub started_in_target: bool,
+    /// No way leads from the start to where the run may end for a robot of this size (a gap
+    /// narrower than it): the run cannot succeed, and is reported as unreachable, not as a
+    /// timeout ([`crate::arena::reach::Reach`] over the arena as given).
+    pub unreachable: bool,
     /// The firmware reported arrival (whatever the truth).
     pub arrived: bool,
     /// Simulated seconds.
@@ -343,6 +347,9 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
         }
     });
     let name = arena.name.clone();
+    let any_goal_target = matches!(opts.task, Task::ReachBeacon | Task::ExploreThenPlan);
+    let reach_goal = (goal, tolerance_m, any_goal_target);
+    let unreachable = !goal_reachable(&arena, &opts, reach_goal);
     let mut sim = Sim::new(arena, opts.sim_config())?;
     // In any target the search may end in (a lab with several beacons has several): the
     // ground sensor sees it from the start, and nothing was searched for.
@@ -405,6 +412,7 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
         tolerance_m,
         reached,
         started_in_target,
+        unreachable,
         arrived,
         sim_s: sim.now_us() as f64 * 1e-6,
         wall_s,
@@ -416,6 +424,35 @@ pub fn run_scenario(arena: Arena, opts: ScenarioOptions) -> Result<ScenarioRepor
         final_believed: sim.believed().into(),
         runs,
     })
+}
+
+/// Whether a robot of the run's size can drive from its start to within `tolerance` of
+/// `goal` (or, with `any_target`, into any goal target): [`crate::arena::free_path`], whose
+/// cell-centre clearance finds a gap a little wider than the robot (the generator's
+/// conservative raster would not). Yes when the start cannot be worked out here (the
+/// simulator then refuses the run with its own error).
+fn goal_reachable(
+    arena: &Arena,
+    opts: &ScenarioOptions,
+    (goal, tolerance_m, any_target): (GoalPoint, f64, bool),
+) -> bool {
+    use crate::arena::free_path::free_path;
+    use crate::geometry::Point;
+    let radius = f64::from(opts.profile.body_diameter_m) / 2.0;
+    let Ok(world) = crate::world::World::new(arena.clone(), Vec::new(), None) else {
+        return true;
+    };
+    let Ok(start) = crate::sim::start_pose(&world, opts.start, radius) else {
+        return true;
+    };
+    let s = Point::new(start.x, start.y);
+    let mut areas = vec![(Point::new(goal.x_m, goal.y_m), tolerance_m)];
+    if any_target {
+        areas.extend(world.goal_targets().map(|t| (t.centre, t.radius_m)));
+    }
+    areas
+        .into_iter()
+        .any(|(c, r)| free_path(arena, s, c, r, radius).is_some())
 }
 
 /// What "reached" means for a run.

@@ -4,7 +4,8 @@
 //! regression in one class shows instead of vanishing in the total.
 //!
 //! Features come from the arena itself where it shows them (several beacons, a home area,
-//! walls hiding the beacon, a small target, a large lab, a narrow gap every route passes), so
+//! walls hiding the beacon, a small target, a large lab, a narrow gap every route passes; the
+//! sizes in the robot's diameters, so a Khepera box is judged as a Micro-Rato lab is), so
 //! files get them too; a generated arena adds the structures it was drawn with (`rows`,
 //! `spiral`, `nested_u`, ...).
 
@@ -15,17 +16,24 @@ use crate::arena::free_path::FreePath;
 use crate::arena::{Arena, CIBERRATO_UNIT_M};
 use crate::arena_gen::real_like::{detour_bucket, DETOUR_BUCKETS, NARROW_GAP_M};
 
-/// A target radius under this is "small" (1.2 CiberRato units: about one robot diameter).
-const SMALL_TARGET_M: f64 = 1.2 * CIBERRATO_UNIT_M;
-/// A lab whose longer side is over this is "large" (20 units; Micro-Rato's is 17.5).
-const LARGE_SIDE_M: f64 = 20.0 * CIBERRATO_UNIT_M;
+/// The Micro-Rato robot's diameter, m: the thresholds below are in its diameters.
+const RATO_M: f64 = 0.24;
+/// A target radius under this many robot diameters is "small" (1.2 CiberRato units for the
+/// Micro-Rato robot).
+const SMALL_TARGET: f64 = 1.2 * CIBERRATO_UNIT_M / RATO_M;
+/// A lab whose longer side is over this many robot diameters is "large" (20 units for the
+/// Micro-Rato robot; Micro-Rato'99's is 17.5).
+const LARGE_SIDE: f64 = 20.0 * CIBERRATO_UNIT_M / RATO_M;
+/// A gap every route passes under this many robot diameters is "narrow".
+const NARROW_GAP: f64 = NARROW_GAP_M / RATO_M;
 
-/// The features `arena` shows, with the measured route's narrow gap, after `declared` (the
-/// generator's structures).
+/// The features `arena` shows to a robot of `diameter_m`, with the measured route's narrow
+/// gap, after `declared` (the generator's structures).
 pub fn features_of(
     arena: &Arena,
     route: Option<&FreePath>,
     declared: &[&'static str],
+    diameter_m: f64,
 ) -> Vec<&'static str> {
     let mut out: Vec<&'static str> = declared.to_vec();
     let beacon_h = arena.beacons.first().map(|b| b.height_m);
@@ -46,15 +54,17 @@ pub fn features_of(
             "hidden_beacon",
         ),
         (
-            arena.target().is_some_and(|t| t.radius_m < SMALL_TARGET_M),
+            arena
+                .target()
+                .is_some_and(|t| t.radius_m < SMALL_TARGET * diameter_m),
             "small_target",
         ),
         (
-            arena.bounds.width().max(arena.bounds.height()) > LARGE_SIDE_M,
+            arena.bounds.width().max(arena.bounds.height()) > LARGE_SIDE * diameter_m,
             "large",
         ),
         (
-            route.is_some_and(|r| r.bottleneck_m < NARROW_GAP_M),
+            route.is_some_and(|r| r.bottleneck_m < NARROW_GAP * diameter_m),
             "narrow_gap",
         ),
     ];

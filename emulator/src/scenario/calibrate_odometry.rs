@@ -79,6 +79,18 @@ impl CalibrationReport {
     }
 }
 
+/// Calibrates the robot of `opts` in `arena` (at most [`DEFAULT_TIMEOUT_S`]) and sets what
+/// it measured on `opts`, as an operator who calibrated once loads the parameter file before
+/// the run (`run --calibrate-odometry`, `bench --calibrate-odometry`).
+pub fn calibrate_before(
+    arena: &Arena,
+    opts: &mut ScenarioOptions,
+) -> Result<CalibrationReport, ScenarioError> {
+    let c = run_calibration(arena.clone(), opts, DEFAULT_TIMEOUT_S)?;
+    opts.params.extend(c.params());
+    Ok(c)
+}
+
 /// Runs the calibration in `arena` with `opts`' robot, seed and noise, for at most
 /// `timeout_s` simulated seconds.
 pub fn run_calibration(
