@@ -41,7 +41,7 @@ impl Method {
     }
 }
 
-pub const CASES: [Case; 9] = [
+pub const CASES: [Case; 13] = [
     Case {
         name: "micro-rato-99 17x17: segmentation (Fig. 6)",
         setup: micro_rato_99,
@@ -132,7 +132,74 @@ pub const CASES: [Case; 9] = [
             route(nav, c(0, 0), c(0, 62))
         },
     },
+    // The planned search's replan (issue 32): the grid planner over free and unknown cells
+    // and the route's first waypoint, as `ExploreMap::route_towards` calls it.
+    Case {
+        name: "search replan, 56x29 (a 28 x 14-unit lab at 0.15 m), nothing known yet",
+        setup: |nav| search_map(nav, 56, 29, |_, _| false),
+        run: |nav| first_waypoint(nav, c(2, 2), c(53, 26)),
+    },
+    Case {
+        name: "search replan, 56x29, a comb of three walls known (route 2.4x the line)",
+        setup: |nav| {
+            search_map(nav, 56, 29, |x, y| match x {
+                14 | 42 => y >= 3,
+                28 => y <= 25,
+                _ => false,
+            })
+        },
+        run: |nav| first_waypoint(nav, c(2, 14), c(53, 14)),
+    },
+    Case {
+        name: "search replan, 64x64 serpentine known (the longest route the grid holds)",
+        setup: |nav| {
+            search_map(nav, 64, 64, |x, y| match y % 4 {
+                1 => x != 63,
+                3 => x != 0,
+                _ => false,
+            })
+        },
+        run: |nav| first_waypoint(nav, c(0, 0), c(0, 62)),
+    },
+    Case {
+        name: "search, no way on its map: reopening (two waves + scan), 64x64 cut in two",
+        setup: |nav| search_map(nav, 64, 64, |_, _| false),
+        run: |nav| {
+            // The wall marked again first (64 cells, a few thousand instructions), so each
+            // run has the same way to reopen.
+            for y in 0..64 {
+                let _ = nav.grid_mut().set(32, y, Cell::Obstacle);
+            }
+            let n = nav.open_between(Passable::FreeOrUnknown, c(2, 2), c(60, 60));
+            (n as u32, Method::Grid)
+        },
+    },
 ];
+
+/// The planned search's step: the first waypoint and the route's length.
+fn first_waypoint(nav: &mut Nav64, s: GridPoint, g: GridPoint) -> (u32, Method) {
+    match nav.first_waypoint(Passable::FreeOrUnknown, s, g) {
+        Ok((p, steps)) => (mix(steps, p), Method::Grid),
+        Err(_) => (u32::MAX, Method::Failed),
+    }
+}
+
+/// A `w` x `h` search map: `wall(x, y)` cells walls, the rest unknown (the search plans
+/// through them as free).
+fn search_map(nav: &mut Nav64, w: u16, h: u16, wall: impl Fn(usize, usize) -> bool) {
+    let g = nav.grid_mut();
+    let _ = g.reshape(w, h);
+    for y in 0..usize::from(h) {
+        for x in 0..usize::from(w) {
+            let cell = if wall(x, y) {
+                Cell::Obstacle
+            } else {
+                Cell::Unknown
+            };
+            let _ = g.set(x, y, cell);
+        }
+    }
+}
 
 fn c(x: u16, y: u16) -> GridPoint {
     GridPoint::cell_centre(x, y)

@@ -36,7 +36,7 @@ use super::grid::{grid_bytes, Geometry, Grid, GridPoint, MAX_SIDE};
 use super::ids::{packed_bytes, PackedIds};
 use super::segment::{segment_with, Passable, Regions, SegmentError, Square};
 use super::smooth::{smooth, Smoothed};
-use super::wave::{wave_bytes, wave_plan, WavePlan, WaveRoute};
+use super::wave::{wave_bytes, wave_first_waypoint, wave_plan, WavePlan, WaveRoute};
 
 /// Fixed-capacity navigation storage: a `W` x `H` grid (`GB` bytes), a `BITS`-bit region map
 /// (`MB` bytes), up to `R` regions, plans of up to `P` regions, smoothed plans of `S` points.
@@ -272,6 +272,20 @@ impl<
         let plan = wave_plan(&self.grid, passable, start, goal, self.map.bytes_mut())?;
         self.held = Held::Labels(passable);
         Ok(plan)
+    }
+
+    /// The grid planner's route from `start` to `goal` over `passable` cells, reduced to what
+    /// a search that replans as it drives needs: its first waypoint (the farthest route
+    /// point in line of sight) and its length in steps between cells.
+    pub fn first_waypoint(
+        &mut self,
+        passable: Passable,
+        start: GridPoint,
+        goal: GridPoint,
+    ) -> Result<(GridPoint, u32), PlanError> {
+        // The labels are left, but no plan to replay them for.
+        self.held = Held::Nothing;
+        wave_first_waypoint(&self.grid, passable, start, goal, self.map.bytes_mut())
     }
 
     /// Makes unknown the wall cells that alone part `a`'s region from `b`'s

@@ -77,7 +77,7 @@ pub use segment::{
     max_regions, segment, segment_with, Neighbours, Passable, Regions, SegmentError, Square,
 };
 pub use smooth::{line_of_sight, polyline_length, smooth, Smoothed};
-pub use wave::{wave_bytes, wave_plan, WavePlan, WaveRoute};
+pub use wave::{wave_bytes, wave_first_waypoint, wave_plan, WavePlan, WaveRoute};
 
 #[cfg(test)]
 mod tests;

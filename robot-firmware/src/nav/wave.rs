@@ -178,6 +178,38 @@ pub fn wave_plan<S: AsRef<[u8]>>(
     Ok(plan)
 }
 
+/// The first waypoint of [`wave_plan`]'s route from `start` to `goal` (the farthest route
+/// point in line of sight of `start`, or `goal`) and the route's length in steps, without the
+/// walk over the whole route that counting its waypoints takes: what a search that replans
+/// as it drives needs.
+pub fn wave_first_waypoint<S: AsRef<[u8]>>(
+    grid: &Grid<S>,
+    passable: Passable,
+    start: GridPoint,
+    goal: GridPoint,
+    scratch: &mut [u8],
+) -> Result<(GridPoint, u32), PlanError> {
+    let cells = grid.len();
+    if scratch.len() < wave_bytes(cells) {
+        return Err(PlanError::ScratchTooSmall {
+            regions: cells,
+            capacity: scratch.len().saturating_mul(2),
+        });
+    }
+    let s = cell_index(grid, passable, start).ok_or(PlanError::StartBlocked)?;
+    let g = cell_index(grid, passable, goal).ok_or(PlanError::GoalBlocked)?;
+    let steps = wave(grid, passable, g, s, scratch)?;
+    let plan = WavePlan {
+        start,
+        goal,
+        points: 0,
+        steps,
+        cost: 0,
+    };
+    let mut walk = Walk::new(grid, &*scratch, passable, plan);
+    Ok((walk.next_point().unwrap_or(goal), steps))
+}
+
 /// Index of the passable cell under `p`.
 fn cell_index<S: AsRef<[u8]>>(grid: &Grid<S>, passable: Passable, p: GridPoint) -> Option<usize> {
     let (x, y) = p.cell();
@@ -240,14 +272,15 @@ impl Frontier {
     }
 }
 
-/// Labels cells with their distance from `goal` modulo 3 until `start` is reached.
+/// Labels cells with their distance from `goal` modulo 3 until `start` is reached; returns
+/// that distance.
 fn wave<S: AsRef<[u8]>>(
     grid: &Grid<S>,
     passable: Passable,
     goal: usize,
     start: usize,
     scratch: &mut [u8],
-) -> Result<(), PlanError> {
+) -> Result<u32, PlanError> {
     let cells = grid.len();
     let (lab_len, set_len) = (cells.div_ceil(4), cells.div_ceil(8));
     if let Some(l) = scratch.get_mut(..lab_len) {
@@ -262,9 +295,10 @@ fn wave<S: AsRef<[u8]>>(
     set_label(scratch, goal, 0);
     cur.add(scratch, goal);
     let mut d = 0u8;
+    let mut waves = 0u32;
     while !cur.is_empty() {
         if label(scratch, start) != UNREACHED {
-            return Ok(());
+            return Ok(waves);
         }
         let nd = (d + 1) % 3;
         for byte in cur.lo..=cur.hi {
@@ -305,9 +339,10 @@ fn wave<S: AsRef<[u8]>>(
         next.lo = usize::MAX;
         next.hi = 0;
         d = nd;
+        waves += 1;
     }
     if label(scratch, start) != UNREACHED {
-        Ok(())
+        Ok(waves)
     } else {
         Err(PlanError::Unreachable)
     }

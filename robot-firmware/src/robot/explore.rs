@@ -303,13 +303,13 @@ impl MapMarker for ExploreMap<'_> {
         let geo = nav.grid().geometry();
         let start = geo.metres_to_grid(from.x, from.y);
         let goal = open_near(nav.grid(), geo.metres_to_grid(to.x, to.y))?;
-        let plan = nav.grid_route(Passable::FreeOrUnknown, start, goal).ok()?;
-        let next = nav.wave_route(plan)?.waypoints().nth(1)?;
-        let next = off_walls(nav.grid(), next);
-        let (x, y) = geo.grid_to_metres(next);
+        let (next, cells) = nav
+            .first_waypoint(Passable::FreeOrUnknown, start, goal)
+            .ok()?;
+        let (x, y) = geo.grid_to_metres(off_walls(nav.grid(), next));
         Some(RouteStep {
             waypoint: Point::new(x, y),
-            cells: plan.steps,
+            cells,
         })
     }
 

@@ -11,8 +11,9 @@ use super::util::{lattice, parse, Rng, Seg};
 use crate::nav::fixed::NAV64_REGIONS;
 use crate::nav::smooth::line_of_sight_by;
 use crate::nav::{
-    max_regions, wave_bytes, wave_plan, Cell, Geometry, Grid, GridPoint, Nav64, Passable,
-    PlanError, Route, SegmentError, WavePlan, WaveRoute, NAV64_BYTES, UNITS_PER_CELL,
+    max_regions, wave_bytes, wave_first_waypoint, wave_plan, Cell, Geometry, Grid, GridPoint,
+    Nav64, Passable, PlanError, Route, SegmentError, WavePlan, WaveRoute, NAV64_BYTES,
+    UNITS_PER_CELL,
 };
 
 /// Waypoints a Plan object of the robot holds with no regions: (3124 - 36) / 8.
@@ -307,4 +308,35 @@ fn a_serpentine_gives_one_waypoint_per_bend() {
         pts.iter().all(|p| p.x == 128 || p.x == 14 * 256 + 128),
         "{pts:?}"
     );
+}
+
+#[test]
+fn the_first_waypoint_alone_is_the_full_plans_and_so_is_its_length() {
+    // The search's replan (issue 32) takes only the route's first point and length: the same
+    // as the whole plan's, on maps with a straight way, one bend and a serpentine.
+    let serpentine: Vec<std::string::String> = (0..15)
+        .map(|y| match y % 4 {
+            1 => "?????????????#.".into(),
+            3 => ".#????????????#".into(),
+            _ => "...............".into(),
+        })
+        .collect();
+    let maps: [Vec<&str>; 3] = [
+        vec!["?????????", "?????????", "?????????"],
+        vec!["....#....", "....#....", "........."],
+        serpentine.iter().map(|r| r.as_str()).collect(),
+    ];
+    for rows in &maps {
+        let g = parse(rows);
+        let (w, h) = (g.width() - 1, g.height() - 1);
+        let (a, b) = (GridPoint::cell_centre(0, 0), GridPoint::cell_centre(w, h));
+        let mut scratch = vec![0u8; wave_bytes(g.len())];
+        let p = wave_plan(&g, Passable::FreeOrUnknown, a, b, &mut scratch).expect("plans");
+        let second = WaveRoute::new(&g, Passable::FreeOrUnknown, &scratch, p)
+            .waypoints()
+            .nth(1);
+        let (first, steps) =
+            wave_first_waypoint(&g, Passable::FreeOrUnknown, a, b, &mut scratch).expect("plans");
+        assert_eq!((Some(first), steps), (second, p.steps), "{rows:?}");
+    }
 }
