@@ -8,20 +8,28 @@
 
 use emulator::arena_gen::{generate, Kind};
 use emulator::bench::run_seed;
-use emulator::scenario::calibrate_odometry::{run_calibration, DEFAULT_TIMEOUT_S};
+use emulator::scenario::calibrate_odometry::{
+    run_calibration, CalibrationReport, DEFAULT_TIMEOUT_S,
+};
 use emulator::scenario::{ScenarioOptions, Task};
+
+/// Box `b`'s calibration with its bench seed: the report and the ratio error, ppm.
+fn calibrate(b: u64) -> (CalibrationReport, Option<f64>) {
+    let arena = generate(Kind::Box, b).expect("generates").arena;
+    let mut so = ScenarioOptions::new(&robot_firmware::KHEPERA, Task::GoTo(None));
+    so.seed = run_seed(1, (b - 1) as usize, 1);
+    let r = run_calibration(arena, &so, DEFAULT_TIMEOUT_S).expect("runs");
+    let err = r
+        .wheel_ratio_ppm
+        .map(|m| (f64::from(m) - r.true_ratio_ppm).abs());
+    (r, err)
+}
 
 #[test]
 fn the_wheel_ratio_comes_within_500_ppm_in_nine_boxes_of_ten() {
     let mut errors = Vec::new();
     for b in 1..=10u64 {
-        let arena = generate(Kind::Box, b).expect("generates").arena;
-        let mut so = ScenarioOptions::new(&robot_firmware::KHEPERA, Task::GoTo(None));
-        so.seed = run_seed(1, (b - 1) as usize, 1);
-        let r = run_calibration(arena, &so, DEFAULT_TIMEOUT_S).expect("runs");
-        let err = r
-            .wheel_ratio_ppm
-            .map(|m| (f64::from(m) - r.true_ratio_ppm).abs());
+        let (r, err) = calibrate(b);
         errors.push((b, err, r.straight_m, r.error.clone()));
     }
     let mut ok: Vec<f64> = errors.iter().filter_map(|e| e.1).collect();
@@ -43,13 +51,7 @@ fn the_wheel_ratio_comes_within_500_ppm_in_nine_boxes_of_ten() {
 #[test]
 fn a_post_beside_the_start_is_left_and_the_boxs_walls_calibrate() {
     for b in [63u64, 81, 111, 168] {
-        let arena = generate(Kind::Box, b).expect("generates").arena;
-        let mut so = ScenarioOptions::new(&robot_firmware::KHEPERA, Task::GoTo(None));
-        so.seed = run_seed(1, (b - 1) as usize, 1);
-        let r = run_calibration(arena, &so, DEFAULT_TIMEOUT_S).expect("runs");
-        let err = r
-            .wheel_ratio_ppm
-            .map(|m| (f64::from(m) - r.true_ratio_ppm).abs());
+        let (r, err) = calibrate(b);
         assert!(
             err.is_some_and(|e| e < 500.0) && r.straight_m >= 1.0,
             "box {b}: {:?} ({err:?} ppm, {:.2} m of straight walls)",

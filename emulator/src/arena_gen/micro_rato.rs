@@ -55,38 +55,7 @@ fn labyrinth(name: &str, rng: &mut SimRng) -> Layout {
     );
     let goal = centre(goal_cell.0, goal_cell.1);
     // Walls east of (c, r) and north of (c, r), inner lines only; true = standing.
-    let mut east = vec![true; n * n];
-    let mut north = vec![true; n * n];
-    let mut seen = vec![false; n * n];
-    let mut stack = vec![(0usize, 0usize)];
-    seen[0] = true;
-    while let Some(&(c, r)) = stack.last() {
-        let mut next = Vec::new();
-        if c > 0 && !seen[r * n + c - 1] {
-            next.push((c - 1, r));
-        }
-        if c + 1 < n && !seen[r * n + c + 1] {
-            next.push((c + 1, r));
-        }
-        if r > 0 && !seen[(r - 1) * n + c] {
-            next.push((c, r - 1));
-        }
-        if r + 1 < n && !seen[(r + 1) * n + c] {
-            next.push((c, r + 1));
-        }
-        if next.is_empty() {
-            stack.pop();
-            continue;
-        }
-        let (nc, nr) = next[(rng.next_u64() % next.len() as u64) as usize];
-        if nr == r {
-            east[r * n + c.min(nc)] = false;
-        } else {
-            north[r.min(nr) * n + c] = false;
-        }
-        seen[nr * n + nc] = true;
-        stack.push((nc, nr));
-    }
+    let (east, north) = super::carve(n, n, (0, 0), rng);
     let remove = uniform(rng, 0.1, 0.4);
     let mut walls = Vec::new();
     let clip = |v: f64| v.clamp(0.0, SIDE_M);

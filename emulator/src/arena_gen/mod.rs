@@ -380,6 +380,53 @@ pub fn write(g: &Generated, out: &Path, force: bool) -> Result<Vec<PathBuf>, Gen
     Ok(paths)
 }
 
+/// A perfect maze of `cols` x `rows` cells, carved by a randomised depth-first search from
+/// `from`: the walls east of and north of each cell (row-major, `r * cols + c`), true where
+/// standing; every cell joined to every other by exactly one way.
+pub(crate) fn carve(
+    cols: usize,
+    rows: usize,
+    from: (usize, usize),
+    rng: &mut SimRng,
+) -> (Vec<bool>, Vec<bool>) {
+    let (n, m) = (cols, rows);
+    let mut east = vec![true; n * m];
+    let mut north = vec![true; n * m];
+    let mut seen = vec![false; n * m];
+    let mut stack = vec![from];
+    if let Some(s) = seen.get_mut(from.1 * n + from.0) {
+        *s = true;
+    }
+    while let Some(&(c, r)) = stack.last() {
+        let mut next = Vec::new();
+        if c > 0 && !seen[r * n + c - 1] {
+            next.push((c - 1, r));
+        }
+        if c + 1 < n && !seen[r * n + c + 1] {
+            next.push((c + 1, r));
+        }
+        if r > 0 && !seen[(r - 1) * n + c] {
+            next.push((c, r - 1));
+        }
+        if r + 1 < m && !seen[(r + 1) * n + c] {
+            next.push((c, r + 1));
+        }
+        if next.is_empty() {
+            stack.pop();
+            continue;
+        }
+        let (nc, nr) = next[(rng.next_u64() % next.len() as u64) as usize];
+        if nr == r {
+            east[r * n + c.min(nc)] = false;
+        } else {
+            north[r.min(nr) * n + c] = false;
+        }
+        seen[nr * n + nc] = true;
+        stack.push((nc, nr));
+    }
+    (east, north)
+}
+
 /// Uniform in `[lo, hi)`.
 pub(crate) fn uniform(rng: &mut SimRng, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * rng.uniform()

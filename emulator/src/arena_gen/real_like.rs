@@ -515,34 +515,8 @@ fn rows_maze(name: &str, rng: &mut SimRng) -> Drawn {
     let cell = 2.0 * U;
     let (w, h) = (nx as f64 * cell, ny as f64 * cell);
     // east[c][r]: wall right of (c, r); north: wall above it.
-    let (mut east, mut north) = (vec![true; nx * ny], vec![true; nx * ny]);
-    let mut seen = vec![false; nx * ny];
-    let mut stack = vec![(pick(rng, 0, nx as u32 - 1) as usize, 0usize)];
-    if let Some(&(c, r)) = stack.first() {
-        seen[r * nx + c] = true;
-    }
-    while let Some(&(c, r)) = stack.last() {
-        let mut next = Vec::new();
-        for (dc, dr) in [(1i64, 0i64), (-1, 0), (0, 1), (0, -1)] {
-            let (a, b) = (c as i64 + dc, r as i64 + dr);
-            let inside = a >= 0 && b >= 0 && (a as usize) < nx && (b as usize) < ny;
-            if inside && !seen[b as usize * nx + a as usize] {
-                next.push((a as usize, b as usize));
-            }
-        }
-        if next.is_empty() {
-            stack.pop();
-            continue;
-        }
-        let (a, b) = next[(rng.next_u64() % next.len() as u64) as usize];
-        if b == r {
-            east[r * nx + c.min(a)] = false;
-        } else {
-            north[r.min(b) * nx + c] = false;
-        }
-        seen[b * nx + a] = true;
-        stack.push((a, b));
-    }
+    let from = (pick(rng, 0, nx as u32 - 1) as usize, 0);
+    let (mut east, mut north) = super::carve(nx, ny, from, rng);
     let open = uniform(rng, 0.05, 0.6);
     for v in east.iter_mut().chain(north.iter_mut()) {
         if *v && rng.chance(open) {

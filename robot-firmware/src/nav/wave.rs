@@ -147,16 +147,7 @@ pub fn wave_plan<S: AsRef<[u8]>>(
     goal: GridPoint,
     scratch: &mut [u8],
 ) -> Result<WavePlan, PlanError> {
-    let cells = grid.len();
-    if scratch.len() < wave_bytes(cells) {
-        return Err(PlanError::ScratchTooSmall {
-            regions: cells,
-            capacity: scratch.len().saturating_mul(2),
-        });
-    }
-    let s = cell_index(grid, passable, start).ok_or(PlanError::StartBlocked)?;
-    let g = cell_index(grid, passable, goal).ok_or(PlanError::GoalBlocked)?;
-    wave(grid, passable, g, s, scratch)?;
+    label_route(grid, passable, start, goal, scratch)?;
     let mut plan = WavePlan {
         start,
         goal,
@@ -189,16 +180,7 @@ pub fn wave_first_waypoint<S: AsRef<[u8]>>(
     goal: GridPoint,
     scratch: &mut [u8],
 ) -> Result<(GridPoint, u32), PlanError> {
-    let cells = grid.len();
-    if scratch.len() < wave_bytes(cells) {
-        return Err(PlanError::ScratchTooSmall {
-            regions: cells,
-            capacity: scratch.len().saturating_mul(2),
-        });
-    }
-    let s = cell_index(grid, passable, start).ok_or(PlanError::StartBlocked)?;
-    let g = cell_index(grid, passable, goal).ok_or(PlanError::GoalBlocked)?;
-    let steps = wave(grid, passable, g, s, scratch)?;
+    let steps = label_route(grid, passable, start, goal, scratch)?;
     let plan = WavePlan {
         start,
         goal,
@@ -208,6 +190,27 @@ pub fn wave_first_waypoint<S: AsRef<[u8]>>(
     };
     let mut walk = Walk::new(grid, &*scratch, passable, plan);
     Ok((walk.next_point().unwrap_or(goal), steps))
+}
+
+/// Checks the scratch and the ends, then labels the cells with the wave from `goal` until it
+/// reaches `start`; returns the route's length in steps.
+fn label_route<S: AsRef<[u8]>>(
+    grid: &Grid<S>,
+    passable: Passable,
+    start: GridPoint,
+    goal: GridPoint,
+    scratch: &mut [u8],
+) -> Result<u32, PlanError> {
+    let cells = grid.len();
+    if scratch.len() < wave_bytes(cells) {
+        return Err(PlanError::ScratchTooSmall {
+            regions: cells,
+            capacity: scratch.len().saturating_mul(2),
+        });
+    }
+    let s = cell_index(grid, passable, start).ok_or(PlanError::StartBlocked)?;
+    let g = cell_index(grid, passable, goal).ok_or(PlanError::GoalBlocked)?;
+    wave(grid, passable, g, s, scratch)
 }
 
 /// Index of the passable cell under `p`.
