@@ -56,12 +56,23 @@ fn main() {
     // Time (ms) spinning (wheels opposite), following, driving, reactive.
     let (mut spin, mut follow, mut drive, mut reactive) = (0u64, 0u64, 0u64, 0u64);
     let summary = std::env::var_os("SUMMARY").is_some();
+    let mut hits = 0;
     for i in 0..300_000u64 {
         sim.step();
         let t = i as f64 / 1000.0;
         let p = sim.truth();
         if i % 100 == 0 {
             track.push((p.x, p.y));
+        }
+        if sim.collisions() > hits {
+            hits = sim.collisions();
+            let r = sim.robot().dom_dinis().unwrap();
+            println!(
+                "  collision at {t:.2}: true ({:.3},{:.3},{:.2}) ir {:?} motor {:?} {:?} {:?} wp {:?}",
+                p.x, p.y, p.heading, &r.core.sensors.ir[..3], r.core.motor,
+                r.core.explorer.phase(), r.core.explorer.planned().phase(),
+                r.core.explorer.planned().waypoint().map(|w| (w.x, w.y))
+            );
         }
         if dumps.iter().any(|&d| (d - t).abs() < 0.0005) {
             println!("--- map at {t:.1} s");

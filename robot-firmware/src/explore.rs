@@ -42,6 +42,8 @@ pub trait MapMarker {
     fn cell_at(&self, p: Point) -> Option<Cell>;
     /// Sets the cell holding `p`; off-map points are ignored.
     fn mark(&mut self, p: Point, cell: Cell);
+    /// The side of a cell, metres.
+    fn cell_m(&self) -> f32;
     /// The first point to drive to on a plan from `from` to `to` over this map with unknown
     /// cells taken as free (seed 004 §6 planning on an incomplete map), or `None` when there
     /// is no such plan or no planner.
@@ -90,6 +92,10 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> MapMarker for Grid<S> {
         let (x, y) = self.geometry().metres_to_grid(p.x, p.y).cell();
         self.contains(x, y)
             .then(|| self.get(x as usize, y as usize))
+    }
+
+    fn cell_m(&self) -> f32 {
+        self.geometry().cell_size_m()
     }
 
     fn mark(&mut self, p: Point, cell: Cell) {

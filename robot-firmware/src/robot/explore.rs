@@ -230,6 +230,10 @@ impl MapMarker for UnknownOnly<'_> {
         MapMarker::index(self.0.nav().grid(), p)
     }
 
+    fn cell_m(&self) -> f32 {
+        MapMarker::cell_m(self.0.nav().grid())
+    }
+
     fn cell_at(&self, p: Point) -> Option<Cell> {
         MapMarker::cell_at(self.0.nav().grid(), p)
     }
@@ -249,6 +253,10 @@ struct ExploreMap<'a>(&'a mut Objects);
 impl MapMarker for ExploreMap<'_> {
     fn index(&self, p: Point) -> Option<(i32, i32)> {
         MapMarker::index(self.0.nav().grid(), p)
+    }
+
+    fn cell_m(&self) -> f32 {
+        MapMarker::cell_m(self.0.nav().grid())
     }
 
     fn cell_at(&self, p: Point) -> Option<Cell> {
