@@ -26,12 +26,14 @@
 //! Pure: pose, readings and time in; motor command and map marks out. Cannot fail or panic.
 
 use crate::behaviour::{MotorCommand, XorShift32};
-use crate::nav::{Cell, Grid};
+use crate::nav::{Cell, Grid, GridPoint};
 use crate::odometry::{wrap_angle, Point, Pose};
 
+pub mod far_marks;
 pub mod motion;
 pub mod planned;
 
+pub use far_marks::{FarMarks, WithFarMarks};
 pub use planned::{Planned, PlannedPhase};
 
 /// Where exploration reads and writes the map, and plans on it.
@@ -44,6 +46,11 @@ pub trait MapMarker {
     fn mark(&mut self, p: Point, cell: Cell);
     /// The side of a cell, metres.
     fn cell_m(&self) -> f32;
+    /// The centre of cell (`x`, `y`), or `None` off the map.
+    fn cell_centre(&self, x: i32, y: i32) -> Option<Point>;
+    /// A wall seen at `p` by a reading whose beam is wider than a cell there: kept apart
+    /// from the map's walls where there is a place for it ([`far_marks`]), else nothing.
+    fn mark_far(&mut self, _p: Point) {}
     /// The first point to drive to on a plan from `from` to `to` over this map with unknown
     /// cells taken as free (seed 004 §6 planning on an incomplete map), or `None` when there
     /// is no such plan or no planner.
@@ -96,6 +103,14 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> MapMarker for Grid<S> {
 
     fn cell_m(&self) -> f32 {
         self.geometry().cell_size_m()
+    }
+
+    fn cell_centre(&self, x: i32, y: i32) -> Option<Point> {
+        let (cx, cy) = (u16::try_from(x).ok()?, u16::try_from(y).ok()?);
+        self.contains(x, y).then(|| {
+            let (mx, my) = self.geometry().grid_to_metres(GridPoint::cell_centre(cx, cy));
+            Point::new(mx, my)
+        })
     }
 
     fn mark(&mut self, p: Point, cell: Cell) {
@@ -240,6 +255,10 @@ pub struct ExploreParams {
     pub no_progress_ms: u32,
     /// Walls within this distance of the robot are kept when the far ones are forgotten, m.
     pub keep_walls_m: f32,
+    /// Walls seen from afar (a beam wider than a cell) are believed by the planned search's
+    /// route when it is at most this much longer than the route without them, m
+    /// ([`far_marks`]).
+    pub far_detour_m: f32,
     /// When the planned search's map closes every way twice within this time, or it has not
     /// moved `stuck_m` in `stuck_ms`, the reactive search drives for this long, ms.
     pub reactive_ms: u32,
@@ -316,6 +335,7 @@ impl Default for ExploreParams {
             leave_rad: 0.35,
             no_progress_ms: 6_000_000,
             keep_walls_m: 0.5,
+            far_detour_m: 0.3,
             reactive_ms: 60_000,
             stuck_m: 0.15,
             stuck_ms: 15_000,
@@ -424,6 +444,8 @@ pub struct Explorer {
     next_hit: u8,
     touching: bool,
     planned: Planned,
+    /// The planned search's walls seen from afar.
+    far: FarMarks,
 }
 
 impl Explorer {
@@ -437,6 +459,7 @@ impl Explorer {
             next_hit: 0,
             touching: false,
             planned: Planned::new(),
+            far: FarMarks::new(),
         }
     }
 
@@ -463,6 +486,7 @@ impl Explorer {
         self.phase = ExplorePhase::Seek;
         self.hits = [HitRecord::default(); HIT_MEMORY];
         self.planned = Planned::new();
+        self.far.clear();
     }
 
     /// One control cycle of the search `params.mode` selects: marks the map and returns the
@@ -495,9 +519,10 @@ impl Explorer {
         inp: &ExploreInput<'_>,
         map: &mut dyn MapMarker,
     ) -> MotorCommand {
+        let p = self.params;
         let new_walls = if mode == SearchMode::Planned {
-            let p = self.params;
-            self.planned.mark(inp, &p, map) > 0
+            let mut map = WithFarMarks::new(map, &mut self.far, p.far_detour_m);
+            self.planned.mark(inp, &p, &mut map) > 0
         } else {
             mark_map(inp, &self.params, map) > 0
         };
@@ -518,8 +543,10 @@ impl Explorer {
             && !self.planned.reactive(inp.now_ms);
         if planned {
             self.phase = ExplorePhase::Seek;
-            let p = self.params;
-            return self.planned.step(&p, inp, map, new_walls, &mut self.stats);
+            let mut map = WithFarMarks::new(map, &mut self.far, p.far_detour_m);
+            return self
+                .planned
+                .step(&p, inp, &mut map, new_walls, &mut self.stats);
         }
         self.reactive_step(inp, map)
     }

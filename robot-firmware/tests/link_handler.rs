@@ -503,15 +503,17 @@ fn go_to_on_the_micro_rato_drives_by_compass_towards_the_goal() {
         }]
     );
     assert_eq!(b.robot.mode(), Mode::GoTo);
-    // Facing the goal in free space: both wheels at top nominal speed 75 (seed 004 §4).
-    assert_eq!(b.hal.motors, MotorCommand::new(75, 75));
+    // Facing the goal in free space: both wheels at the search's speed, seed 004 §4's middle
+    // 50 (the compass robot's go-to follows the planned search's route, issue 32; at the top
+    // speed 75 it met walls six times as often on the Micro-Rato labyrinths).
+    assert_eq!(b.hal.motors, MotorCommand::new(50, 50));
     // Dead reckoning moves the belief forward along the compass heading.
     let x0 = b.robot.pose().x;
     b.run(1000);
     let dx = b.robot.pose().x - x0;
     assert!(
-        (dx - 0.23).abs() < 0.03,
-        "1 s at nominal 75 should be ~0.23 m, got {dx}"
+        (dx - 0.155).abs() < 0.03,
+        "1 s at nominal 50 should be ~0.155 m, got {dx}"
     );
 }
 

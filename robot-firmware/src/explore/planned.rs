@@ -40,9 +40,9 @@ const BEAM_HALF_RAD: f32 = 0.5236;
 
 /// The planned search's map: the cells the robot stands in are free, and stay free (its
 /// centre has been there, so a route may cross them whatever a later reading, shifted by the
-/// position's error, says); each IR reading near enough for its beam to be no wider than a
-/// cell marks a wall a little inside the wall it sees, unless that cell is one the robot
-/// stood in. Rays mark nothing free: the planner takes
+/// position's error, says); each IR reading marks a wall a little inside the wall it sees,
+/// unless that cell is one the robot stood in: a wall of the map when the beam is no wider
+/// than a cell there, a far mark beyond. Rays mark nothing free: the planner takes
 /// unknown cells as free anyway, and a free cell here means the robot stood in it. Returns
 /// the number of cells that became walls.
 pub fn mark_visited(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) -> u32 {
@@ -70,19 +70,22 @@ fn mark_visited_counting(
         }
         map.mark(q, Cell::Free);
     }
-    // A reading is marked only where the beam is no wider than a cell (0.13 m from the sensor
-    // on a 0.15 m map): farther, the wall it reports may be anywhere across the beam (the end
-    // of a wall at its side reads as a wall straight ahead), and marking it straight ahead
-    // closed the gaps of 0.3-0.45 m the robot turns through round a wall's end (issue 32:
-    // real-like narrow gaps 19 -> 43 of 48 reached).
+    // A reading is a wall of the map only where the beam is no wider than a cell (0.13 m from
+    // the sensor on a 0.15 m map); farther, the wall it reports may be anywhere across the
+    // beam (the end of a wall at its side reads as a wall straight ahead): a far mark
+    // ([`super::far_marks`]), which cannot close a gap the route needs.
     let within = map.cell_m() / (2.0 * libm::tanf(BEAM_HALF_RAD));
     let mut walls = 0;
     for &(reading, angle) in inp.ir {
-        if let Some(d) = p.ir.distance(reading).filter(|&d| d <= within) {
+        if let Some(d) = p.ir.distance(reading) {
             // The sensor sits at the body edge; the wall is d beyond it.
             let q = ray_point(inp, angle, d + 0.12 + WALL_DEPTH_M);
             if map.cell_at(q).is_some_and(|c| c != Cell::Free) {
-                walls += mark_wall(map, q);
+                if d <= within {
+                    walls += mark_wall(map, q);
+                } else {
+                    map.mark_far(q);
+                }
             }
         }
     }

@@ -230,6 +230,10 @@ impl MapMarker for UnknownOnly<'_> {
         MapMarker::index(self.0.nav().grid(), p)
     }
 
+    fn cell_centre(&self, x: i32, y: i32) -> Option<Point> {
+        MapMarker::cell_centre(self.0.nav().grid(), x, y)
+    }
+
     fn cell_m(&self) -> f32 {
         MapMarker::cell_m(self.0.nav().grid())
     }
@@ -253,6 +257,10 @@ struct ExploreMap<'a>(&'a mut Objects);
 impl MapMarker for ExploreMap<'_> {
     fn index(&self, p: Point) -> Option<(i32, i32)> {
         MapMarker::index(self.0.nav().grid(), p)
+    }
+
+    fn cell_centre(&self, x: i32, y: i32) -> Option<Point> {
+        MapMarker::cell_centre(self.0.nav().grid(), x, y)
     }
 
     fn cell_m(&self) -> f32 {
