@@ -537,6 +537,7 @@ impl Sim {
         // The id in force now (an operator may set it), so truth names the robot as it does;
         // only a pass (or `robot_mut`, which a pass follows) changes it.
         self.truth.robot_id = self.robot.config().robot_id;
+        self.truth.binding = self.robot.link().binding();
     }
 
     /// Moves the wire on to `now_us` (at most this step's start), the robot not stepping: the

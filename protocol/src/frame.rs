@@ -20,7 +20,7 @@ use crate::msg::{
     Telemetry, TransferAck, TransferBegin, TransferChunk,
 };
 use crate::sign::{
-    LinkKey, Signature, MAC_LEN, SIGNATURE_LEN, SIGNED_FLAG, TIMESTAMP_LEN, TIMESTAMP_MAX,
+    Binding, LinkKey, Signature, MAC_LEN, SIGNATURE_LEN, SIGNED_FLAG, TIMESTAMP_LEN, TIMESTAMP_MAX,
 };
 
 /// The protocol version carried in every header.
@@ -189,13 +189,15 @@ pub fn encode(seq: u16, msg: &Message<'_>, out: &mut [u8]) -> Result<usize, Enco
     finish_raw(&mut raw, PROTOCOL_VERSION, msg.kind() as u8, seq, n, out)
 }
 
-/// Encodes `msg` as a signed frame (PROTOCOL.md §13) with the given link id and timestamp.
-/// The payload budget is `MAX_SIGNED_PAYLOAD`. Callers keep timestamps increasing; use
-/// `sign::LinkAuth::encode`, which does.
+/// Encodes `msg` as a signed frame (PROTOCOL.md §13) bound to `binding`, with the given link
+/// id and timestamp. The payload budget is `MAX_SIGNED_PAYLOAD`. Callers keep timestamps
+/// increasing and bind the handshake's frames as §13 says; use `sign::LinkAuth::encode`,
+/// which does both.
 pub fn encode_signed(
     seq: u16,
     msg: &Message<'_>,
     key: &LinkKey,
+    binding: &Binding,
     link_id: u8,
     timestamp: u64,
     out: &mut [u8],
@@ -218,7 +220,10 @@ pub fn encode_signed(
         .ok_or(EncodeError::PayloadTooLarge)?;
     trailer[0] = link_id;
     trailer[1..].copy_from_slice(&ts[..TIMESTAMP_LEN]);
-    let mac = key.mac(raw.get(..mac_at).ok_or(EncodeError::PayloadTooLarge)?);
+    let mac = key.mac(
+        binding,
+        raw.get(..mac_at).ok_or(EncodeError::PayloadTooLarge)?,
+    );
     raw.get_mut(mac_at..mac_at + MAC_LEN)
         .ok_or(EncodeError::PayloadTooLarge)?
         .copy_from_slice(&mac);

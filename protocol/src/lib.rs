@@ -34,7 +34,7 @@ pub use frame::{
 pub use msg::*;
 pub use packed::Packed10x8;
 pub use seq::{SeqEvent, SeqTracker};
-pub use sign::{AuthError, AuthStats, KeyError, LinkAuth, LinkKey, Signature};
+pub use sign::{AuthError, AuthStats, Binding, KeyError, LinkAuth, LinkKey, Signature};
 
 /// The schema fingerprint: FNV-1a 64 over the protocol name, version and the full postcard
 /// schema of `Message` (every variant, field name and type, in order). Two builds whose

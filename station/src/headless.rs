@@ -434,7 +434,9 @@ async fn send(
             };
             let v = json!({"outcome": "ack", "command": what, "sends": sends, "rtt_ms": rtt_ms,
                            "info": detail});
-            (true, format!("{text} ({rtt_ms} ms)"), v)
+            // The robot that answered, as its HelloReply states: on a fleet's lines, that is
+            // what says a cable goes where the operator thinks.
+            (true, format!("{text} ({rtt_ms} ms, robot {})", peer.robot_id), v)
         }
         CommandOutcome::Nacked { reason, sends } => {
             let mut why = refusal_text(&command, reason);
@@ -460,8 +462,11 @@ async fn send(
         ),
     };
     let mut value = value;
-    if let (Some(r), Some(obj)) = (&round_trips, value.as_object_mut()) {
-        obj.insert("round_trip".into(), serde_json::to_value(r)?);
+    if let Some(obj) = value.as_object_mut() {
+        obj.insert("robot_id".into(), json!(peer.robot_id));
+        if let Some(r) = &round_trips {
+            obj.insert("round_trip".into(), serde_json::to_value(r)?);
+        }
     }
     if json {
         println!("{}", serde_json::to_string_pretty(&value)?);

@@ -27,7 +27,9 @@
 
 use std::collections::VecDeque;
 
-use protocol::sign::{ticks_from_unix_us, AuthError, LinkAuth, LinkKey, STATION_LINK};
+use protocol::sign::{
+    ticks_from_unix_us, AuthError, Binding, LinkAuth, LinkKey, ANY_ROBOT, STATION_LINK,
+};
 use protocol::timing::LINK_TIMEOUT_MS;
 use protocol::{
     Command, EventCode, Feed, FrameDecoder, FrameError, Heartbeat, Hello, HelloReply, Kind,
@@ -294,7 +296,8 @@ impl LinkMachine {
                     input = rest;
                     if !self.trust_signatures {
                         if let Err(e) = self.auth.verify(&frame) {
-                            self.on_auth_error(e);
+                            let refusal = is_handshake_refusal(&frame.message);
+                            self.on_auth_error(e, refusal);
                             continue;
                         }
                     }
@@ -487,6 +490,9 @@ impl LinkMachine {
             session,
             station: &station,
         };
+        // Until a reply names the robot, the robot's frames of this session are not ours:
+        // only the reply and a refusal of this Hello verify (PROTOCOL.md §13).
+        self.auth.bind(Binding::new(session, ANY_ROBOT));
         self.send(now_ms, &Message::Hello(hello));
     }
 
@@ -506,11 +512,17 @@ impl LinkMachine {
     /// A frame that passed the CRC but not authentication: counted (the stats show it) and
     /// dropped. Before a session, a key on one side only or a different key is what it means,
     /// and the user is told so instead of waiting for a timeout.
-    fn on_auth_error(&mut self, e: AuthError) {
+    /// `refusal`: the frame decodes as the robot's `HandshakeRefused`.
+    fn on_auth_error(&mut self, e: AuthError, refusal: bool) {
         if self.connected() {
             return;
         }
         let why = match e {
+            // Only the robot's refusal of a Hello says which key it has: it is bound to no
+            // session, so with our key it verifies. Any other frame that does not verify may
+            // be the robot's last session with another station, still in the port (bound to
+            // that session), or a frame relayed from another robot: counted only.
+            AuthError::BadSignature { .. } if !refusal => return,
             AuthError::BadSignature { .. } => {
                 "the robot's frames do not verify with this station's key (the robot has \
                  another key)"
@@ -675,6 +687,9 @@ impl LinkMachine {
         }
         if r.accepted && r.fingerprint == FINGERPRINT && r.protocol == PROTOCOL_VERSION {
             self.stats.handshakes = self.stats.handshakes.saturating_add(1);
+            // From now on both directions sign for this session and this robot: a frame of
+            // another robot sharing the key, relayed onto this line, does not verify.
+            self.auth.bind(Binding::new(r.session, r.robot_id));
             self.state = State::Connected {
                 session: r.session,
                 since_ms: now_ms,
@@ -892,6 +907,10 @@ fn owned_reply(r: &HelloReply<'_>) -> OwnedHelloReply {
 }
 
 /// Hex digits of a fingerprint, as PROTOCOL.md prints it.
+fn is_handshake_refusal(msg: &Message<'_>) -> bool {
+    matches!(msg, Message::Event(e) if e.code == EventCode::HandshakeRefused)
+}
+
 pub fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }

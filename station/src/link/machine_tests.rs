@@ -505,8 +505,11 @@ fn closing_the_port_fails_what_is_in_flight_and_reports_why() {
 mod auth {
     //! Link authentication (PROTOCOL.md §13) against a hand-made keyed robot.
     use super::*;
-    use protocol::sign::{LinkAuth, LinkKey, ROBOT_LINK, STATION_LINK};
+    use protocol::sign::{Binding, LinkAuth, LinkKey, ROBOT_LINK, STATION_LINK};
     use protocol::{Event, EventCode};
+
+    /// The robot id `reply` states.
+    const ROBOT_ID: u8 = 1;
 
     const T0: u64 = 0x1f92_d63c_e000;
 
@@ -516,7 +519,8 @@ mod auth {
         m
     }
 
-    /// The robot's side: verifies what the station sent, returns the Hello's session.
+    /// The robot's side: verifies what the station sent, returns the Hello's session (which
+    /// the robot accepts, so its frames are bound to it from then on).
     fn robot_reads(robot: &mut LinkAuth, m: &mut LinkMachine) -> Option<u32> {
         let bytes = m.take_output();
         let mut dec = FrameDecoder::new();
@@ -530,6 +534,7 @@ mod auth {
                     robot.verify(&frame).expect("the station's frames verify");
                     if let Message::Hello(h) = frame.message {
                         session = Some(h.session);
+                        robot.bind(Binding::new(h.session, ROBOT_ID));
                     }
                     input = rest;
                 }
@@ -583,6 +588,76 @@ mod auth {
             (1, 1, 2)
         );
         assert_eq!(s.telemetry_frames, 1, "only the verified telemetry counts");
+    }
+
+    #[test]
+    fn an_ack_signed_by_another_robot_of_the_fleet_is_refused_and_the_command_stays_unanswered() {
+        // One key, two robots: robot 2's Ack relayed onto robot 1's line must not answer the
+        // Stop sent to robot 1 (PROTOCOL.md §13, binding).
+        let mut m = keyed_machine(1);
+        let mut robot = LinkAuth::new(Some(LinkKey::new(&[1; 32])), ROBOT_LINK);
+        m.port_opened(0, "p");
+        let session = robot_reads(&mut robot, &mut m).expect("hello");
+        let mut dec = FrameDecoder::new();
+        let msg = match dec.feed(&reply(session, FINGERPRINT, true)) {
+            Feed::Frame { frame, .. } => frame.message,
+            other => panic!("{other:?}"),
+        };
+        m.receive(5, &signed(&mut robot, 0, &msg));
+        assert!(m.connected());
+        m.take_events();
+        m.submit(10, 7, Command::Stop);
+        let stop_seq = sent(&mut m)
+            .iter()
+            .find(|f| f.2 == Some(Command::Stop))
+            .expect("stop sent")
+            .0;
+        let ack = Message::Ack(protocol::Ack {
+            cmd_seq: stop_seq,
+            info: protocol::AckInfo::Done,
+        });
+        let mut robot_2 = LinkAuth::new(Some(LinkKey::new(&[1; 32])), ROBOT_LINK);
+        robot_2.bind(Binding::new(session, ROBOT_ID + 1));
+        m.receive(20, &signed(&mut robot_2, 1, &ack));
+        assert!(
+            outcomes(&m.take_events()).is_empty(),
+            "robot 2's ack answered"
+        );
+        assert_eq!(m.stats(30).auth.bad_signature, 1);
+        // Robot 1's own Ack does.
+        m.receive(40, &signed(&mut robot, 2, &ack));
+        assert!(matches!(
+            outcomes(&m.take_events()).as_slice(),
+            [(7, CommandOutcome::Acked { .. })]
+        ));
+    }
+
+    #[test]
+    fn the_robots_frames_to_the_last_station_do_not_look_like_another_key() {
+        // The robot talks on to a station that left until its link timeout; those frames,
+        // bound to that station's session, reach the next station as it handshakes. They
+        // fail our MAC, and are counted, but only a refusal of our Hello says "another key".
+        let mut m = keyed_machine(1);
+        let mut robot = LinkAuth::new(Some(LinkKey::new(&[1; 32])), ROBOT_LINK);
+        robot.bind(Binding::new(0x5e55_1014, ROBOT_ID));
+        m.port_opened(0, "p");
+        let session = robot_reads(&mut robot, &mut m).expect("hello");
+        robot.bind(Binding::new(0x5e55_1014, ROBOT_ID));
+        m.receive(3, &signed(&mut robot, 9, &telemetry()));
+        assert!(
+            !matches!(m.connection(), Connection::Refused { .. }),
+            "{:?}",
+            m.connection()
+        );
+        assert_eq!(m.stats(4).auth.bad_signature, 1);
+        robot.bind(Binding::new(session, ROBOT_ID));
+        let mut dec = FrameDecoder::new();
+        let msg = match dec.feed(&reply(session, FINGERPRINT, true)) {
+            Feed::Frame { frame, .. } => frame.message,
+            other => panic!("{other:?}"),
+        };
+        m.receive(5, &signed(&mut robot, 10, &msg));
+        assert!(m.connected());
     }
 
     #[test]
