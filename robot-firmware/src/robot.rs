@@ -1029,6 +1029,16 @@ impl<K: Kit> Core<K> {
 
     /// The motor command for this cycle, by mode.
     fn decide(&mut self) -> MotorCommand {
+        let cmd = self.mode_command();
+        // A task that ended this cycle (it arrived) left the robot Idle: stopped at once.
+        if self.mode == Mode::Idle {
+            MotorCommand::STOP
+        } else {
+            cmd
+        }
+    }
+
+    fn mode_command(&mut self) -> MotorCommand {
         if self.mode == Mode::Wander {
             // ALICE wanders by its whiskers; the others by the arbiter's IR behaviours.
             if let Some(cmd) = K::Alice::wander(self) {
@@ -1111,10 +1121,15 @@ impl<K: Kit> Core<K> {
         cmd
     }
 
+    /// The task is done: `GoalReached`, and the robot goes Idle with its motors stopped, so
+    /// that its mode, its progress reports (none in Idle) and the station's status line say
+    /// the task is over instead of counting time without progress at its end. `arrived`
+    /// stays set until the next mode begins: it says the last task ended by arriving.
     fn mark_arrived(&mut self) {
         if !self.arrived {
-            self.arrived = true;
             self.push_event(EventCode::GoalReached, 0);
+            self.enter(Mode::Idle);
+            self.arrived = true;
         }
     }
 

@@ -803,7 +803,7 @@ impl App {
             EventCode::ModeChanged => {
                 (Level::Info, format!("mode changed to {}", mode_name_i32(v)))
             }
-            EventCode::GoalReached => (Level::Info, "goal reached".into()),
+            EventCode::GoalReached => (Level::Info, self.arrival_text()),
             EventCode::FailsafeStop => (
                 Level::Warn,
                 format!("failsafe stop after {v} ms of silence"),
@@ -888,6 +888,18 @@ impl App {
                 (Level::Info, format!("parameter {} changed", param_name(id)))
             }
         };
+        // A task that ended (or a mode that changed) takes its progress with it: the status
+        // line shows what the robot reports now, not the last report of a task that is over.
+        if matches!(
+            e.code,
+            EventCode::ModeChanged
+                | EventCode::GoalReached
+                | EventCode::PlanFinished
+                | EventCode::PlanAborted
+                | EventCode::NoProgress
+        ) {
+            self.progress = None;
+        }
         self.note_grouped(level, Source::Event, text, group);
     }
 
@@ -940,6 +952,9 @@ impl App {
                 }
             }
             CommandOutcome::Nacked { reason, .. } => {
+                if matches!(command, Command::Segment | Command::Plan { .. }) {
+                    self.plan_not_made();
+                }
                 if let Command::SetParam { id, .. } | Command::GetParam { id } = command {
                     if reason == protocol::NackReason::Unsupported {
                         self.params.set_absent(id.0);
@@ -992,6 +1007,9 @@ impl App {
                 Some(groups::SUPERSEDED),
             ),
             CommandOutcome::Failed(why) => {
+                if matches!(command, Command::Segment | Command::Plan { .. }) {
+                    self.plan_not_made();
+                }
                 if let Command::SetParam { id, .. } | Command::GetParam { id } = command {
                     self.params.set_failed(id.0, why.to_string());
                 }

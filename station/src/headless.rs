@@ -436,7 +436,11 @@ async fn send(
                            "info": detail});
             // The robot that answered, as its HelloReply states: on a fleet's lines, that is
             // what says a cable goes where the operator thinks.
-            (true, format!("{text} ({rtt_ms} ms, robot {})", peer.robot_id), v)
+            (
+                true,
+                format!("{text} ({rtt_ms} ms, robot {})", peer.robot_id),
+                v,
+            )
         }
         CommandOutcome::Nacked { reason, sends } => {
             let mut why = refusal_text(&command, reason);

@@ -317,3 +317,80 @@ fn the_upload_prompt_suggestion_is_replaced_by_typing_kept_by_end_and_cleared_by
         Some(format!("{}x", emulator::builtin::MICRO_RATO_99).as_str())
     );
 }
+
+/// `O` for a chosen target, refused: `X` must not execute the robot's earlier plan (to the
+/// map's goal) while the footer names the chosen target. After the refusal there is no plan
+/// for that target, and `X` says so; `G` names the goal again, whose plan `X` then runs.
+#[test]
+fn x_executes_only_the_plan_the_screen_names() {
+    let mut app = app();
+    let done = |app: &mut App, command, outcome| {
+        app.update(Action::Link(LinkEvent::CommandDone {
+            id: 0,
+            command,
+            outcome,
+        }));
+    };
+    let ack = CommandOutcome::Acked {
+        info: AckInfo::Done,
+        sends: 1,
+        rtt_ms: 5,
+    };
+    // A plan to the map's goal, installed.
+    app.update(key(&app, 'O'));
+    app.take_outbox();
+    done(&mut app, Command::Segment, ack);
+    done(
+        &mut app,
+        Command::Plan {
+            from: None,
+            to: None,
+        },
+        ack,
+    );
+    let goal_plan = 0x600d_0001;
+    app.update(Action::Link(LinkEvent::Robot(Event {
+        code: EventCode::PlanInstalled,
+        value: goal_plan as i32,
+    })));
+    app.take_outbox();
+
+    // The cursor becomes the target; the robot refuses to plan there.
+    app.update(key(&app, 'g'));
+    app.update(key(&app, 'O'));
+    let sent: Vec<Command> = app.take_outbox().into_iter().map(|(_, c)| c).collect();
+    let to = match sent.as_slice() {
+        [Command::Segment, Command::Plan { to: Some(to), .. }] => *to,
+        other => panic!("{other:?}"),
+    };
+    done(&mut app, Command::Segment, ack);
+    let refused = CommandOutcome::Nacked {
+        reason: protocol::NackReason::BadPoint,
+        sends: 1,
+    };
+    done(
+        &mut app,
+        Command::Plan {
+            from: None,
+            to: Some(to),
+        },
+        refused,
+    );
+    let footer = screen(&app, 160, 40);
+    assert!(footer.contains("plan to ("), "{footer}");
+    app.update(key(&app, 'X'));
+    let sent: Vec<Command> = app.take_outbox().into_iter().map(|(_, c)| c).collect();
+    assert!(
+        sent.is_empty(),
+        "X ran a plan the screen does not name: {sent:?}"
+    );
+    let last = app.log.window(1).last().unwrap().text.clone();
+    assert!(last.contains("no plan to the chosen target ("), "{last}");
+    assert!(last.contains("refused"), "{last}");
+
+    // `G`: the map's goal again, and its plan is the robot's installed one.
+    app.update(key(&app, 'G'));
+    app.update(key(&app, 'X'));
+    let sent: Vec<Command> = app.take_outbox().into_iter().map(|(_, c)| c).collect();
+    assert_eq!(sent, vec![Command::ExecutePlan { plan_id: goal_plan }]);
+}

@@ -40,6 +40,16 @@ impl PlanTarget {
         }
     }
 
+    /// Whether two targets are the same place for a plan: the same chosen point, or both
+    /// the map's goal (wherever the station's map puts it now).
+    pub fn same(&self, other: &PlanTarget) -> bool {
+        match (self, other) {
+            (PlanTarget::Chosen(a), PlanTarget::Chosen(b)) => a == b,
+            (PlanTarget::MapGoal(_), PlanTarget::MapGoal(_)) => true,
+            _ => false,
+        }
+    }
+
     /// The footer's short form.
     pub fn short(&self) -> String {
         match *self {
@@ -141,6 +151,30 @@ impl App {
                 format!(" (the robot's arena: x {x0:.2} .. {x1:.2} m, y {y0:.2} .. {y1:.2} m)")
             }
             _ => " (reading the robot's arena bounds: see the parameter editor, p)".into(),
+        }
+    }
+
+    /// The `GoalReached` event in words: what the task that arrived was, and where (the
+    /// robot says only that its task reached its end; the goal is the goal only when
+    /// exploring found it, or a plan to the map's goal got there).
+    pub(super) fn arrival_text(&self) -> String {
+        let at = self
+            .pose()
+            .map_or(String::new(), |(x, y, _)| format!(" at ({x:.2}, {y:.2})"));
+        let mode = self
+            .progress
+            .map(|p| p.mode)
+            .or_else(|| self.telemetry.map(|t| t.mode));
+        let to_goal = matches!(
+            &self.transfers.plan_for,
+            Some(super::transfers::PlanFor::Target(PlanTarget::MapGoal(_)))
+        );
+        match mode {
+            Some(Mode::Explore) => format!("goal reached{at}: exploration found the goal area"),
+            Some(Mode::GoTo) => format!("arrived{at}: the go-to point"),
+            Some(Mode::ExecutePlan) if to_goal => format!("goal reached{at}: the plan's end"),
+            Some(Mode::ExecutePlan) => format!("arrived{at}: the plan's end"),
+            _ => format!("task ended{at}: the robot arrived"),
         }
     }
 
