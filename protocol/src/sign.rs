@@ -27,21 +27,15 @@ use hmac::digest::{FixedOutput, KeyInit, Mac, Update};
 use hmac::Hmac;
 use sha2::Sha256;
 
-use crate::frame::{encode_signed, EncodeError, Frame};
+use crate::frame::{finish_raw, serialize_payload, EncodeError, Frame, HEADER_LEN, MAX_RAW};
+use crate::frame::{MAX_SIGNED_PAYLOAD, PROTOCOL_VERSION};
 use crate::msg::{EventCode, Message};
+pub use crate::trailer::{
+    Signature, MAC_LEN, SIGNATURE_LEN, SIGNED_FLAG, TIMESTAMP_LEN, TIMESTAMP_MAX,
+};
 
 /// Bytes of a key.
 pub const KEY_LEN: usize = 32;
-/// Set in the version byte of a signed frame.
-pub const SIGNED_FLAG: u8 = 0x80;
-/// Bytes of the truncated MAC.
-pub const MAC_LEN: usize = 6;
-/// Bytes of the timestamp (48 bits, little-endian).
-pub const TIMESTAMP_LEN: usize = 6;
-/// Bytes of the trailer: link id, timestamp, MAC.
-pub const SIGNATURE_LEN: usize = 1 + TIMESTAMP_LEN + MAC_LEN;
-/// Largest timestamp.
-pub const TIMESTAMP_MAX: u64 = (1 << 48) - 1;
 /// Link ids with this bit are sent by the robot side (robot, emulator), without by a station.
 pub const ROBOT_SIDE: u8 = 0x80;
 /// The station's link id.
@@ -203,16 +197,6 @@ pub fn parse_key_hex(text: &str) -> Result<[u8; KEY_LEN], KeyError> {
         return Err(KeyError::AllZero);
     }
     Ok(key)
-}
-
-/// The trailer of a signed frame, as parsed; `covered` is what the MAC is over (the decoded
-/// frame from the version byte through the timestamp).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Signature<'a> {
-    pub link_id: u8,
-    pub timestamp: u64,
-    pub mac: [u8; MAC_LEN],
-    pub covered: &'a [u8],
 }
 
 /// Why an authenticated link refused a frame that passed the CRC. Nothing else happened.
@@ -537,6 +521,47 @@ impl LinkAuth {
             }
         }
     }
+}
+
+/// Encodes `msg` as a signed frame (PROTOCOL.md §13) bound to `binding`, with the given link
+/// id and timestamp. The payload budget is `MAX_SIGNED_PAYLOAD`. Callers keep timestamps
+/// increasing and bind the handshake's frames as §13 says; use `sign::LinkAuth::encode`,
+/// which does both.
+pub fn encode_signed(
+    seq: u16,
+    msg: &Message<'_>,
+    key: &LinkKey,
+    binding: &Binding,
+    link_id: u8,
+    timestamp: u64,
+    out: &mut [u8],
+) -> Result<usize, EncodeError> {
+    let mut raw = [0u8; MAX_RAW];
+    let body = raw
+        .get_mut(HEADER_LEN..HEADER_LEN + MAX_SIGNED_PAYLOAD)
+        .ok_or(EncodeError::PayloadTooLarge)?;
+    let n = serialize_payload(msg, body)?;
+    let version = PROTOCOL_VERSION | SIGNED_FLAG;
+    let kind = msg.kind() as u8;
+    let [s0, s1] = seq.to_le_bytes();
+    // The MAC covers the header, so it goes in before the MAC is taken.
+    raw[..HEADER_LEN].copy_from_slice(&[version, kind, s0, s1]);
+    let trailer_at = HEADER_LEN + n;
+    let mac_at = trailer_at + SIGNATURE_LEN - MAC_LEN;
+    let ts = timestamp.min(TIMESTAMP_MAX).to_le_bytes();
+    let trailer = raw
+        .get_mut(trailer_at..mac_at)
+        .ok_or(EncodeError::PayloadTooLarge)?;
+    trailer[0] = link_id;
+    trailer[1..].copy_from_slice(&ts[..TIMESTAMP_LEN]);
+    let mac = key.mac(
+        binding,
+        raw.get(..mac_at).ok_or(EncodeError::PayloadTooLarge)?,
+    );
+    raw.get_mut(mac_at..mac_at + MAC_LEN)
+        .ok_or(EncodeError::PayloadTooLarge)?
+        .copy_from_slice(&mac);
+    finish_raw(&mut raw, version, kind, seq, n + SIGNATURE_LEN, out)
 }
 
 /// Ticks since the epoch for a Unix time in microseconds (0 before the epoch).
