@@ -63,6 +63,9 @@ pub enum Response {
     Reply(Reply),
     /// A frame to send, e.g. a `TransferAck`.
     Send(Message<'static>),
+    /// To `Connected`: the robot's settings in the session that starts now, which its
+    /// `HelloReply` states (a new session resets the telemetry rate, PROTOCOL.md §4).
+    Session(LinkStatus),
 }
 
 /// A command's reply, remembered to answer that command's retries (PROTOCOL.md §7). 24 bytes:
@@ -256,11 +259,15 @@ impl Link {
                     let accepted = h.fingerprint == FINGERPRINT && h.protocol == PROTOCOL_VERSION;
                     // The reply names the Hello's session and this robot, and is signed so.
                     let answer_in = Binding::new(h.session, status.robot_id);
+                    let mut status = status;
                     if accepted {
                         st.auth.bind(answer_in);
                         st.session = Some(h.session);
                         st.replies = [None; REPLY_CACHE];
                         st.counters.handshakes = st.counters.handshakes.wrapping_add(1);
+                        if let Response::Session(now) = on(Inbound::Connected) {
+                            status = now;
+                        }
                     } else {
                         st.session = None;
                         st.counters.handshakes_refused =
@@ -281,9 +288,7 @@ impl Link {
                         robot_id: status.robot_id,
                     };
                     st.send_in(answer_in, &Message::HelloReply(reply), now_ms);
-                    if accepted {
-                        on(Inbound::Connected);
-                    } else {
+                    if !accepted {
                         let ev = Event {
                             code: EventCode::HandshakeRefused,
                             value: i32::from(h.protocol),
@@ -308,7 +313,7 @@ impl Link {
                             Response::Reply(r) => r,
                             // A command always gets an answer; "nothing" means it was not
                             // acted on.
-                            Response::Nothing | Response::Send(_) => {
+                            Response::Nothing | Response::Send(_) | Response::Session(_) => {
                                 Reply::Nack(NackReason::BadState)
                             }
                         };

@@ -295,7 +295,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "m",
         -100.0,
         100.0,
-        "beacon position x, map frame (exploration goal)",
+        "beacon position x, map frame (exploration goal); the emulator sets it from its arena",
     ),
     p(
         22,
@@ -303,7 +303,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "m",
         -100.0,
         100.0,
-        "beacon position y, map frame (exploration goal)",
+        "beacon position y, map frame (exploration goal); the emulator sets it from its arena",
     ),
     p(
         23,
