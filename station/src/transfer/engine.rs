@@ -25,6 +25,8 @@ use std::collections::VecDeque;
 
 use protocol::object::{kind_of, parse};
 use protocol::transfer::{chunk_for_loss, next_tag, Outcome, Receiver, Sender, NO_TAG};
+
+use super::UploadCounts;
 use protocol::{
     AckInfo, Command, Message, ObjectKind, TransferAck, TransferBegin, TransferData, TransferStatus,
 };
@@ -121,6 +123,8 @@ struct Active {
     /// began, so an `AlreadyHave` to a later attempt's Begin means this job installed it
     /// (its `Complete` answers were lost and the attempt timed out).
     robot_receiving: bool,
+    /// An upload's first chunk size, bytes (0 for a download).
+    first_chunk: u32,
     phase: Phase,
 }
 
@@ -391,12 +395,17 @@ impl TransferEngine {
                 not_before: now_ms,
             },
         };
+        let first_chunk = match &phase {
+            Phase::Upload { sender, .. } => sender.chunk(),
+            _ => 0,
+        };
         self.active = Some(Active {
             job,
             direction,
             object,
             started_ms: now_ms,
             attempts: 1,
+            first_chunk,
             down_since: None,
             shown: (0, 0),
             robot_receiving: false,
@@ -427,6 +436,7 @@ impl TransferEngine {
             elapsed_ms: 0,
             attempts: 0,
             bytes: None,
+            sender: None,
         }));
     }
 
@@ -784,6 +794,14 @@ impl TransferEngine {
             Phase::Receiving { info, .. } => (Some(info.id), Some(info.crc), info.len),
             Phase::Request { .. } | Phase::Requested { .. } => (None, None, 0),
         };
+        let sender = match &a.phase {
+            Phase::Upload { sender, .. } => Some(UploadCounts {
+                stats: sender.stats(),
+                first_chunk: a.first_chunk,
+                last_chunk: sender.chunk(),
+            }),
+            _ => None,
+        };
         self.events.push_back(TransferEvent::Finished(JobReport {
             job: a.job,
             direction: a.direction,
@@ -795,6 +813,7 @@ impl TransferEngine {
             elapsed_ms: now_ms.saturating_sub(a.started_ms),
             attempts: a.attempts,
             bytes,
+            sender,
         }));
     }
 }

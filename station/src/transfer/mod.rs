@@ -166,6 +166,19 @@ pub struct JobReport {
     pub attempts: u8,
     /// The object received (downloads that completed).
     pub bytes: Option<Vec<u8>>,
+    /// An upload's sender: where its time went (chunks, resends, losses, timer expiries) and
+    /// the chunk size it started with.
+    pub sender: Option<UploadCounts>,
+}
+
+/// What an upload's sender did, for the report (`station upload-map --json`, `"sender"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct UploadCounts {
+    pub stats: protocol::transfer::SenderStats,
+    /// The chunk size the upload started with, bytes.
+    pub first_chunk: u32,
+    /// The chunk size when it ended, bytes.
+    pub last_chunk: u32,
 }
 
 impl JobReport {
@@ -187,6 +200,15 @@ impl JobReport {
             "elapsed_ms": self.elapsed_ms,
             "attempts": self.attempts,
             "error": error,
+            "sender": self.sender.map(|c| json!({
+                "chunks": c.stats.chunks,
+                "resent": c.stats.resent,
+                "lost_units": c.stats.lost_units,
+                "probes": c.stats.probes,
+                "timeouts": c.stats.timeouts,
+                "first_chunk": c.first_chunk,
+                "last_chunk": c.last_chunk,
+            })),
         })
     }
 
