@@ -191,7 +191,7 @@ impl BenchArgs {
         }
         if self.robots > 1 && self.task != BenchTask::ReachBeacon {
             return Err(format!(
-                "--robots {}: the contest is seed 004's reach-beacon; use --task reach-beacon",
+                "--robots {}: the contest is the Micro-Rato reach-beacon task (the Dom Dinis paper §2); use --task reach-beacon",
                 self.robots
             ));
         }
@@ -908,7 +908,7 @@ impl RunArgs {
         if self.task != TaskArg::ReachBeacon {
             return Err(format!(
                 "--robots/--robot: several robots run the Micro-Rato contest, --task \
-                 reach-beacon (seed 004 §2), not --task {}",
+                 reach-beacon (the Dom Dinis paper §2), not --task {}",
                 self.task
                     .to_possible_value()
                     .map_or_else(String::new, |v| v.get_name().to_string())
