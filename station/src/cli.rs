@@ -124,9 +124,9 @@ pub enum Sub {
     ///
     /// Names and ids are the firmware's table (`list` shows each with its unit, range and
     /// description). Files are `name = value` lines, `#` comments (docs/station.md,
-    /// "Parameter files"); `load` sets each parameter the file names and reports each change and each
-    /// refusal (exit 1 if any was refused); `diff` exits 1 when the robot differs from the
-    /// file. A bad file is refused with FILE:LINE:COL before the port is opened.
+    /// "Parameter files"); `load` sets each parameter the file names and reports each change
+    /// and each refusal (exit 1 if any was refused); `diff` exits 1 when the robot differs
+    /// from the file. A bad file is refused with FILE:LINE:COL before the port is opened.
     ///
     /// Examples:
     ///   station params --port /dev/ttyUSB0 list
@@ -251,10 +251,11 @@ pub enum Sub {
     /// Train the light -> angle map (Khepera light calibration) from a recording of a calibrating robot
     ///
     /// The Kohonen map of the Khepera foraging paper (Löffler, Klahold, Rückert 2001, §5.3):
-    /// 60 neurons learn the light's bearing from the six front light sensors. Uses the telemetry recorded while a Khepera turned next to a light (mode
-    /// calibrate-light): labels from each full turn (or from --light X,Y), the firmware's own
-    /// network code, every fifth example held out. Prints the held-out mean/max angle error
-    /// and writes the map (FILE.json, or binary for any other name) atomically.
+    /// 60 neurons learn the light's bearing from the six front light sensors. Uses the
+    /// telemetry recorded while a Khepera turned next to a light (mode calibrate-light):
+    /// labels from each full turn (or from --light X,Y), the firmware's own network code,
+    /// every fifth example held out. Prints the held-out mean/max angle error and writes the
+    /// map (FILE.json, or binary for any other name) atomically.
     ///
     /// Examples:
     ///   station calibrate cal.rec --out som.json
