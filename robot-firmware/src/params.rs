@@ -163,7 +163,7 @@ pub const PARAMS: [ParamInfo; 36] = [
             "mm",
             10.0,
             500.0,
-            "odometry: distance between the wheels (seed 000 §3.1: 52 mm)",
+            "odometry: distance between the wheels (Löffler et al. §3.1: 52 mm)",
         ),
     ),
     needs(
@@ -183,7 +183,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "counts",
         0.0,
         1023.0,
-        "obstacle avoidance: IR activation threshold (seed 000 §4.2: 475)",
+        "obstacle avoidance: IR activation threshold (Löffler et al. §4.2: 475)",
     ),
     pi(
         8,
@@ -191,7 +191,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "counts",
         0.0,
         200.0,
-        "obstacle avoidance: random spread of the threshold (seed 000 §4.2: 25)",
+        "obstacle avoidance: random spread of the threshold (Löffler et al. §4.2: 25)",
     ),
     pi(
         9,
@@ -207,7 +207,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "counts",
         1.0,
         500.0,
-        "edge following: error below this is noise (seed 000 §4.3: 7)",
+        "edge following: error below this is noise (Löffler et al. §4.3: 7)",
     ),
     pi(
         11,
@@ -215,7 +215,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "counts",
         1.0,
         1023.0,
-        "edge following: error below minus this means the wall is lost (seed 000 §4.3: 100)",
+        "edge following: error below minus this means the wall is lost (Löffler et al. §4.3: 100)",
     ),
     pi(
         12,
@@ -223,7 +223,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "cycles",
         1.0,
         10_000.0,
-        "edge following: longest strong curve while the wall is lost (seed 000 §4.3: 120)",
+        "edge following: longest strong curve while the wall is lost (Löffler et al. §4.3: 120)",
     ),
     p(
         13,
@@ -231,7 +231,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "m",
         0.01,
         2.0,
-        "drift to target: turn to it and halve propulsion inside this (seed 000 §4.4: 0.15)",
+        "drift to target: turn to it and halve propulsion inside this (Löffler et al. §4.4: 0.15)",
     ),
     p(
         14,
@@ -239,7 +239,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "m",
         0.005,
         1.0,
-        "drift to target: arrived inside this (seed 000 §4.4: 0.05)",
+        "drift to target: arrived inside this (Löffler et al. §4.4: 0.05)",
     ),
     pi(
         15,
@@ -255,7 +255,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "counts",
         0.0,
         1023.0,
-        "light: source detected below this front reading (seed 000 §6.1: T1 = 470)",
+        "light: source detected below this front reading (Löffler et al. §6.1: T1 = 470)",
     ),
     pi(
         17,
@@ -263,7 +263,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "counts",
         0.0,
         1023.0,
-        "light: optimal distance below this average front reading (seed 000 §6.1: T2 = 200)",
+        "light: optimal distance below this average front reading (Löffler et al. §6.1: T2 = 200)",
     ),
     pi(
         18,
@@ -271,7 +271,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "counts",
         0.0,
         1023.0,
-        "light: source left when every front reading is above this (seed 000 §6.1: T3 = 490)",
+        "light: source left when every front reading is above this (Löffler et al. §6.1: T3 = 490)",
     ),
     p(
         19,
@@ -279,7 +279,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "",
         0.0,
         1.0,
-        "dead reckoning: confidence a beacon calibration adds (seed 004 §4)",
+        "dead reckoning: confidence a beacon calibration adds (Dom Dinis paper §4)",
     ),
     p(
         20,
@@ -287,7 +287,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "",
         0.0,
         1.0,
-        "dead reckoning: confidence a collision removes (seed 004 §4)",
+        "dead reckoning: confidence a collision removes (Dom Dinis paper §4)",
     ),
     p(
         21,
@@ -311,7 +311,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "nominal",
         0.0,
         100.0,
-        "guided motion: nominal speed in free motion (seed 004 §4: 75)",
+        "guided motion: nominal speed in free motion (Dom Dinis paper §4: 75)",
     ),
     p(
         24,
@@ -344,7 +344,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "m",
         -100.0,
         100.0,
-        "arena bounds: smallest x (seed 004 §4)",
+        "arena bounds: smallest x (Dom Dinis paper §4)",
     ),
     p(
         28,
@@ -352,7 +352,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "m",
         -100.0,
         100.0,
-        "arena bounds: smallest y (seed 004 §4)",
+        "arena bounds: smallest y (Dom Dinis paper §4)",
     ),
     p(
         29,
@@ -360,7 +360,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "m",
         -100.0,
         100.0,
-        "arena bounds: largest x (seed 004 §4)",
+        "arena bounds: largest x (Dom Dinis paper §4)",
     ),
     p(
         30,
@@ -368,7 +368,7 @@ pub const PARAMS: [ParamInfo; 36] = [
         "m",
         -100.0,
         100.0,
-        "arena bounds: largest y (seed 004 §4)",
+        "arena bounds: largest y (Dom Dinis paper §4)",
     ),
     // GoTo and ExecutePlan give up after this long without getting nearer (robot::progress).
     p(

@@ -72,14 +72,17 @@ pub struct CalibrateCommand {
 /// What `station calibrate` calibrates on a robot.
 #[derive(Debug, clap::Subcommand, Clone)]
 pub enum CalibrateWhat {
-    /// Calibrate the Khepera's odometry on the robot: wall-following laps both ways, then set
+    /// Calibrate the Khepera's odometry on the robot: hold the wall both ways, then set
     /// odo_wheel_ratio_ppm and odo_wheel_distance_mm
     ///
-    /// The robot follows the wall with it on its right until a lap closes, turns round and
-    /// follows it the other way; the laps' drift gives the wheel ratio (and, both ways, the
-    /// effective wheel distance). Put it next to a wall of a closed arena. Prints each lap,
-    /// then each parameter before -> after. The robot is stopped at the end, on Ctrl-C and
-    /// on --timeout (which still uses the laps closed so far).
+    /// The robot holds the wall on its right (Manual mode, a teleop command each telemetry
+    /// frame) until a lap closes, turns round and holds it on its left. The wheel ratio comes
+    /// from the straight stretches of wall (once they cover a metre; else from the laps), the
+    /// effective wheel distance from the laps. Put it next to a wall of a closed arena.
+    /// Prints each lap, then each parameter before -> after (both or neither are set). The
+    /// robot is stopped at the end, on Ctrl-C and on --timeout (which still uses the laps
+    /// closed so far). A calibration of the kind Borenstein's UMBmark makes, for the wheel
+    /// error the Khepera foraging paper measures (Löffler et al. §3.3).
     ///
     /// Examples:
     ///   station calibrate odometry --port /dev/ttyUSB0

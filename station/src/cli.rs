@@ -20,9 +20,18 @@ use crate::link::serial::DEFAULT_BAUD;
 
 /// Terminal control station for small mobile robots over a serial link.
 ///
-/// With no arguments, starts the built-in emulator on a pseudo-terminal and connects to it.
+/// With no arguments, starts the built-in emulator (the micro-rato robot, modelled on Dom
+/// Dinis, in the Micro-Rato'99 labyrinth) on a pseudo-terminal and opens the TUI on it, as
+/// it would open /dev/ttyUSB0; with --port, the TUI on a robot. `?` in the TUI lists the
+/// keys. The commands below do one thing each without the TUI. Guide: docs/station.md.
+///
+/// Examples:
+///   station                                  (the built-in emulator)
+///   station --port /dev/ttyUSB0              (a robot on a serial port)
+///   station --arena builtin:forage           (a simulated Khepera in the foraging arena)
+///   station --robots 3                       (three robots in one simulated world)
 #[derive(Debug, Parser)]
-#[command(name = "station", version, about, long_about = None)]
+#[command(name = "station", version, about, verbatim_doc_comment)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Sub>,
@@ -34,9 +43,10 @@ pub struct Cli {
     /// Without --port the built-in emulator simulates it.
     #[arg(long, value_name = "FILE", global = false)]
     pub arena: Option<PathBuf>,
-    /// The built-in emulator's robot (without --port): default micro-rato, or khepera in
-    /// `builtin:forage` (the foraging robot, with its gripper); `alice` (seed 001, its
-    /// situations feed the QT world model, `T`) in `builtin:alice` unless --arena names another.
+    /// The built-in emulator's robot (without --port): default micro-rato (the Dom Dinis
+    /// robot), or khepera in `builtin:forage` (the foraging robot, with its gripper); `alice`
+    /// (the robot of Zimmer's thesis: its situations feed the QT world model, `T`) in
+    /// `builtin:alice` unless --arena names another.
     #[arg(long, value_enum, global = false)]
     pub profile: Option<emulator::cli::ProfileArg>,
     /// The built-in emulator's start pose `X,Y[,HEADING_DEG]` in metres (without --port;
@@ -86,7 +96,7 @@ pub enum Sub {
           allow_negative_numbers = true)]
         timeout: f64,
         /// Send the command this many times, one after another, and report the round trips'
-        /// p50 / p99 (the README's round-trip figure).
+        /// p50 / p99 (the round-trip figure of docs/performance.md).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000),
           global = true)]
         repeat: u32,
@@ -113,10 +123,10 @@ pub enum Sub {
     /// Read, write, save, load and compare the robot's parameters
     ///
     /// Names and ids are the firmware's table (`list` shows each with its unit, range and
-    /// description). Files are `name = value` lines, `#` comments (README.md, "Parameter
-    /// files"); `load` sets each parameter the file names and reports each change and each
-    /// refusal (exit 1 if any was refused); `diff` exits 1 when the robot differs from the
-    /// file. A bad file is refused with FILE:LINE:COL before the port is opened.
+    /// description). Files are `name = value` lines, `#` comments (docs/station.md,
+    /// "Parameter files"); `load` sets each parameter the file names and reports each change
+    /// and each refusal (exit 1 if any was refused); `diff` exits 1 when the robot differs
+    /// from the file. A bad file is refused with FILE:LINE:COL before the port is opened.
     ///
     /// Examples:
     ///   station params --port /dev/ttyUSB0 list
@@ -189,7 +199,7 @@ pub enum Sub {
     /// The file is FILE.partial while recording (flushed every second, so a crash loses at
     /// most that) and is renamed to FILE when the recording ends: at --seconds, or on Ctrl-C.
     /// Losing and regaining the robot is recorded as a gap. Without --port, the built-in
-    /// emulator is started and recorded. The format is in README.md, "Recordings".
+    /// emulator is started and recorded. The format is in docs/recordings.md.
     ///
     /// Examples:
     ///   station record --port /dev/ttyUSB0 --out run.rec --seconds 60
@@ -219,7 +229,7 @@ pub enum Sub {
     ///   station export run.rec --csv run.csv --mcap run.mcap
     #[command(verbatim_doc_comment)]
     Export(crate::export::ExportArgs),
-    /// Re-run a recorded run through the firmware's own code (seed 001 retracing)
+    /// Re-run a recorded run through the firmware's own code (retracing, Zimmer's ALICE thesis §3.1.2)
     ///
     /// The recording must hold the robot's hardware trace (parameter 34 hal_trace, message
     /// kind 15; `robot-emulator --hal-trace` streams it from power-up). Every pass of the
@@ -235,15 +245,17 @@ pub enum Sub {
     ///
     /// Examples:
     ///   station retrace run.rec
-    ///   station retrace run.rec --param wheel_distance_mm=53 --json
+    ///   station retrace run.rec --param odo_wheel_distance_mm=53.3 --json
     #[command(verbatim_doc_comment)]
     Retrace(crate::retrace::RetraceArgs),
     /// Train the light -> angle map (Khepera light calibration) from a recording of a calibrating robot
     ///
-    /// Uses the telemetry recorded while a Khepera turned next to a light (mode
-    /// calibrate-light): labels from each full turn (or from --light X,Y), the firmware's own
-    /// network code, every fifth example held out. Prints the held-out mean/max angle error
-    /// and writes the map (FILE.json, or binary for any other name) atomically.
+    /// The Kohonen map of the Khepera foraging paper (Löffler, Klahold, Rückert 2001, §5.3):
+    /// 60 neurons learn the light's bearing from the six front light sensors. Uses the
+    /// telemetry recorded while a Khepera turned next to a light (mode calibrate-light):
+    /// labels from each full turn (or from --light X,Y), the firmware's own network code,
+    /// every fifth example held out. Prints the held-out mean/max angle error and writes the
+    /// map (FILE.json, or binary for any other name) atomically.
     ///
     /// Examples:
     ///   station calibrate cal.rec --out som.json
@@ -275,7 +287,7 @@ pub enum Sub {
     ///   station download-calibration --port /dev/ttyUSB0 --out som.bin
     #[command(verbatim_doc_comment)]
     DownloadCalibration(crate::transfer::calibration::DownloadCalibrationArgs),
-    /// Mächler's unsupervised landmarks and places (seed 003 ch. 3), run and played back here
+    /// Unsupervised landmarks and places (Mächler's thesis, ch. 3), run and played back here
     ///
     /// Runs the unsupervised-places scenario on the station with the firmware's own code and
     /// plays it back: landmarks on the map, the class streams, matches as they happen,

@@ -45,10 +45,10 @@ pub struct ExportArgs {
     pub mcap: Option<PathBuf>,
     /// How the MCAP file's per-frame topics (/telemetry, /pose, /truth, /truth_pose, /tf) are
     /// encoded: protobuf (Foxglove's schemas for poses and transforms; the default) or json
-    /// (the JSON of exports before, for tools that parse it). Other topics are always JSON.
+    /// (for tools that parse JSON text). Other topics are always JSON.
     #[arg(long, value_enum, value_name = "ENCODING", default_value_t = mcap::Encoding::Protobuf, requires = "mcap")]
     pub mcap_encoding: mcap::Encoding,
-    /// Write the telemetry as CSV, one row per frame (columns in README.md, "Recordings"); a
+    /// Write the telemetry as CSV, one row per frame (columns in docs/recordings.md); a
     /// recording of several robots writes one file each (OUT with `.robot<ID>` or `.link<K>`
     /// before its extension).
     #[arg(long, value_name = "OUT")]

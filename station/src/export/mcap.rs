@@ -145,10 +145,12 @@ const INTEGER_COLUMNS: &[&str] = &[
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Encoding {
     /// Protocol Buffers: Foxglove's well-known schemas for poses and transforms, the station's
-    /// for telemetry and truth; a quarter of JSON's bytes and far less work to write.
+    /// for telemetry and truth; a file of about 40 % of JSON's bytes, written in about half
+    /// the time.
     #[default]
     Protobuf,
-    /// JSON text with JSON schemas, as exports before issue 15's binary encoding were.
+    /// JSON text with JSON schemas, for scripts that parse the messages' JSON themselves (an
+    /// MCAP reader and a JSON parser, no protobuf); a lacking sensor's reading is `null`.
     Json,
 }
 

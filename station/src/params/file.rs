@@ -1,7 +1,7 @@
 //! Parameter files: `name = value` lines, as `station params save` writes them and `load` and
 //! `diff` read them (the shape of MAVProxy's `.parm` files, with names instead of ids).
 //!
-//! Layer: pure text <-> values, no I/O. Format (README.md, "Parameter files"):
+//! Layer: pure text <-> values, no I/O. Format (docs/station.md, "Parameter files"):
 //! - one parameter a line: `NAME = VALUE`, white space around either side ignored;
 //! - `#` starts a comment to the end of the line (save writes the unit, range and
 //!   description there); blank lines are ignored;
@@ -112,7 +112,9 @@ pub fn format(header: &str, values: &[(&'static ParamInfo, f32)]) -> String {
         out.push_str(l);
         out.push('\n');
     }
-    out.push_str("# name = value  # unit, range: description (README.md, \"Parameter files\")\n");
+    out.push_str(
+        "# name = value  # unit, range: description (docs/station.md, \"Parameter files\")\n",
+    );
     for (info, v) in values {
         let unit = if info.unit.is_empty() {
             String::new()

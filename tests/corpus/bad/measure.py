@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Time and peak memory of every bad-input case (README "Reliability").
+"""Time and peak memory of every bad-input case (docs/reliability.md).
 
     cargo build --release -p station -p emulator
     python3 tests/corpus/bad/measure.py [--bin-dir target/release] [--scale N] [--json]
