@@ -265,8 +265,9 @@ fn changing_d_and_dl_in_a_retrace_reproduces_seed_000_tables_1_and_2() {
 
 #[test]
 fn the_replay_overlays_the_retraced_track_and_says_what_differed() {
-    if !e2e_tests::tmux::Tmux::available() {
-        println!("tmux is missing: not run");
+    if !e2e_tests::tmux::Tmux::require(
+        "the_replay_overlays_the_retraced_track_and_says_what_differed",
+    ) {
         return;
     }
     let d = dir("overlay");

@@ -50,8 +50,9 @@ fn teleops(rec: &Recording) -> Vec<(u64, i16)> {
 
 #[test]
 fn teleop_repeats_keep_their_rate_and_a_key_press_goes_at_once() {
-    if !Tmux::available() {
-        eprintln!("tmux is not installed: skipping the teleop TUI test");
+    if !e2e_tests::tmux::Tmux::require(
+        "teleop_repeats_keep_their_rate_and_a_key_press_goes_at_once",
+    ) {
         return;
     }
     let d = scratch_dir("teleop-tmux", "drive");
