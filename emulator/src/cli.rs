@@ -51,6 +51,7 @@ pub enum Command {
     /// Run one task over many arenas and seeds in parallel and report success rate, times,
     /// collisions, final error and failures by cause (issue 14's generalisation benchmark).
     Bench(BenchArgs),
+    Hil(crate::hil::args::HilArgs),
 }
 
 /// `arena` subcommands.
