@@ -2,8 +2,9 @@
 //! UART1 on a Unix socket for the world (`serve`), optionally with `-icount` so instruction
 //! counts can be read off the board's timer.
 //!
-//! QEMU names the pty it made on its standard error ("char device redirected to /dev/pts/N
-//! (label serial0)"); that line is read here and everything else QEMU says is passed on.
+//! QEMU names the pty it made on its standard output ("char device redirected to /dev/pts/N
+//! (label serial0)"); that line is read here and everything else QEMU says is passed on to
+//! standard error.
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -50,8 +51,8 @@ pub fn start(opts: &QemuOptions, hil_socket: &Path) -> Result<Qemu, String> {
     }
     let mut child = cmd
         .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
         .spawn()
         .map_err(|e| {
             format!(
@@ -59,14 +60,14 @@ pub fn start(opts: &QemuOptions, hil_socket: &Path) -> Result<Qemu, String> {
                 opts.binary.display()
             )
         })?;
-    let Some(stderr) = child.stderr.take() else {
+    let Some(stdout) = child.stdout.take() else {
         let _ = child.kill();
-        return Err("QEMU's standard error is not readable".to_string());
+        return Err("QEMU's standard output is not readable".to_string());
     };
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         let mut told = false;
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
             if !told {
                 if let Some(path) = pty_of_serial0(&line) {
                     told = true;
