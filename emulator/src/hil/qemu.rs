@@ -49,6 +49,9 @@ pub fn start(opts: &QemuOptions, hil_socket: &Path) -> Result<Qemu, String> {
     if let Some(shift) = opts.icount_shift {
         cmd.args(["-icount", &format!("shift={shift}")]);
     }
+    // Its own process group: a Ctrl-C at the terminal reaches the world, which then stops
+    // QEMU after printing its summary, rather than both at once.
+    std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
     let mut child = cmd
         .stdin(Stdio::null())
         .stdout(Stdio::piped())

@@ -175,6 +175,7 @@ fn run(
             continue;
         }
         let n = match port.read(&mut buf) {
+            Ok(0) if stop.load(Ordering::Relaxed) => break,
             Ok(0) => return Err("the board's port closed".to_string()),
             Ok(n) => n,
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
@@ -187,7 +188,13 @@ fn run(
         };
         last_byte = Instant::now();
         out.clear();
+        let stops = world.stops();
         world.feed(&buf[..n], &mut out).map_err(|e| e.to_string())?;
+        if world.stops() != stops {
+            if let Ok(t) = nix::time::clock_gettime(nix::time::ClockId::CLOCK_MONOTONIC) {
+                world.note_stop_time(t.tv_sec() as f64 + t.tv_nsec() as f64 * 1e-9);
+            }
+        }
         if !out.is_empty() {
             port.write_all(&out)
                 .and_then(|()| port.flush())

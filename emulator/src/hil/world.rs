@@ -63,7 +63,14 @@ pub struct HilSummary {
     /// A digest of every exchange (sensors sent, motors received): same seed and same motor
     /// commands, same digest.
     pub digest: String,
+    /// When the motors stopped (running before, STOP from this exchange), as
+    /// `CLOCK_MONOTONIC` seconds on this machine, so a bench on the same machine can time a
+    /// Stop from its write to the wheels (the first `MAX_STOPS_KEPT`; `serve` fills it).
+    pub motor_stops_monotonic_s: Vec<f64>,
 }
+
+/// Motor stops timed in a summary, at most.
+pub const MAX_STOPS_KEPT: usize = 1000;
 
 /// `protocol::hil::Report` as the summary prints it.
 #[derive(Clone, Debug, Default, Serialize, PartialEq, Eq)]
@@ -119,6 +126,10 @@ pub struct HilWorld {
     period_steps: u64,
     summary: HilSummary,
     digest: u64,
+    /// The motors of the last exchange ran.
+    moving: bool,
+    /// Exchanges whose motors stopped after running.
+    stops: u64,
 }
 
 /// FNV-1a, 64 bits: a stable digest of the exchange (not a security measure).
@@ -177,6 +188,8 @@ impl HilWorld {
             period_steps: u64::from(period_us) / STEP_US,
             summary: HilSummary::default(),
             digest: 0xCBF2_9CE4_8422_2325,
+            moving: false,
+            stops: 0,
         })
     }
 
@@ -232,9 +245,13 @@ impl HilWorld {
                     arm: m.arm,
                     closed: m.closed,
                 });
-                if cmd != MotorCommand::STOP {
+                let moving = cmd != MotorCommand::STOP;
+                if moving {
                     self.summary.moving_exchanges += 1;
+                } else if self.moving {
+                    self.stops += 1;
                 }
+                self.moving = moving;
                 for _ in 0..self.period_steps {
                     self.sim.advance_hardware();
                     self.check_target();
@@ -307,6 +324,18 @@ impl HilWorld {
         s.distance_m = self.sim.distance_m();
         s.digest = format!("{:016x}", self.digest);
         s
+    }
+
+    /// Times the motors have stopped after running (`serve` times each).
+    pub fn stops(&self) -> u64 {
+        self.stops
+    }
+
+    /// Records the time of a stop (`serve`).
+    pub fn note_stop_time(&mut self, monotonic_s: f64) {
+        if self.summary.motor_stops_monotonic_s.len() < MAX_STOPS_KEPT {
+            self.summary.motor_stops_monotonic_s.push(monotonic_s);
+        }
     }
 
     /// The simulation (truth, world).
