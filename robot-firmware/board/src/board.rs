@@ -378,12 +378,18 @@ impl<'r, K: Kit, P: Ports> Board<'r, K, P> {
         }
     }
 
+    /// One pass, then sleep until the next has work.
+    pub fn pass_and_sleep(&mut self) {
+        self.pass();
+        let until = self.wake_at();
+        self.hal.ports.idle(until);
+    }
+
     /// Passes forever, sleeping between them.
+    #[cfg(target_os = "none")]
     pub fn run(&mut self) -> ! {
         loop {
-            self.pass();
-            let until = self.wake_at();
-            self.hal.ports.idle(until);
+            self.pass_and_sleep();
         }
     }
 }

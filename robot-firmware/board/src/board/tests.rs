@@ -123,9 +123,7 @@ fn the_boards_loop_drives_the_world_exactly_as_the_emulator_does() {
     let period_ms = u64::from(MICRO_RATO.cycle_us) / 1000;
     let mut periods = 0;
     for _ in 0..20_000 {
-        board.pass();
-        let until = board.wake_at();
-        board.hal.ports.idle(until);
+        board.pass_and_sleep();
         let w = board.hal.ports.world.summary();
         while periods < w.exchanges {
             reference.run_for(period_ms);
@@ -154,10 +152,8 @@ fn without_a_station_the_loop_sleeps_from_cycle_to_cycle() {
     let mut board = Board::new(robot, ports, &setup, first, dec);
     let mut passes = 0u32;
     while board.hal.ports.world.summary().exchanges < 100 {
-        board.pass();
+        board.pass_and_sleep();
         passes += 1;
-        let until = board.wake_at();
-        board.hal.ports.idle(until);
         assert!(passes < 10_000, "the loop does not advance the world");
     }
     assert!(passes <= 2 * 100 + 2, "{passes} passes for 100 cycles");

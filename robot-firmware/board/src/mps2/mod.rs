@@ -30,8 +30,8 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use critical_section::Mutex;
 
-use crate::board::Ports;
-use crate::fifo::Fifo;
+use robot_board::board::Ports;
+use robot_board::fifo::Fifo;
 
 pub use irq::dispatch;
 
