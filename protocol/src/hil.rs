@@ -126,6 +126,8 @@ pub struct Report {
     pub cycles: u32,
     pub cycle_ticks_last: u32,
     pub cycle_ticks_max: u32,
+    /// Their ticks summed (wrapping; with `cycles`, the mean).
+    pub cycle_ticks_sum: u32,
     /// Passes without a control cycle that read station bytes, the frames they decoded and
     /// their ticks summed and largest.
     pub rx_passes: u32,
@@ -137,7 +139,7 @@ pub struct Report {
     pub hil_errors: u32,
 }
 
-const REPORT_FIELDS: usize = 15;
+const REPORT_FIELDS: usize = 16;
 
 /// Why the board stopped (`Fault`).
 pub mod fault {
@@ -436,6 +438,7 @@ fn report_fields(r: &Report) -> [u32; REPORT_FIELDS] {
         r.cycles,
         r.cycle_ticks_last,
         r.cycle_ticks_max,
+        r.cycle_ticks_sum,
         r.rx_passes,
         r.rx_frames,
         r.rx_pass_ticks_sum,
@@ -570,7 +573,7 @@ pub fn parse(raw: &[u8]) -> Result<Msg, HilError> {
             for v in f.iter_mut() {
                 *v = r.u32()?;
             }
-            let [static_ram, stack_size, stack_used, rx_bytes, rx_fifo_max, rx_dropped, cycles, cycle_ticks_last, cycle_ticks_max, rx_passes, rx_frames, rx_pass_ticks_sum, rx_pass_ticks_max, sleeps, hil_errors] =
+            let [static_ram, stack_size, stack_used, rx_bytes, rx_fifo_max, rx_dropped, cycles, cycle_ticks_last, cycle_ticks_max, cycle_ticks_sum, rx_passes, rx_frames, rx_pass_ticks_sum, rx_pass_ticks_max, sleeps, hil_errors] =
                 f;
             Msg::Report(Report {
                 static_ram,
@@ -582,6 +585,7 @@ pub fn parse(raw: &[u8]) -> Result<Msg, HilError> {
                 cycles,
                 cycle_ticks_last,
                 cycle_ticks_max,
+                cycle_ticks_sum,
                 rx_passes,
                 rx_frames,
                 rx_pass_ticks_sum,

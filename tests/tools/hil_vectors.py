@@ -1,31 +1,10 @@
 #!/usr/bin/env python3
 """docs/hil.md §5's test vectors from the document's layouts alone (an independent check of
-protocol::hil): COBS over [kind][body][crc32c LE], then 0x00."""
+protocol::hil): COBS over [kind][body][crc32c LE], then 0x00 (COBS and CRC-32C from
+wire.py, the station link's own)."""
 import struct
 
-
-def crc32c(data: bytes) -> int:
-    crc = 0xFFFFFFFF
-    for b in data:
-        crc ^= b
-        for _ in range(8):
-            crc = (crc >> 1) ^ (0x82F63B78 if crc & 1 else 0)
-    return crc ^ 0xFFFFFFFF
-
-
-def cobs(data: bytes) -> bytes:
-    out, block = bytearray(), bytearray()
-    for b in data:
-        if b == 0:
-            out += bytes([len(block) + 1]) + block
-            block = bytearray()
-        else:
-            block.append(b)
-            if len(block) == 254:
-                out += bytes([255]) + block
-                block = bytearray()
-    out += bytes([len(block) + 1]) + block
-    return bytes(out)
+from wire import cobs, crc32c
 
 
 def frame(raw: bytes) -> bytes:

@@ -55,7 +55,7 @@ pub struct HilArgs {
     /// Stop after this much world time, seconds.
     #[arg(long, value_name = "S")]
     pub seconds: Option<f64>,
-    /// Stop once the robot's true position is in the target area (and 1 s more).
+    /// Stop once the robot's true position is in the target area (and 3 s more, for it to stop).
     #[arg(long)]
     pub until_target: bool,
     /// Print the run's summary as JSON on exit (the board's own measures included).
@@ -105,7 +105,7 @@ impl HilArgs {
         Ok(StopWhen {
             world_seconds: self.seconds,
             target: self.until_target,
-            grace_s: 1.0,
+            grace_s: 3.0,
             silent_s: None,
         })
     }

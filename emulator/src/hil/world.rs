@@ -54,6 +54,10 @@ pub struct HilSummary {
     pub target_reached_s: Option<f64>,
     pub collisions: u32,
     pub distance_m: f64,
+    /// At the end: the true position in the target area, and the motors stopped (the
+    /// firmware declared its arrival there: a search ends in `Idle`).
+    pub final_in_target: bool,
+    pub final_stopped: bool,
     /// Exchanges with the motors running.
     pub moving_exchanges: u64,
     /// The board's last `Report` (its own measures, docs/hil.md §4).
@@ -84,6 +88,7 @@ pub struct BoardReport {
     pub cycles: u32,
     pub cycle_ticks_last: u32,
     pub cycle_ticks_max: u32,
+    pub cycle_ticks_sum: u32,
     pub rx_passes: u32,
     pub rx_frames: u32,
     pub rx_pass_ticks_sum: u32,
@@ -104,6 +109,7 @@ impl From<hil::Report> for BoardReport {
             cycles: r.cycles,
             cycle_ticks_last: r.cycle_ticks_last,
             cycle_ticks_max: r.cycle_ticks_max,
+            cycle_ticks_sum: r.cycle_ticks_sum,
             rx_passes: r.rx_passes,
             rx_frames: r.rx_frames,
             rx_pass_ticks_sum: r.rx_pass_ticks_sum,
@@ -322,6 +328,9 @@ impl HilWorld {
         s.world_time_s = self.sim.now_us() as f64 * 1e-6;
         s.collisions = self.sim.collisions();
         s.distance_m = self.sim.distance_m();
+        let p = self.sim.truth();
+        s.final_in_target = self.sim.world().in_target(Point::new(p.x, p.y));
+        s.final_stopped = !self.moving;
         s.digest = format!("{:016x}", self.digest);
         s
     }

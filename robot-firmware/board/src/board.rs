@@ -320,6 +320,7 @@ impl<'r, K: Kit, P: Ports> Board<'r, K, P> {
             r.cycles = r.cycles.wrapping_add(1);
             r.cycle_ticks_last = ticks;
             r.cycle_ticks_max = r.cycle_ticks_max.max(ticks);
+            r.cycle_ticks_sum = r.cycle_ticks_sum.wrapping_add(ticks);
         } else if self.hal.rx_in_pass > 0 {
             r.rx_passes = r.rx_passes.wrapping_add(1);
             r.rx_frames = r

@@ -10,9 +10,9 @@ use cortex_m_rt::{entry, exception, ExceptionFrame};
 use protocol::hil::fault;
 use robot_firmware::Robot;
 
-use robot_board::board::{self, Board};
 use crate::mps2::{self, Mps2Ports};
 use crate::profile::{Kit, PROFILE};
+use robot_board::board::{self, Board};
 
 #[entry]
 fn main() -> ! {
