@@ -146,8 +146,11 @@ fn send<P: Ports>(ports: &mut P, msg: &Msg) {
     }
 }
 
-/// Tells the world the board has stopped (`hil::fault`), so it stops the motors.
+/// Tells the world the board has stopped (`hil::fault`), so it stops the motors. A delimiter
+/// goes first: the fault may have cut a frame short, and the world's decoder resynchronises
+/// on it (an empty frame is nothing).
 pub fn send_fault<P: Ports>(ports: &mut P, code: u8) {
+    ports.hil_write(&[0]);
     send(ports, &Msg::Fault(code));
 }
 
