@@ -111,7 +111,7 @@ pub struct Motors {
 }
 
 /// Board to world: the board's own measures (docs/hil.md §4), sent every few seconds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct Report {
     /// RAM taken by statics (.data + .bss), bytes.
     pub static_ram: u32,

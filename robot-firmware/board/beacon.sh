@@ -21,13 +21,7 @@ while [ $# -gt 0 ]; do
     *) echo "usage: $0 [--seeds N] [--jobs J] [--json]" >&2; exit 2 ;;
   esac
 done
-target=thumbv7em-none-eabihf
-dir="${CARGO_TARGET_DIR:-$PWD/target}"
-cargo build -q -p robot-board --release --target "$target"
-cargo build -q -p emulator -p station --release
-image="$dir/$target/release/robot-board"
-emu="$dir/release/robot-emulator"
-station="$dir/release/station"
+source robot-firmware/board/common.sh
 work="$(mktemp -d)"
 trap 'jobs -p | xargs -r kill 2>/dev/null; rm -rf "$work"' EXIT
 limit_s=400

@@ -17,13 +17,7 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 json=0
 [[ "${1:-}" == "--json" ]] && json=1
-target=thumbv7em-none-eabihf
-dir="${CARGO_TARGET_DIR:-$PWD/target}"
-cargo build -q -p robot-board --release --target "$target"
-cargo build -q -p emulator -p station --release
-image="$dir/$target/release/robot-board"
-emu="$dir/release/robot-emulator"
-station="$dir/release/station"
+source robot-firmware/board/common.sh
 work="$(mktemp -d)"
 world=""
 trap '[ -n "$world" ] && kill "$world" 2>/dev/null; rm -rf "$work"' EXIT
@@ -59,12 +53,13 @@ sleep 15
 sleep 15
 stop_world
 
-# 2. -icount shift=0: instructions, the robot searching from power-on, a station probing.
+# 2. -icount shift=0: instructions, 60 s of world time of the robot searching from power-on,
+#    a station probing it for the first 10 s of wall time.
 link="$work/robot-icount"
-start_world "$work/icount.json" "$link" --seed 1 --icount 0 --power-on-mode explore
+start_world "$work/icount.json" "$link" --seed 1 --icount 0 --power-on-mode explore --seconds 60
 "$station" stats --port "$link" -s 10 --json >"$work/stats.json" || true
-sleep 2
-stop_world
+wait "$world" || true
+world=""
 
 python3 - "$image" "$work" "$json" <<'PY'
 import json, struct, sys

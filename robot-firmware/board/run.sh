@@ -10,17 +10,5 @@
 # Another profile's image: ROBOT_BOARD_FEATURES=khepera run.sh --profile khepera
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-target=thumbv7em-none-eabihf
-dir="${CARGO_TARGET_DIR:-$PWD/target}"
-features=()
-if [ -n "${ROBOT_BOARD_FEATURES:-}" ]; then
-  features=(--no-default-features --features "$ROBOT_BOARD_FEATURES")
-fi
-if ! command -v qemu-system-arm >/dev/null; then
-  echo "error: qemu-system-arm not found (Debian/Ubuntu: apt-get install qemu-system-arm)" >&2
-  exit 1
-fi
-rustup target add "$target" >/dev/null 2>&1 || true
-cargo build -q -p robot-board --release --target "$target" "${features[@]}"
-cargo build -q -p emulator --release --bin robot-emulator
-exec "$dir/release/robot-emulator" hil --image "$dir/$target/release/robot-board" "$@"
+source robot-firmware/board/common.sh
+exec "$emu" hil --image "$image" "$@"

@@ -16,13 +16,11 @@ Standard library only (and min_client_rtt.py beside it). Exit 1 when the robot d
 
 import argparse
 import json
-import os
-import select
 import sys
 import time
 
 from min_client_rtt import HELLO_WIRE, Port, frame
-from wire import crc32c, read_varint, uncobs, varint
+from wire import crc32c, read_varint, varint
 
 
 def zigzag(n):
@@ -66,21 +64,8 @@ def main():
         """Answers read within `timeout`, timed at their delimiter. Only the kind and cmd_seq
         are read (a CRC-32C in Python per Ack would make this script the bottleneck); the
         Stop's Ack alone is CRC-checked."""
-        r, _, _ = select.select([p.fd], [], [], timeout)
-        if not r:
-            return
-        now = time.monotonic()
-        try:
-            p.buf += os.read(p.fd, 65536)
-        except BlockingIOError:
-            return
-        while b"\x00" in p.buf:
-            i = p.buf.index(0)
-            enc = bytes(p.buf[:i])
-            del p.buf[: i + 1]
-            raw = uncobs(enc) if enc else None
-            if not raw or len(raw) < 9 or raw[1] not in (5, 6):
-                continue
+        answer = lambda raw: len(raw) >= 9 and raw[1] in (5, 6)
+        for raw, now in p.raw_frames(timeout, answer):
             cmd_seq, _ = read_varint(raw, 4)
             if cmd_seq not in pending:
                 continue

@@ -61,7 +61,7 @@ pub struct HilSummary {
     /// Exchanges with the motors running.
     pub moving_exchanges: u64,
     /// The board's last `Report` (its own measures, docs/hil.md §4).
-    pub board: Option<BoardReport>,
+    pub board: Option<hil::Report>,
     /// The fault the board stopped with, if it did.
     pub fault: Option<String>,
     /// A digest of every exchange (sensors sent, motors received): same seed and same motor
@@ -75,50 +75,6 @@ pub struct HilSummary {
 
 /// Motor stops timed in a summary, at most.
 pub const MAX_STOPS_KEPT: usize = 1000;
-
-/// `protocol::hil::Report` as the summary prints it.
-#[derive(Clone, Debug, Default, Serialize, PartialEq, Eq)]
-pub struct BoardReport {
-    pub static_ram: u32,
-    pub stack_size: u32,
-    pub stack_used: u32,
-    pub rx_bytes: u32,
-    pub rx_fifo_max: u32,
-    pub rx_dropped: u32,
-    pub cycles: u32,
-    pub cycle_ticks_last: u32,
-    pub cycle_ticks_max: u32,
-    pub cycle_ticks_sum: u32,
-    pub rx_passes: u32,
-    pub rx_frames: u32,
-    pub rx_pass_ticks_sum: u32,
-    pub rx_pass_ticks_max: u32,
-    pub sleeps: u32,
-    pub hil_errors: u32,
-}
-
-impl From<hil::Report> for BoardReport {
-    fn from(r: hil::Report) -> Self {
-        BoardReport {
-            static_ram: r.static_ram,
-            stack_size: r.stack_size,
-            stack_used: r.stack_used,
-            rx_bytes: r.rx_bytes,
-            rx_fifo_max: r.rx_fifo_max,
-            rx_dropped: r.rx_dropped,
-            cycles: r.cycles,
-            cycle_ticks_last: r.cycle_ticks_last,
-            cycle_ticks_max: r.cycle_ticks_max,
-            cycle_ticks_sum: r.cycle_ticks_sum,
-            rx_passes: r.rx_passes,
-            rx_frames: r.rx_frames,
-            rx_pass_ticks_sum: r.rx_pass_ticks_sum,
-            rx_pass_ticks_max: r.rx_pass_ticks_max,
-            sleeps: r.sleeps,
-            hil_errors: r.hil_errors,
-        }
-    }
-}
 
 /// The world serving one board.
 pub struct HilWorld {
@@ -267,7 +223,7 @@ impl HilWorld {
                 self.awaiting = Some(next);
                 self.send_sensors(next, out);
             }
-            Msg::Report(r) => self.summary.board = Some(r.into()),
+            Msg::Report(r) => self.summary.board = Some(r),
             Msg::Fault(code) => {
                 self.summary.fault = Some(
                     match code {

@@ -58,18 +58,45 @@ pub fn init() {
     irq::enable();
 }
 
-/// Receive interrupt of UART0: every byte the UART holds into the station FIFO.
-fn station_rx_isr() {
-    uart::STATION.clear_rx_irq();
+/// Every byte `uart` holds into `fifo` (a receive interrupt); `wake` is raised at a frame's
+/// delimiter, and at half a FIFO when `at_half` (so a flood of bytes without delimiters is
+/// drained before it overflows).
+fn drain_rx<const N: usize>(
+    uart: &uart::Uart,
+    fifo: &Mutex<RefCell<Fifo<N>>>,
+    wake: &AtomicBool,
+    at_half: bool,
+) {
+    uart.clear_rx_irq();
     critical_section::with(|cs| {
-        let mut f = STATION_RX.borrow_ref_mut(cs);
-        while let Some(b) = uart::STATION.read() {
+        let mut f = fifo.borrow_ref_mut(cs);
+        while let Some(b) = uart.read() {
             f.push(b);
-            if b == 0 || f.len() >= STATION_RX_FIFO / 2 {
-                STATION_WAKE.store(true, Ordering::Relaxed);
+            if b == 0 || (at_half && f.len() >= N / 2) {
+                wake.store(true, Ordering::Relaxed);
             }
         }
     });
+}
+
+/// Bytes from `fifo` into `buf` (the main loop); `wake` falls once it is empty.
+fn take<const N: usize>(
+    fifo: &Mutex<RefCell<Fifo<N>>>,
+    wake: &AtomicBool,
+    buf: &mut [u8],
+) -> usize {
+    critical_section::with(|cs| {
+        let mut f = fifo.borrow_ref_mut(cs);
+        let n = f.pop_into(buf);
+        if f.is_empty() {
+            wake.store(false, Ordering::Relaxed);
+        }
+        n
+    })
+}
+
+fn station_rx_isr() {
+    drain_rx(&uart::STATION, &STATION_RX, &STATION_WAKE, true);
 }
 
 /// Transmit interrupt of UART0 (the last byte left): the next byte of the FIFO.
@@ -88,16 +115,7 @@ fn feed_station_tx(f: &mut Fifo<STATION_TX_FIFO>) {
 }
 
 fn hil_rx_isr() {
-    uart::HIL.clear_rx_irq();
-    critical_section::with(|cs| {
-        let mut f = HIL_RX.borrow_ref_mut(cs);
-        while let Some(b) = uart::HIL.read() {
-            f.push(b);
-            if b == 0 {
-                HIL_WAKE.store(true, Ordering::Relaxed);
-            }
-        }
-    });
+    drain_rx(&uart::HIL, &HIL_RX, &HIL_WAKE, false);
 }
 
 /// The mps2-an386 as the board's ports (no state of its own: it is the hardware's).
@@ -109,14 +127,7 @@ impl Ports for Mps2Ports {
     }
 
     fn station_read(&mut self, buf: &mut [u8]) -> usize {
-        critical_section::with(|cs| {
-            let mut f = STATION_RX.borrow_ref_mut(cs);
-            let n = f.pop_into(buf);
-            if f.is_empty() {
-                STATION_WAKE.store(false, Ordering::Relaxed);
-            }
-            n
-        })
+        take(&STATION_RX, &STATION_WAKE, buf)
     }
 
     fn station_write(&mut self, bytes: &[u8]) -> usize {
@@ -130,14 +141,7 @@ impl Ports for Mps2Ports {
     }
 
     fn hil_read(&mut self, buf: &mut [u8]) -> usize {
-        critical_section::with(|cs| {
-            let mut f = HIL_RX.borrow_ref_mut(cs);
-            let n = f.pop_into(buf);
-            if f.is_empty() {
-                HIL_WAKE.store(false, Ordering::Relaxed);
-            }
-            n
-        })
+        take(&HIL_RX, &HIL_WAKE, buf)
     }
 
     fn hil_write(&mut self, bytes: &[u8]) {
