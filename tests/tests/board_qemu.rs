@@ -1,9 +1,10 @@
 //! The robot firmware's own image on a Cortex-M4 (QEMU mps2-an386, `robot-firmware/board`)
 //! driven by the real station through a pty, its sensors and motors served by
-//! `robot-emulator hil` in lockstep (docs/hil.md): boot, a signed handshake, a teleop that
-//! moves the wheels and a Stop that stops them, telemetry, a map upload, a station without the
-//! key refused; then the board's own measures (RAM within the Dom Dinis board's 32 KB, no byte
-//! dropped by the station FIFO). CI's smoke test of the image (needs qemu-system-arm).
+//! `robot-emulator hil` in lockstep (docs/hil.md): boot, a signed handshake, a teleop whose
+//! wheels the failsafe stops when the station leaves, another stopped by a Stop, telemetry, a
+//! map upload, a station without the key refused; then the board's own measures (RAM within
+//! the Dom Dinis board's 32 KB, no byte dropped by the station FIFO). CI's smoke test of the
+//! image (needs qemu-system-arm).
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::io::{BufRead, BufReader, Read};
@@ -114,9 +115,14 @@ fn the_image_boots_and_the_station_drives_it_through_a_pty() {
         a.extend_from_slice(cmd);
         station(&a)
     };
+    // The station's `send` leaves at once: its link falls silent, and the manual-mode
+    // failsafe (failsafe_ms, 300 ms) must stop the wheels on the image.
     let (ok, out) = with_key(&["teleop", "150", "0"]);
     assert!(ok && out.contains("ack: teleop"), "{out}");
-    std::thread::sleep(Duration::from_millis(300));
+    std::thread::sleep(Duration::from_millis(1000));
+    let (ok, out) = with_key(&["teleop", "150", "0"]);
+    assert!(ok && out.contains("ack: teleop"), "{out}");
+    std::thread::sleep(Duration::from_millis(150));
     let (ok, out) = with_key(&["stop"]);
     assert!(ok && out.contains("ack: stop"), "{out}");
 
@@ -191,8 +197,14 @@ fn the_image_boots_and_the_station_drives_it_through_a_pty() {
         "teleop moved: {summary}"
     );
     assert!(summary["distance_m"].as_f64().unwrap() > 0.0, "{summary}");
+    // Two teleops, two stops: the failsafe's after the first, the Stop's after the second.
     let stops = summary["motor_stops_monotonic_s"].as_array().unwrap();
-    assert!(!stops.is_empty(), "the Stop stopped the wheels: {summary}");
+    assert!(
+        stops.len() >= 2,
+        "the failsafe and the Stop stopped the wheels: {summary}"
+    );
+    let t = |i: usize| stops[i].as_f64().unwrap();
+    assert!(t(1) - t(0) > 0.5, "one stop each: {summary}");
     let b = &summary["board"];
     let ram = b["static_ram"].as_u64().unwrap() + b["stack_used"].as_u64().unwrap();
     assert!(b["stack_used"].as_u64().unwrap() > 512, "{summary}");
