@@ -61,6 +61,20 @@ pub struct HilArgs {
     /// Print the run's summary as JSON on exit (the board's own measures included).
     #[arg(long)]
     pub json: bool,
+    /// Probability of losing a byte of the station link, both directions (with --image: the
+    /// link then runs through the world, `hil::relay`).
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    pub drop_rate: f64,
+    /// Probability of flipping a bit of the station link, both directions.
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    pub flip_rate: f64,
+    /// Stall the station link every PERIOD seconds for DURATION seconds.
+    #[arg(long, value_name = "PERIOD,DURATION", value_parser = crate::cli::parse_stall)]
+    pub stall: Option<crate::fault::Stall>,
+    /// The station link's line rate, baud (QEMU's UART is not paced: bytes go as fast as
+    /// written); the link then runs through the world.
+    #[arg(long, value_name = "BAUD")]
+    pub line_baud: Option<u32>,
 }
 
 /// `--power-on-mode`.
@@ -84,12 +98,35 @@ impl PowerOnMode {
 impl HilArgs {
     /// Where the board is.
     pub fn port(&self) -> Result<Port, String> {
+        let fault = crate::fault::FaultConfig {
+            drop_rate: self.drop_rate,
+            flip_rate: self.flip_rate,
+            stall: self.stall,
+        };
+        fault.validate("--drop-rate/--flip-rate/--stall")?;
+        if self.line_baud.is_some_and(|b| b == 0 || b > 4_000_000) {
+            return Err("--line-baud must be 1..=4000000".into());
+        }
+        let relay = super::relay::RelayOptions {
+            to_robot: fault,
+            from_robot: fault,
+            baud: self.line_baud,
+            seed: self.world.seed,
+        };
         match (&self.image, &self.port) {
-            (Some(image), None) => Ok(Port::Qemu(super::qemu::QemuOptions {
-                binary: self.qemu.clone(),
-                image: image.clone(),
-                icount_shift: self.icount,
-            })),
+            (Some(image), None) => Ok(Port::Qemu(
+                super::qemu::QemuOptions {
+                    binary: self.qemu.clone(),
+                    image: image.clone(),
+                    icount_shift: self.icount,
+                },
+                relay.wanted().then_some(relay),
+            )),
+            (None, Some(_)) if relay.wanted() => Err(
+                "link faults and --line-baud need the station link through the world: start \
+                 the board with --image"
+                    .into(),
+            ),
             (None, Some(tty)) => Ok(Port::Tty(tty.clone())),
             _ => Err("give the board's image (--image ELF) or its HIL port (--port TTY)".into()),
         }

@@ -5,10 +5,13 @@
 //! - `serve`: the port it runs on (a tty such as QEMU's `-serial pty`, or a socket to a QEMU
 //!   it starts itself, `qemu`), and the summary a run prints.
 //! - `args`: the `robot-emulator hil` command line.
+//! - `relay`: the station's link through the world, with the emulator's link faults and a
+//!   line rate (optional).
 //! - `qemu`: starting `qemu-system-arm -M mps2-an386` with the board image.
 
 pub mod args;
 pub mod qemu;
+pub mod relay;
 pub mod serve;
 pub mod world;
 

@@ -23,15 +23,20 @@ pub struct QemuOptions {
     pub icount_shift: Option<u8>,
 }
 
-/// A running QEMU and the pty its UART0 is on.
+/// A running QEMU and the pty its UART0 is on (`None` when UART0 is on a socket).
 pub struct Qemu {
     pub child: Child,
-    pub station_pty: PathBuf,
+    pub station_pty: Option<PathBuf>,
 }
 
 /// Starts QEMU with UART1 connected to the Unix socket `hil_socket` (which must be listening)
-/// and waits (at most 10 s) for the pty of UART0.
-pub fn start(opts: &QemuOptions, hil_socket: &Path) -> Result<Qemu, String> {
+/// and UART0 to `station_socket` (then listening too) or, without one, to a pty, whose path it
+/// waits for (at most 10 s).
+pub fn start(
+    opts: &QemuOptions,
+    hil_socket: &Path,
+    station_socket: Option<&Path>,
+) -> Result<Qemu, String> {
     if !opts.image.is_file() {
         return Err(format!(
             "board image {} not found (build it: cargo build -p robot-board --release --target \
@@ -40,10 +45,17 @@ pub fn start(opts: &QemuOptions, hil_socket: &Path) -> Result<Qemu, String> {
         ));
     }
     let mut cmd = Command::new(&opts.binary);
-    cmd.args(["-M", "mps2-an386", "-nographic", "-monitor", "none"])
-        .args(["-chardev"])
+    cmd.args(["-M", "mps2-an386", "-nographic", "-monitor", "none"]);
+    match station_socket {
+        Some(s) => cmd
+            .arg("-chardev")
+            .arg(format!("socket,id=station,path={}", s.display()))
+            .args(["-serial", "chardev:station"]),
+        None => cmd.args(["-serial", "pty"]),
+    };
+    cmd.arg("-chardev")
         .arg(format!("socket,id=hil,path={}", hil_socket.display()))
-        .args(["-serial", "pty", "-serial", "chardev:hil"])
+        .args(["-serial", "chardev:hil"])
         .arg("-kernel")
         .arg(&opts.image);
     if let Some(shift) = opts.icount_shift {
@@ -67,6 +79,18 @@ pub fn start(opts: &QemuOptions, hil_socket: &Path) -> Result<Qemu, String> {
         let _ = child.kill();
         return Err("QEMU's standard output is not readable".to_string());
     };
+    if station_socket.is_some() {
+        // Nothing to wait for; pass QEMU's words on.
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                eprintln!("qemu: {line}");
+            }
+        });
+        return Ok(Qemu {
+            child,
+            station_pty: None,
+        });
+    }
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         let mut told = false;
@@ -82,7 +106,10 @@ pub fn start(opts: &QemuOptions, hil_socket: &Path) -> Result<Qemu, String> {
         }
     });
     match rx.recv_timeout(Duration::from_secs(10)) {
-        Ok(station_pty) => Ok(Qemu { child, station_pty }),
+        Ok(pty) => Ok(Qemu {
+            child,
+            station_pty: Some(pty),
+        }),
         Err(_) => {
             let _ = child.kill();
             let _ = child.wait();

@@ -10,11 +10,13 @@ use std::os::fd::AsFd;
 use std::os::unix::net::UnixListener;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use nix::poll::{PollFd, PollFlags, PollTimeout};
 
 use super::qemu::{self, QemuOptions};
+use super::relay::{self, RelayOptions};
 use super::{HilSummary, HilWorld};
 
 /// Where the board is.
@@ -22,8 +24,9 @@ use super::{HilSummary, HilWorld};
 pub enum Port {
     /// A tty path (a pty QEMU made, or a serial adapter).
     Tty(PathBuf),
-    /// Start QEMU with this image and serve it over a socket.
-    Qemu(QemuOptions),
+    /// Start QEMU with this image and serve it over a socket; with a relay, the station's
+    /// link goes through the world too (faults, line rate).
+    Qemu(QemuOptions, Option<RelayOptions>),
 }
 
 /// When to stop.
@@ -56,21 +59,45 @@ pub fn serve(
             let file = open_tty(path)?;
             run(world, file, stop, when, None)
         }
-        Port::Qemu(opts) => {
+        Port::Qemu(opts, relay) => {
             let dir = tempfile::Builder::new()
                 .prefix("robot-hil-")
                 .tempdir()
                 .map_err(|e| format!("cannot make a directory for the HIL socket: {e}"))?;
-            let sock = dir.path().join("hil.sock");
-            let listener = UnixListener::bind(&sock)
-                .map_err(|e| format!("cannot listen on {}: {e}", sock.display()))?;
-            let mut q = qemu::start(opts, &sock)?;
-            let stream = accept_within(&listener, Duration::from_secs(10), &mut q.child)?;
-            on_station_port(&q.station_pty);
+            let listen = |name: &str| {
+                let path = dir.path().join(name);
+                UnixListener::bind(&path)
+                    .map(|l| (l, path.clone()))
+                    .map_err(|e| format!("cannot listen on {}: {e}", path.display()))
+            };
+            let (hil_listener, hil_sock) = listen("hil.sock")?;
+            let station = match relay {
+                Some(_) => Some(listen("station.sock")?),
+                None => None,
+            };
+            let mut q = qemu::start(opts, &hil_sock, station.as_ref().map(|(_, p)| p.as_path()))?;
+            let stream = accept_within(&hil_listener, Duration::from_secs(10), &mut q.child)?;
+            let mut relay_thread = None;
+            let relay_stop = Arc::new(AtomicBool::new(false));
+            match (station, relay, &q.station_pty) {
+                (Some((listener, _)), Some(r), _) => {
+                    let board = accept_within(&listener, Duration::from_secs(10), &mut q.child)?;
+                    let pty = crate::pty::Pty::open(None).map_err(|e| e.to_string())?;
+                    on_station_port(pty.slave_path());
+                    relay_thread = Some(relay::spawn(pty, board, *r, Arc::clone(&relay_stop)));
+                }
+                (_, _, Some(pty)) => on_station_port(pty),
+                _ => return Err("QEMU's UART0 has no port".to_string()),
+            }
             let result = run(world, stream, stop, when, Some(&mut q.child));
+            relay_stop.store(true, Ordering::Relaxed);
+            let relay_stats = relay_thread.and_then(|t| t.join().ok());
             let _ = q.child.kill();
             let _ = q.child.wait();
-            result
+            result.map(|mut s| {
+                s.relay = relay_stats;
+                s
+            })
         }
     }
 }

@@ -71,6 +71,9 @@ pub struct HilSummary {
     /// `CLOCK_MONOTONIC` seconds on this machine, so a bench on the same machine can time a
     /// Stop from its write to the wheels (the first `MAX_STOPS_KEPT`; `serve` fills it).
     pub motor_stops_monotonic_s: Vec<f64>,
+    /// The station link's relay (`--drop-rate`, `--flip-rate`, `--stall`, `--line-baud`),
+    /// when it ran through the world.
+    pub relay: Option<super::relay::RelayStats>,
 }
 
 /// Motor stops timed in a summary, at most.
