@@ -2,8 +2,9 @@
 # Issue 35's measures, on the robot's own image (QEMU mps2-an386, Cortex-M4):
 # - flash and static RAM, from the ELF's sections;
 # - the stack's high-water mark: painted at reset (cortex-m-rt paint-stack), read back by the
-#   image and sent to the world in its Report (docs/hil.md §4), after a session that runs the
-#   deep paths: a flood of commands, a map and plan upload, the plan executed, a search;
+#   image and sent to the world in its Report (docs/hil.md §4), the deepest of four runs that
+#   take the deep paths: a flood of commands, a map and plan upload, the plan executed, a
+#   search, a signed session;
 # - state + worst stack against the Dom Dinis board's 32 KB;
 # - instructions per control cycle and per link frame: a second run under QEMU's
 #   `-icount shift=0` (1 instruction = 1 ns, one 25 MHz timer tick = 40 instructions, as
@@ -62,6 +63,19 @@ python3 tests/tools/board_flood.py "$link" --json >"$work/flood-line.json"
 sleep 1
 stop_world
 
+# 4. A signed session (PROTOCOL.md §13: HMAC-SHA256 on every frame, the deepest stack the
+#    link has): telemetry, a teleop and a Stop, a map upload.
+link="$work/robot-signed"
+printf '%s\n' 6b1f0a2c9d8e7f60514233241506f7e8d9cabbac9d8e7f60514233241506f7e8 >"$work/link.key"
+chmod 600 "$work/link.key"
+start_world "$work/signed.json" "$link" --seed 1 --key-file "$work/link.key"
+"$station" stats --port "$link" --key-file "$work/link.key" -s 2 >/dev/null
+"$station" send --port "$link" --key-file "$work/link.key" teleop 150 0 >/dev/null
+"$station" send --port "$link" --key-file "$work/link.key" stop >/dev/null
+"$station" upload-map --port "$link" --key-file "$work/link.key" --map builtin:micro-rato-99 >/dev/null
+sleep 1
+stop_world
+
 # 2. -icount shift=0: instructions, 60 s of world time of the robot searching from power-on,
 #    a station probing it for the first 10 s of wall time.
 link="$work/robot-icount"
@@ -94,6 +108,7 @@ def last_json(path):
 
 rt, ic = last_json(f"{work}/rt.json"), last_json(f"{work}/icount.json")
 b, bi = rt["board"], ic["board"]
+runs = [rt, ic, last_json(f"{work}/line.json"), last_json(f"{work}/signed.json")]
 
 def flood_figures(flood, run):
     """The flood's figures, the wheels' stop timed by the world's clock."""
@@ -113,7 +128,7 @@ def flood_figures(flood, run):
 
 TICK = 40  # instructions per 25 MHz tick under -icount shift=0
 budget = 32 * 1024
-stack = max(b["stack_used"], bi["stack_used"])
+stack = max(r["board"]["stack_used"] for r in runs)
 out = {
     "image": "robot-board (Dom Dinis, micro-rato), thumbv7em-none-eabihf, QEMU mps2-an386",
     "flash_bytes": flash,

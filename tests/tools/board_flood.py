@@ -6,7 +6,7 @@ switches to Manual and drives (Teleop at 20 Hz), and fills the line at 115200 ba
 bytes a second, paced by the clock) with harmless commands (GetParam) in between. Every
 command must be answered: a command without an Ack or Nack is a frame lost on the way in.
 After --stop-after seconds it sends a Stop (no more Teleop, the GetParam flood goes on) and
-times the Stop's Ack; the world's summary (robot-emulator hil --json, motor_stops_monotonic_s)
+times the Stop's Ack and notes how many bytes it was queued behind in the port; the world's summary (robot-emulator hil --json, motor_stops_monotonic_s)
 gives the moment the wheels stopped, on the same CLOCK_MONOTONIC as `stop_written_monotonic_s`.
 
     board_flood.py PORT [--seconds 6] [--stop-after 4] [--baud 115200] [--json]
@@ -15,8 +15,11 @@ Standard library only (and min_client_rtt.py beside it). Exit 1 when the robot d
 """
 
 import argparse
+import fcntl
 import json
+import struct
 import sys
+import termios
 import time
 
 from min_client_rtt import HELLO_WIRE, Port, frame
@@ -75,6 +78,14 @@ def main():
             del pending[cmd_seq]
             answered[cmd_seq] = (what, raw[1] == 5, now - t0, now)
 
+    def queued():
+        """Bytes written and not yet read from the port by the other side (TIOCOUTQ): what a
+        command written now waits behind on the way in."""
+        try:
+            return struct.unpack("i", fcntl.ioctl(p.fd, termios.TIOCOUTQ, b"\0\0\0\0"))[0]
+        except OSError:
+            return None
+
     # Manual mode (SetMode index 0, Mode::Manual 1), then the flood.
     send(bytes([0, 1]), "mode")
     take(0.3)
@@ -82,7 +93,7 @@ def main():
     t0 = time.monotonic()
     sent_bytes = 0
     next_teleop = t0
-    stop_seq = stop_written = None
+    stop_seq = stop_written = queued_before_stop = None
     get_param = bytes([5]) + varint(0)
     frames_sent = {"teleop": 0, "get_param": 0, "stop": 0}
     while True:
@@ -92,6 +103,7 @@ def main():
         budget = (now - t0) * bytes_per_s - sent_bytes
         while budget > 0:
             if stop_seq is None and now - t0 >= a.stop_after:
+                queued_before_stop = queued()
                 f, stop_seq = send(bytes([2]), "stop")
                 stop_written = time.monotonic()
                 frames_sent["stop"] += 1
@@ -125,6 +137,7 @@ def main():
         "stop_acked": bool(stop and stop[1]),
         "stop_ack_ms": round(stop[2] * 1000, 2) if stop else None,
         "stop_written_monotonic_s": stop_written,
+        "bytes_queued_before_stop": queued_before_stop,
     }
     if a.json:
         print(json.dumps(out))
