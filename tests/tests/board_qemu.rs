@@ -272,3 +272,52 @@ fn a_seed_gives_the_same_run_however_fast_the_image_executes() {
         slow["board"]["cycle_ticks_max"]
     );
 }
+
+/// The station link through the world (`--line-baud`, `--drop-rate`): the emulator's seeded
+/// link faults between the station and the image, a paced 115200-baud line; the station
+/// still handshakes and reads telemetry through the losses, and the relay counts them.
+#[test]
+fn the_station_link_through_the_world_takes_the_emulators_faults() {
+    let image = image();
+    let dir = std::env::temp_dir().join(format!("board-qemu-relay-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let link = dir.join("robot");
+    let port = link.display().to_string();
+    let mut world = Command::new(workspace_bin("robot-emulator"))
+        .args(["hil", "--seed", "2", "--json", "--line-baud", "115200"])
+        .args(["--drop-rate", "0.003", "--link", &port, "--image"])
+        .arg(&image)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    wait_for(&link, Duration::from_secs(10));
+    let (ok, out) = station(&["stats", "--port", &port, "-s", "3", "--json"]);
+    assert!(ok, "{out}");
+    let stats: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(stats["stats"]["frames_in"].as_u64().unwrap() > 10, "{out}");
+    let pid = world.id().to_string();
+    Command::new("kill").args(["-INT", &pid]).status().unwrap();
+    let mut rest = String::new();
+    world
+        .stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut rest)
+        .unwrap();
+    assert!(world.wait().unwrap().success());
+    let summary: serde_json::Value =
+        serde_json::from_str(rest.lines().last().unwrap_or("")).unwrap();
+    let relay = &summary["relay"];
+    assert!(
+        relay["from_robot_bytes"].as_u64().unwrap() > 1000,
+        "{summary}"
+    );
+    let dropped =
+        relay["to_robot_dropped"].as_u64().unwrap() + relay["from_robot_dropped"].as_u64().unwrap();
+    assert!(dropped > 0, "the faults were applied: {summary}");
+    assert!(summary["fault"].is_null(), "{summary}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
