@@ -52,6 +52,7 @@ pub enum Command {
     /// collisions, final error and failures by cause (the generalisation benchmark: does a
     /// task succeed in arenas nobody tuned it for?).
     Bench(BenchArgs),
+    Hil(crate::hil::args::HilArgs),
 }
 
 /// `arena` subcommands.
@@ -1009,7 +1010,7 @@ pub fn parse_pose(s: &str) -> Result<[f64; 3], String> {
     Ok([v[0], v[1], v.get(2).copied().unwrap_or(0.0)])
 }
 
-fn parse_stall(s: &str) -> Result<Stall, String> {
+pub fn parse_stall(s: &str) -> Result<Stall, String> {
     let v = numbers(s, "PERIOD,DURATION in seconds", 2, 2)?;
     Ok(Stall {
         period_s: v[0],

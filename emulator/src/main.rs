@@ -15,6 +15,7 @@ fn main() -> ExitCode {
         Some(Command::Serve(args)) => serve(&args),
         Some(Command::Arena(args)) => arena(&args),
         Some(Command::Bench(args)) => bench(&args),
+        Some(Command::Hil(args)) => hil(&args),
         None => serve(&cli.serve),
     };
     match result {
@@ -39,6 +40,62 @@ fn arena(args: &emulator::cli::ArenaArgs) -> Result<(), String> {
             }
             Ok(())
         }
+    }
+}
+
+/// `hil`: the world for a board running the firmware itself (emulator::hil).
+fn hil(args: &emulator::hil::args::HilArgs) -> Result<(), String> {
+    let port = args.port()?;
+    let when = args.stop_when()?;
+    let key = args
+        .key_file
+        .as_deref()
+        .map(|p| emulator::link::read_key_file(p).map_err(|e| format!("--key-file: {e}")))
+        .transpose()?;
+    let cfg = args.world.sim_config(emulator::uart::DEFAULT_BAUD)?;
+    let arena =
+        load_arena(args.world.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
+    let sim = emulator::sim::Sim::new(arena, cfg).map_err(|e| e.to_string())?;
+    let mut world = emulator::hil::HilWorld::new(sim, key, args.power_on_mode.mode())
+        .map_err(|e| e.to_string())?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
+        .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
+    let link = args.link.clone();
+    let profile = args.world.profile.profile().name;
+    let arena_name = args.world.arena().to_string();
+    let mut link_err = None;
+    let summary = emulator::hil::serve::serve(&mut world, &port, &stop, when, &mut |pty| {
+        // The one line a script waits for: the station's port.
+        println!("{}", pty.display());
+        if let Some(l) = &link {
+            let _ = std::fs::remove_file(l);
+            if let Err(e) = std::os::unix::fs::symlink(pty, l) {
+                link_err = Some(format!("--link {}: {e}", l.display()));
+            }
+        }
+        eprintln!(
+            "robot-emulator: {profile} in {arena_name}, board in the loop, station port {}",
+            pty.display()
+        );
+    });
+    if let Some(l) = &link {
+        let _ = std::fs::remove_file(l);
+    }
+    if let Some(e) = link_err {
+        return Err(e);
+    }
+    let summary = summary?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string(&summary).map_err(|e| e.to_string())?
+        );
+    }
+    match summary.fault {
+        Some(f) => Err(format!("the board stopped: {f}")),
+        None => Ok(()),
     }
 }
 

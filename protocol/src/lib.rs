@@ -18,6 +18,7 @@
 #![deny(unsafe_code)]
 
 pub mod frame;
+pub mod hil;
 pub mod msg;
 pub mod object;
 pub mod packed;
