@@ -12,6 +12,7 @@ pub mod fleet;
 pub mod fleet_bench;
 pub mod forage;
 pub mod geometry;
+pub mod input_file;
 pub mod line_correct;
 pub mod link;
 pub mod output_file;

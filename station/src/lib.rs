@@ -16,7 +16,8 @@
 //!   `headless`, `builtin`: the binary's edge.
 //! - `terminal_text`: the one sanitiser for wire- and file-supplied text before a terminal.
 //! - `output_file`: how every file the station writes reaches its name (atomic, O_EXCL
-//!   temporary, no special file replaced).
+//!   temporary, no special file replaced); `input_file`: how every file a user names is
+//!   read (regular files only, a size limit per kind).
 #![deny(unsafe_code)]
 
 pub mod action;
@@ -30,6 +31,8 @@ pub mod export;
 pub mod fleet;
 pub mod headless;
 pub mod input;
+/// Lives in the emulator crate so that the emulator reads its arena and key files the same way.
+pub use emulator::input_file;
 pub mod link;
 /// Lives in the emulator crate so that `robot-emulator arena generate` writes the same way.
 pub use emulator::output_file;

@@ -87,6 +87,14 @@ pub const MAX_DATA: usize = 1024 * 1024;
 pub const MAX_T_US: u64 = 365 * 24 * 3600 * 1_000_000;
 /// What a finished recording's name gets while it is written.
 pub const PARTIAL_SUFFIX: &str = ".partial";
+/// What a recording file may be (`input_file`'s rule): the reader holds a whole file in
+/// memory, two to four times its size once parsed; a gibibyte is about 90 hours of one robot's
+/// telemetry at 50 Hz.
+pub const RECORDING_FILE: crate::input_file::InputKind = crate::input_file::InputKind {
+    what: "recordings",
+    max_bytes: 1 << 30,
+    pipes: false,
+};
 
 /// What a record holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -323,6 +331,8 @@ pub enum RecordError {
     #[error("{path} does not exist{hint}")]
     Missing { path: PathBuf, hint: String },
     #[error(transparent)]
+    Input(crate::input_file::InputError),
+    #[error(transparent)]
     Output(#[from] crate::output_file::OutputError),
     #[error(
         "{path} exists: an unfinished recording (a crash?); replay or rename it, then try again"
@@ -419,28 +429,7 @@ impl Recording {
     /// Reads a file leniently (see `parse`). A missing `FILE` whose `FILE.partial` exists is
     /// reported with a hint to use the partial one.
     pub fn open(path: &Path) -> Result<Recording, RecordError> {
-        let bytes = std::fs::read(path).map_err(|source| {
-            if source.kind() == std::io::ErrorKind::NotFound {
-                let partial = partial_path(path);
-                let hint = if partial.exists() {
-                    format!(
-                        "; an unfinished recording {} does (replay or export that)",
-                        partial.display()
-                    )
-                } else {
-                    String::new()
-                };
-                RecordError::Missing {
-                    path: path.to_path_buf(),
-                    hint,
-                }
-            } else {
-                RecordError::Io {
-                    path: path.to_path_buf(),
-                    source,
-                }
-            }
-        })?;
+        let bytes = read_file(path)?;
         Recording::parse(&bytes).map_err(|source| RecordError::Read {
             path: path.to_path_buf(),
             source,
@@ -501,6 +490,30 @@ pub fn record_crc(bytes: &[u8]) -> u32 {
     const CRC: crc::Crc<u32, crc::Table<16>> =
         crc::Crc::<u32, crc::Table<16>>::new(&crc::CRC_32_ISCSI);
     CRC.checksum(bytes)
+}
+
+/// A recording's bytes, by `input_file`'s rule (a regular file of at most
+/// `RECORDING_FILE.max_bytes`). A missing `FILE` whose `FILE.partial` exists is reported with
+/// a hint to use the partial one.
+pub fn read_file(path: &Path) -> Result<Vec<u8>, RecordError> {
+    crate::input_file::read(path, &RECORDING_FILE).map_err(|e| {
+        if !e.is_not_found() {
+            return RecordError::Input(e);
+        }
+        let partial = partial_path(path);
+        let hint = if partial.exists() {
+            format!(
+                "; an unfinished recording {} does (replay or export that)",
+                partial.display()
+            )
+        } else {
+            String::new()
+        };
+        RecordError::Missing {
+            path: path.to_path_buf(),
+            hint,
+        }
+    })
 }
 
 /// `FILE.partial` for `FILE`.

@@ -23,7 +23,7 @@ pub mod run;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 use clap::Args;
 use serde::Serialize;
 
@@ -210,7 +210,7 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
         .map(|s| parse_param(s))
         .collect::<Result<Vec<_>, _>>()
         .map_err(anyhow::Error::msg)?;
-    let bytes = std::fs::read(&args.recording).with_context(|| format!("cannot read {name}"))?;
+    let bytes = crate::record::read_file(&args.recording)?;
     let loaded = load::load(&bytes).map_err(|e| anyhow::anyhow!("cannot retrace: {name}: {e}"))?;
     if loaded.trace.is_empty() {
         bail!(

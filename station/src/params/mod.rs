@@ -13,7 +13,7 @@ pub mod file;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 use clap::{Args, Subcommand};
 use protocol::{AckInfo, Command, NackReason, ParamId};
 use robot_firmware::params::{ParamInfo, PARAMS};
@@ -97,19 +97,8 @@ pub async fn run(args: &ParamsArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn read_file(path: &std::path::Path) -> anyhow::Result<Vec<file::Entry>> {
+    let bytes = crate::input_file::read(path, &file::PARAMETER_FILE)?;
     let label = path.display().to_string();
-    let meta = std::fs::metadata(path).with_context(|| format!("cannot read {label}"))?;
-    if !meta.is_file() {
-        bail!("{label}: not a regular file");
-    }
-    if meta.len() > file::MAX_FILE_BYTES as u64 {
-        bail!(
-            "{label}: {} bytes; a parameter file is at most {} bytes",
-            meta.len(),
-            file::MAX_FILE_BYTES
-        );
-    }
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {label}"))?;
     file::parse(&label, &bytes).map_err(|e| anyhow::anyhow!(printable_text(&e).into_owned()))
 }
 
