@@ -385,22 +385,8 @@ impl Recording {
             }
             match parse_record(bytes, at, header.version, links) {
                 Ok((rec, next)) => {
-                    if rec.t_us < last_t {
-                        damage = Some(ReadError::BadRecord {
-                            offset: at as u64,
-                            why: format!("time goes back from {last_t} us to {} us", rec.t_us),
-                        });
-                        break;
-                    }
-                    if rec.t_us > MAX_T_US {
-                        damage = Some(ReadError::BadRecord {
-                            offset: at as u64,
-                            why: format!(
-                                "time {} us is more than a year ({MAX_T_US} us) after the \
-                                 recording's start",
-                                rec.t_us
-                            ),
-                        });
+                    if let Err(e) = check_time(last_t, rec.t_us, at) {
+                        damage = Some(e);
                         break;
                     }
                     last_t = rec.t_us;
@@ -481,6 +467,22 @@ impl Recording {
             .map(|i| self.link(u8::try_from(i).unwrap_or(u8::MAX)))
             .collect()
     }
+}
+
+/// A record's time at byte `at`, after one at `last_t`: never earlier, and at most
+/// `MAX_T_US`. Every reader of records checks it (`Recording::parse`, the retrace's loader).
+pub fn check_time(last_t: u64, t_us: u64, at: usize) -> Result<(), ReadError> {
+    let why = if t_us < last_t {
+        format!("time goes back from {last_t} us to {t_us} us")
+    } else if t_us > MAX_T_US {
+        format!("time {t_us} us is more than a year ({MAX_T_US} us) after the recording's start")
+    } else {
+        return Ok(());
+    };
+    Err(ReadError::BadRecord {
+        offset: at as u64,
+        why,
+    })
 }
 
 /// CRC-32C of a record: `protocol::crc32c`, computed 16 bytes a step (a 16 KB table; the
