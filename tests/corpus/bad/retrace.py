@@ -5,13 +5,7 @@ malformed, for `station retrace` (MANIFEST.tsv rows). Needs nothing else:
 import json
 import struct
 
-from generate import crc32c, header, record, varint, write
-from wire import cobs
-
-
-def frame(kind, seq, payload):
-    raw = bytes([1, kind]) + struct.pack("<H", seq) + payload
-    return cobs(raw + struct.pack("<I", crc32c(raw))) + b"\x00"
+from generate import frame, header, record, varint, write
 
 
 def hal_trace(offset, data, dropped=0):
