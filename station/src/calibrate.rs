@@ -382,7 +382,8 @@ pub fn encode_json(som: &LightSom, report: Option<&Report>) -> anyhow::Result<Ve
         "held_out_mean_deg": report.map(|r| r.mean_deg),
         "held_out_max_deg": report.map(|r| r.max_deg),
     });
-    let mut bytes = serde_json::to_vec_pretty(&doc)?;
+    let mut bytes = Vec::new();
+    crate::json_text::write_pretty(&mut bytes, &doc)?;
     bytes.push(b'\n');
     Ok(bytes)
 }
@@ -626,7 +627,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
     report.bytes = bytes.len();
     crate::output_file::write_atomically(&args.out, &bytes, args.force)?;
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        println!("{}", crate::json_text::compact(&report)?);
     } else {
         println!(
             "{} examples ({} reference{}), {} trained, {} held out: held-out error mean {:.2} \

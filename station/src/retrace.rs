@@ -285,7 +285,7 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
     }
 
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        println!("{}", crate::json_text::pretty(&report)?);
     } else {
         print_text(&report);
     }
@@ -454,7 +454,10 @@ fn print_text(r: &Report) {
             r.frames_compared, r.frames_recorded
         );
     } else if let Some(d) = &r.first_divergence {
-        println!("first divergence: {d}");
+        println!(
+            "first divergence: {}",
+            crate::json_text::compact(d).unwrap_or_default()
+        );
     }
     if let Some(t) = &r.track_difference {
         println!(

@@ -4,7 +4,7 @@
 //! say what is wrong and where (the manifest's fragment: the file with its line:column or
 //! byte offset, or the argument), never panic, and leave no file behind (no output, no
 //! temporary or `.partial` file): each runs in a fresh copy of the corpus whose listing must
-//! not change. A case whose place is `out:N` is a hostile input the command must turn into
+//! not change. No output holds a raw control character. A case whose place is `out:N` is a hostile input the command must turn into
 //! bounded output instead: it exits with the manifest's status (0 allowed), says the
 //! fragment, and the files it adds total at most N bytes (none hidden or temporary).
 #![allow(clippy::unwrap_used, clippy::panic)]
@@ -203,6 +203,14 @@ fn every_malformed_input_is_refused_clearly_without_panic_or_leftovers() {
             if !named {
                 problems.push("the message names no file".into());
             }
+        }
+        // What a terminal would act on (ESC, BEL, DEL, C1 such as CSI U+009B, bidirectional
+        // overrides) never comes out raw, from an error or a JSON report (issue 31 item 5).
+        if let Some(c) = text
+            .chars()
+            .find(|&c| c != '\n' && c != '\t' && station::terminal_text::must_escape(c))
+        {
+            problems.push(format!("a raw control character {c:?} in the output"));
         }
         if text.contains("panicked at") || text.contains("RUST_BACKTRACE") {
             problems.push("panicked".into());

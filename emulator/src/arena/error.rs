@@ -171,19 +171,8 @@ pub(crate) fn excerpt(s: &str) -> String {
 
 /// [`excerpt`] with a longer limit, for a library's message that may quote the file.
 pub(crate) fn excerpt_n(s: &str, max_chars: usize) -> String {
-    let mut out = String::new();
-    let mut end = s.len();
-    for (n, (i, c)) in s.char_indices().enumerate() {
-        if n == max_chars {
-            end = i;
-            break;
-        }
-        if c.is_control() {
-            out.extend(c.escape_default());
-        } else {
-            out.push(c);
-        }
-    }
+    let end = s.char_indices().nth(max_chars).map_or(s.len(), |(i, _)| i);
+    let mut out = crate::terminal_text::printable(s.get(..end).unwrap_or(s)).into_owned();
     if end < s.len() {
         out.push_str(&format!("… ({} more bytes)", s.len() - end));
     }
@@ -338,7 +327,7 @@ mod tests {
     #[test]
     fn excerpts_are_short_and_escape_control_characters() {
         assert_eq!(excerpt("origin"), "origin");
-        assert_eq!(excerpt("a\x1b]0;x\x07"), "a\\u{1b}]0;x\\u{7}");
+        assert_eq!(excerpt("a\x1b]0;x\x07"), "a\\x1b]0;x\\x07");
         let long = "0, ".repeat(2_000_000);
         let e = excerpt(&long);
         assert!(e.len() < 100, "{e}");

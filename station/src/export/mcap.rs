@@ -247,7 +247,8 @@ fn write_robot<W: Write>(
                 let known = match binary {
                     Some(set) => (out.add_schema(name, "protobuf", &set).map_err(err)?, true),
                     None => {
-                        let data = serde_json::to_vec(&schema).unwrap_or_default();
+                        let mut data = Vec::new();
+                        let _ = crate::json_text::write(&mut data, &schema);
                         (
                             out.add_schema(name, "jsonschema", &data).map_err(err)?,
                             false,

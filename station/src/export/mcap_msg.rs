@@ -73,7 +73,7 @@ impl Body {
         }
     }
 
-    /// Appends the body's JSON (compact, as `serde_json::to_writer` writes it) to `out`.
+    /// Appends the body's JSON (compact, as `json_text::write` writes it) to `out`.
     pub fn write_json(&self, out: &mut Vec<u8>) {
         match self {
             Body::Telemetry { row, caps } => write_telemetry(out, row, *caps),
@@ -94,7 +94,7 @@ impl Body {
             }
             // Writing a Value into a Vec cannot fail.
             Body::Json(v) => {
-                let _ = serde_json::to_writer(&mut *out, v);
+                let _ = crate::json_text::write(&mut *out, v);
             }
             Body::JsonText(text) => out.extend_from_slice(text),
         }
@@ -232,9 +232,10 @@ impl FrameTransform {
     }
 }
 
-/// A string, escaped as `serde_json` escapes it (these are the program's own names).
+/// A string, escaped as every JSON output escapes it (`json_text`; these are the program's
+/// own names).
 fn string(out: &mut Vec<u8>, s: &str) {
-    let _ = serde_json::to_writer(&mut *out, s);
+    let _ = crate::json_text::write(&mut *out, s);
 }
 
 /// `/telemetry`, as `TelemetryJson` serialises it.

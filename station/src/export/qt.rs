@@ -124,7 +124,9 @@ impl<'a> QtExport<'a> {
 
 /// The snapshot's JSON text.
 fn snapshot_json(qt: &QtState, time_ms: u32) -> Vec<u8> {
-    serde_json::to_vec(&snapshot(qt, time_ms)).unwrap_or_default()
+    let mut out = Vec::new();
+    let _ = crate::json_text::write(&mut out, &snapshot(qt, time_ms));
+    out
 }
 
 /// The model as one `/qt_model` message.

@@ -131,10 +131,7 @@ fn info(id: u16) -> &'static ParamInfo {
 
 fn emit(json: bool, value: serde_json::Value, text: &str, ok: bool) -> ExitCode {
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).unwrap_or_default()
-        );
+        println!("{}", crate::json_text::pretty(&value).unwrap_or_default());
     } else if ok {
         println!("{}", printable_text(text));
     } else {
@@ -224,7 +221,7 @@ async fn list(link: &mut RunningLink, peer: &PeerInfo, json: bool) -> anyhow::Re
                        "integer": p.integer, "description": p.desc})
             })
             .collect();
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        println!("{}", crate::json_text::pretty(&v)?);
     } else {
         for (p, r) in &all {
             let value = match r {
@@ -346,7 +343,7 @@ async fn load(
         let v: Vec<_> = report.into_iter().map(|(v, _)| v).collect();
         println!(
             "{}",
-            serde_json::to_string_pretty(&json!({"changed": changed, "unchanged": same,
+            crate::json_text::pretty(&json!({"changed": changed, "unchanged": same,
                                                  "refused": refused, "parameters": v}))?
         );
     } else {
@@ -390,7 +387,7 @@ async fn diff(
             .collect();
         println!(
             "{}",
-            serde_json::to_string_pretty(&json!({"compared": entries.len(), "differ": v}))?
+            crate::json_text::pretty(&json!({"compared": entries.len(), "differ": v}))?
         );
     } else {
         for (e, r) in &differ {

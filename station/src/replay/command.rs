@@ -69,7 +69,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         if args.json {
             println!(
                 "{}",
-                serde_json::to_string_pretty(&s).context("cannot print JSON")?
+                crate::json_text::pretty(&s).context("cannot print JSON")?
             );
         } else {
             print!(
@@ -94,7 +94,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         if args.json {
             println!(
                 "{}",
-                serde_json::to_string_pretty(&s).context("cannot print JSON")?
+                crate::json_text::pretty(&s).context("cannot print JSON")?
             );
         } else {
             // The summary quotes the recording's metadata and link texts.

@@ -10,6 +10,8 @@ station/tests/data/recording-v1.rec is the one the committed files were made fro
 Arena files (arenas/) are copies of emulator/tests/data/bad. MANIFEST.tsv says how each file
 is used and what the error must say; keep the two in step.
 
+`python3 generate.py small` writes the cases that need no good file (recordings/18-...).
+
 The large hostile arenas (hundreds of KB each: deep nesting, tens of thousands of unknown keys,
 huge values) are not committed: `python3 generate.py big DIR` writes them into DIR/generated/,
 and tests/tests/bad_inputs.rs does that itself before running the cases that name them.
@@ -268,7 +270,22 @@ def random_situations(n):
     return header(meta) + body + record(1000 * (n + 1), 3, b"end")
 
 
+def small():
+    """Cases built from nothing: a recording whose header text holds what a terminal acts on
+    (CSI as U+009B, ESC ] ... BEL, DEL, a bidirectional override), written raw as a careless
+    writer would, and a torn tail so that `replay --json` prints its summary and fails (issue
+    31: the summary's JSON copied U+009B to the terminal raw)."""
+    text = "robot\u009b31m\u001b]0;owned\u0007\u007f\u202egnp"
+    meta = json.dumps({"created_unix_ms": 0, "writer": text, "port": text, "baud": 115200,
+                       "arena": text}, ensure_ascii=False).encode()
+    body = record(0, 2, b"\x02" + text.encode()) + record(1000, 0, b"\x00")
+    write("recordings/18-control-text.rec", header(meta) + body + record(2000, 3, b"end")[:-3])
+
+
 if __name__ == "__main__":
+    if sys.argv[1:2] == ["small"]:
+        small()
+        sys.exit(0)
     if sys.argv[1:2] == ["big"]:
         big(sys.argv[2], int(sys.argv[3]) if len(sys.argv) > 3 else 1)
         sys.exit(0)
