@@ -11,8 +11,9 @@
 //! The limit the thesis states: a changed algorithm would have moved the robot elsewhere and so
 //! gathered other data; a retrace keeps the recorded sensor data, so it shows what the changed
 //! firmware would have made of the same readings, not where the robot would have gone.
-//! What can fail: an unreadable or damaged recording, no trace in it, a malformed trace (each
-//! with the file's byte offset), an unknown or refused parameter. Exit codes: 0 retraced (and
+//! What can fail: an unreadable or damaged recording, no trace in it, a malformed trace or one
+//! claiming more passes or robot time than a recording of its span can hold (each with the
+//! file's byte offset; `run`, PROTOCOL.md §17), an unknown or refused parameter. Exit codes: 0 retraced (and
 //! identical, without --param), 1 diverged or could not retrace, 2 usage.
 
 pub mod compare;

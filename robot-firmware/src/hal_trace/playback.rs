@@ -214,6 +214,8 @@ pub struct Playback<'a> {
     step: StepInputs<'a>,
     /// Idle passes still to play from an `IDLE` entry, and their spacing.
     idle: (u64, u64),
+    /// The profile `START` names.
+    profile: &'static crate::profile::Profile,
     /// Most passes, and most µs of robot time, between two control cycles (`between_cycles`).
     bound: u64,
     /// The clock of the last control cycle (or of the first pass, before one), and the passes
@@ -255,16 +257,18 @@ impl<'a> Playback<'a> {
         }
         let start = read_start(&mut cur)?;
         let at = cur.at;
-        let bound = between_cycles(start.profile).ok_or(TraceError::BadValue {
-            offset: 2,
-            field: "START profile",
-        })?;
+        let profile =
+            crate::profile::Profile::by_trace_code(start.profile).ok_or(TraceError::BadValue {
+                offset: 2,
+                field: "START profile",
+            })?;
         Ok(Playback {
             cur,
             start,
             step: StepInputs::default(),
             idle: (0, 0),
-            bound,
+            profile,
+            bound: between_cycles(profile),
             since_cycle: None,
             pass_at: at,
             next_pass: Some(at),
@@ -291,6 +295,11 @@ impl<'a> Playback<'a> {
     /// Byte offset in the stream of the pass about to be played.
     pub fn offset(&self) -> usize {
         self.cur.at
+    }
+
+    /// The robot's profile, as `START` names it (a profile this firmware lacks is refused).
+    pub fn profile(&self) -> &'static crate::profile::Profile {
+        self.profile
     }
 
     /// Byte offset in the stream of the entry that began the pass just loaded (its `STEP`, or
@@ -587,9 +596,8 @@ impl<'a> Playback<'a> {
     }
 }
 
-/// The bound on a trace between two control cycles for the profile `START` names (`None`: a
-/// profile this firmware does not have), µs of robot time and passes alike: two control
-/// periods. The firmware runs a control cycle (its sensors read, so a `STEP`, never `IDLE`)
+/// The bound on a trace between two control cycles for `profile`, µs of robot time and passes
+/// alike: two control periods. The firmware runs a control cycle (its sensors read, so a `STEP`, never `IDLE`)
 /// in the first pass at least a period after the last, so a genuine trace has less than one
 /// period of passes between two, and a main loop that reads its clock, its port and its link
 /// takes more than a microsecond a pass on these robots (the emulator makes one a
@@ -597,9 +605,8 @@ impl<'a> Playback<'a> {
 /// `Robot::step` a pass, and one 8-byte `IDLE` entry can claim 2^32 - 1 passes. Retracing is
 /// then work in proportion to the trace: at most two periods of passes per control cycle,
 /// whose entries take at least 11 bytes.
-fn between_cycles(profile: u8) -> Option<u64> {
-    let p = crate::profile::Profile::by_trace_code(profile)?;
-    Some(2 * u64::from(p.cycle_us))
+fn between_cycles(profile: &crate::profile::Profile) -> u64 {
+    2 * u64::from(profile.cycle_us)
 }
 
 fn read_start(c: &mut Cursor<'_>) -> Result<StartInfo, TraceError> {

@@ -76,15 +76,7 @@ pub fn retrace(
     let mut play = Playback::new(&loaded.trace)
         .map_err(|e| format!("byte {}: hardware trace: {e}", at_file(offset_of(&e))))?;
     let start = play.start;
-    // `Playback::new` refused a profile this firmware does not have.
-    let profile =
-        robot_firmware::profile::Profile::by_trace_code(start.profile).ok_or_else(|| {
-            format!(
-                "byte {}: hardware trace: START names profile {}, which this station does not know",
-                at_file(0),
-                start.profile
-            )
-        })?;
+    let profile = play.profile();
     // The HelloReply names the firmware's version; the retraced robot answers with the same.
     let version = loaded
         .firmware_version
