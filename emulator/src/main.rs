@@ -106,7 +106,7 @@ fn bench(args: &emulator::cli::BenchArgs) -> Result<(), String> {
         if args.json {
             println!(
                 "{}",
-                serde_json::to_string(&report).map_err(|e| e.to_string())?
+                emulator::json_text::compact(&report).map_err(|e| e.to_string())?
             );
         } else {
             print!("{}", emulator::fleet_bench::render(&report));
@@ -117,7 +117,7 @@ fn bench(args: &emulator::cli::BenchArgs) -> Result<(), String> {
     if args.json {
         println!(
             "{}",
-            serde_json::to_string(&report).map_err(|e| e.to_string())?
+            emulator::json_text::compact(&report).map_err(|e| e.to_string())?
         );
     } else {
         print!("{}", emulator::bench::render(&report));
@@ -168,7 +168,10 @@ fn print_stats(args: &ServeArgs, stats: serde_json::Value, bias: [f64; 2]) -> Re
                 serde_json::json!(((1.0 + bias[1]) / (1.0 + bias[0]) - 1.0) * 1e6),
             );
         }
-        println!("{v}");
+        println!(
+            "{}",
+            emulator::json_text::compact(&v).map_err(|e| e.to_string())?
+        );
     }
     Ok(())
 }
@@ -236,7 +239,7 @@ fn serve_fleet(args: &ServeArgs, robots: &[emulator::fleet::RobotSpec]) -> Resul
     if args.json {
         println!(
             "{}",
-            serde_json::to_string(&stats).map_err(|e| e.to_string())?
+            emulator::json_text::compact(&stats).map_err(|e| e.to_string())?
         );
     }
     Ok(())
@@ -251,7 +254,7 @@ fn run(args: &RunArgs) -> Result<(), String> {
         if args.json {
             println!(
                 "{}",
-                serde_json::to_string(&report).map_err(|e| e.to_string())?
+                emulator::json_text::compact(&report).map_err(|e| e.to_string())?
             );
         } else {
             print!("{}", emulator::scenario::contest::render(&report));
@@ -389,7 +392,10 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
     options.scene = args.scene;
     let r = navigation(&options)?;
     if args.json {
-        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            emulator::json_text::compact(&r).map_err(|e| e.to_string())?
+        );
         return Ok(());
     }
     println!(
@@ -438,7 +444,10 @@ fn alice(args: &RunArgs, run: AliceRun) -> Result<(), String> {
     let params = qt_params(args)?;
     let r = run(args.world.seed, &params)?;
     if args.json {
-        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            emulator::json_text::compact(&r).map_err(|e| e.to_string())?
+        );
     } else {
         println!(
             "ALICE {} seed {} ({:.1} s wall)",
@@ -478,7 +487,10 @@ fn unsupervised_places(args: &RunArgs) -> Result<(), String> {
     let opts = args.unsupervised_places_options()?;
     let r = emulator::unsupervised_places::run(&opts);
     if args.json {
-        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            emulator::json_text::compact(&r).map_err(|e| e.to_string())?
+        );
     } else {
         println!(
             "{:?} arena, seed {}: {:.1} m in {:.0} s simulated ({:.2} s wall), wheel bias \
@@ -648,7 +660,7 @@ fn run_json(report: &impl serde::Serialize) -> Result<String, String> {
             obj.insert("speed_x".into(), (sim_s / cpu_s).round().into());
         }
     }
-    serde_json::to_string(&v).map_err(|e| e.to_string())
+    emulator::json_text::compact(&v).map_err(|e| e.to_string())
 }
 
 /// User + system CPU seconds of this process (getrusage).

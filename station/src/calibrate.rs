@@ -385,7 +385,8 @@ pub fn encode_json(som: &LightSom, report: Option<&Report>) -> anyhow::Result<Ve
         "held_out_mean_deg": report.map(|r| r.mean_deg),
         "held_out_max_deg": report.map(|r| r.max_deg),
     });
-    let mut bytes = serde_json::to_vec_pretty(&doc)?;
+    let mut bytes = Vec::new();
+    crate::json_text::write_pretty(&mut bytes, &doc)?;
     bytes.push(b'\n');
     Ok(bytes)
 }
@@ -431,24 +432,17 @@ pub fn from_light_object(bytes: &[u8]) -> anyhow::Result<LightSom> {
 /// Reads the map in the file at `path`; errors name the file, and the line and column of a
 /// JSON syntax error (`som.json:3:14: JSON light map: expected value`).
 pub fn decode_file(path: &Path) -> anyhow::Result<LightSom> {
-    use std::io::Read as _;
-    let shown = path.display();
-    let cannot = |e: std::io::Error| anyhow::anyhow!("cannot read {shown}: {e}");
-    // Bounded: `--calibration /dev/zero` must end. A map is 854 bytes, its JSON about 11 KB.
-    let mut bytes = Vec::new();
-    std::fs::File::open(path)
-        .map_err(cannot)?
-        .take(FILE_MAX + 1)
-        .read_to_end(&mut bytes)
-        .map_err(cannot)?;
-    if bytes.len() as u64 > FILE_MAX {
-        bail!("{shown}: longer than {FILE_MAX} bytes; not a light map");
-    }
+    let bytes = crate::input_file::read(path, &LIGHT_MAP_FILE)?;
     decode_named(path, &bytes)
 }
 
-/// Longest light-map file read (JSON with generous white space).
-const FILE_MAX: u64 = 1 << 20;
+/// What a light-map file may be (`input_file`'s rule): a map is 854 bytes, its JSON about
+/// 11 KB; a mebibyte leaves room for generous white space.
+pub const LIGHT_MAP_FILE: crate::input_file::InputKind = crate::input_file::InputKind {
+    what: "light maps",
+    max_bytes: 1 << 20,
+    pipes: false,
+};
 
 /// [`decode`] of `bytes` read from `path`, with [`decode_file`]'s errors.
 pub fn decode_named(path: &Path, bytes: &[u8]) -> anyhow::Result<LightSom> {
@@ -636,7 +630,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
     report.bytes = bytes.len();
     crate::output_file::write_atomically(&args.out, &bytes, args.force)?;
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        println!("{}", crate::json_text::compact(&report)?);
     } else {
         println!(
             "{} examples ({} reference{}), {} trained, {} held out: held-out error mean {:.2} \

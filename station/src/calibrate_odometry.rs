@@ -440,7 +440,7 @@ fn say(json: bool, line: &str) {
 
 fn print_report(json: bool, r: &Report) {
     if json {
-        println!("{}", serde_json::to_string_pretty(r).unwrap_or_default());
+        println!("{}", crate::json_text::pretty(r).unwrap_or_default());
         return;
     }
     if let Some(e) = &r.error {

@@ -190,9 +190,14 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         let mut f = OutputFile::create(out, args.force)?;
         let robots: Vec<(&str, &Recording)> =
             labels.iter().map(String::as_str).zip(&links).collect();
-        let n = mcap::write_robots(&file_meta, &robots, args.mcap_encoding, f.writer(), out)?;
+        let written = mcap::write_robots(&file_meta, &robots, args.mcap_encoding, f.writer(), out)?;
         done.push(f);
-        notes.push(format!("wrote {} ({n} messages)", out.display()));
+        notes.push(format!(
+            "wrote {} ({} messages)",
+            out.display(),
+            written.messages
+        ));
+        notes.extend(written.notes);
     }
     for (out, rec) in csvs.iter().zip(&links) {
         let mut f = OutputFile::create(out, args.force)?;

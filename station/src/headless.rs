@@ -221,7 +221,7 @@ fn ports(json: bool) -> anyhow::Result<ExitCode> {
             })).collect::<Vec<_>>(),
             "pty": ptys,
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        println!("{}", crate::json_text::pretty(&v)?);
     } else {
         if serial.is_empty() {
             println!("no serial ports found");
@@ -473,7 +473,7 @@ async fn send(
         }
     }
     if json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        println!("{}", crate::json_text::pretty(&value)?);
     } else if ok {
         println!("{}", crate::terminal_text::printable_text(&text));
     } else {
@@ -531,7 +531,7 @@ async fn stats(
     if let [one] = each.as_slice() {
         let w = watch(one, seconds, timeout).await?;
         if json {
-            println!("{}", serde_json::to_string_pretty(&w.json())?);
+            println!("{}", crate::json_text::pretty(&w.json())?);
         } else {
             print_watched(&w);
         }
@@ -567,7 +567,7 @@ async fn stats(
             })
             .collect();
         let v = json!({"links": links, "duplicate_robot_ids": dups});
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        println!("{}", crate::json_text::pretty(&v)?);
     } else {
         for (i, (p, r)) in results.iter().enumerate() {
             if i > 0 {

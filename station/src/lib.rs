@@ -14,9 +14,11 @@
 //! - `transfer`: map and plan uploads and downloads (the engine, `station upload-map` ...).
 //! - `tui`: the terminal loop; `pace`: the timer grid its periodic work shares; `cli`,
 //!   `headless`, `builtin`: the binary's edge.
-//! - `terminal_text`: the one sanitiser for wire- and file-supplied text before a terminal.
+//! - `terminal_text`: the one sanitiser for wire- and file-supplied text before a terminal;
+//!   `json_text`: JSON output by the same rule.
 //! - `output_file`: how every file the station writes reaches its name (atomic, O_EXCL
-//!   temporary, no special file replaced).
+//!   temporary, no special file replaced); `input_file`: how every file a user names is
+//!   read (regular files only, a size limit per kind).
 #![deny(unsafe_code)]
 
 pub mod action;
@@ -30,6 +32,8 @@ pub mod export;
 pub mod fleet;
 pub mod headless;
 pub mod input;
+/// Lives in the emulator crate so that the emulator reads its arena and key files the same way.
+pub use emulator::input_file;
 pub mod link;
 /// Lives in the emulator crate so that `robot-emulator arena generate` writes the same way.
 pub use emulator::output_file;
@@ -40,7 +44,8 @@ pub mod plan;
 pub mod record;
 pub mod replay;
 pub mod retrace;
-pub mod terminal_text;
+/// Lives in the emulator crate so that the emulator's output follows the same rule.
+pub use emulator::{json_text, terminal_text};
 pub mod transfer;
 pub mod tui;
 pub mod ui;

@@ -87,6 +87,14 @@ pub const MAX_DATA: usize = 1024 * 1024;
 pub const MAX_T_US: u64 = 365 * 24 * 3600 * 1_000_000;
 /// What a finished recording's name gets while it is written.
 pub const PARTIAL_SUFFIX: &str = ".partial";
+/// What a recording file may be (`input_file`'s rule): the reader holds a whole file in
+/// memory, two to four times its size once parsed; a gibibyte is about 90 hours of one robot's
+/// telemetry at 50 Hz.
+pub const RECORDING_FILE: crate::input_file::InputKind = crate::input_file::InputKind {
+    what: "recordings",
+    max_bytes: 1 << 30,
+    pipes: false,
+};
 
 /// What a record holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -323,6 +331,8 @@ pub enum RecordError {
     #[error("{path} does not exist{hint}")]
     Missing { path: PathBuf, hint: String },
     #[error(transparent)]
+    Input(crate::input_file::InputError),
+    #[error(transparent)]
     Output(#[from] crate::output_file::OutputError),
     #[error(
         "{path} exists: an unfinished recording (a crash?); replay or rename it, then try again"
@@ -375,22 +385,8 @@ impl Recording {
             }
             match parse_record(bytes, at, header.version, links) {
                 Ok((rec, next)) => {
-                    if rec.t_us < last_t {
-                        damage = Some(ReadError::BadRecord {
-                            offset: at as u64,
-                            why: format!("time goes back from {last_t} us to {} us", rec.t_us),
-                        });
-                        break;
-                    }
-                    if rec.t_us > MAX_T_US {
-                        damage = Some(ReadError::BadRecord {
-                            offset: at as u64,
-                            why: format!(
-                                "time {} us is more than a year ({MAX_T_US} us) after the \
-                                 recording's start",
-                                rec.t_us
-                            ),
-                        });
+                    if let Err(e) = check_time(last_t, rec.t_us, at) {
+                        damage = Some(e);
                         break;
                     }
                     last_t = rec.t_us;
@@ -419,28 +415,7 @@ impl Recording {
     /// Reads a file leniently (see `parse`). A missing `FILE` whose `FILE.partial` exists is
     /// reported with a hint to use the partial one.
     pub fn open(path: &Path) -> Result<Recording, RecordError> {
-        let bytes = std::fs::read(path).map_err(|source| {
-            if source.kind() == std::io::ErrorKind::NotFound {
-                let partial = partial_path(path);
-                let hint = if partial.exists() {
-                    format!(
-                        "; an unfinished recording {} does (replay or export that)",
-                        partial.display()
-                    )
-                } else {
-                    String::new()
-                };
-                RecordError::Missing {
-                    path: path.to_path_buf(),
-                    hint,
-                }
-            } else {
-                RecordError::Io {
-                    path: path.to_path_buf(),
-                    source,
-                }
-            }
-        })?;
+        let bytes = read_file(path)?;
         Recording::parse(&bytes).map_err(|source| RecordError::Read {
             path: path.to_path_buf(),
             source,
@@ -494,6 +469,22 @@ impl Recording {
     }
 }
 
+/// A record's time at byte `at`, after one at `last_t`: never earlier, and at most
+/// `MAX_T_US`. Every reader of records checks it (`Recording::parse`, the retrace's loader).
+pub fn check_time(last_t: u64, t_us: u64, at: usize) -> Result<(), ReadError> {
+    let why = if t_us < last_t {
+        format!("time goes back from {last_t} us to {t_us} us")
+    } else if t_us > MAX_T_US {
+        format!("time {t_us} us is more than a year ({MAX_T_US} us) after the recording's start")
+    } else {
+        return Ok(());
+    };
+    Err(ReadError::BadRecord {
+        offset: at as u64,
+        why,
+    })
+}
+
 /// CRC-32C of a record: `protocol::crc32c`, computed 16 bytes a step (a 16 KB table; the
 /// protocol's own takes one byte a step with 1 KB, small enough for the robot). Reading a
 /// recording checks every record's CRC; byte by byte that was a third of a replay.
@@ -501,6 +492,30 @@ pub fn record_crc(bytes: &[u8]) -> u32 {
     const CRC: crc::Crc<u32, crc::Table<16>> =
         crc::Crc::<u32, crc::Table<16>>::new(&crc::CRC_32_ISCSI);
     CRC.checksum(bytes)
+}
+
+/// A recording's bytes, by `input_file`'s rule (a regular file of at most
+/// `RECORDING_FILE.max_bytes`). A missing `FILE` whose `FILE.partial` exists is reported with
+/// a hint to use the partial one.
+pub fn read_file(path: &Path) -> Result<Vec<u8>, RecordError> {
+    crate::input_file::read(path, &RECORDING_FILE).map_err(|e| {
+        if !e.is_not_found() {
+            return RecordError::Input(e);
+        }
+        let partial = partial_path(path);
+        let hint = if partial.exists() {
+            format!(
+                "; an unfinished recording {} does (replay or export that)",
+                partial.display()
+            )
+        } else {
+            String::new()
+        };
+        RecordError::Missing {
+            path: path.to_path_buf(),
+            hint,
+        }
+    })
 }
 
 /// `FILE.partial` for `FILE`.

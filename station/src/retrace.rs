@@ -11,8 +11,9 @@
 //! The limit the thesis states: a changed algorithm would have moved the robot elsewhere and so
 //! gathered other data; a retrace keeps the recorded sensor data, so it shows what the changed
 //! firmware would have made of the same readings, not where the robot would have gone.
-//! What can fail: an unreadable or damaged recording, no trace in it, a malformed trace (each
-//! with the file's byte offset), an unknown or refused parameter. Exit codes: 0 retraced (and
+//! What can fail: an unreadable or damaged recording, no trace in it, a malformed trace or one
+//! claiming more passes or robot time than a recording of its span can hold (each with the
+//! file's byte offset; `run`, PROTOCOL.md §17), an unknown or refused parameter. Exit codes: 0 retraced (and
 //! identical, without --param), 1 diverged or could not retrace, 2 usage.
 
 pub mod compare;
@@ -23,7 +24,7 @@ pub mod run;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 use clap::Args;
 use serde::Serialize;
 
@@ -210,7 +211,7 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
         .map(|s| parse_param(s))
         .collect::<Result<Vec<_>, _>>()
         .map_err(anyhow::Error::msg)?;
-    let bytes = std::fs::read(&args.recording).with_context(|| format!("cannot read {name}"))?;
+    let bytes = crate::record::read_file(&args.recording)?;
     let loaded = load::load(&bytes).map_err(|e| anyhow::anyhow!("cannot retrace: {name}: {e}"))?;
     if loaded.trace.is_empty() {
         bail!(
@@ -285,7 +286,7 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
     }
 
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        println!("{}", crate::json_text::pretty(&report)?);
     } else {
         print_text(&report);
     }
@@ -454,7 +455,10 @@ fn print_text(r: &Report) {
             r.frames_compared, r.frames_recorded
         );
     } else if let Some(d) = &r.first_divergence {
-        println!("first divergence: {d}");
+        println!(
+            "first divergence: {}",
+            crate::json_text::compact(d).unwrap_or_default()
+        );
     }
     if let Some(t) = &r.track_difference {
         println!(

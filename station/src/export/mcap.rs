@@ -9,7 +9,8 @@
 //! - `/events`: robot events; `/log`: robot log lines as `foxglove.Log` (the Log panel);
 //! - `/link`: connection changes, gap markers included;
 //! - `/tf`, `/map`, `/regions`, `/plan`, `/arena`: the scene for the 3D panel (`scene`);
-//! - `/qt_model`: the QT world model rebuilt from an ALICE's situations, once a second (`qt`);
+//! - `/qt_model`: the QT world model rebuilt from an ALICE's situations, once a second within a
+//!   budget in proportion to the recording (`qt`);
 //! - `/commands`: the station's own commands (decoded from its recorded bytes), with their
 //!   sequence numbers; `/replies`: the robot's Acks and Nacks naming them.
 //!
@@ -154,46 +155,55 @@ pub enum Encoding {
     Json,
 }
 
-/// Writes `rec` as MCAP to `w`; returns the number of messages.
+/// What an MCAP export wrote.
+#[derive(Debug, Default)]
+pub struct Written {
+    /// Messages.
+    pub messages: u64,
+    /// What the reader should know about the file (a budget that left snapshots out).
+    pub notes: Vec<String>,
+}
+
+/// Writes `rec` as MCAP to `w`.
 pub fn write<W: Write>(
     rec: &Recording,
     enc: Encoding,
     w: W,
     path: &Path,
-) -> Result<u64, ExportError> {
+) -> Result<Written, ExportError> {
     write_robots(&rec.meta, &[("", rec)], enc, w, path)
 }
 
 /// Writes several robots' recordings (the links of one file, `meta` its header) as one MCAP
-/// file, each robot's channels under its prefix ([`topic_name`]); returns the number of
-/// messages. Robots are written one after the other: MCAP readers order by log time.
+/// file, each robot's channels under its prefix ([`topic_name`]). Robots are written one after
+/// the other: MCAP readers order by log time.
 pub fn write_robots<W: Write>(
     meta: &crate::record::Meta,
     robots: &[(&str, &Recording)],
     enc: Encoding,
     w: W,
     path: &Path,
-) -> Result<u64, ExportError> {
+) -> Result<Written, ExportError> {
     let err = mcap_error(path);
     let library = format!("station {}", env!("CARGO_PKG_VERSION"));
     let mut out = Writer::new(w, "", &library).map_err(err)?;
     let mut schemas = BTreeMap::new();
-    let mut count = 0;
+    let mut written = Written::default();
     let mut first = true;
     for (prefix, rec) in robots {
-        count += write_robot(
+        write_robot(
             &mut out,
             &mut schemas,
-            prefix,
-            rec,
+            (prefix, rec),
             enc,
             first.then_some(meta),
             path,
+            &mut written,
         )?;
         first = false;
     }
     out.finish().map_err(err)?;
-    Ok(count)
+    Ok(written)
 }
 
 /// How a failure to write the file is reported.
@@ -218,12 +228,12 @@ pub fn topic_name(prefix: &str, topic: &str) -> String {
 fn write_robot<W: Write>(
     out: &mut Writer<W>,
     schemas: &mut BTreeMap<&'static str, (u16, bool)>,
-    prefix: &str,
-    rec: &Recording,
+    (prefix, rec): (&str, &Recording),
     enc: Encoding,
     file_meta: Option<&crate::record::Meta>,
     path: &Path,
-) -> Result<u64, ExportError> {
+    written: &mut Written,
+) -> Result<(), ExportError> {
     let err = mcap_error(path);
     // Channel ids, per-channel sequence numbers and whether the channel is protobuf, in
     // `channels()` order. A schema `mcap_proto` has is binary unless JSON was asked for.
@@ -239,7 +249,8 @@ fn write_robot<W: Write>(
                 let known = match binary {
                     Some(set) => (out.add_schema(name, "protobuf", &set).map_err(err)?, true),
                     None => {
-                        let data = serde_json::to_vec(&schema).unwrap_or_default();
+                        let mut data = Vec::new();
+                        let _ = crate::json_text::write(&mut data, &schema);
                         (
                             out.add_schema(name, "jsonschema", &data).map_err(err)?,
                             false,
@@ -273,7 +284,14 @@ fn write_robot<W: Write>(
             .unwrap_or_default();
         out.metadata("recording", &meta).map_err(err)?;
     }
-    write_messages(out, &mut topics, rec, path)
+    written.messages += write_messages(out, &mut topics, rec, path, |note| {
+        let robot = match prefix {
+            "" => String::new(),
+            p => format!("/{p}"),
+        };
+        written.notes.push(format!("{robot}{note}"));
+    })?;
+    Ok(())
 }
 
 /// Every message of `rec` on its channel (`topics`: topic, channel id, messages so far).
@@ -282,13 +300,14 @@ fn write_messages<W: Write>(
     topics: &mut [(&'static str, u16, u32, bool)],
     rec: &Recording,
     path: &Path,
+    mut note: impl FnMut(String),
 ) -> Result<u64, ExportError> {
     let err = mcap_error(path);
     let base_ns = rec.meta.created_unix_ms.saturating_mul(1_000_000);
     let mut count = 0u64;
     let mut failure = None;
     let mut scene = super::scene::Scene::new(rec);
-    let mut qt = super::qt::QtExport::default();
+    let mut qt = super::qt::QtExport::new(&rec.records);
     // Reused for every item: its messages.
     let mut messages = Vec::new();
     walk(rec, |item| {
@@ -319,6 +338,9 @@ fn write_messages<W: Write>(
     });
     if let Some(e) = failure {
         return Err(e);
+    }
+    if let Some(n) = qt.note() {
+        note(n);
     }
     Ok(count)
 }

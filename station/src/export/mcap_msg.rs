@@ -36,6 +36,8 @@ pub enum Body {
     Truth(Truth),
     /// Any other topic.
     Json(Value),
+    /// JSON already written out (a `/qt_model` snapshot: its size counts against a budget).
+    JsonText(Vec<u8>),
 }
 
 impl Body {
@@ -45,7 +47,7 @@ impl Body {
         match self {
             Body::Pose(p) => p.timestamp = t,
             Body::Transform(f) => f.timestamp = t,
-            Body::Telemetry { .. } | Body::Truth(_) => {}
+            Body::Telemetry { .. } | Body::Truth(_) | Body::JsonText(_) => {}
             Body::Json(v) => stamp_value(v, t),
         }
     }
@@ -67,11 +69,11 @@ impl Body {
             Body::Truth(t) => mcap_proto::truth(out, t),
             // No binary channel carries these (`mcap_proto::descriptor_set` has no schema for
             // their topics), so this is never reached; JSON keeps the bytes readable if it is.
-            Body::Json(_) => self.write_json(out),
+            Body::Json(_) | Body::JsonText(_) => self.write_json(out),
         }
     }
 
-    /// Appends the body's JSON (compact, as `serde_json::to_writer` writes it) to `out`.
+    /// Appends the body's JSON (compact, as `json_text::write` writes it) to `out`.
     pub fn write_json(&self, out: &mut Vec<u8>) {
         match self {
             Body::Telemetry { row, caps } => write_telemetry(out, row, *caps),
@@ -92,8 +94,9 @@ impl Body {
             }
             // Writing a Value into a Vec cannot fail.
             Body::Json(v) => {
-                let _ = serde_json::to_writer(&mut *out, v);
+                let _ = crate::json_text::write(&mut *out, v);
             }
+            Body::JsonText(text) => out.extend_from_slice(text),
         }
     }
 }
@@ -229,9 +232,10 @@ impl FrameTransform {
     }
 }
 
-/// A string, escaped as `serde_json` escapes it (these are the program's own names).
+/// A string, escaped as every JSON output escapes it (`json_text`; these are the program's
+/// own names).
 fn string(out: &mut Vec<u8>, s: &str) {
-    let _ = serde_json::to_writer(&mut *out, s);
+    let _ = crate::json_text::write(&mut *out, s);
 }
 
 /// `/telemetry`, as `TelemetryJson` serialises it.
@@ -336,6 +340,10 @@ impl Serialize for Body {
             Body::Transform(f) => f.serialize(s),
             Body::Truth(t) => t.serialize(s),
             Body::Json(v) => v.serialize(s),
+            // Read back: the text is what `write_json` writes.
+            Body::JsonText(t) => serde_json::from_slice::<Value>(t)
+                .unwrap_or(Value::Null)
+                .serialize(s),
         }
     }
 }

@@ -28,6 +28,13 @@ pub struct Entry {
 /// Longest file read, bytes: 31 parameters with long comments fit in a few KB.
 pub const MAX_FILE_BYTES: usize = 256 * 1024;
 
+/// What a parameter file may be (`input_file`'s rule).
+pub const PARAMETER_FILE: crate::input_file::InputKind = crate::input_file::InputKind {
+    what: "parameter files",
+    max_bytes: MAX_FILE_BYTES as u64,
+    pipes: false,
+};
+
 /// Parses a parameter file; `label` names it in errors (`robot.parm:3:1: ...`).
 pub fn parse(label: &str, bytes: &[u8]) -> Result<Vec<Entry>, String> {
     if bytes.len() > MAX_FILE_BYTES {

@@ -13,7 +13,7 @@ pub mod file;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 use clap::{Args, Subcommand};
 use protocol::{AckInfo, Command, NackReason, ParamId};
 use robot_firmware::params::{ParamInfo, PARAMS};
@@ -97,19 +97,8 @@ pub async fn run(args: &ParamsArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn read_file(path: &std::path::Path) -> anyhow::Result<Vec<file::Entry>> {
+    let bytes = crate::input_file::read(path, &file::PARAMETER_FILE)?;
     let label = path.display().to_string();
-    let meta = std::fs::metadata(path).with_context(|| format!("cannot read {label}"))?;
-    if !meta.is_file() {
-        bail!("{label}: not a regular file");
-    }
-    if meta.len() > file::MAX_FILE_BYTES as u64 {
-        bail!(
-            "{label}: {} bytes; a parameter file is at most {} bytes",
-            meta.len(),
-            file::MAX_FILE_BYTES
-        );
-    }
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {label}"))?;
     file::parse(&label, &bytes).map_err(|e| anyhow::anyhow!(printable_text(&e).into_owned()))
 }
 
@@ -142,10 +131,7 @@ fn info(id: u16) -> &'static ParamInfo {
 
 fn emit(json: bool, value: serde_json::Value, text: &str, ok: bool) -> ExitCode {
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).unwrap_or_default()
-        );
+        println!("{}", crate::json_text::pretty(&value).unwrap_or_default());
     } else if ok {
         println!("{}", printable_text(text));
     } else {
@@ -235,7 +221,7 @@ async fn list(link: &mut RunningLink, peer: &PeerInfo, json: bool) -> anyhow::Re
                        "integer": p.integer, "description": p.desc})
             })
             .collect();
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        println!("{}", crate::json_text::pretty(&v)?);
     } else {
         for (p, r) in &all {
             let value = match r {
@@ -357,7 +343,7 @@ async fn load(
         let v: Vec<_> = report.into_iter().map(|(v, _)| v).collect();
         println!(
             "{}",
-            serde_json::to_string_pretty(&json!({"changed": changed, "unchanged": same,
+            crate::json_text::pretty(&json!({"changed": changed, "unchanged": same,
                                                  "refused": refused, "parameters": v}))?
         );
     } else {
@@ -401,7 +387,7 @@ async fn diff(
             .collect();
         println!(
             "{}",
-            serde_json::to_string_pretty(&json!({"compared": entries.len(), "differ": v}))?
+            crate::json_text::pretty(&json!({"compared": entries.len(), "differ": v}))?
         );
     } else {
         for (e, r) in &differ {

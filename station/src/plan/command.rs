@@ -147,7 +147,7 @@ pub fn plan(args: &PlanArgs) -> anyhow::Result<ExitCode> {
         if let (Some(o), Some(m)) = (object, v.as_object_mut()) {
             m.insert("object".into(), o);
         }
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        println!("{}", crate::json_text::pretty(&v)?);
     } else {
         // The map's name comes from the arena file.
         let text = plan_text(&planner, &r, &goal_note(planner.map(), args.to, r.goal()));
@@ -169,7 +169,7 @@ pub fn plan(args: &PlanArgs) -> anyhow::Result<ExitCode> {
 pub fn segment(args: &SegmentArgs) -> anyhow::Result<ExitCode> {
     let planner = planner(&args.map)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&segment_json(&planner))?);
+        println!("{}", crate::json_text::pretty(&segment_json(&planner))?);
     } else {
         print!(
             "{}",

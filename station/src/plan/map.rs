@@ -87,15 +87,22 @@ impl Endpoint {
     }
 }
 
-/// The bytes of `spec` if it is a file that opens as a Map object (version 1, kind 0).
-fn map_object_file(spec: &str) -> Option<Vec<u8>> {
+/// The bytes of `spec` if it is a file that opens as a Map object (version 1, kind 0): its
+/// first two bytes say so, then it is read whole as an object file (`input_file`'s rule).
+fn map_object_file(spec: &str) -> Result<Option<Vec<u8>>, NavError> {
     let path = std::path::Path::new(spec);
     if !path.is_file() {
-        return None;
+        return Ok(None);
     }
-    let bytes = std::fs::read(path).ok()?;
-    (bytes.first() == Some(&protocol::object::OBJECT_VERSION) && bytes.get(1) == Some(&0))
-        .then_some(bytes)
+    let kind = &crate::transfer::objects::OBJECT_FILE;
+    let refused = |e: crate::input_file::InputError| NavError::Load(e.into());
+    let head = crate::input_file::read_head(path, kind, 2).map_err(refused)?;
+    if head != [protocol::object::OBJECT_VERSION, 0] {
+        return Ok(None);
+    }
+    crate::input_file::read(path, kind)
+        .map(Some)
+        .map_err(refused)
 }
 
 /// The planner's map: a nav grid in `Vec` storage, its markers and where it came from.
@@ -123,7 +130,7 @@ impl NavMap {
     /// Loads `spec` (an arena file, a Map object file such as `station download-map --out`
     /// writes, or `builtin:micro-rato-99`) and builds its grid.
     pub fn load(spec: &str, opts: &MapOptions) -> Result<NavMap, NavError> {
-        if let Some(bytes) = map_object_file(spec) {
+        if let Some(bytes) = map_object_file(spec)? {
             let name = std::path::Path::new(spec)
                 .file_stem()
                 .map_or_else(|| spec.to_string(), |s| s.to_string_lossy().into_owned());

@@ -363,7 +363,7 @@ fn report(
         });
         println!(
             "{}",
-            serde_json::to_string_pretty(&v).context("cannot print JSON")?
+            crate::json_text::pretty(&v).context("cannot print JSON")?
         );
     } else {
         println!(

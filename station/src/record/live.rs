@@ -220,7 +220,7 @@ pub fn link_record(c: &Connection) -> (LinkState, String) {
         Connection::Handshaking { port } => (LinkState::Handshaking, port.clone()),
         Connection::Connected(p) => (
             LinkState::Connected,
-            serde_json::to_string(&PeerRecord::from(p)).unwrap_or_default(),
+            crate::json_text::compact(&PeerRecord::from(p)).unwrap_or_default(),
         ),
         Connection::Refused { message } => (LinkState::Refused, message.clone()),
     }

@@ -69,7 +69,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         if args.json {
             println!(
                 "{}",
-                serde_json::to_string_pretty(&s).context("cannot print JSON")?
+                crate::json_text::pretty(&s).context("cannot print JSON")?
             );
         } else {
             print!(
@@ -94,7 +94,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         if args.json {
             println!(
                 "{}",
-                serde_json::to_string_pretty(&s).context("cannot print JSON")?
+                crate::json_text::pretty(&s).context("cannot print JSON")?
             );
         } else {
             // The summary quotes the recording's metadata and link texts.
@@ -122,7 +122,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
             .map(|s| crate::retrace::parse_param(s))
             .collect::<Result<Vec<_>, _>>()
             .map_err(anyhow::Error::msg)?;
-        let bytes = std::fs::read(&args.file).with_context(|| format!("cannot read {file}"))?;
+        let bytes = crate::record::read_file(&args.file)?;
         let o = crate::retrace::overlay::overlay(&bytes, &params)
             .map_err(|e| anyhow::anyhow!("cannot retrace: {file}: {e}"))?;
         Some(std::sync::Arc::new(o))

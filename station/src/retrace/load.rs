@@ -3,12 +3,14 @@
 //! compare with the retraced ones), and the emulator's truth.
 //!
 //! Layer: pure over the file's bytes (read whole: memory is linear in the file). Every record
-//! is checked as `record::parse_record` checks it; a damaged record, a trace frame whose offset
-//! jumps (lost on the wire), or a second stream are reported with the file's byte offset.
+//! is checked as `record::parse_record` checks it, and its time as `record::check_time` does
+//! (never going back, at most a year); a damaged record is an error with the file's byte
+//! offset; a trace frame whose offset jumps (lost on the wire), or a second stream, is reported
+//! with it.
 
 use protocol::{Feed, FrameDecoder, Message};
 
-use crate::record::{parse_header, parse_record, LinkState, RecordKind};
+use crate::record::{check_time, parse_header, parse_record, LinkState, RecordKind};
 
 /// One frame from the robot, as read.
 #[derive(Clone, Debug)]
@@ -50,6 +52,8 @@ pub struct Loaded {
     pub bad_frames: u64,
     /// The robot said how many passes its trace dropped (the largest count seen).
     pub dropped_steps: u32,
+    /// The recording's span: its last record's time less its first's, µs.
+    pub span_us: u64,
 }
 
 impl Loaded {
@@ -69,11 +73,16 @@ pub fn load(bytes: &[u8]) -> Result<Loaded, String> {
     let mut out = Loaded::default();
     let mut frame: Vec<u8> = Vec::new();
     let mut stream_open = false;
+    let (mut first_t, mut last_t) = (None, 0);
     while at < bytes.len() {
         let (rec, next) =
             parse_record(bytes, at, header.version, links).map_err(|e| e.to_string())?;
+        check_time(last_t, rec.t_us, at).map_err(|e| e.to_string())?;
+        last_t = rec.t_us;
         let offset = at as u64;
         at = next;
+        let first_t = *first_t.get_or_insert(rec.t_us);
+        out.span_us = rec.t_us - first_t;
         // A recording of several robots: the first link's robot is retraced.
         if rec.link != 0 {
             continue;

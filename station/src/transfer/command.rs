@@ -100,7 +100,7 @@ pub(super) fn fail(
     if json {
         let mut v = json!({"command": command, "outcome": outcome, "ok": false, "error": error});
         merge(&mut v, extra);
-        println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+        println!("{}", crate::json_text::pretty(&v).unwrap_or_default());
     } else {
         eprintln!(
             "station {command}: {}",
@@ -135,7 +135,7 @@ pub(super) fn finish(json: bool, command: &str, r: &JobReport, extra: Value) -> 
         let mut v = json!({"command": command});
         merge(&mut v, r.json());
         merge(&mut v, extra);
-        println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+        println!("{}", crate::json_text::pretty(&v).unwrap_or_default());
     } else if r.outcome.is_success() {
         println!("{}", crate::terminal_text::printable_text(&r.text()));
     } else {

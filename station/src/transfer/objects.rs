@@ -25,7 +25,24 @@ use robot_firmware::nav::grid_bytes;
 use robot_firmware::transfer::{encode_map_object, encode_plan_object};
 
 use super::object_name;
+use crate::input_file::{InputError, InputKind};
 use crate::plan::{MapOptions, NavError, NavMap, PlanResult, Planner};
+
+/// What a file given to `upload-map --map` may be (`input_file`'s rule): an object, a light
+/// calibration or any arena file, so the arena files' limit.
+pub const MAP_FILE: InputKind = InputKind {
+    what: "map files",
+    max_bytes: emulator::arena::MAX_FILE_BYTES,
+    pipes: false,
+};
+
+/// What an object file (`upload-plan --plan`) may be: a 2048 x 2048 Map object, the largest
+/// the station makes, is 1 MiB; a robot holds a few KB.
+pub const OBJECT_FILE: InputKind = InputKind {
+    what: "object files",
+    max_bytes: 16 << 20,
+    pipes: false,
+};
 
 /// A Map object built from a [`NavMap`].
 #[derive(Clone, Debug, PartialEq)]
@@ -58,11 +75,8 @@ pub struct CapacityError {
 /// Why a file cannot be uploaded.
 #[derive(Debug, thiserror::Error)]
 pub enum ObjectFileError {
-    #[error("cannot read {path}: {source}")]
-    Read {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Input(#[from] InputError),
     #[error("{path} is a {found} object, not a {expected} object")]
     WrongKind {
         path: PathBuf,
@@ -174,10 +188,7 @@ pub fn load_for_upload(path: &str, opts: &MapOptions) -> Result<Loaded, ObjectFi
     let file = Path::new(path);
     // Not a regular file (a `builtin:` name, a device): never read here.
     let bytes = if file.is_file() {
-        std::fs::read(file).map_err(|source| ObjectFileError::Read {
-            path: file.into(),
-            source,
-        })?
+        crate::input_file::read(file, &MAP_FILE)?
     } else {
         Vec::new()
     };
@@ -283,10 +294,7 @@ fn load_calibration_file(path: &Path, bytes: &[u8]) -> Result<Option<Loaded>, Ob
 
 /// Reads a Plan object file, refusing anything else with the byte offset of the problem.
 pub fn read_plan_file(path: &Path) -> Result<Vec<u8>, ObjectFileError> {
-    let bytes = std::fs::read(path).map_err(|source| ObjectFileError::Read {
-        path: path.into(),
-        source,
-    })?;
+    let bytes = crate::input_file::read(path, &OBJECT_FILE)?;
     let bad = |source| ObjectFileError::Object {
         path: path.into(),
         source,

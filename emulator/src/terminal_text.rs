@@ -1,5 +1,5 @@
 //! Text from the wire or from a file, made safe to print on a terminal: the one place that
-//! decides which characters may reach it.
+//! decides which characters may reach it ([`must_escape`]), for the station and the emulator.
 //!
 //! Layer: pure functions. A robot's firmware name, its log lines, a recording's metadata, an
 //! arena's name or a file's content quoted in an error are untrusted; printed raw, `ESC ] 0;
@@ -9,25 +9,26 @@
 //! `\u{202e}`, so the text stays readable and the fault visible. The link machine applies
 //! `printable` to what it takes from the robot (so the TUI and every command get clean peer
 //! names and log lines; ratatui also drops control characters when it draws); the commands
-//! apply `printable_text` to what they print. JSON output needs neither: serde_json escapes
-//! control characters itself.
+//! apply `printable_text` to what they print. JSON output goes through `json_text`, which
+//! writes the same characters as JSON escapes (`\u009b`): serde_json escapes only C0, and
+//! DEL or a C1 control such as CSI (U+009B) reached the terminal raw (issue 31).
 
 use std::borrow::Cow;
 use std::fmt::Write as _;
 
-/// Whether `c` must not reach a terminal as it is.
-fn unsafe_char(c: char) -> bool {
+/// Whether `c` must not reach a terminal as it is: the rule every text output follows.
+pub fn must_escape(c: char) -> bool {
     c.is_control()
         || matches!(c, '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
 }
 
 fn escape(s: &str, keep: impl Fn(char) -> bool) -> Cow<'_, str> {
-    if !s.chars().any(|c| unsafe_char(c) && !keep(c)) {
+    if !s.chars().any(|c| must_escape(c) && !keep(c)) {
         return Cow::Borrowed(s);
     }
     let mut out = String::with_capacity(s.len() + 8);
     for c in s.chars() {
-        if !unsafe_char(c) || keep(c) {
+        if !must_escape(c) || keep(c) {
             out.push(c);
         } else if (c as u32) < 0x100 {
             let _ = write!(out, "\\x{:02x}", c as u32);
