@@ -4,7 +4,11 @@
 //! (the firmware's `Robot` over a `Playback` of the trace). With the recorded parameters, the
 //! retraced robot's frames (telemetry, events, replies: pose, mode, motor output) must equal
 //! the recorded ones byte for byte, and its motor and gripper commands the recorded ones pass
-//! by pass; the first divergence is reported with its cycle and field. With `--param`, it
+//! by pass; the first divergence is reported with its cycle and field. "Identical" means every
+//! recorded frame the trace covers was compared: the retrace ran to the trace's end (or to
+//! `--until-ms`); the only frames left uncompared are those the robot sent after the last pass
+//! whose trace the recording holds (the recording ended before their trace), and the report
+//! counts them and says so. A retrace stopped by a gap in the trace is not identical. With `--param`, it
 //! retraces twice (recorded parameters, then changed) and reports what would have differed:
 //! the believed pose track, the events, the rotation (with the emulator's truth beside it).
 //!
@@ -135,6 +139,9 @@ struct Report {
     frames_compared: usize,
     frames_recorded: usize,
     frames_retraced: usize,
+    /// Recorded frames not compared, and why.
+    frames_not_compared: usize,
+    frames_not_compared_why: Option<String>,
     identical: bool,
     first_divergence: Option<serde_json::Value>,
     misses: u64,
@@ -223,7 +230,19 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
         .map_err(|e| anyhow::anyhow!("cannot retrace: {name}: {e}"))?;
     let frame_div = compare_frames(&loaded.frames, &base.frames);
     let compared = loaded.frames.len().min(base.frames.len());
-    let identical = frame_div.is_none() && base.command_divergence.is_none() && base.misses == 0;
+    // Bit for bit means every frame the trace covers: a retrace that stopped before the
+    // trace's end (a gap, a restarted stream) compared only a part.
+    let to_the_end = matches!(base.stop, Stop::End | Stop::Until);
+    let identical =
+        frame_div.is_none() && base.command_divergence.is_none() && base.misses == 0 && to_the_end;
+    let not_compared = loaded.frames.len() - compared;
+    let not_compared_why = (not_compared > 0).then(|| match base.stop {
+        Stop::End => "sent after the last pass whose trace the recording holds (the recording \
+                      ended before their trace was sent): no retrace can reproduce them"
+            .to_string(),
+        Stop::Until => "after --until-ms".to_string(),
+        _ => format!("after the retrace stopped: {}", stop_text(&base.stop)),
+    });
 
     let mut report = Report {
         recording: name.clone(),
@@ -243,6 +262,8 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
         frames_compared: compared,
         frames_recorded: loaded.frames.len(),
         frames_retraced: base.frames.len(),
+        frames_not_compared: not_compared,
+        frames_not_compared_why: not_compared_why,
         identical,
         first_divergence: first_divergence(&base, frame_div.as_ref()),
         misses: base.misses,
@@ -451,13 +472,26 @@ fn print_text(r: &Report) {
     }
     if r.identical {
         println!(
-            "identical: {} of {} recorded frames compared byte for byte, every motor command the same",
-            r.frames_compared, r.frames_recorded
+            "identical: every recorded frame the trace covers ({}) compared byte for byte, every \
+             motor command the same",
+            r.frames_compared
         );
+        if let Some(why) = &r.frames_not_compared_why {
+            println!(
+                "not compared: the last {} of {} recorded frames, {why}",
+                r.frames_not_compared, r.frames_recorded
+            );
+        }
     } else if let Some(d) = &r.first_divergence {
         println!(
             "first divergence: {}",
             crate::json_text::compact(d).unwrap_or_default()
+        );
+    } else {
+        println!(
+            "not retraced to the end ({}): the {} frames before it are identical, the other {} \
+             not compared",
+            r.stopped, r.frames_compared, r.frames_not_compared
         );
     }
     if let Some(t) = &r.track_difference {
