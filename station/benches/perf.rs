@@ -108,7 +108,7 @@ fn driven_app(seconds: u32, hz: u32, size: (u16, u16)) -> App {
     let mut actions = Vec::new();
     feed.advance_to(&rec.records, rec.duration_us(), &mut actions);
     for a in actions {
-        app.update(a);
+        app.update(a.into());
     }
     app
 }

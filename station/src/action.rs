@@ -115,3 +115,13 @@ pub enum Action {
     /// Fleet: send `Stop` to every connected robot.
     StopAll,
 }
+
+/// What a recording replays as is what the live link would have said.
+impl From<station_core::replay::ReplayEvent> for Action {
+    fn from(e: station_core::replay::ReplayEvent) -> Self {
+        match e {
+            station_core::replay::ReplayEvent::Tick { now_ms } => Action::Tick { now_ms },
+            station_core::replay::ReplayEvent::Link(ev) => Action::Link(ev),
+        }
+    }
+}

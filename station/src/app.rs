@@ -8,7 +8,8 @@
 //! itself); every command sent is remembered until its `CommandDone` arrives, so its outcome
 //! (with the robot's Nack reason) reaches the log and the parameter editor. Cannot fail.
 
-pub mod arena;
+pub use station_core::arena;
+pub use station_core::format::{mode_from_index, mode_name, mode_name_i32, MODES};
 pub mod fleet;
 pub mod forage;
 pub mod history;
@@ -16,8 +17,7 @@ pub mod localization;
 pub mod log;
 pub mod params;
 pub mod plan_target;
-pub mod qt_feed;
-pub mod qt_state;
+pub use station_core::qt_state;
 pub mod transfers;
 
 use std::collections::HashMap;
@@ -1118,49 +1118,6 @@ fn pose_m(p: &protocol::Pose) -> (f64, f64, f64) {
         f64::from(p.y_mm) / 1000.0,
         f64::from(p.heading_mrad) / 1000.0,
     )
-}
-
-/// A mode's name for display.
-pub fn mode_name(m: Mode) -> &'static str {
-    match m {
-        Mode::Idle => "Idle",
-        Mode::Manual => "Manual",
-        Mode::GoTo => "GoTo",
-        Mode::Wander => "Wander",
-        Mode::EdgeFollowLeft => "EdgeFollowLeft",
-        Mode::EdgeFollowRight => "EdgeFollowRight",
-        Mode::SeekLight => "SeekLight",
-        Mode::Explore => "Explore",
-        Mode::ExecutePlan => "ExecutePlan",
-        Mode::Forage => "Forage",
-        Mode::Survey => "Survey",
-        Mode::CalibrateLight => "CalibrateLight",
-    }
-}
-
-/// The mode with wire index `i` (as in `Event ModeChanged`).
-pub fn mode_from_index(i: i32) -> Option<Mode> {
-    MODES.get(usize::try_from(i).ok()?).copied()
-}
-
-/// Every mode in wire order; the digit keys 0-9 select the first ten.
-pub const MODES: [Mode; 12] = [
-    Mode::Idle,
-    Mode::Manual,
-    Mode::GoTo,
-    Mode::Wander,
-    Mode::EdgeFollowLeft,
-    Mode::EdgeFollowRight,
-    Mode::SeekLight,
-    Mode::Explore,
-    Mode::ExecutePlan,
-    Mode::Forage,
-    Mode::Survey,
-    Mode::CalibrateLight,
-];
-
-fn mode_name_i32(i: i32) -> String {
-    mode_from_index(i).map_or_else(|| format!("#{i}"), |m| mode_name(m).to_string())
 }
 
 #[cfg(test)]

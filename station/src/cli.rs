@@ -135,7 +135,7 @@ pub enum Sub {
     ///   station params --port /dev/ttyUSB0 load robot.parm
     ///   station params --port /dev/ttyUSB0 diff robot.parm
     #[command(verbatim_doc_comment)]
-    Params(crate::params::ParamsArgs),
+    Params(crate::commands::params::ParamsArgs),
     /// Upload a map to the robot: any map file `station plan` reads, or a Map object file
     ///
     /// The map is gridded as `station plan` grids it (--cell, --radius) and sent as a Map
@@ -149,7 +149,7 @@ pub enum Sub {
     ///   station upload-map --port /dev/ttyUSB0 --map builtin:micro-rato-99
     ///   station upload-map --port /dev/ttyUSB0 --map lab.xml --cell 0.25 --json
     #[command(verbatim_doc_comment)]
-    UploadMap(crate::transfer::command::UploadMapArgs),
+    UploadMap(crate::commands::transfer::UploadMapArgs),
     /// Download the robot's map (the one uploaded, or the one it built exploring)
     ///
     /// The file is a Map object (PROTOCOL.md §12), written to a temporary file and renamed
@@ -160,7 +160,7 @@ pub enum Sub {
     ///   station download-map --port /dev/ttyUSB0 --out robot-map.obj
     ///   station download-map --port /dev/ttyUSB0 --ascii
     #[command(verbatim_doc_comment)]
-    DownloadMap(crate::transfer::command::DownloadMapArgs),
+    DownloadMap(crate::commands::transfer::DownloadMapArgs),
     /// Upload a plan to the robot: a Plan object file from `station plan --out-object`
     ///
     /// The robot installs it (any plan it was executing is aborted); `station send execute
@@ -172,7 +172,7 @@ pub enum Sub {
     ///   station upload-plan --port /dev/ttyUSB0 --plan plan.obj
     ///   station send --port /dev/ttyUSB0 execute 0x1234abcd
     #[command(verbatim_doc_comment)]
-    UploadPlan(crate::transfer::command::UploadPlanArgs),
+    UploadPlan(crate::commands::transfer::UploadPlanArgs),
     /// Plan a path on a map file with the robot's own planner; no robot needed
     ///
     /// As the Dom Dinis robot plans: the map becomes a grid (0.3 m cells), its free cells squares, and A* finds
@@ -184,7 +184,7 @@ pub enum Sub {
     ///   station plan --map maze.txt --json          (mazes: cells of half the pitch)
     ///   station plan --map lab.xml --from 0.5,0.5 --to 3.2,2.6 --cell 0.1 --radius 0.12
     #[command(verbatim_doc_comment)]
-    Plan(crate::plan::command::PlanArgs),
+    Plan(crate::commands::plan::PlanArgs),
     /// Segment a map into the free squares the planner searches (Dom Dinis segmentation)
     ///
     /// Squares are in cells: x, y of the corner with the smallest column and row (row 0 is
@@ -193,7 +193,7 @@ pub enum Sub {
     /// Example:
     ///   station segment --map builtin:micro-rato-99 --json
     #[command(verbatim_doc_comment)]
-    Segment(crate::plan::command::SegmentArgs),
+    Segment(crate::commands::plan::SegmentArgs),
     /// Record the link, both directions with timestamps, to a file
     ///
     /// The file is FILE.partial while recording (flushed every second, so a crash loses at
@@ -205,7 +205,7 @@ pub enum Sub {
     ///   station record --port /dev/ttyUSB0 --out run.rec --seconds 60
     ///   station record --out demo.rec --seconds 20 --rate 50 --json
     #[command(verbatim_doc_comment)]
-    Record(crate::record::command::RecordArgs),
+    Record(crate::commands::record::RecordArgs),
     /// Replay a recording in the TUI (pause, seek, speed), or summarise it with --json
     ///
     /// The robot's recorded bytes go through the station's own link code, so every view
@@ -218,7 +218,7 @@ pub enum Sub {
     ///   station replay run.rec --speed 4 --arena lab.xml
     ///   station replay run.rec --json        (duration, frames, telemetry rate, gaps, errors)
     #[command(verbatim_doc_comment)]
-    Replay(crate::replay::command::ReplayArgs),
+    Replay(crate::commands::replay::ReplayArgs),
     /// Export a recording to MCAP (Foxglove) and/or CSV (telemetry, one row per frame)
     ///
     /// Outputs are written to a temporary file and renamed when complete. A damaged
@@ -228,7 +228,7 @@ pub enum Sub {
     ///   station export run.rec --mcap run.mcap
     ///   station export run.rec --csv run.csv --mcap run.mcap
     #[command(verbatim_doc_comment)]
-    Export(crate::export::ExportArgs),
+    Export(crate::commands::export::ExportArgs),
     /// Re-run a recorded run through the firmware's own code (retracing, Zimmer's ALICE thesis §3.1.2)
     ///
     /// The recording must hold the robot's hardware trace (parameter 34 hal_trace, message
@@ -247,7 +247,7 @@ pub enum Sub {
     ///   station retrace run.rec
     ///   station retrace run.rec --param odo_wheel_distance_mm=53.3 --json
     #[command(verbatim_doc_comment)]
-    Retrace(crate::retrace::RetraceArgs),
+    Retrace(crate::commands::retrace::RetraceArgs),
     /// Train the light -> angle map (Khepera light calibration) from a recording of a calibrating robot
     ///
     /// The Kohonen map of the Khepera foraging paper (Löffler, Klahold, Rückert 2001, §5.3):
@@ -262,7 +262,7 @@ pub enum Sub {
     ///   station calibrate cal.rec --out som.bin --light 0.40,0.30 --json
     ///   station calibrate odometry --port /dev/ttyUSB0   (odometry laps on the robot)
     #[command(verbatim_doc_comment)]
-    Calibrate(crate::calibrate::CalibrateCommand),
+    Calibrate(crate::commands::calibrate::CalibrateCommand),
     /// Upload a light -> angle calibration to the robot (Khepera light calibration)
     ///
     /// The file is what `station calibrate --out` or `station download-calibration --out`
@@ -275,7 +275,7 @@ pub enum Sub {
     ///   station calibrate cal.rec --out som.json
     ///   station upload-calibration --port /dev/ttyUSB0 --calibration som.json
     #[command(verbatim_doc_comment)]
-    UploadCalibration(crate::transfer::calibration::UploadCalibrationArgs),
+    UploadCalibration(crate::commands::calibration::UploadCalibrationArgs),
     /// Download the robot's light -> angle calibration to a file (Khepera light calibration)
     ///
     /// The network the robot trained in mode calibrate-light (or was given), as JSON
@@ -286,7 +286,7 @@ pub enum Sub {
     /// Examples:
     ///   station download-calibration --port /dev/ttyUSB0 --out som.bin
     #[command(verbatim_doc_comment)]
-    DownloadCalibration(crate::transfer::calibration::DownloadCalibrationArgs),
+    DownloadCalibration(crate::commands::calibration::DownloadCalibrationArgs),
     /// Unsupervised landmarks and places (Mächler's thesis, ch. 3), run and played back here
     ///
     /// Runs the unsupervised-places scenario on the station with the firmware's own code and
@@ -427,11 +427,11 @@ pub enum SendCmd {
     /// otherwise. The robot segments its map first if needed.
     Plan {
         /// Start, metres in the map frame [default: where the robot believes it is].
-        #[arg(long, value_name = "X,Y", value_parser = crate::plan::command::parse_point,
+        #[arg(long, value_name = "X,Y", value_parser = crate::commands::plan::parse_point,
               allow_hyphen_values = true)]
         from: Option<(f64, f64)>,
         /// Goal, metres [default: the goal of the robot's map].
-        #[arg(long, value_name = "X,Y", value_parser = crate::plan::command::parse_point,
+        #[arg(long, value_name = "X,Y", value_parser = crate::commands::plan::parse_point,
               allow_hyphen_values = true)]
         to: Option<(f64, f64)>,
     },

@@ -72,19 +72,19 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             json,
             timeout,
         }) => stats(&port, seconds, json, timeout).await,
-        Some(Sub::Params(args)) => crate::params::run(&args).await,
-        Some(Sub::UploadMap(args)) => crate::transfer::command::upload_map(&args).await,
-        Some(Sub::DownloadMap(args)) => crate::transfer::command::download_map(&args).await,
-        Some(Sub::UploadPlan(args)) => crate::transfer::command::upload_plan(&args).await,
-        Some(Sub::Plan(args)) => crate::plan::command::plan(&args),
-        Some(Sub::Segment(args)) => crate::plan::command::segment(&args),
-        Some(Sub::Record(args)) => crate::record::command::run(&args).await,
-        Some(Sub::Replay(args)) => crate::replay::command::run(&args).await,
-        Some(Sub::Export(args)) => crate::export::run(&args),
-        Some(Sub::Retrace(args)) => crate::retrace::run(&args),
-        Some(Sub::Calibrate(args)) => crate::calibrate::dispatch(&args).await,
-        Some(Sub::UploadCalibration(args)) => crate::transfer::calibration::upload(&args).await,
-        Some(Sub::DownloadCalibration(args)) => crate::transfer::calibration::download(&args).await,
+        Some(Sub::Params(args)) => crate::commands::params::run(&args).await,
+        Some(Sub::UploadMap(args)) => crate::commands::transfer::upload_map(&args).await,
+        Some(Sub::DownloadMap(args)) => crate::commands::transfer::download_map(&args).await,
+        Some(Sub::UploadPlan(args)) => crate::commands::transfer::upload_plan(&args).await,
+        Some(Sub::Plan(args)) => crate::commands::plan::plan(&args),
+        Some(Sub::Segment(args)) => crate::commands::plan::segment(&args),
+        Some(Sub::Record(args)) => crate::commands::record::run(&args).await,
+        Some(Sub::Replay(args)) => crate::commands::replay::run(&args).await,
+        Some(Sub::Export(args)) => crate::commands::export::run(&args),
+        Some(Sub::Retrace(args)) => crate::commands::retrace::run(&args),
+        Some(Sub::Calibrate(args)) => crate::commands::calibrate::dispatch(&args).await,
+        Some(Sub::UploadCalibration(args)) => crate::commands::calibration::upload(&args).await,
+        Some(Sub::DownloadCalibration(args)) => crate::commands::calibration::download(&args).await,
         Some(Sub::Places(args)) => crate::places::command(&args),
     }
 }
@@ -382,7 +382,7 @@ async fn send(
     // A plan made on the robot is named by its PlanInstalled event: `execute` needs the id.
     let plan_id = match (command, outcome.is_ack()) {
         (protocol::Command::Plan { .. }, true) => {
-            crate::transfer::command::plan_id_after(&mut link.events).await
+            crate::commands::transfer::plan_id_after(&mut link.events).await
         }
         _ => None,
     };

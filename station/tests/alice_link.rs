@@ -73,7 +73,7 @@ fn replayed(sits: &[AliceSituation]) -> App {
     let mut actions = Vec::new();
     feed.advance_to(&rec.records, u64::MAX / 2, &mut actions);
     for a in actions {
-        app.update(a);
+        app.update(a.into());
     }
     app
 }

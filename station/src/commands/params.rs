@@ -8,8 +8,6 @@
 //! done (`diff`: no difference), 1 refused, unanswered, unusable file or port (`diff`: the
 //! robot differs from the file), 2 usage.
 
-pub mod file;
-
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -96,10 +94,11 @@ pub async fn run(args: &ParamsArgs) -> anyhow::Result<ExitCode> {
     result
 }
 
-fn read_file(path: &std::path::Path) -> anyhow::Result<Vec<file::Entry>> {
-    let bytes = crate::input_file::read(path, &file::PARAMETER_FILE)?;
+fn read_file(path: &std::path::Path) -> anyhow::Result<Vec<station_core::param_file::Entry>> {
+    let bytes = crate::input_file::read(path, &station_core::param_file::PARAMETER_FILE)?;
     let label = path.display().to_string();
-    file::parse(&label, &bytes).map_err(|e| anyhow::anyhow!(printable_text(&e).into_owned()))
+    station_core::param_file::parse(&label, &bytes)
+        .map_err(|e| anyhow::anyhow!(printable_text(&e).into_owned()))
 }
 
 /// What the robot answered about one parameter.
@@ -273,7 +272,7 @@ async fn save(
         peer.profile,
         env!("CARGO_PKG_VERSION")
     );
-    let text = file::format(&printable_text(&header), &values);
+    let text = station_core::param_file::format(&printable_text(&header), &values);
     crate::output_file::write_atomically(path, text.as_bytes(), force)?;
     let note = format!("wrote {} ({} parameters)", path.display(), values.len());
     Ok(emit(
@@ -286,7 +285,7 @@ async fn save(
 
 async fn load(
     link: &mut RunningLink,
-    entries: Vec<file::Entry>,
+    entries: Vec<station_core::param_file::Entry>,
     json: bool,
 ) -> anyhow::Result<ExitCode> {
     let mut report = Vec::new();
@@ -363,7 +362,7 @@ async fn load(
 
 async fn diff(
     link: &mut RunningLink,
-    entries: Vec<file::Entry>,
+    entries: Vec<station_core::param_file::Entry>,
     json: bool,
 ) -> anyhow::Result<ExitCode> {
     let mut differ = Vec::new();

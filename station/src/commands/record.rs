@@ -18,14 +18,14 @@ use serde_json::json;
 use tokio::sync::mpsc;
 use tokio::time::Instant;
 
-use super::live::{LiveCounts, LiveRecorder};
-use super::writer::Written;
-use super::{partial_path, Meta, MAX_LINKS};
 use crate::builtin::start_builtin_emulator;
 use crate::cli::{parse_baud, parse_seconds};
 use crate::link::robot_ids::duplicates;
 use crate::link::serial::{open_exclusive, SerialConnector, DEFAULT_BAUD};
 use crate::link::{spawn_link, Connection, LinkEvent, LinkOptions, TapRecord};
+use station_core::record::live::{LiveCounts, LiveRecorder};
+use station_core::record::writer::Written;
+use station_core::record::{partial_path, Meta, MAX_LINKS};
 
 /// Arguments of `station record`.
 #[derive(Debug, Args, Clone)]

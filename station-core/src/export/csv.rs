@@ -13,7 +13,7 @@ use protocol::{flags, EmuTruth, Message, Telemetry};
 use serde::Serialize;
 
 use super::{walk, Direction, Item};
-use crate::app::mode_name;
+use crate::format::mode_name;
 use crate::record::{LinkState, Recording};
 
 /// The CSV header, in order.

@@ -7,9 +7,9 @@
 //! would make from the same grid. Pipeline:
 //! [`NavMap`] (file -> raster -> `nav::Grid`, markers, goal area) -> [`Planner`] (segmentation
 //! and stored adjacency, timed) -> [`Planner::plan`] (start/goal resolved, A*, optional
-//! smoothing) -> [`PlanResult`] in metres, map frame. `command` is the `station plan` /
-//! `station segment` edge, `report` turns results into JSON and text, `state` is what the TUI
-//! keeps.
+//! smoothing) -> [`PlanResult`] in metres, map frame. The station crate's `commands::plan` is
+//! the `station plan` / `station segment` edge; `report` turns results into JSON and text,
+//! `state` is what the TUI keeps.
 //!
 //! Invariants: nav row 0 is the smallest y, exactly as the raster's row 0 (raster.rs), so cells
 //! copy across unchanged; the cell size is whole millimetres (nav's unit), so the raster and
@@ -22,7 +22,6 @@
 //! cell, an unreachable goal, a map with no start or goal marker when none is given). Nothing
 //! here panics.
 
-pub mod command;
 pub mod map;
 pub mod report;
 pub mod solve;

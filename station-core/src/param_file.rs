@@ -14,7 +14,7 @@
 
 use robot_firmware::params::{by_name, ParamInfo};
 
-use crate::app::params::{format_value, range_text};
+use crate::format::{format_value, range_text};
 
 /// One `name = value` line.
 #[derive(Clone, Copy, Debug, PartialEq)]

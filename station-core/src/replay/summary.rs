@@ -12,11 +12,11 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::ReplayFeed;
-use crate::action::Action;
 use crate::link::stats::{CommandCounts, DecoderCounts, RttSummary, SeqStats};
 use crate::link::{Connection, LinkEvent};
 use crate::record::live::PeerRecord;
 use crate::record::{Meta, Recording};
+use crate::replay::ReplayEvent;
 
 /// Everything `station replay --json` prints.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -199,10 +199,10 @@ impl Counter {
         }
     }
 
-    fn action(&mut self, a: Action) {
+    fn action(&mut self, a: ReplayEvent) {
         match a {
-            Action::Tick { now_ms } => self.now_ms = now_ms,
-            Action::Link(LinkEvent::Telemetry(_)) => {
+            ReplayEvent::Tick { now_ms } => self.now_ms = now_ms,
+            ReplayEvent::Link(LinkEvent::Telemetry(_)) => {
                 self.telemetry += 1;
                 self.first_ms.get_or_insert(self.now_ms);
                 self.last_ms = self.now_ms;
@@ -214,9 +214,9 @@ impl Counter {
                 self.in_second += 1;
                 self.max_hz = self.max_hz.max(self.in_second);
             }
-            Action::Link(LinkEvent::Log { .. }) => self.logs += 1,
-            Action::Link(LinkEvent::Robot(_)) => self.events += 1,
-            Action::Link(LinkEvent::Connection(c)) => self.connection(c),
+            ReplayEvent::Link(LinkEvent::Log { .. }) => self.logs += 1,
+            ReplayEvent::Link(LinkEvent::Robot(_)) => self.events += 1,
+            ReplayEvent::Link(LinkEvent::Connection(c)) => self.connection(c),
             _ => {}
         }
     }

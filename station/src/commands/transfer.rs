@@ -18,18 +18,18 @@ use clap::Args;
 use protocol::{caps, EventCode, ObjectKind};
 use serde_json::{json, Value};
 
-use super::client::TransferClient;
-use super::engine::JobSpec;
-use super::objects::{
+use crate::cli::{parse_seconds, RequiredPort};
+use crate::commands::plan::MapArgs;
+use crate::link::{LinkEvent, PeerInfo};
+use crate::output_file::{check as check_output, write_atomically};
+use crate::plan::{MapOptions, PlanResult, Planner};
+use station_core::transfer::client::TransferClient;
+use station_core::transfer::engine::JobSpec;
+use station_core::transfer::objects::{
     check_capacity, load_for_upload, map_ascii, map_object, plan_object, plan_waypoints,
     read_plan_file, MapObject,
 };
-use super::{JobOutcome, JobReport};
-use crate::cli::{parse_seconds, RequiredPort};
-use crate::link::{LinkEvent, PeerInfo};
-use crate::output_file::{check as check_output, write_atomically};
-use crate::plan::command::MapArgs;
-use crate::plan::{MapOptions, PlanResult, Planner};
+use station_core::transfer::{JobOutcome, JobReport};
 
 /// `station upload-map`.
 #[derive(Debug, Args, Clone)]
@@ -200,7 +200,7 @@ pub async fn upload_map(args: &UploadMapArgs) -> anyhow::Result<ExitCode> {
         let e = format!(
             "{} is a {}, not a map (use {instead})",
             args.map.map,
-            super::object_name(loaded.object)
+            station_core::format::object_name(loaded.object)
         );
         return Ok(fail(json, CMD, "bad_map", &e, Value::Null));
     };

@@ -1,8 +1,9 @@
-//! `station calibrate`: seed 000 §5.3's light -> angle network trained on the station from a
-//! recording, with the robot's own code (`robot_firmware::som`, the same `LightSom` the
-//! firmware trains online in `Mode::CalibrateLight`).
+//! The Khepera's light -> angle network (the Khepera foraging paper, §5.3) trained on the
+//! station from a recording, with the robot's own code (`robot_firmware::som`, the same
+//! `LightSom` the firmware trains online in `Mode::CalibrateLight`); `station calibrate` runs
+//! it.
 //!
-//! Layer: the command line's edge over pure functions: [`examples`] turns a recording's
+//! Layer: pure functions: [`examples`] turns a recording's
 //! telemetry into labelled examples, [`train`] trains and measures a network, [`encode_json`]
 //! / [`encode_bin`] and [`decode`] are the map's file formats.
 //!
@@ -34,11 +35,9 @@
 //! usable frames (says why), bad arguments, an output that cannot be written. The output is
 //! written to a temporary file and renamed when complete, so it is never left half written.
 
-use std::path::{Path, PathBuf};
-use std::process::ExitCode;
+use std::path::Path;
 
 use anyhow::{bail, Context};
-use clap::Args;
 use protocol::{Message, Mode, Telemetry};
 use robot_firmware::behaviour::XorShift32;
 use robot_firmware::som::{rescale, Example, LightSom, Schedule};
@@ -57,79 +56,6 @@ const MAGIC: &[u8; 4] = b"LSOM";
 const FORMAT: &str = "robot-station light-som";
 const FILE_VERSION: u16 = 1;
 const NEURONS: usize = 60;
-
-/// `station calibrate`: the light map from a recording (`RECORDING --out FILE`), or a
-/// calibration run on a robot (`odometry --port P`, [`crate::calibrate_odometry`]).
-#[derive(Debug, Args, Clone)]
-#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
-pub struct CalibrateCommand {
-    #[command(subcommand)]
-    pub what: Option<CalibrateWhat>,
-    #[command(flatten)]
-    pub light: Option<CalibrateArgs>,
-}
-
-/// What `station calibrate` calibrates on a robot.
-#[derive(Debug, clap::Subcommand, Clone)]
-pub enum CalibrateWhat {
-    /// Calibrate the Khepera's odometry on the robot: hold the wall both ways, then set
-    /// odo_wheel_ratio_ppm and odo_wheel_distance_mm
-    ///
-    /// The robot holds the wall on its right (Manual mode, a teleop command each telemetry
-    /// frame) until a lap closes, turns round and holds it on its left. The wheel ratio comes
-    /// from the straight stretches of wall (once they cover a metre; else from the laps), the
-    /// effective wheel distance from the laps. Put it next to a wall of a closed arena.
-    /// Prints each lap, then each parameter before -> after (both or neither are set). The
-    /// robot is stopped at the end, on Ctrl-C and on --timeout (which still uses the laps
-    /// closed so far). A calibration of the kind Borenstein's UMBmark makes, for the wheel
-    /// error the Khepera foraging paper measures (Löffler et al. §3.3).
-    ///
-    /// Examples:
-    ///   station calibrate odometry --port /dev/ttyUSB0
-    ///   station calibrate odometry --port /dev/ttyUSB0 --dry-run --json
-    #[command(verbatim_doc_comment)]
-    Odometry(crate::calibrate_odometry::OdometryArgs),
-}
-
-/// Runs `station calibrate`.
-pub async fn dispatch(cmd: &CalibrateCommand) -> anyhow::Result<ExitCode> {
-    match (&cmd.what, &cmd.light) {
-        (Some(CalibrateWhat::Odometry(a)), _) => crate::calibrate_odometry::run(a).await,
-        (None, Some(light)) => run(light),
-        // clap requires RECORDING and --out without a subcommand.
-        (None, None) => bail!("station calibrate: give RECORDING --out FILE, or `odometry`"),
-    }
-}
-
-/// Arguments of `station calibrate RECORDING --out FILE`.
-#[derive(Debug, Args, Clone)]
-pub struct CalibrateArgs {
-    /// The recording (`station record`) of a Khepera calibrating next to a light.
-    #[arg(value_name = "RECORDING")]
-    pub recording: PathBuf,
-    /// Where to write the trained map: FILE.json for JSON, any other name for the binary form.
-    #[arg(long, value_name = "FILE")]
-    pub out: PathBuf,
-    /// The light's position in the recording's pose frame, metres; default: found from each
-    /// full turn of the robot, as the robot does.
-    #[arg(long, value_name = "X,Y", value_parser = crate::plan::command::parse_point)]
-    pub light: Option<(f64, f64)>,
-    /// Use telemetry in every mode, not only `calibrate-light`.
-    #[arg(long)]
-    pub any_mode: bool,
-    /// Seed of the network's initial neurons and the presentation order.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u32,
-    /// Use a damaged or torn recording up to its last good record.
-    #[arg(long)]
-    pub salvage: bool,
-    /// Overwrite --out if it exists (a device, FIFO or directory is never replaced).
-    #[arg(long)]
-    pub force: bool,
-    /// Print the report as one JSON object.
-    #[arg(long)]
-    pub json: bool,
-}
 
 /// How the labels were made.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -561,98 +487,7 @@ fn decode_json(bytes: &[u8]) -> anyhow::Result<LightSom> {
     Ok(LightSom::from_neurons(weights, outputs))
 }
 
-pub(crate) fn is_json(path: &Path) -> bool {
+pub fn is_json(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("json"))
-}
-
-/// Runs `station calibrate`.
-pub fn run(args: &CalibrateArgs) -> anyhow::Result<ExitCode> {
-    // Before the work, and so that the map never replaces the recording it came from.
-    crate::export::check_out(&args.out, &args.recording, args.force).context("--out")?;
-    let rec = crate::export::open_whole(&args.recording, args.salvage)?;
-    // One robot's light map: a recording of several robots would mix their readings.
-    if rec.link_count() > 1 {
-        bail!(
-            "{}: the recording holds {} robots (links); calibration trains one robot's map: \
-             record the calibrating robot alone",
-            args.recording.display(),
-            rec.link_count()
-        );
-    }
-    let frames = samples(&rec, args.any_mode);
-    if frames.is_empty() {
-        bail!(
-            "{}: no telemetry{}; record while the robot calibrates (station send --port P mode \
-             calibrate-light), or pass --any-mode",
-            args.recording.display(),
-            if args.any_mode {
-                ""
-            } else {
-                " in mode calibrate-light"
-            }
-        );
-    }
-    let (all, reference, turns) =
-        examples(&frames, args.light).with_context(|| args.recording.display().to_string())?;
-    if all.len() < 2 * HOLD_OUT {
-        bail!(
-            "{}: only {} examples with a light within 90 deg of ahead (below T1 = {T1}); need \
-             at least {}",
-            args.recording.display(),
-            all.len(),
-            2 * HOLD_OUT
-        );
-    }
-    let (som, fit, test) = train(&all, args.seed);
-    let (mean_deg, max_deg) = errors(&som, &test);
-    let (train_mean_deg, train_max_deg) = errors(&som, &fit);
-    let mut report = Report {
-        recording: args.recording.display().to_string(),
-        out: args.out.display().to_string(),
-        bytes: 0,
-        reference,
-        frames: frames.len(),
-        turns,
-        examples: all.len(),
-        trained_on: fit.len(),
-        held_out: test.len(),
-        mean_deg,
-        max_deg,
-        train_mean_deg,
-        train_max_deg,
-    };
-    let bytes = if is_json(&args.out) {
-        encode_json(&som, Some(&report))?
-    } else {
-        encode_bin(&som)
-    };
-    report.bytes = bytes.len();
-    crate::output_file::write_atomically(&args.out, &bytes, args.force)?;
-    if args.json {
-        println!("{}", crate::json_text::compact(&report)?);
-    } else {
-        println!(
-            "{} examples ({} reference{}), {} trained, {} held out: held-out error mean {:.2} \
-             deg, max {:.2} deg (paper 1.52 / 6.52); training mean {:.2}, max {:.2}",
-            report.examples,
-            match reference {
-                Reference::Light => "light position",
-                Reference::Turns => "per-turn",
-            },
-            if turns > 0 {
-                format!(", {turns} turns")
-            } else {
-                String::new()
-            },
-            report.trained_on,
-            report.held_out,
-            mean_deg,
-            max_deg,
-            train_mean_deg,
-            train_max_deg
-        );
-        println!("wrote {} ({} bytes)", args.out.display(), report.bytes);
-    }
-    Ok(ExitCode::SUCCESS)
 }

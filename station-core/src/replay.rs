@@ -1,10 +1,11 @@
 //! Replay: a recording drives the app exactly as the live link did, at any speed, with seek.
 //!
-//! Layer: pure state (time passed in, no I/O) plus the replay's edge in submodules: `player`
-//! (position, speed, pause), `screen` (the progress bar), `tui` (the terminal loop), `summary`
-//! (`station replay --json`), `links` (its per-link form for a file of several links),
-//! `command` (the CLI). `ReplayFeed` turns records into the same
-//! `Action`s the TUI gets live: the robot's bytes go through the station's own `LinkMachine`
+//! Layer: pure state (time passed in, no I/O): `player` (position, speed, pause), `summary`
+//! (`station replay --json`), `links` (its per-link form for a file of several links); the
+//! station crate holds the replay's screen, terminal loop and command. `ReplayFeed` turns
+//! records into the same
+//! events the TUI gets live ([`ReplayEvent`], which the app takes as its `Action`s): the
+//! robot's bytes go through the station's own `LinkMachine`
 //! (decoder, sequence accounting, statistics, event translation), so the sensors, map, charts,
 //! link panel and log show what they showed live; the connection state comes from the
 //! recording's link records (what the live station decided); and the station's own recorded
@@ -14,24 +15,28 @@
 //! feeding is deterministic, so seeking back is "start again and feed up to there". Cannot
 //! fail: damaged bytes inside a good record are decoding errors, counted as live.
 
-pub mod command;
 pub mod links;
 pub mod player;
-pub mod screen;
-pub mod session;
 pub mod summary;
-pub mod tui;
 
 use std::collections::HashMap;
 
 use protocol::{Command, Feed, FrameDecoder, Kind, Message};
 
-use crate::action::Action;
 use crate::link::machine::{LinkMachine, MachineConfig};
 use crate::link::stats::StatsCollector;
 use crate::link::{CommandFailure, CommandOutcome, Connection, LinkEvent, LinkStats};
 use crate::record::live::PeerRecord;
 use crate::record::{LinkState, Record, RecordKind};
+
+/// What a replay yields, in order: what the live link would have told the app.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ReplayEvent {
+    /// Time passes: `now_ms` since the recording started.
+    Tick { now_ms: u64 },
+    /// Something the link reported.
+    Link(LinkEvent),
+}
 
 /// A command unanswered this long after its last send has timed out (PROTOCOL.md §7: 5 sends
 /// 200 ms apart, then the station gives up).
@@ -109,7 +114,7 @@ impl ReplayFeed {
 
     /// Feeds every record at or before `t_us` and lets the link's timers run to `t_us`;
     /// appends the app's actions to `out`.
-    pub fn advance_to(&mut self, records: &[Record], t_us: u64, out: &mut Vec<Action>) {
+    pub fn advance_to(&mut self, records: &[Record], t_us: u64, out: &mut Vec<ReplayEvent>) {
         while let Some(rec) = records.get(self.next) {
             if rec.t_us > t_us {
                 break;
@@ -117,19 +122,19 @@ impl ReplayFeed {
             self.next += 1;
             self.now_us = self.now_us.max(rec.t_us);
             let now_ms = self.now_us / 1000;
-            out.push(Action::Tick { now_ms });
+            out.push(ReplayEvent::Tick { now_ms });
             self.feed(rec, now_ms, out);
             self.poll(now_ms, out);
         }
         if t_us > self.now_us {
             self.now_us = t_us;
             let now_ms = t_us / 1000;
-            out.push(Action::Tick { now_ms });
+            out.push(ReplayEvent::Tick { now_ms });
             self.poll(now_ms, out);
         }
     }
 
-    fn feed(&mut self, rec: &Record, now_ms: u64, out: &mut Vec<Action>) {
+    fn feed(&mut self, rec: &Record, now_ms: u64, out: &mut Vec<ReplayEvent>) {
         match rec.kind {
             RecordKind::FromRobot => {
                 // Frame by frame, so the machine's events and the station side's (command
@@ -142,7 +147,7 @@ impl ReplayFeed {
                     self.forward_machine(now_ms, out);
                     if let Some((cmd_seq, result)) = reply {
                         if let Some(ev) = self.station.answer(now_ms, cmd_seq, result) {
-                            out.push(Action::Link(ev));
+                            out.push(ReplayEvent::Link(ev));
                         }
                     }
                     input = rest;
@@ -158,7 +163,7 @@ impl ReplayFeed {
         }
     }
 
-    fn on_link(&mut self, now_ms: u64, state: LinkState, text: &str, out: &mut Vec<Action>) {
+    fn on_link(&mut self, now_ms: u64, state: LinkState, text: &str, out: &mut Vec<ReplayEvent>) {
         let c = match state {
             LinkState::Closed => Connection::Closed {
                 reason: text.to_string(),
@@ -193,7 +198,7 @@ impl ReplayFeed {
         if was_connected && !connected {
             // Everything in flight was lost with the session, as live.
             for ev in self.station.fail_all(CommandFailure::LinkLost) {
-                out.push(Action::Link(ev));
+                out.push(ReplayEvent::Link(ev));
             }
             if state == LinkState::Handshaking {
                 self.station.stats.link_timeouts =
@@ -215,31 +220,31 @@ impl ReplayFeed {
             self.forward_machine(now_ms, out);
         }
         self.connection = c.clone();
-        out.push(Action::Link(LinkEvent::Connection(c)));
+        out.push(ReplayEvent::Link(LinkEvent::Connection(c)));
     }
 
-    fn poll(&mut self, now_ms: u64, out: &mut Vec<Action>) {
+    fn poll(&mut self, now_ms: u64, out: &mut Vec<ReplayEvent>) {
         self.timer_runs += 1;
         self.machine.poll(now_ms);
         // Whatever the machine would send (Hellos, heartbeats) goes nowhere.
         let _ = self.machine.take_output();
         self.forward_machine(now_ms, out);
         for ev in self.station.expire(now_ms) {
-            out.push(Action::Link(ev));
+            out.push(ReplayEvent::Link(ev));
         }
     }
 
     /// The machine's events, with its view of the connection (it never saw the handshake's
     /// session) replaced by the recorded one.
-    fn forward_machine(&mut self, now_ms: u64, out: &mut Vec<Action>) {
+    fn forward_machine(&mut self, now_ms: u64, out: &mut Vec<ReplayEvent>) {
         for ev in self.machine.take_events() {
             match ev {
                 LinkEvent::Connection(_) | LinkEvent::CommandDone { .. } => {}
                 LinkEvent::Stats(s) => {
                     let s = self.merge_stats(now_ms, *s);
-                    out.push(Action::Link(LinkEvent::Stats(Box::new(s))));
+                    out.push(ReplayEvent::Link(LinkEvent::Stats(Box::new(s))));
                 }
-                ev => out.push(Action::Link(ev)),
+                ev => out.push(ReplayEvent::Link(ev)),
             }
         }
     }

@@ -7,7 +7,7 @@
 //! `Command::Download` and answer the robot's `TransferBegin` and chunks with
 //! `protocol::transfer::Receiver`. Jobs run one at a time, in order. Around it:
 //! - [`client`]: an async driver over a `RunningLink` for the headless commands and tests;
-//! - [`command`]: `station upload-map`, `download-map`, `upload-plan`;
+//! - the station crate's `commands::transfer`: `station upload-map`, `download-map`, `upload-plan`;
 //! - [`objects`]: Map and Plan objects from the station's planner (`NavMap`, `PlanResult`),
 //!   the robot's capacity check, ASCII pictures and atomic file writes.
 //!
@@ -17,9 +17,7 @@
 //! [`JobReport`] whose [`JobOutcome`] is `Complete`, `AlreadyHave` or a [`TransferError`]
 //! that says what happened: nothing fails silently.
 
-pub mod calibration;
 pub mod client;
-pub mod command;
 pub mod engine;
 pub mod objects;
 
@@ -53,15 +51,7 @@ impl Direction {
     }
 }
 
-/// The object's name for text and JSON.
-pub fn object_name(o: ObjectKind) -> &'static str {
-    match o {
-        ObjectKind::Map => "map",
-        ObjectKind::Plan => "plan",
-        ObjectKind::Regions => "regions",
-        ObjectKind::LightCalibration => "light calibration",
-    }
-}
+pub use crate::format::object_name;
 
 /// Why a transfer failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -21,7 +21,7 @@ use serde_json::{json, Value};
 
 use super::mcap_msg::Body;
 use super::{Direction, Item};
-use crate::app::qt_state::QtState;
+use crate::qt_state::QtState;
 use crate::record::Record;
 
 /// Robot time between two snapshots, milliseconds.

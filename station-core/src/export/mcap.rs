@@ -143,7 +143,7 @@ const INTEGER_COLUMNS: &[&str] = &[
 ];
 
 /// How the topics of every frame are encoded (`station export --mcap-encoding`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Encoding {
     /// Protocol Buffers: Foxglove's well-known schemas for poses and transforms, the station's
     /// for telemetry and truth; a file of about 40 % of JSON's bytes, written in about half

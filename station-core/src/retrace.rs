@@ -1,7 +1,9 @@
-//! `station retrace`: re-run a recorded run through the firmware's own code (seed 001 §3.1.2).
+//! Retracing: re-running a recorded run through the firmware's own code (ALICE's retracing,
+//! Zimmer's thesis §3.1.2).
 //!
-//! Layer: the binary's edge over `load` (a recording's frames and hardware trace) and `run`
-//! (the firmware's `Robot` over a `Playback` of the trace). With the recorded parameters, the
+//! Layer: pure over a recording's bytes: `load` (its frames and hardware trace), `run` (the
+//! firmware's `Robot` over a `Playback` of the trace), `compare`, and [`report`], which the
+//! `station retrace` command prints. With the recorded parameters, the
 //! retraced robot's frames (telemetry, events, replies: pose, mode, motor output) must equal
 //! the recorded ones byte for byte, and its motor and gripper commands the recorded ones pass
 //! by pass; the first divergence is reported with its cycle and field. "Identical" means every
@@ -17,42 +19,16 @@
 //! firmware would have made of the same readings, not where the robot would have gone.
 //! What can fail: an unreadable or damaged recording, no trace in it, a malformed trace or one
 //! claiming more passes or robot time than a recording of its span can hold (each with the
-//! file's byte offset; `run`, PROTOCOL.md §17), an unknown or refused parameter. Exit codes: 0 retraced (and
-//! identical, without --param), 1 diverged or could not retrace, 2 usage.
-
+//! file's byte offset; `run`, PROTOCOL.md §17), an unknown or refused parameter.
 pub mod compare;
 pub mod load;
 pub mod overlay;
 pub mod run;
 
-use std::path::PathBuf;
-use std::process::ExitCode;
-
-use anyhow::bail;
-use clap::Args;
 use serde::Serialize;
 
 use compare::{compare_frames, events, FrameDivergence};
 use run::{retrace, Run, Stop};
-
-/// Arguments of `station retrace`.
-#[derive(Debug, Args, Clone)]
-pub struct RetraceArgs {
-    /// A recording (`station record`) of a robot streaming its hardware trace (parameter 34
-    /// hal_trace; `robot-emulator --hal-trace` streams it from power-up).
-    #[arg(value_name = "RECORDING")]
-    pub recording: PathBuf,
-    /// Retrace with this parameter changed (a name from `station params`, or an id); repeat
-    /// for several. Without it, the retrace checks that the firmware does what it did.
-    #[arg(long = "param", value_name = "NAME=VALUE")]
-    pub params: Vec<String>,
-    /// Retrace up to this robot time, milliseconds.
-    #[arg(long, value_name = "MS")]
-    pub until_ms: Option<u32>,
-    /// Print the figures as JSON.
-    #[arg(long)]
-    pub json: bool,
-}
 
 /// Parses `NAME=VALUE` against the firmware's parameter table.
 pub fn parse_param(s: &str) -> Result<(u16, f32), String> {
@@ -116,42 +92,42 @@ pub struct Rotation {
 }
 
 #[derive(Clone, Debug, Serialize)]
-struct EventRow {
-    time_ms: u32,
-    code: String,
-    value: i32,
+pub struct EventRow {
+    pub time_ms: u32,
+    pub code: String,
+    pub value: i32,
 }
 
 /// The `--json` report.
 #[derive(Debug, Serialize)]
-struct Report {
-    recording: String,
-    steps: u64,
-    cycles: u64,
-    robot_time_s: f64,
+pub struct Report {
+    pub recording: String,
+    pub steps: u64,
+    pub cycles: u64,
+    pub robot_time_s: f64,
     /// The believed track with the recorded parameters: length and rotation.
-    believed_distance_m: f64,
-    believed_rotation_deg: f64,
-    stopped: String,
-    trace_bytes: usize,
-    trace_complete_from_power_up: bool,
-    trace_dropped_steps: u32,
-    frames_compared: usize,
-    frames_recorded: usize,
-    frames_retraced: usize,
+    pub believed_distance_m: f64,
+    pub believed_rotation_deg: f64,
+    pub stopped: String,
+    pub trace_bytes: usize,
+    pub trace_complete_from_power_up: bool,
+    pub trace_dropped_steps: u32,
+    pub frames_compared: usize,
+    pub frames_recorded: usize,
+    pub frames_retraced: usize,
     /// Recorded frames not compared, and why.
-    frames_not_compared: usize,
-    frames_not_compared_why: Option<String>,
-    identical: bool,
-    first_divergence: Option<serde_json::Value>,
-    misses: u64,
-    params: Vec<serde_json::Value>,
-    track_difference: Option<TrackDiff>,
-    rotation: Option<Rotation>,
-    events_only_recorded: Option<Vec<EventRow>>,
-    events_only_retraced: Option<Vec<EventRow>>,
-    link: LinkUse,
-    limit: &'static str,
+    pub frames_not_compared: usize,
+    pub frames_not_compared_why: Option<String>,
+    pub identical: bool,
+    pub first_divergence: Option<serde_json::Value>,
+    pub misses: u64,
+    pub params: Vec<serde_json::Value>,
+    pub track_difference: Option<TrackDiff>,
+    pub rotation: Option<Rotation>,
+    pub events_only_recorded: Option<Vec<EventRow>>,
+    pub events_only_retraced: Option<Vec<EventRow>>,
+    pub link: LinkUse,
+    pub limit: &'static str,
 }
 
 /// The reference line: 115200 baud, 8N1, 11520 bytes a second.
@@ -160,15 +136,15 @@ const LINE_BYTES_PER_S: f64 = 11_520.0;
 /// What the trace costs on the link, beside telemetry (from the retraced frames, which are the
 /// recorded ones when identical): bytes on the wire (COBS, delimiter and all).
 #[derive(Debug, Default, Serialize)]
-struct LinkUse {
-    cycle_ms: f64,
-    trace_bytes_per_cycle_mean: f64,
-    trace_bytes_per_cycle_max: u64,
-    trace_percent_of_115200: f64,
+pub struct LinkUse {
+    pub cycle_ms: f64,
+    pub trace_bytes_per_cycle_mean: f64,
+    pub trace_bytes_per_cycle_max: u64,
+    pub trace_percent_of_115200: f64,
     /// The cycle with the most trace bytes, as a share of the line during that cycle.
-    trace_worst_cycle_percent_of_115200: f64,
-    telemetry_percent_of_115200: f64,
-    all_frames_percent_of_115200: f64,
+    pub trace_worst_cycle_percent_of_115200: f64,
+    pub telemetry_percent_of_115200: f64,
+    pub all_frames_percent_of_115200: f64,
 }
 
 fn link_use(run: &Run) -> LinkUse {
@@ -209,25 +185,23 @@ fn link_use(run: &Run) -> LinkUse {
 pub const LIMIT: &str = "a changed algorithm would have moved the robot elsewhere; the retraced \
                          sensor data stay the recorded ones";
 
-/// Runs `station retrace`.
-pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
-    let name = args.recording.display().to_string();
-    let params = args
-        .params
-        .iter()
-        .map(|s| parse_param(s))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(anyhow::Error::msg)?;
-    let bytes = crate::record::read_file(&args.recording)?;
-    let loaded = load::load(&bytes).map_err(|e| anyhow::anyhow!("cannot retrace: {name}: {e}"))?;
+/// Retraces a recording's bytes (`name` for messages): with the recorded parameters, and with
+/// `params` changed if any. Err: why it cannot be retraced, naming the file.
+pub fn report(
+    name: &str,
+    bytes: &[u8],
+    params: &[(u16, f32)],
+    until_ms: Option<u32>,
+) -> Result<Report, String> {
+    let loaded = load::load(bytes).map_err(|e| format!("cannot retrace: {name}: {e}"))?;
     if loaded.trace.is_empty() {
-        bail!(
+        return Err(format!(
             "cannot retrace: {name}: no hardware trace in it (record a robot with parameter 34 \
              hal_trace on, e.g. robot-emulator --hal-trace)"
-        );
+        ));
     }
-    let base = retrace(&loaded, &[], args.until_ms)
-        .map_err(|e| anyhow::anyhow!("cannot retrace: {name}: {e}"))?;
+    let base =
+        retrace(&loaded, &[], until_ms).map_err(|e| format!("cannot retrace: {name}: {e}"))?;
     let frame_div = compare_frames(&loaded.frames, &base.frames);
     let compared = loaded.frames.len().min(base.frames.len());
     // Bit for bit means every frame the trace covers: a retrace that stopped before the
@@ -245,7 +219,7 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
     });
 
     let mut report = Report {
-        recording: name.clone(),
+        recording: name.to_string(),
         steps: base.steps,
         cycles: base.cycles,
         robot_time_s: f64::from(base.last_ms) / 1000.0,
@@ -276,8 +250,8 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
         limit: LIMIT,
     };
     if !params.is_empty() {
-        let changed = retrace(&loaded, &params, args.until_ms)
-            .map_err(|e| anyhow::anyhow!("cannot retrace: {name}: {e}"))?;
+        let changed = retrace(&loaded, params, until_ms)
+            .map_err(|e| format!("cannot retrace: {name}: {e}"))?;
         report.params = params
             .iter()
             .map(|&(id, v)| {
@@ -305,17 +279,7 @@ pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
         report.events_only_recorded = Some(only_a.iter().map(row).collect());
         report.events_only_retraced = Some(only_b.iter().map(row).collect());
     }
-
-    if args.json {
-        println!("{}", crate::json_text::pretty(&report)?);
-    } else {
-        print_text(&report);
-    }
-    Ok(if params.is_empty() && !identical {
-        ExitCode::FAILURE
-    } else {
-        ExitCode::SUCCESS
-    })
+    Ok(report)
 }
 
 fn stop_text(s: &Stop) -> String {
@@ -451,100 +415,4 @@ fn truth_rotation_deg(truth: &[(u32, i32)], run: &Run) -> Option<f64> {
         Some(a.1 + f * (b.1 - a.1))
     };
     Some((at(f64::from(t1))? - at(f64::from(t0))?).to_degrees())
-}
-
-fn print_text(r: &Report) {
-    println!(
-        "{}: retraced {} passes, {} control cycles, {:.1} s of robot time ({})",
-        r.recording, r.steps, r.cycles, r.robot_time_s, r.stopped
-    );
-    if !r.trace_complete_from_power_up {
-        println!(
-            "the trace began after power-up: the robot's state before it is not known, so the \
-             retrace cannot match (start tracing at power-up: robot-emulator --hal-trace)"
-        );
-    }
-    if r.trace_dropped_steps > 0 {
-        println!(
-            "the robot dropped {} passes of its trace (its link could not keep up)",
-            r.trace_dropped_steps
-        );
-    }
-    if r.identical {
-        println!(
-            "identical: every recorded frame the trace covers ({}) compared byte for byte, every \
-             motor command the same",
-            r.frames_compared
-        );
-        if let Some(why) = &r.frames_not_compared_why {
-            println!(
-                "not compared: the last {} of {} recorded frames, {why}",
-                r.frames_not_compared, r.frames_recorded
-            );
-        }
-    } else if let Some(d) = &r.first_divergence {
-        println!(
-            "first divergence: {}",
-            crate::json_text::compact(d).unwrap_or_default()
-        );
-    } else {
-        println!(
-            "not retraced to the end ({}): the {} frames before it are identical, the other {} \
-             not compared",
-            r.stopped, r.frames_compared, r.frames_not_compared
-        );
-    }
-    if let Some(t) = &r.track_difference {
-        println!(
-            "with {}: the believed track differs by {:.3} m at most, {:.3} m at the end; heading \
-             {:+.1} deg",
-            r.params
-                .iter()
-                .map(|p| format!("{}={}", p["name"].as_str().unwrap_or("?"), p["value"]))
-                .collect::<Vec<_>>()
-                .join(", "),
-            t.max_m,
-            t.final_m,
-            t.final_heading_deg
-        );
-    }
-    if let Some(rot) = &r.rotation {
-        match rot.truth_deg {
-            Some(t) => println!(
-                "rotation: {:.1} deg believed with the recorded parameters, {:.1} deg retraced, \
-                 {t:.1} deg true",
-                rot.recorded_deg, rot.retraced_deg
-            ),
-            None => println!(
-                "rotation: {:.1} deg believed with the recorded parameters, {:.1} deg retraced",
-                rot.recorded_deg, rot.retraced_deg
-            ),
-        }
-    }
-    if let (Some(a), Some(b)) = (&r.events_only_recorded, &r.events_only_retraced) {
-        println!(
-            "events only in the recorded run: {}; only in the retrace: {}",
-            a.len(),
-            b.len()
-        );
-        for e in a.iter().take(20) {
-            println!("  - {:>9} ms {} {}", e.time_ms, e.code, e.value);
-        }
-        for e in b.iter().take(20) {
-            println!("  + {:>9} ms {} {}", e.time_ms, e.code, e.value);
-        }
-    }
-    let l = &r.link;
-    println!(
-        "link: the trace takes {:.0} bytes a {:.0} ms cycle on average, {} at most ({:.1} % of a \
-         115200-baud line, {:.1} % in its worst cycle); telemetry {:.1} %, all frames {:.1} %",
-        l.trace_bytes_per_cycle_mean,
-        l.cycle_ms,
-        l.trace_bytes_per_cycle_max,
-        l.trace_percent_of_115200,
-        l.trace_worst_cycle_percent_of_115200,
-        l.telemetry_percent_of_115200,
-        l.all_frames_percent_of_115200
-    );
-    println!("limit: {}", r.limit);
 }

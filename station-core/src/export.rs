@@ -1,5 +1,5 @@
-//! `station export`: a recording to MCAP (for Foxglove) and to CSV (for a spreadsheet or
-//! pandas), written atomically.
+//! A recording to MCAP (for Foxglove) and to CSV (for a spreadsheet or pandas), written
+//! atomically; `station export` runs it.
 //!
 //! Layer: a walk over a parsed `Recording` that decodes both directions with the protocol's
 //! `FrameDecoder` (one per direction, the robot's reset when a port closed, as live) and hands
@@ -21,45 +21,12 @@ pub mod robots;
 pub mod scene;
 
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 
 use anyhow::bail;
-use clap::Args;
 use protocol::{Feed, FrameDecoder, FrameError, Message};
 
-use crate::output_file::{OutputError, OutputFile};
+use crate::output_file::OutputError;
 use crate::record::{LinkState, RecordKind, Recording};
-
-/// Arguments of `station export`.
-#[derive(Debug, Args, Clone)]
-#[command(group(clap::ArgGroup::new("output").required(true).multiple(true).args(["mcap", "csv"])))]
-pub struct ExportArgs {
-    /// The recording to export.
-    #[arg(value_name = "FILE")]
-    pub file: PathBuf,
-    /// Write an MCAP file (channels: /telemetry, /pose, /truth, /truth_pose, /events,
-    /// /log, /link, /commands, /replies, and for the 3D panel /tf, /map, /regions, /plan,
-    /// /arena; /qt_model for an ALICE), for Foxglove; a recording of several robots puts each
-    /// under its own prefix (/robot1/telemetry, ...).
-    #[arg(long, value_name = "OUT")]
-    pub mcap: Option<PathBuf>,
-    /// How the MCAP file's per-frame topics (/telemetry, /pose, /truth, /truth_pose, /tf) are
-    /// encoded: protobuf (Foxglove's schemas for poses and transforms; the default) or json
-    /// (for tools that parse JSON text). Other topics are always JSON.
-    #[arg(long, value_enum, value_name = "ENCODING", default_value_t = mcap::Encoding::Protobuf, requires = "mcap")]
-    pub mcap_encoding: mcap::Encoding,
-    /// Write the telemetry as CSV, one row per frame (columns in docs/recordings.md); a
-    /// recording of several robots writes one file each (OUT with `.robot<ID>` or `.link<K>`
-    /// before its extension).
-    #[arg(long, value_name = "OUT")]
-    pub csv: Option<PathBuf>,
-    /// Export a damaged or torn recording up to its last good record instead of refusing it.
-    #[arg(long)]
-    pub salvage: bool,
-    /// Overwrite output files that exist (a device, FIFO or directory is never replaced).
-    #[arg(long)]
-    pub force: bool,
-}
 
 /// Why an export failed.
 #[derive(Debug, thiserror::Error)]
@@ -152,71 +119,9 @@ pub fn walk(rec: &Recording, mut f: impl FnMut(Item<'_>)) {
     }
 }
 
-/// Runs `station export`.
-pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
-    let outs: Vec<&Path> = [args.mcap.as_deref(), args.csv.as_deref()]
-        .into_iter()
-        .flatten()
-        .collect();
-    for out in &outs {
-        check_out(out, &args.file, args.force)?;
-    }
-    if outs.len() == 2 && args.mcap == args.csv {
-        bail!("--mcap and --csv name the same file");
-    }
-    let rec = open_whole(&args.file, args.salvage)?;
-    // One robot per link: a file of several gets per-robot topics and CSV files (`robots`).
-    let file_meta = rec.meta.clone();
-    let links = if rec.link_count() > 1 {
-        rec.links()
-    } else {
-        vec![rec]
-    };
-    let labels = robots::labels(&links);
-    let csvs: Vec<PathBuf> = match &args.csv {
-        Some(out) => labels.iter().map(|l| robots::csv_path(out, l)).collect(),
-        None => Vec::new(),
-    };
-    if links.len() > 1 {
-        for out in &csvs {
-            check_out(out, &args.file, args.force)?;
-        }
-    }
-    // Every output is complete before any takes its final name; an output not committed is
-    // removed when dropped.
-    let mut done = Vec::new();
-    let mut notes = Vec::new();
-    if let Some(out) = &args.mcap {
-        let mut f = OutputFile::create(out, args.force)?;
-        let robots: Vec<(&str, &Recording)> =
-            labels.iter().map(String::as_str).zip(&links).collect();
-        let written = mcap::write_robots(&file_meta, &robots, args.mcap_encoding, f.writer(), out)?;
-        done.push(f);
-        notes.push(format!(
-            "wrote {} ({} messages)",
-            out.display(),
-            written.messages
-        ));
-        notes.extend(written.notes);
-    }
-    for (out, rec) in csvs.iter().zip(&links) {
-        let mut f = OutputFile::create(out, args.force)?;
-        let n = csv::write(rec, f.writer()).map_err(|e| io(out, e))?;
-        done.push(f);
-        notes.push(format!("wrote {} ({n} telemetry rows)", out.display()));
-    }
-    for f in done {
-        f.commit()?;
-    }
-    for n in notes {
-        eprintln!("{n}");
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
 /// Opens a recording for a command that writes something from it: a damaged one (corrupted
 /// or torn) is refused unless `salvage`, which keeps the records before the damage.
-pub(crate) fn open_whole(path: &Path, salvage: bool) -> anyhow::Result<Recording> {
+pub fn open_whole(path: &Path, salvage: bool) -> anyhow::Result<Recording> {
     let rec = Recording::open(path)?;
     if let Some(w) = rec.meta.schema_warning() {
         eprintln!("station: {}: {w}", path.display());
@@ -239,7 +144,7 @@ pub(crate) fn open_whole(path: &Path, salvage: bool) -> anyhow::Result<Recording
 
 /// Refuses an output that `output_file::check` refuses (a special file, a directory, a
 /// missing directory, an existing file without `force`) or that is the input.
-pub(crate) fn check_out(out: &Path, input: &Path, force: bool) -> anyhow::Result<()> {
+pub fn check_out(out: &Path, input: &Path, force: bool) -> anyhow::Result<()> {
     let same = match (out.canonicalize(), input.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
         _ => out == input,
@@ -251,7 +156,8 @@ pub(crate) fn check_out(out: &Path, input: &Path, force: bool) -> anyhow::Result
     Ok(())
 }
 
-fn io(path: &Path, source: std::io::Error) -> ExportError {
+/// An I/O error writing `path`.
+pub fn io(path: &Path, source: std::io::Error) -> ExportError {
     ExportError::Io {
         path: path.to_path_buf(),
         source,

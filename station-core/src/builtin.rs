@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use emulator::link::{spawn, EmulatorOptions, RunningEmulator};
 
-use crate::app::arena::ArenaOverlay;
+use crate::arena::ArenaOverlay;
 
 /// Why the built-in emulator did not start.
 #[derive(Debug, thiserror::Error)]

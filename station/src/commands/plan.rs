@@ -10,10 +10,10 @@ use std::process::ExitCode;
 use anyhow::Context as _;
 use clap::Args;
 
-use super::map::{GoalKind, MapOptions, NavMap};
-use super::report::{plan_json, plan_text, segment_json, segment_text};
-use super::solve::Planner;
-use super::NavError;
+use station_core::plan::map::{GoalKind, MapOptions, NavMap};
+use station_core::plan::report::{plan_json, plan_text, segment_json, segment_text};
+use station_core::plan::solve::Planner;
+use station_core::plan::NavError;
 
 /// The map and how to grid it.
 #[derive(Debug, Args, Clone, PartialEq)]
@@ -81,7 +81,7 @@ impl MapArgs {
 }
 
 fn parse_cell(s: &str) -> Result<f64, String> {
-    use super::map::{MAX_CELL_M, MIN_CELL_M};
+    use station_core::plan::map::{MAX_CELL_M, MIN_CELL_M};
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && (MIN_CELL_M..=MAX_CELL_M).contains(&v) => Ok(v),
         Ok(v) => Err(format!(
@@ -92,7 +92,7 @@ fn parse_cell(s: &str) -> Result<f64, String> {
 }
 
 fn parse_radius(s: &str) -> Result<f64, String> {
-    use super::map::MAX_RADIUS_M;
+    use station_core::plan::map::MAX_RADIUS_M;
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && (0.0..=MAX_RADIUS_M).contains(&v) => Ok(v),
         Ok(v) => Err(format!(
@@ -137,7 +137,7 @@ pub fn plan(args: &PlanArgs) -> anyhow::Result<ExitCode> {
         .plan(args.from, args.to, args.smooth)
         .map_err(|e| failure(&args.map.map, &e))?;
     let object = match &args.out_object {
-        Some(path) => Some(crate::transfer::command::write_plan_object(
+        Some(path) => Some(crate::commands::transfer::write_plan_object(
             &planner, &r, path, args.force,
         )?),
         None => None,

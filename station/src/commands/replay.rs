@@ -12,11 +12,11 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use clap::Args;
 
-use super::session::ReplaySession;
-use super::summary::{summarize, text};
 use crate::app::arena::ArenaOverlay;
 use crate::app::AppOptions;
 use crate::record::Recording;
+use crate::replay::session::ReplaySession;
+use station_core::replay::summary::{summarize, text};
 
 /// Arguments of `station replay`.
 #[derive(Debug, Args, Clone)]
@@ -65,7 +65,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         eprintln!("station: {file}: {w}");
     }
     if (args.json || args.summary) && rec.link_count() > 1 {
-        let s = super::links::summarize_links(&rec);
+        let s = station_core::replay::links::summarize_links(&rec);
         if args.json {
             println!(
                 "{}",
@@ -74,7 +74,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         } else {
             print!(
                 "{}",
-                crate::terminal_text::printable_text(&super::links::text(&file, &s))
+                crate::terminal_text::printable_text(&station_core::replay::links::text(&file, &s))
             );
         }
         for d in &s.duplicate_robot_ids {
@@ -139,7 +139,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         args.speed,
     )
     .with_retrace(retrace);
-    super::tui::run(session).await?;
+    crate::replay::tui::run(session).await?;
     Ok(ExitCode::SUCCESS)
 }
 

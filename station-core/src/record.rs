@@ -4,8 +4,8 @@
 //! Layer: a file format (pure encode/parse over byte slices, like the wire code in
 //! `protocol::frame`) plus the I/O around it in submodules: `writer` (the `.partial` file and
 //! its rename), `live` (the link's tap and connection events to records, and the TUI's `R`
-//! key), `command` (`station record`), `synth` (recordings built from messages, for tests and
-//! benchmarks). Invariants: times in a file never decrease; the final name only ever
+//! key), `synth` (recordings built from messages, for tests and benchmarks); the station
+//! crate's `commands::record` is `station record`. Invariants: times in a file never decrease; the final name only ever
 //! holds a file that was finished cleanly (it was written as `FILE.partial` and renamed);
 //! every record carries a CRC, so a torn or damaged tail is found at its exact byte offset.
 //! What can fail: parsing a file that is not a recording, of another version, truncated or
@@ -55,7 +55,6 @@
 //! and renamed to `FILE` when it ends cleanly. After a crash `FILE.partial` holds everything up
 //! to the last flush; a reader accepts it up to the last good record and reports the rest.
 
-pub mod command;
 pub mod live;
 pub mod synth;
 pub mod writer;

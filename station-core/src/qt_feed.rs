@@ -8,7 +8,7 @@
 use protocol::{AliceSituation, ALICE_SENSORS};
 use world_model::{Pose, Sample};
 
-use super::qt_state::QtState;
+use crate::qt_state::QtState;
 
 /// The model's inputs decoded from one situation: light 0..1, touches, pose in metres.
 pub fn sample_parts(s: &AliceSituation) -> ([f64; ALICE_SENSORS], [bool; ALICE_SENSORS], Pose) {

@@ -15,12 +15,12 @@ use clap::Args;
 use protocol::{caps, NackReason, ObjectKind};
 use serde_json::{json, Value};
 
-use super::command::{connect, download_object, fail, finish, progress_printer};
-use super::engine::JobSpec;
-use super::{JobOutcome, TransferError};
+use super::transfer::{connect, download_object, fail, finish, progress_printer};
 use crate::calibrate;
 use crate::cli::{parse_seconds, RequiredPort};
 use crate::output_file::write_atomically;
+use station_core::transfer::engine::JobSpec;
+use station_core::transfer::{JobOutcome, TransferError};
 
 /// `station upload-calibration`.
 #[derive(Debug, Args, Clone)]
