@@ -13,12 +13,16 @@ pub use station_core::format::{mode_from_index, mode_name, mode_name_i32, MODES}
 pub mod fleet;
 pub mod forage;
 pub mod history;
+pub mod layout;
 pub mod localization;
 pub mod log;
 pub mod params;
 pub mod plan_target;
 pub use station_core::qt_state;
 pub mod transfers;
+pub mod view;
+
+pub use view::View;
 
 use std::collections::HashMap;
 
@@ -68,43 +72,6 @@ mod groups {
     /// `R` (and any burst of reads): one summary line.
     pub const PARAM_READ: Group = Group::new("param read").summary("parameters read");
     pub const SUPERSEDED: Group = Group::new("superseded");
-}
-
-/// The main area's content.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum View {
-    /// Everything that fits, arranged by the terminal's size.
-    Dashboard,
-    Sensors,
-    Charts,
-    Map,
-    Link,
-    Log,
-    Params,
-}
-
-impl View {
-    pub const ALL: [View; 7] = [
-        View::Dashboard,
-        View::Sensors,
-        View::Charts,
-        View::Map,
-        View::Link,
-        View::Log,
-        View::Params,
-    ];
-
-    pub fn title(&self) -> &'static str {
-        match self {
-            View::Dashboard => "Dashboard",
-            View::Sensors => "Sensors",
-            View::Charts => "Charts",
-            View::Map => "Map",
-            View::Link => "Link",
-            View::Log => "Log",
-            View::Params => "Parameters",
-        }
-    }
 }
 
 /// Keyboard teleop state.
@@ -1104,8 +1071,8 @@ impl App {
     fn log_rows(&self) -> usize {
         let screen = ratatui::layout::Rect::new(0, 0, self.size.0, self.size.1);
         let rows = |app: &App| {
-            crate::ui::areas(screen, app)
-                .find(crate::ui::Panel::Log)
+            layout::areas(screen, app)
+                .find(layout::Panel::Log)
                 .map(|r| usize::from(r.height.saturating_sub(2)))
         };
         rows(self).unwrap_or_else(|| usize::from(self.size.1.saturating_sub(4)))

@@ -13,6 +13,20 @@ use protocol::{Mode, Progress};
 use super::log::{Level, Source};
 use super::App;
 
+/// What the station calls a map it received from the robot.
+pub const ROBOT_MAP_NAME: &str = "robot map";
+
+/// Where the robot's installed plan goes, as the station knows it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PlanFor {
+    /// Made by the robot at `O`, for this target.
+    Target(PlanTarget),
+    /// Uploaded from this file.
+    Uploaded(String),
+    /// Installed by something else (another station on the link): not shown here.
+    Elsewhere,
+}
+
 /// Where a plan goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PlanTarget {
@@ -125,7 +139,7 @@ impl App {
             .map
             .plan
             .planner()
-            .filter(|p| p.map().source == super::transfers::ROBOT_MAP_NAME);
+            .filter(|p| p.map().source == ROBOT_MAP_NAME);
         match robot_map {
             Some(p) => format!(" (the robot's map has {} squares)", p.squares().len()),
             None => String::new(),
@@ -167,7 +181,7 @@ impl App {
             .or_else(|| self.telemetry.map(|t| t.mode));
         let to_goal = matches!(
             &self.transfers.plan_for,
-            Some(super::transfers::PlanFor::Target(PlanTarget::MapGoal(_)))
+            Some(PlanFor::Target(PlanTarget::MapGoal(_)))
         );
         match mode {
             Some(Mode::Explore) => format!("goal reached{at}: exploration found the goal area"),

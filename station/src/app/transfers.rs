@@ -31,6 +31,7 @@ use protocol::{Command, EventCode, Mode, ObjectKind, PointMm};
 
 use super::log::{Level, Source};
 use super::plan_target::PlanTarget;
+pub use super::plan_target::{PlanFor, ROBOT_MAP_NAME};
 use super::App;
 use crate::link::{CommandOutcome, LinkEvent, SendWhen, TransferOut};
 use crate::plan::{End, MapOptions};
@@ -44,44 +45,8 @@ use crate::transfer::{
 pub const LIVE_MAP_PERIOD_MS: u64 = 1000;
 /// Longest path the prompt takes.
 const PROMPT_MAX: usize = 1024;
-/// What the station calls a map it received from the robot.
-pub const ROBOT_MAP_NAME: &str = "robot map";
 
-/// Where the robot's installed plan goes, as the station knows it.
-#[derive(Clone, Debug, PartialEq)]
-pub enum PlanFor {
-    /// Made by the robot at `O`, for this target.
-    Target(PlanTarget),
-    /// Uploaded from this file.
-    Uploaded(String),
-    /// Installed by something else (another station on the link): not shown here.
-    Elsewhere,
-}
-
-/// A transfer key or prompt edit.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum TransferAction {
-    /// `u`: open the upload prompt.
-    OpenPrompt,
-    PromptInput(char),
-    PromptBackspace,
-    /// Ctrl-U: clear the prompt (as in a shell).
-    PromptClear,
-    /// End or an arrow: keep the suggestion and edit it.
-    PromptKeep,
-    /// Enter: upload the file named in the prompt.
-    PromptCommit,
-    /// Esc: close the prompt.
-    PromptCancel,
-    /// `M`: download the robot's map and show it.
-    DownloadMap,
-    /// `O`: segment and plan on the robot, then download and draw the plan.
-    PlanOnRobot,
-    /// `X`: execute the robot's installed plan.
-    ExecutePlan,
-    /// `E`: start exploring.
-    StartExploration,
-}
+pub use crate::action::TransferAction;
 
 /// Why a job was started.
 #[derive(Clone, Debug, PartialEq, Eq)]

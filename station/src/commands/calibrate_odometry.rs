@@ -29,7 +29,7 @@ use robot_firmware::params::id as param;
 use serde::Serialize;
 use tokio::time::Instant;
 
-use crate::cli::RequiredPort;
+use crate::commands::args::RequiredPort;
 use crate::link::api::refusal_text;
 use crate::link::{CommandOutcome, Connection, LinkEvent, RunningLink};
 
@@ -43,7 +43,7 @@ pub struct OdometryArgs {
     pub port: RequiredPort,
     /// Seconds the laps may take; then the robot is stopped and the laps closed so far are
     /// used (a lap of a 1.2 x 1 m box is about 100 s at the edge follower's speed).
-    #[arg(long, default_value_t = 600.0, value_parser = crate::cli::parse_seconds,
+    #[arg(long, default_value_t = 600.0, value_parser = crate::commands::args::parse_seconds,
           allow_negative_numbers = true)]
     pub timeout: f64,
     /// Measure and print, but set no parameter.
@@ -139,7 +139,7 @@ enum End {
 
 /// Runs `station calibrate odometry`.
 pub async fn run(args: &OdometryArgs) -> anyhow::Result<ExitCode> {
-    let (mut link, peer) = crate::headless::connect(&args.port, HANDSHAKE_S).await?;
+    let (mut link, peer) = crate::commands::connect::connect(&args.port, HANDSHAKE_S).await?;
     let result = calibrate(&mut link, &peer, args).await;
     link.handle.shutdown();
     let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;

@@ -17,7 +17,7 @@ use serde_json::{json, Value};
 
 use super::transfer::{connect, download_object, fail, finish, progress_printer};
 use crate::calibrate;
-use crate::cli::{parse_seconds, RequiredPort};
+use crate::commands::args::{parse_seconds, RequiredPort};
 use crate::output_file::write_atomically;
 use station_core::transfer::engine::JobSpec;
 use station_core::transfer::{JobOutcome, TransferError};

@@ -18,7 +18,7 @@ use robot_firmware::params::{ParamInfo, PARAMS};
 use serde_json::json;
 
 use crate::app::params::{format_param, format_value, range_text};
-use crate::cli::RequiredPort;
+use crate::commands::args::RequiredPort;
 use crate::link::api::refusal_text;
 use crate::link::{CommandOutcome, PeerInfo, RunningLink};
 use crate::terminal_text::printable_text;
@@ -32,7 +32,7 @@ pub struct ParamsArgs {
     #[arg(long, global = true)]
     pub json: bool,
     /// Seconds to wait for the handshake.
-    #[arg(long, default_value_t = 5.0, value_parser = crate::cli::parse_seconds, global = true,
+    #[arg(long, default_value_t = 5.0, value_parser = crate::commands::args::parse_seconds, global = true,
           allow_negative_numbers = true)]
     pub timeout: f64,
     #[command(subcommand)]
@@ -43,15 +43,15 @@ pub struct ParamsArgs {
 pub enum ParamsOp {
     /// Print one parameter's value in force.
     Get {
-        #[arg(value_parser = crate::cli::parse_param)]
+        #[arg(value_parser = crate::commands::args::parse_param)]
         name: u16,
     },
     /// Set a parameter; prints the value the robot put in force, or its reason for refusing.
     #[command(allow_negative_numbers = true)]
     Set {
-        #[arg(value_parser = crate::cli::parse_param)]
+        #[arg(value_parser = crate::commands::args::parse_param)]
         name: u16,
-        #[arg(value_parser = crate::cli::parse_value)]
+        #[arg(value_parser = crate::commands::args::parse_value)]
         value: f32,
     },
     /// Every parameter: value, unit, range and what it does.
@@ -80,7 +80,7 @@ pub async fn run(args: &ParamsArgs) -> anyhow::Result<ExitCode> {
         }
         _ => None,
     };
-    let (mut link, peer) = crate::headless::connect(&args.port, args.timeout).await?;
+    let (mut link, peer) = crate::commands::connect::connect(&args.port, args.timeout).await?;
     let result = match &args.op {
         ParamsOp::Get { name } => get_one(&mut link, *name, args.json).await,
         ParamsOp::Set { name, value } => set_one(&mut link, *name, *value, args.json).await,

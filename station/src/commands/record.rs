@@ -19,7 +19,7 @@ use tokio::sync::mpsc;
 use tokio::time::Instant;
 
 use crate::builtin::start_builtin_emulator;
-use crate::cli::{parse_baud, parse_seconds};
+use crate::commands::args::{parse_baud, parse_seconds};
 use crate::link::robot_ids::duplicates;
 use crate::link::serial::{open_exclusive, SerialConnector, DEFAULT_BAUD};
 use crate::link::{spawn_link, Connection, LinkEvent, LinkOptions, TapRecord};
@@ -84,10 +84,10 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
             args.port.len()
         );
     }
-    crate::cli::distinct_ports(args.port.iter().map(PathBuf::as_path))
+    crate::commands::args::distinct_ports(args.port.iter().map(PathBuf::as_path))
         .map_err(anyhow::Error::msg)?;
-    let raw_key =
-        crate::cli::load_key_bytes(args.key_file.as_deref()).map_err(anyhow::Error::msg)?;
+    let raw_key = crate::commands::args::load_key_bytes(args.key_file.as_deref())
+        .map_err(anyhow::Error::msg)?;
     let key = raw_key.map(|k| protocol::LinkKey::new(&k));
     let mut builtin = None;
     // (path opened, label recorded) per link.
@@ -290,7 +290,7 @@ fn parse_send(s: &str) -> anyhow::Result<Command> {
     #[command(no_binary_name = true)]
     struct One {
         #[command(subcommand)]
-        cmd: crate::cli::SendCmd,
+        cmd: crate::commands::send::SendCmd,
     }
     let one = <One as clap::Parser>::try_parse_from(s.split_whitespace()).map_err(|e| {
         anyhow::anyhow!(

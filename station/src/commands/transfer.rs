@@ -18,7 +18,7 @@ use clap::Args;
 use protocol::{caps, EventCode, ObjectKind};
 use serde_json::{json, Value};
 
-use crate::cli::{parse_seconds, RequiredPort};
+use crate::commands::args::{parse_seconds, RequiredPort};
 use crate::commands::plan::MapArgs;
 use crate::link::{LinkEvent, PeerInfo};
 use crate::output_file::{check as check_output, write_atomically};
@@ -153,7 +153,7 @@ pub(super) async fn connect(
     port: &RequiredPort,
     timeout: f64,
 ) -> Result<(TransferClient, PeerInfo), String> {
-    let (link, peer) = crate::headless::connect(port, timeout)
+    let (link, peer) = crate::commands::connect::connect(port, timeout)
         .await
         .map_err(|e| format!("{e:#}"))?;
     let client = TransferClient::new(link, true);
