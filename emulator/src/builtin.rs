@@ -114,7 +114,7 @@ pub fn forage() -> Result<Arena, ArenaError> {
 
 /// 5 cm cells, the border outside the 1.0 x 0.8 m floor; `S` is the home base's centre.
 const FORAGE_GRID: &str = "\
-# name Foraging (seed 000)
+# name Foraging (Löffler et al.)
 # cell 0.05
 # origin -0.05 -0.05
 # heading 45

@@ -31,7 +31,7 @@ use crate::sim::SimConfig;
         station --port /tmp/robot                        # drive it\n  \
         robot-emulator --arena maze.txt --profile khepera --speed 10\n  \
         robot-emulator run --arena lab.xml --profile micro-rato --task go-to --seed 3 --json\n  \
-        robot-emulator --profile alice   # seed 001's ALICE in builtin:alice, kind-16 situations"
+        robot-emulator --profile alice   # ALICE (Zimmer's thesis) in builtin:alice"
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -49,8 +49,10 @@ pub enum Command {
     /// Arena files: `arena generate` writes a generated arena.
     Arena(ArenaArgs),
     /// Run one task over many arenas and seeds in parallel and report success rate, times,
-    /// collisions, final error and failures by cause (issue 14's generalisation benchmark).
+    /// collisions, final error and failures by cause (the generalisation benchmark: does a
+    /// task succeed in arenas nobody tuned it for?).
     Bench(BenchArgs),
+    Hil(crate::hil::args::HilArgs),
 }
 
 /// `arena` subcommands.
@@ -72,8 +74,8 @@ pub enum ArenaCommand {
 /// `arena generate` options.
 #[derive(Debug, Clone, Args)]
 pub struct GenerateArgs {
-    /// Micro-Rato labyrinth (as Dom Dinis met), micromouse maze, or Khepera box (as in the
-    /// Khepera foraging paper).
+    /// Micro-Rato labyrinth (as Dom Dinis met, Seabra Lopes, Lau, Reis §2), micromouse maze,
+    /// or Khepera box (as in the Khepera foraging paper's Fig. 17, Löffler et al.).
     #[arg(long, value_enum)]
     pub kind: crate::arena_gen::Kind,
     /// The arena's seed.
@@ -129,9 +131,9 @@ pub struct BenchArgs {
     /// against alone, and the collisions between robots.
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub robots: usize,
-    /// Go-to only: before each run the same robot calibrates its odometry in the arena (two
-    /// wall-following laps, `station calibrate odometry`'s manoeuvre) and starts the go-to
-    /// with the measured wheel distance and ratio set.
+    /// Go-to only: before each run the same robot calibrates its odometry in the arena
+    /// (holding the wall both ways, `station calibrate odometry`'s manoeuvre) and starts the
+    /// go-to with the measured wheel distance and ratio set.
     #[arg(long)]
     pub calibrate_odometry: bool,
     /// The search tasks: which Dom Dinis search runs (parameter `search_mode`) [default: the
@@ -217,7 +219,7 @@ impl BenchArgs {
         }
         if self.robots > 1 && self.task != BenchTask::ReachBeacon {
             return Err(format!(
-                "--robots {}: the contest is seed 004's reach-beacon; use --task reach-beacon",
+                "--robots {}: the contest is the Micro-Rato reach-beacon task (the Dom Dinis paper §2); use --task reach-beacon",
                 self.robots
             ));
         }
@@ -258,8 +260,8 @@ impl BenchArgs {
 pub struct WorldArgs {
     /// Arena file: CiberRato lab .xml, micromouse maze .txt, ROS map .yaml, or an ASCII grid;
     /// or a built-in one: `builtin:micro-rato-99`, `builtin:forage`, `builtin:floor-grid`,
-    /// `builtin:alice` (the default for `--profile alice`), `builtin:alice-navigation` (seed 001
-    /// §5.3's corridors, as the thesis describes them).
+    /// `builtin:alice` (the default for `--profile alice`), `builtin:alice-navigation` (the
+    /// corridors of Zimmer's ALICE thesis §5.3, as it describes them).
     #[arg(long, default_value = crate::builtin::MICRO_RATO_99, value_name = "FILE")]
     pub arena: String,
     /// CiberRato grid file with start poses (default: found beside a `...Lab.xml`).
@@ -458,8 +460,8 @@ fn parse_robot(s: &str) -> Result<RobotArg, String> {
 pub enum ProfileArg {
     Khepera,
     MicroRato,
-    /// Seed 001's ALICE: 24 whiskers, 24 photoresistors, situations (kind 16); in
-    /// `builtin:alice` unless --arena names another.
+    /// ALICE, the robot of Zimmer's thesis: 24 whiskers, 24 photoresistors, situations
+    /// (kind 16); in `builtin:alice` unless --arena names another.
     Alice,
 }
 
@@ -607,34 +609,37 @@ pub struct RunArgs {
 pub enum TaskArg {
     /// Drive to --goal (default: the arena's target).
     GoTo,
-    /// Reactive goal search with mapping, start to goal area (the Dom Dinis search).
+    /// The Dom Dinis reactive goal search (Seabra Lopes, Lau, Reis §5), start to goal area,
+    /// mapping on the way.
     ReachBeacon,
-    /// Run 1 explores; the robot plans on its own map; run 2 executes the plan (Dom Dinis).
+    /// Dom Dinis (Seabra Lopes, Lau, Reis §5-7): run 1 explores; the robot plans on its own
+    /// map; run 2 executes the plan.
     ExploreThenPlan,
     /// Survey a floor grid for --distance metres; report line-corrected, plain-odometry and
-    /// nearest-line errors against the truth (floor-grid line correction; use --arena
-    /// builtin:floor-grid).
+    /// nearest-line errors against the truth (floor-grid line correction, Mächler's thesis
+    /// ch. 2; use --arena builtin:floor-grid).
     LineCorrect,
-    /// Carry the objects at the lit sources to the home base (Khepera foraging). Runs the khepera
+    /// Carry the objects at the lit sources to the home base (Khepera foraging, Löffler,
+    /// Klahold, Rückert §7). Runs the khepera
     /// (the profile with a gripper) in `builtin:forage` unless --arena names another arena
     /// (which then gets three lamps with objects drawn from --seed, home at the start).
     Forage,
-    /// Khepera light-source mapping: calibrate the light sensors, then map one lamp in the paper's 75 x 60
+    /// Khepera light-source mapping (Löffler et al. §6.1): calibrate the light sensors, then map one lamp in the paper's 75 x 60
     /// cm box, once without and once with local correction; reports the recognitions of
     /// each (paper: 5 without, 24+ with). Its own arena and the khepera: --arena and
     /// --profile are ignored.
     LightMap,
-    /// Khepera odometry, the foraging paper's Tables 1-2: a Khepera with 53.3 mm wheels wall-follows two laps of the
+    /// Khepera odometry, the foraging paper's Tables 1-2 (Löffler et al. §3.3): a Khepera with 53.3 mm wheels wall-follows two laps of the
     /// 75 x 60 cm box; the encoder counts it sends are re-integrated with the tables' swept
     /// wheel distance and pulse length. Its own arena and the khepera: --arena and --profile
     /// are ignored.
     OdometryLaps,
-    /// Mächler's unsupervised landmarks and places (seed 003 ch. 3): the thesis's simulated
+    /// Unsupervised landmarks and places (Mächler's thesis ch. 3): the thesis's simulated
     /// Khepera wanders in a generated arena (--arena unstructured|structured, from --seed),
     /// resets its odometry on landmark matches; reports corrected vs plain odometry error in
     /// robot diameters. --timeout is the run length [default 1200 s].
     UnsupervisedPlaces,
-    /// ALICE's QT world model (seed 001 §4.5.4): one 8000-situation run in builtin:alice;
+    /// ALICE's QT world model (Zimmer's thesis §4.5.4): one 8000-situation run in builtin:alice;
     /// when the cell count settles (thesis: about 5000). Own arena and robot; --seed.
     AliceEquilibrium,
     /// ALICE's QT model, eps_o at 0.1 / 0.03 / 0.005 (§4.5.1).
@@ -951,7 +956,7 @@ impl RunArgs {
         if self.task != TaskArg::ReachBeacon {
             return Err(format!(
                 "--robots/--robot: several robots run the Micro-Rato contest, --task \
-                 reach-beacon (seed 004 §2), not --task {}",
+                 reach-beacon (the Dom Dinis paper §2), not --task {}",
                 self.task
                     .to_possible_value()
                     .map_or_else(String::new, |v| v.get_name().to_string())
@@ -1052,7 +1057,7 @@ pub fn parse_pose(s: &str) -> Result<[f64; 3], String> {
     Ok([v[0], v[1], v.get(2).copied().unwrap_or(0.0)])
 }
 
-fn parse_stall(s: &str) -> Result<Stall, String> {
+pub fn parse_stall(s: &str) -> Result<Stall, String> {
     let v = numbers(s, "PERIOD,DURATION in seconds", 2, 2)?;
     Ok(Stall {
         period_s: v[0],

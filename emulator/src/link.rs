@@ -714,32 +714,34 @@ pub fn spawn(opts: EmulatorOptions) -> Result<RunningEmulator, SpawnError> {
 /// the file and what is wrong with it. A regular file that group or others may access is
 /// refused, as ssh refuses such a private key: whoever can read the key can drive the robot.
 pub fn read_key_file(path: &Path) -> Result<[u8; protocol::sign::KEY_LEN], String> {
-    use std::io::Read;
-    let cannot = |e: std::io::Error| format!("cannot read key file {}: {e}", path.display());
-    let file = std::fs::File::open(path).map_err(cannot)?;
+    let file = crate::input_file::InputFile::open(path, &KEY_FILE).map_err(|e| key_error(&e))?;
     // The open file's mode, not the path's: no window for a swap in between. Only regular
     // files: a pipe (`--key-file <(pass show robot)`) is the caller's own.
-    let meta = file.metadata().map_err(cannot)?;
-    if let Some(mode) = loose_mode(&meta) {
+    if let Some(mode) = loose_mode(file.metadata()) {
         return Err(format!(
             "key file {p} is accessible by group or others (mode {mode:04o}); a link key must \
              be private, as an ssh private key must: run `chmod 600 {p}`",
             p = path.display()
         ));
     }
-    // Read a bounded prefix: a key is 64 digits, and `--key-file /dev/zero` must not hang.
-    let mut text = String::new();
-    file.take(KEY_FILE_MAX + 1)
-        .read_to_string(&mut text)
-        .map_err(cannot)?;
-    if text.len() as u64 > KEY_FILE_MAX {
-        return Err(format!(
-            "key file {}: longer than {KEY_FILE_MAX} bytes; a key is 64 hex digits",
-            path.display()
-        ));
-    }
+    // Bounded: a key is 64 digits, and a pipe that never ends must not hang.
+    let bytes = file.read_all().map_err(|e| key_error(&e))?;
+    let text = String::from_utf8_lossy(&bytes);
     protocol::sign::parse_key_hex(&text).map_err(|e| format!("key file {}: {e}", path.display()))
 }
+
+/// A key file's read error, naming it as one.
+fn key_error(e: &crate::input_file::InputError) -> String {
+    format!("key file {}: {}", e.path().display(), e.reason())
+}
+
+/// What a key file may be: 64 hex digits with room for white space and line endings; a pipe
+/// is read (up to the limit).
+const KEY_FILE: crate::input_file::InputKind = crate::input_file::InputKind {
+    what: "key files",
+    max_bytes: 4096,
+    pipes: true,
+};
 
 /// The permission bits of a regular file that group or others may read, write or execute.
 #[cfg(unix)]
@@ -753,9 +755,6 @@ fn loose_mode(meta: &std::fs::Metadata) -> Option<u32> {
 fn loose_mode(_: &std::fs::Metadata) -> Option<u32> {
     None
 }
-
-/// Longest key file read, bytes (64 digits with room for white space and line endings).
-const KEY_FILE_MAX: u64 = 4096;
 
 #[cfg(test)]
 mod tests {
@@ -878,7 +877,7 @@ mod tests {
         private(&long, 0o600);
         let e = read_key_file(&long).unwrap_err();
         assert!(
-            e.contains("longer than 4096 bytes") && e.contains("emu-key-long"),
+            e.contains("key files are limited to 4096 bytes") && e.contains("emu-key-long"),
             "{e}"
         );
         let _ = std::fs::remove_file(ok);

@@ -15,6 +15,7 @@ fn main() -> ExitCode {
         Some(Command::Serve(args)) => serve(&args),
         Some(Command::Arena(args)) => arena(&args),
         Some(Command::Bench(args)) => bench(&args),
+        Some(Command::Hil(args)) => hil(&args),
         None => serve(&cli.serve),
     };
     match result {
@@ -42,6 +43,62 @@ fn arena(args: &emulator::cli::ArenaArgs) -> Result<(), String> {
     }
 }
 
+/// `hil`: the world for a board running the firmware itself (emulator::hil).
+fn hil(args: &emulator::hil::args::HilArgs) -> Result<(), String> {
+    let port = args.port()?;
+    let when = args.stop_when()?;
+    let key = args
+        .key_file
+        .as_deref()
+        .map(|p| emulator::link::read_key_file(p).map_err(|e| format!("--key-file: {e}")))
+        .transpose()?;
+    let cfg = args.world.sim_config(emulator::uart::DEFAULT_BAUD)?;
+    let arena =
+        load_arena(args.world.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
+    let sim = emulator::sim::Sim::new(arena, cfg).map_err(|e| e.to_string())?;
+    let mut world = emulator::hil::HilWorld::new(sim, key, args.power_on_mode.mode())
+        .map_err(|e| e.to_string())?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
+        .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
+    let link = args.link.clone();
+    let profile = args.world.profile.profile().name;
+    let arena_name = args.world.arena().to_string();
+    let mut link_err = None;
+    let summary = emulator::hil::serve::serve(&mut world, &port, &stop, when, &mut |pty| {
+        // The one line a script waits for: the station's port.
+        println!("{}", pty.display());
+        if let Some(l) = &link {
+            let _ = std::fs::remove_file(l);
+            if let Err(e) = std::os::unix::fs::symlink(pty, l) {
+                link_err = Some(format!("--link {}: {e}", l.display()));
+            }
+        }
+        eprintln!(
+            "robot-emulator: {profile} in {arena_name}, board in the loop, station port {}",
+            pty.display()
+        );
+    });
+    if let Some(l) = &link {
+        let _ = std::fs::remove_file(l);
+    }
+    if let Some(e) = link_err {
+        return Err(e);
+    }
+    let summary = summary?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string(&summary).map_err(|e| e.to_string())?
+        );
+    }
+    match summary.fault {
+        Some(f) => Err(format!("the board stopped: {f}")),
+        None => Ok(()),
+    }
+}
+
 fn bench(args: &emulator::cli::BenchArgs) -> Result<(), String> {
     let opts = args.options()?;
     if opts.robots > 1 {
@@ -49,7 +106,7 @@ fn bench(args: &emulator::cli::BenchArgs) -> Result<(), String> {
         if args.json {
             println!(
                 "{}",
-                serde_json::to_string(&report).map_err(|e| e.to_string())?
+                emulator::json_text::compact(&report).map_err(|e| e.to_string())?
             );
         } else {
             print!("{}", emulator::fleet_bench::render(&report));
@@ -60,7 +117,7 @@ fn bench(args: &emulator::cli::BenchArgs) -> Result<(), String> {
     if args.json {
         println!(
             "{}",
-            serde_json::to_string(&report).map_err(|e| e.to_string())?
+            emulator::json_text::compact(&report).map_err(|e| e.to_string())?
         );
     } else {
         print!("{}", emulator::bench::render(&report));
@@ -111,7 +168,10 @@ fn print_stats(args: &ServeArgs, stats: serde_json::Value, bias: [f64; 2]) -> Re
                 serde_json::json!(((1.0 + bias[1]) / (1.0 + bias[0]) - 1.0) * 1e6),
             );
         }
-        println!("{v}");
+        println!(
+            "{}",
+            emulator::json_text::compact(&v).map_err(|e| e.to_string())?
+        );
     }
     Ok(())
 }
@@ -179,7 +239,7 @@ fn serve_fleet(args: &ServeArgs, robots: &[emulator::fleet::RobotSpec]) -> Resul
     if args.json {
         println!(
             "{}",
-            serde_json::to_string(&stats).map_err(|e| e.to_string())?
+            emulator::json_text::compact(&stats).map_err(|e| e.to_string())?
         );
     }
     Ok(())
@@ -194,7 +254,7 @@ fn run(args: &RunArgs) -> Result<(), String> {
         if args.json {
             println!(
                 "{}",
-                serde_json::to_string(&report).map_err(|e| e.to_string())?
+                emulator::json_text::compact(&report).map_err(|e| e.to_string())?
             );
         } else {
             print!("{}", emulator::scenario::contest::render(&report));
@@ -357,7 +417,10 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
     options.scene = args.scene;
     let r = navigation(&options)?;
     if args.json {
-        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            emulator::json_text::compact(&r).map_err(|e| e.to_string())?
+        );
         return Ok(());
     }
     println!(
@@ -406,7 +469,10 @@ fn alice(args: &RunArgs, run: AliceRun) -> Result<(), String> {
     let params = qt_params(args)?;
     let r = run(args.world.seed, &params)?;
     if args.json {
-        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            emulator::json_text::compact(&r).map_err(|e| e.to_string())?
+        );
     } else {
         println!(
             "ALICE {} seed {} ({:.1} s wall)",
@@ -446,7 +512,10 @@ fn unsupervised_places(args: &RunArgs) -> Result<(), String> {
     let opts = args.unsupervised_places_options()?;
     let r = emulator::unsupervised_places::run(&opts);
     if args.json {
-        println!("{}", serde_json::to_string(&r).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            emulator::json_text::compact(&r).map_err(|e| e.to_string())?
+        );
     } else {
         println!(
             "{:?} arena, seed {}: {:.1} m in {:.0} s simulated ({:.2} s wall), wheel bias \
@@ -616,7 +685,7 @@ fn run_json(report: &impl serde::Serialize) -> Result<String, String> {
             obj.insert("speed_x".into(), (sim_s / cpu_s).round().into());
         }
     }
-    serde_json::to_string(&v).map_err(|e| e.to_string())
+    emulator::json_text::compact(&v).map_err(|e| e.to_string())
 }
 
 /// User + system CPU seconds of this process (getrusage).

@@ -51,8 +51,8 @@ fn directory(out: &Path) -> &Path {
     }
 }
 
-/// What a non-regular file is, for the error.
-fn kind(t: std::fs::FileType) -> &'static str {
+/// What a non-regular file is, for the error (here and in `input_file`).
+pub(crate) fn kind(t: std::fs::FileType) -> &'static str {
     #[cfg(unix)]
     {
         use std::os::unix::fs::FileTypeExt as _;

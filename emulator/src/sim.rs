@@ -346,13 +346,18 @@ fn tell_the_arena(robot: &mut AnyRobot, world: &World) {
     });
 }
 
+/// The seed of the firmware's own random draws in a run of `seed` (a board in the loop is
+/// told the same, `hil`).
+pub fn firmware_seed(seed: u64) -> u32 {
+    SimRng::new(seed, stream::FIRMWARE).next_u64() as u32
+}
+
 /// The firmware instance of one simulated robot: the one place the emulator constructs a
 /// `Robot` (a single robot and every robot of a fleet alike), told its start and its arena.
 fn build_robot(profile: &'static Profile, seed: u64, start: Pose, world: &World) -> AnyRobot {
-    let firmware_seed = SimRng::new(seed, stream::FIRMWARE).next_u64() as u32;
     let mut robot = AnyRobot::new(RobotOptions {
         profile,
-        seed: firmware_seed,
+        seed: firmware_seed(seed),
         // The robot is told where it starts (seed 004 §5: the start pose is known).
         start: FwPose::new(start.x as f32, start.y as f32, start.heading as f32),
         emulated: true,
@@ -551,6 +556,7 @@ impl Sim {
         // The id in force now (an operator may set it), so truth names the robot as it does;
         // only a pass (or `robot_mut`, which a pass follows) changes it.
         self.truth.robot_id = self.robot.config().robot_id;
+        self.truth.binding = self.robot.link().binding();
     }
 
     /// Moves the wire on to `now_us` (at most this step's start), the robot not stepping: the
@@ -696,6 +702,20 @@ impl Sim {
         // What the caller changes may give the next pass work.
         self.robot_idle_until_us = 0;
         &mut self.robot
+    }
+
+    /// The simulated hardware, for hardware in the loop (`hil`): a board's firmware reads
+    /// these sensors and sets these motors through the HIL port; the firmware here is then
+    /// never stepped.
+    pub fn hardware_mut(&mut self) -> &mut SimHal {
+        &mut self.hal
+    }
+
+    /// One step of the world without a pass of the firmware (`hil`): the physics under the
+    /// motors in force, and the truth recorded.
+    pub fn advance_hardware(&mut self) {
+        self.hal.advance();
+        self.record_truth();
     }
 
     /// The serial port (host side: `push_inbound`, `take_outbound`).

@@ -100,6 +100,9 @@ pub struct TruthHistory {
     next: usize,
     /// The robot the samples are about (its `robot_id` parameter now), named in `EmuTruth`.
     pub robot_id: u8,
+    /// The session and robot the robot's signed frames are bound to now: truth frames are
+    /// signed as the robot's (PROTOCOL.md §13).
+    pub binding: protocol::Binding,
 }
 
 impl TruthHistory {
@@ -162,7 +165,9 @@ pub struct Uart {
     /// The bytes of the truth frame on the wire, if one is.
     truth_queue: VecDeque<u8>,
     /// Truth owed, not started: the message and the telemetry's signing timestamp.
-    truth_pending: VecDeque<(EmuTruth, Option<u64>)>,
+    /// Owed truth frames, each with the timestamp and binding of the signed telemetry frame
+    /// it follows (none on an unsigned link).
+    truth_pending: VecDeque<(EmuTruth, Option<(u64, protocol::Binding)>)>,
     /// The robot's last byte on the wire did not end a frame: only its bytes may follow.
     robot_mid_frame: bool,
     /// Sent bytes with the time each completed: the serving loop steps ahead of the wall
@@ -442,14 +447,15 @@ impl Uart {
 
     /// Encodes the oldest owed truth frame into `truth_queue`; false when none is owed.
     fn start_truth_frame(&mut self) -> bool {
-        while let Some((msg, timestamp)) = self.truth_pending.pop_front() {
+        while let Some((msg, signed)) = self.truth_pending.pop_front() {
             let msg = Message::EmuTruth(msg);
             let mut buf = [0u8; MAX_FRAME];
-            let encoded = match (&self.truth_key, timestamp) {
-                (Some(key), Some(ts)) => protocol::encode_signed(
+            let encoded = match (&self.truth_key, signed) {
+                (Some(key), Some((ts, binding))) => protocol::encode_signed(
                     self.truth_seq,
                     &msg,
                     key,
+                    &binding,
                     protocol::sign::TRUTH_LINK,
                     ts,
                     &mut buf,
@@ -495,7 +501,7 @@ impl Uart {
         if !self.truth_enabled {
             return;
         }
-        let (time_ms, timestamp) = match self.decoder.feed(&[byte]) {
+        let (time_ms, signed) = match self.decoder.feed(&[byte]) {
             Feed::Frame {
                 frame:
                     protocol::Frame {
@@ -504,7 +510,7 @@ impl Uart {
                         ..
                     },
                 ..
-            } => (t.time_ms, signature.map(|s| s.timestamp)),
+            } => (t.time_ms, signature.map(|s| (s.timestamp, truth.binding))),
             _ => return,
         };
         let Some(s) = truth.at(time_ms) else { return };
@@ -518,7 +524,7 @@ impl Uart {
             collisions: s.collisions,
             robot_id: truth.robot_id,
         };
-        self.truth_pending.push_back((msg, timestamp));
+        self.truth_pending.push_back((msg, signed));
     }
 }
 

@@ -162,8 +162,10 @@ fn fig17_with_calibrated_odometry() {
         errors.push(r.goal_error_m);
     }
     println!("fig17 calibrated: {reached}/{SEEDS} within 5 cm, calibrated {calibrated}/{SEEDS}, errors {errors:.3?}");
+    // docs/reproductions.md: at least 9 of 10 calibrated and at least 9 of 10 within 5 cm.
+    assert!(calibrated >= 9, "calibrated in {calibrated} of {SEEDS}");
     assert!(
-        reached >= 8,
+        reached >= 9,
         "reached in {reached} of {SEEDS}: {errors:.3?}"
     );
 }

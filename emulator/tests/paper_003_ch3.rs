@@ -70,19 +70,19 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// compass heading: the estimate a kernel is stored with decides match or new). Tolerance:
 /// the median within 75-300 (a factor of two; the thesis gives one arena, one run).
 #[test]
-fn unstructured_landmark_count_is_near_150() {
+fn unstructured_landmark_count_median_within_a_factor_of_two_of_150() {
     let r = reports(ArenaKind::Unstructured);
     let m = median(r.iter().map(|r| r.landmarks as f64).collect());
     assert!((75.0..=300.0).contains(&m), "median landmarks {m}");
 }
 
 /// Paper: plain odometry drifts (Fig. 3-34's reference). Ours: plain odometry's peak error
-/// 7.3-22 diameters on every seed (wheel-bias heading drift). Asserted: > 1/2 diameter on
-/// every seed.
+/// 7.3-22 diameters on every seed (wheel-bias heading drift). Asserted: more than 5
+/// diameters on every seed, ten times the corrected error's bound.
 #[test]
-fn plain_odometry_drifts_past_half_a_diameter() {
+fn plain_odometry_drifts_more_than_five_diameters() {
     for r in reports(ArenaKind::Unstructured) {
-        assert!(r.plain_peak > 0.5, "seed {}: {}", r.seed, r.plain_peak);
+        assert!(r.plain_peak > 5.0, "seed {}: {}", r.seed, r.plain_peak);
     }
 }
 

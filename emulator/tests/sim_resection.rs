@@ -220,6 +220,14 @@ fn resection_from_camera_bearings_stays_within_the_eq_45_errors() {
                 String::new()
             }
         );
+        // Our Eq 45 is the paper's: its printed table to the digit it prints (whole mm from
+        // 100 mm on, tenths below), and near the singular circle to 0.05 % (8169: 8172).
+        let ours_mm = f64::from(ours.unwrap_or(f32::NAN));
+        let printed: f64 = if paper >= 100.0 { 0.5 } else { 0.05 };
+        assert!(
+            (ours_mm - paper).abs() <= printed.max(paper * 5e-4),
+            "({x}, {y}): Eq 45 {ours_mm} mm, the paper prints {paper}"
+        );
         if paper > 1000.0 {
             // Near the circle through the landmarks: no fix, or a poor one.
             assert!(singular > 0 || max > 100.0, "({x}, {y}): max {max}");
@@ -229,7 +237,6 @@ fn resection_from_camera_bearings_stays_within_the_eq_45_errors() {
             let bound = f64::from(ours.unwrap());
             assert!(singular == 0, "({x}, {y}): {singular} without a fix");
             assert!(max <= bound * 1.1, "({x}, {y}): max {max} vs Eq 45 {bound}");
-            assert!(p90 <= max);
             // Not trivially exact: the pixel grid shows.
             assert!(max > 0.0, "({x}, {y})");
         }

@@ -71,7 +71,9 @@ fn codec(c: &mut Criterion) {
     let key = LinkKey::new(&[0x5a; 32]);
     let mut signed = [0u8; MAX_FRAME];
     let ts = 0x1f92_d63c_e000;
-    let sn = encode_signed(1, &msg, &key, sign::ROBOT_LINK, ts, &mut signed).expect("fits");
+    let binding = Binding::new(0x2a5c_7e19, 1);
+    let sn =
+        encode_signed(1, &msg, &key, &binding, sign::ROBOT_LINK, ts, &mut signed).expect("fits");
     eprintln!("signed telemetry frame on the wire: {sn} bytes");
     let mut g = c.benchmark_group("signed_telemetry");
     g.throughput(Throughput::Elements(1));
@@ -83,6 +85,7 @@ fn codec(c: &mut Criterion) {
     g.bench_function("decode_and_verify", |b| {
         let mut dec = FrameDecoder::new();
         let mut auth = LinkAuth::new(Some(key.clone()), sign::STATION_LINK);
+        auth.bind(binding);
         b.iter(|| match dec.feed(black_box(&signed[..sn])) {
             Feed::Frame { frame, .. } => {
                 // The same frame again is stale: the verdict costs the MAC either way, and
@@ -95,7 +98,7 @@ fn codec(c: &mut Criterion) {
     });
     g.bench_function("hmac_only", |b| {
         let covered = &signed[..sn - 12];
-        b.iter(|| key.mac(black_box(covered)))
+        b.iter(|| key.mac(&binding, black_box(covered)))
     });
     g.finish();
 

@@ -11,7 +11,8 @@
 //! `[version u8][kind u8][seq u16 LE][payload: postcard][crc32c u32 LE]`, with the CRC taken
 //! over version..payload. A signed frame (PROTOCOL.md §13) has `SIGNED_FLAG` in the version
 //! byte and `[link id u8][timestamp u48 LE][mac 6]` between payload and CRC, the CRC then
-//! covering the trailer too; the decoder parses the trailer, `sign::LinkAuth` judges it.
+//! covering the trailer too; the decoder parses the trailer (`trailer`), `sign::LinkAuth`
+//! judges it and `sign::encode_signed` makes it.
 
 use core::fmt;
 
@@ -19,9 +20,7 @@ use crate::msg::{
     Ack, Command, EmuTruth, Event, Heartbeat, Hello, HelloReply, Kind, Log, Message, Nack,
     Telemetry, TransferAck, TransferBegin, TransferChunk,
 };
-use crate::sign::{
-    LinkKey, Signature, MAC_LEN, SIGNATURE_LEN, SIGNED_FLAG, TIMESTAMP_LEN, TIMESTAMP_MAX,
-};
+use crate::trailer::{Signature, MAC_LEN, SIGNATURE_LEN, SIGNED_FLAG, TIMESTAMP_LEN};
 
 /// The protocol version carried in every header.
 pub const PROTOCOL_VERSION: u8 = 1;
@@ -189,42 +188,6 @@ pub fn encode(seq: u16, msg: &Message<'_>, out: &mut [u8]) -> Result<usize, Enco
     finish_raw(&mut raw, PROTOCOL_VERSION, msg.kind() as u8, seq, n, out)
 }
 
-/// Encodes `msg` as a signed frame (PROTOCOL.md §13) with the given link id and timestamp.
-/// The payload budget is `MAX_SIGNED_PAYLOAD`. Callers keep timestamps increasing; use
-/// `sign::LinkAuth::encode`, which does.
-pub fn encode_signed(
-    seq: u16,
-    msg: &Message<'_>,
-    key: &LinkKey,
-    link_id: u8,
-    timestamp: u64,
-    out: &mut [u8],
-) -> Result<usize, EncodeError> {
-    let mut raw = [0u8; MAX_RAW];
-    let body = raw
-        .get_mut(HEADER_LEN..HEADER_LEN + MAX_SIGNED_PAYLOAD)
-        .ok_or(EncodeError::PayloadTooLarge)?;
-    let n = serialize_payload(msg, body)?;
-    let version = PROTOCOL_VERSION | SIGNED_FLAG;
-    let kind = msg.kind() as u8;
-    let [s0, s1] = seq.to_le_bytes();
-    // The MAC covers the header, so it goes in before the MAC is taken.
-    raw[..HEADER_LEN].copy_from_slice(&[version, kind, s0, s1]);
-    let trailer_at = HEADER_LEN + n;
-    let mac_at = trailer_at + SIGNATURE_LEN - MAC_LEN;
-    let ts = timestamp.min(TIMESTAMP_MAX).to_le_bytes();
-    let trailer = raw
-        .get_mut(trailer_at..mac_at)
-        .ok_or(EncodeError::PayloadTooLarge)?;
-    trailer[0] = link_id;
-    trailer[1..].copy_from_slice(&ts[..TIMESTAMP_LEN]);
-    let mac = key.mac(raw.get(..mac_at).ok_or(EncodeError::PayloadTooLarge)?);
-    raw.get_mut(mac_at..mac_at + MAC_LEN)
-        .ok_or(EncodeError::PayloadTooLarge)?
-        .copy_from_slice(&mac);
-    finish_raw(&mut raw, version, kind, seq, n + SIGNATURE_LEN, out)
-}
-
 /// Encodes a frame from raw parts: any version, any kind byte, any payload bytes. For tests,
 /// test vectors and tools that speak the framing without the message set.
 pub fn encode_raw(
@@ -243,7 +206,7 @@ pub fn encode_raw(
     finish_raw(&mut raw, version, kind, seq, payload.len(), out)
 }
 
-fn finish_raw(
+pub(crate) fn finish_raw(
     raw: &mut [u8; MAX_RAW],
     version: u8,
     kind: u8,
@@ -278,7 +241,7 @@ pub fn retry_digest(seq: u16, msg: &Message<'_>) -> Result<u32, EncodeError> {
     Ok(digest.finalize())
 }
 
-fn serialize_payload(msg: &Message<'_>, body: &mut [u8]) -> Result<usize, EncodeError> {
+pub(crate) fn serialize_payload(msg: &Message<'_>, body: &mut [u8]) -> Result<usize, EncodeError> {
     msg.check_limits()
         .map_err(|(field, limit)| EncodeError::FieldTooLong { field, limit })?;
     fn ser<T: serde::Serialize>(v: &T, body: &mut [u8]) -> Result<usize, EncodeError> {

@@ -10,6 +10,7 @@
 //! - `packed`: eight 10-bit sensor readings in 10 bytes.
 //! - `telemetry_range`: the ranges that bound a telemetry frame to 80 bytes on the wire.
 //! - `fingerprint`: the schema hash exchanged at handshake.
+//! - `trailer`: the signature trailer's layout, below `frame` and `sign`.
 //! - `sign`: optional link authentication, HMAC-SHA256 signatures and replay windows (§13).
 //! - `transfer`: the chunked-transfer sender and receiver state machines (§8).
 //! - `object`: the byte layouts of the Map, Plan and Regions objects (§12).
@@ -17,24 +18,28 @@
 #![deny(unsafe_code)]
 
 pub mod frame;
+pub mod hil;
 pub mod msg;
 pub mod object;
 pub mod packed;
 pub mod seq;
 pub mod sign;
 pub mod telemetry_range;
+pub mod trailer;
 pub mod transfer;
 pub mod units;
 
 pub use frame::{
-    crc32c, encode, encode_raw, encode_signed, parse_raw, retry_digest, DecoderStats, EncodeError,
-    Feed, Frame, FrameDecoder, FrameError, Header, PayloadError, MAX_FRAME, MAX_PAYLOAD,
-    MAX_SIGNED_PAYLOAD, PROTOCOL_VERSION,
+    crc32c, encode, encode_raw, parse_raw, retry_digest, DecoderStats, EncodeError, Feed, Frame,
+    FrameDecoder, FrameError, Header, PayloadError, MAX_FRAME, MAX_PAYLOAD, MAX_SIGNED_PAYLOAD,
+    PROTOCOL_VERSION,
 };
 pub use msg::*;
 pub use packed::Packed10x8;
 pub use seq::{SeqEvent, SeqTracker};
-pub use sign::{AuthError, AuthStats, KeyError, LinkAuth, LinkKey, Signature};
+pub use sign::{
+    encode_signed, AuthError, AuthStats, Binding, KeyError, LinkAuth, LinkKey, Signature,
+};
 
 /// The schema fingerprint: FNV-1a 64 over the protocol name, version and the full postcard
 /// schema of `Message` (every variant, field name and type, in order). Two builds whose

@@ -1,5 +1,6 @@
 //! Link authentication (PROTOCOL.md §13): a shared 32-byte key, a 13-byte signature trailer
-//! (link id, 48-bit timestamp, 48-bit truncated HMAC-SHA256) and per-link replay windows.
+//! (link id, 48-bit timestamp, 48-bit truncated HMAC-SHA256), per-link replay windows, and a
+//! binding of every signature to its session and robot.
 //!
 //! Layer: pure state over caller buffers, like `frame`. `frame` parses the trailer; this
 //! module decides whether a parsed frame is acceptable (`LinkAuth::verify`) and builds signed
@@ -12,6 +13,13 @@
 //! no_std and heap-free. A frame costs two SHA-256 compressions more than MAVLink's plain
 //! hash (the keyed pads); keeping the keyed states would save them for 48 more bytes, which
 //! the robot's 32 KB does not have to spare.
+//!
+//! Why a binding: a fleet shares one key, and a signature over the frame alone is valid on
+//! every robot's line. A man in the middle could then move robot 2's signed Stop onto robot
+//! 1's line and robot 1's Ack back. The MAC therefore also covers the session the station's
+//! Hello opened and the robot that answered it ([`Binding`], not sent: both ends know it), so
+//! a frame moved to another robot or another session fails its MAC there (MAVLink 2 signs
+//! its link id for the same reason).
 
 use core::fmt;
 
@@ -19,21 +27,15 @@ use hmac::digest::{FixedOutput, KeyInit, Mac, Update};
 use hmac::Hmac;
 use sha2::Sha256;
 
-use crate::frame::{encode_signed, EncodeError, Frame};
-use crate::msg::Message;
+use crate::frame::{finish_raw, serialize_payload, EncodeError, Frame, HEADER_LEN, MAX_RAW};
+use crate::frame::{MAX_SIGNED_PAYLOAD, PROTOCOL_VERSION};
+use crate::msg::{EventCode, Message};
+pub use crate::trailer::{
+    Signature, MAC_LEN, SIGNATURE_LEN, SIGNED_FLAG, TIMESTAMP_LEN, TIMESTAMP_MAX,
+};
 
 /// Bytes of a key.
 pub const KEY_LEN: usize = 32;
-/// Set in the version byte of a signed frame.
-pub const SIGNED_FLAG: u8 = 0x80;
-/// Bytes of the truncated MAC.
-pub const MAC_LEN: usize = 6;
-/// Bytes of the timestamp (48 bits, little-endian).
-pub const TIMESTAMP_LEN: usize = 6;
-/// Bytes of the trailer: link id, timestamp, MAC.
-pub const SIGNATURE_LEN: usize = 1 + TIMESTAMP_LEN + MAC_LEN;
-/// Largest timestamp.
-pub const TIMESTAMP_MAX: u64 = (1 << 48) - 1;
 /// Link ids with this bit are sent by the robot side (robot, emulator), without by a station.
 pub const ROBOT_SIDE: u8 = 0x80;
 /// The station's link id.
@@ -50,7 +52,55 @@ pub const EPOCH_UNIX_S: u64 = 1_420_070_400;
 /// Timestamp units per second (10 µs units).
 pub const TICKS_PER_S: u64 = 100_000;
 
+/// Bytes of a binding in the MAC input: session u32 LE, robot id u8.
+pub const BINDING_LEN: usize = 5;
+/// The robot id of a binding made before the station knows which robot answers (a `Hello`,
+/// and the robot's refusal of one).
+pub const ANY_ROBOT: u8 = 0;
+/// The binding of a frame that belongs to no session: the robot's `HandshakeRefused`, and
+/// everything before a first session.
+pub const NO_SESSION: Binding = Binding::new(0, ANY_ROBOT);
+
 type HmacSha256 = Hmac<Sha256>;
+
+/// What a signature binds a frame to besides its own bytes (PROTOCOL.md §13): the `session`
+/// nonce of the station's `Hello` and the `robot_id` of the robot whose `HelloReply` accepted
+/// it. It is not sent; the MAC is over its 5 bytes followed by the frame, so a frame signed for
+/// another session or another robot does not verify.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Binding {
+    pub session: u32,
+    pub robot_id: u8,
+}
+
+impl Binding {
+    pub const fn new(session: u32, robot_id: u8) -> Self {
+        Binding { session, robot_id }
+    }
+
+    /// The bytes the MAC input starts with.
+    pub fn bytes(&self) -> [u8; BINDING_LEN] {
+        let [a, b, c, d] = self.session.to_le_bytes();
+        [a, b, c, d, self.robot_id]
+    }
+
+    /// The binding a frame carrying `msg` is signed and verified with, when `self` is the
+    /// session in force on this side. The handshake's frames carry their own: a `Hello` opens
+    /// its session before anyone knows which robot answers (robot id 0), and a `HelloReply`
+    /// names both in its payload. The robot's `HandshakeRefused` answers a `Hello` that opened
+    /// nothing, so it is bound to no session (0, 0): a station can then verify a refusal
+    /// whatever session it is in, and tell a robot with another key (whose refusal does not
+    /// verify) from a refusal of another station's Hello (which does, and is older than its
+    /// own Hello, so stale). Every other frame is bound to the session in force.
+    pub fn for_message(self, msg: &Message<'_>) -> Binding {
+        match msg {
+            Message::Hello(h) => Binding::new(h.session, ANY_ROBOT),
+            Message::HelloReply(r) => Binding::new(r.session, r.robot_id),
+            Message::Event(e) if e.code == EventCode::HandshakeRefused => NO_SESSION,
+            _ => self,
+        }
+    }
+}
 
 /// A shared link key. `Debug` never prints it.
 #[derive(Clone)]
@@ -108,9 +158,10 @@ impl LinkKey {
         parse_key_hex(text).map(|k| LinkKey::new(&k))
     }
 
-    /// The first `MAC_LEN` bytes of HMAC-SHA256(key, covered).
-    pub fn mac(&self, covered: &[u8]) -> [u8; MAC_LEN] {
+    /// The first `MAC_LEN` bytes of HMAC-SHA256(key, binding bytes || covered).
+    pub fn mac(&self, binding: &Binding, covered: &[u8]) -> [u8; MAC_LEN] {
         let mut m = self.keyed();
+        Update::update(&mut m, &binding.bytes());
         Update::update(&mut m, covered);
         let full = m.finalize_fixed();
         let mut out = [0u8; MAC_LEN];
@@ -118,9 +169,10 @@ impl LinkKey {
         out
     }
 
-    /// Whether `tag` is the MAC of `covered`, compared in constant time.
-    pub fn verify(&self, covered: &[u8], tag: &[u8; MAC_LEN]) -> bool {
+    /// Whether `tag` is the MAC of `covered` under `binding`, compared in constant time.
+    pub fn verify(&self, binding: &Binding, covered: &[u8], tag: &[u8; MAC_LEN]) -> bool {
         let mut m = self.keyed();
+        Update::update(&mut m, &binding.bytes());
         Update::update(&mut m, covered);
         m.verify_truncated_left(tag).is_ok()
     }
@@ -147,16 +199,6 @@ pub fn parse_key_hex(text: &str) -> Result<[u8; KEY_LEN], KeyError> {
     Ok(key)
 }
 
-/// The trailer of a signed frame, as parsed; `covered` is what the MAC is over (the decoded
-/// frame from the version byte through the timestamp).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Signature<'a> {
-    pub link_id: u8,
-    pub timestamp: u64,
-    pub mac: [u8; MAC_LEN],
-    pub covered: &'a [u8],
-}
-
 /// Why an authenticated link refused a frame that passed the CRC. Nothing else happened.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AuthError {
@@ -164,7 +206,8 @@ pub enum AuthError {
     Unsigned,
     /// This side has no key; the frame is signed.
     UnexpectedSignature { link_id: u8 },
-    /// The MAC does not match: another key (or a forgery).
+    /// The MAC does not match: another key, a frame of another session or robot, or a
+    /// forgery.
     BadSignature { link_id: u8 },
     /// The timestamp is not above the last one accepted on this link: a replay or a
     /// duplicate.
@@ -329,11 +372,13 @@ impl<const N: usize> ReplayWindows<N> {
 }
 
 /// One side's authentication state: its key (if any), its own link id and outgoing
-/// timestamps, and its replay windows for the other side's links. 104 bytes.
+/// timestamps, the binding in force, and its replay windows for the other side's links.
 #[derive(Clone, Debug)]
 pub struct LinkAuth {
     key: Option<LinkKey>,
     link_id: u8,
+    /// The session and robot this side's frames are bound to now (`bind`).
+    binding: Binding,
     /// The last timestamp this side signed with.
     tx_timestamp: u64,
     replay: ReplayWindows<REPLAY_LINKS>,
@@ -346,6 +391,7 @@ impl LinkAuth {
         LinkAuth {
             key,
             link_id,
+            binding: NO_SESSION,
             tx_timestamp: 0,
             replay: ReplayWindows::new(),
             stats: AuthStats::default(),
@@ -364,6 +410,17 @@ impl LinkAuth {
     /// This side's link id.
     pub fn link_id(&self) -> u8 {
         self.link_id
+    }
+
+    /// Binds this side's frames from now on to `binding` (the station when it starts a
+    /// handshake and when a `HelloReply` accepts it; the robot when it accepts a `Hello`).
+    pub fn bind(&mut self, binding: Binding) {
+        self.binding = binding;
+    }
+
+    /// The session and robot in force.
+    pub fn binding(&self) -> Binding {
+        self.binding
     }
 
     /// Forgets the other side's links and accepts only timestamps above `floor` from now on
@@ -413,7 +470,8 @@ impl LinkAuth {
             (Some(_), None) => Err(AuthError::Unsigned),
             (Some(key), Some(sig)) => {
                 // The MAC first: only the key holder can make the replay windows matter.
-                if !key.verify(sig.covered, &sig.mac) {
+                let binding = self.binding.for_message(&frame.message);
+                if !key.verify(&binding, sig.covered, &sig.mac) {
                     return Err(AuthError::BadSignature {
                         link_id: sig.link_id,
                     });
@@ -429,10 +487,24 @@ impl LinkAuth {
         }
     }
 
-    /// Encodes `msg`: signed with the next timestamp when keyed (see `next_timestamp`), plain
-    /// otherwise. Returns the bytes written to `out` (`MAX_FRAME` always suffices).
+    /// Encodes `msg`: signed with the next timestamp when keyed (see `next_timestamp`) and
+    /// bound to the session in force, plain otherwise. Returns the bytes written to `out`
+    /// (`MAX_FRAME` always suffices).
     pub fn encode(
         &mut self,
+        seq: u16,
+        msg: &Message<'_>,
+        clock: u64,
+        out: &mut [u8],
+    ) -> Result<usize, EncodeError> {
+        self.encode_in(self.binding, seq, msg, clock, out)
+    }
+
+    /// `encode` as if `session` were in force, without binding this side to it: the robot's
+    /// answer to a `Hello` it refuses, which must not end the session it is in.
+    pub fn encode_in(
+        &mut self,
+        session: Binding,
         seq: u16,
         msg: &Message<'_>,
         clock: u64,
@@ -442,12 +514,54 @@ impl LinkAuth {
             None => crate::frame::encode(seq, msg, out),
             Some(key) => {
                 let ts = self.next_timestamp(clock);
-                let n = encode_signed(seq, msg, key, self.link_id, ts, out)?;
+                let binding = session.for_message(msg);
+                let n = encode_signed(seq, msg, key, &binding, self.link_id, ts, out)?;
                 self.tx_timestamp = ts;
                 Ok(n)
             }
         }
     }
+}
+
+/// Encodes `msg` as a signed frame (PROTOCOL.md §13) bound to `binding`, with the given link
+/// id and timestamp. The payload budget is `MAX_SIGNED_PAYLOAD`. Callers keep timestamps
+/// increasing and bind the handshake's frames as §13 says; use `sign::LinkAuth::encode`,
+/// which does both.
+pub fn encode_signed(
+    seq: u16,
+    msg: &Message<'_>,
+    key: &LinkKey,
+    binding: &Binding,
+    link_id: u8,
+    timestamp: u64,
+    out: &mut [u8],
+) -> Result<usize, EncodeError> {
+    let mut raw = [0u8; MAX_RAW];
+    let body = raw
+        .get_mut(HEADER_LEN..HEADER_LEN + MAX_SIGNED_PAYLOAD)
+        .ok_or(EncodeError::PayloadTooLarge)?;
+    let n = serialize_payload(msg, body)?;
+    let version = PROTOCOL_VERSION | SIGNED_FLAG;
+    let kind = msg.kind() as u8;
+    let [s0, s1] = seq.to_le_bytes();
+    // The MAC covers the header, so it goes in before the MAC is taken.
+    raw[..HEADER_LEN].copy_from_slice(&[version, kind, s0, s1]);
+    let trailer_at = HEADER_LEN + n;
+    let mac_at = trailer_at + SIGNATURE_LEN - MAC_LEN;
+    let ts = timestamp.min(TIMESTAMP_MAX).to_le_bytes();
+    let trailer = raw
+        .get_mut(trailer_at..mac_at)
+        .ok_or(EncodeError::PayloadTooLarge)?;
+    trailer[0] = link_id;
+    trailer[1..].copy_from_slice(&ts[..TIMESTAMP_LEN]);
+    let mac = key.mac(
+        binding,
+        raw.get(..mac_at).ok_or(EncodeError::PayloadTooLarge)?,
+    );
+    raw.get_mut(mac_at..mac_at + MAC_LEN)
+        .ok_or(EncodeError::PayloadTooLarge)?
+        .copy_from_slice(&mac);
+    finish_raw(&mut raw, version, kind, seq, n + SIGNATURE_LEN, out)
 }
 
 /// Ticks since the epoch for a Unix time in microseconds (0 before the epoch).

@@ -503,6 +503,10 @@ pub struct Sender {
     chunk_units: u8,
     /// Chunks acknowledged since the last loss or growth.
     clean: u8,
+    /// The line is unknown (no loss measurement, no loss seen yet): the chunk size started
+    /// small and doubles with every chunk acknowledged without loss, as TCP's slow start
+    /// doubles its window, until the first loss, expiry or measurement.
+    probing: bool,
     stats: SenderStats,
 }
 
@@ -513,6 +517,18 @@ fn due(now: u32, deadline: u32) -> bool {
 
 /// Units a chunk of the largest size spans.
 const MAX_CHUNK_UNITS: u8 = (MAX_CHUNK as u32 / UNIT) as u8;
+
+/// The retransmission timeout before the first round trip is measured, ms, doubled with
+/// each expiry in a row up to `TRANSFER_RETRY_MS`.
+const FIRST_RTO_MS: u32 = 150;
+
+/// Units of the first chunks on a line nothing is known of (`probing`). 224-byte chunks are
+/// the clean line's best, and a lossy line's worst: with 1 % of bytes dropped 91 % of them
+/// are lost, no round trip is measured, and the 400 ms first timeout runs out (measured:
+/// uploads begun that way took about 1 s, against 0.2 s for those that began at 32 or 64
+/// bytes). Two units arrive half the time at 1 %; doubling on each clean answer reaches 224
+/// bytes within the first round trips of a clean line.
+const PROBE_START_UNITS: u8 = 2;
 
 /// Units the window holds at least, whatever the chunk size: with small chunks on a lossy
 /// line, `TRANSFER_WINDOW` chunks would not cover a round trip with an ack queued behind a
@@ -553,8 +569,9 @@ impl Sender {
             timeouts: 0,
             restarts: 0,
             unknown_echoes: 0,
-            chunk_units: MAX_CHUNK_UNITS,
+            chunk_units: PROBE_START_UNITS,
             clean: 0,
+            probing: true,
             stats: SenderStats {
                 chunks: 0,
                 resent: 0,
@@ -574,17 +591,24 @@ impl Sender {
     }
 
     /// Starts with chunks of `bytes` (rounded down to whole units, `MIN_CHUNK..=MAX_CHUNK`)
-    /// instead of the largest: what the owner knows of the line, e.g. [`chunk_for_loss`].
+    /// instead of probing a line nothing is known of: what the owner knows of the line, e.g.
+    /// [`chunk_for_loss`].
     pub fn set_chunk(&mut self, bytes: u32) {
         self.chunk_units = (bytes / UNIT).clamp(1, u32::from(MAX_CHUNK_UNITS)) as u8;
+        self.probing = false;
     }
 
-    /// Caps the chunk size at `bytes` (whole units, at least one): what the owner learned of
-    /// the line during the transfer, e.g. its first loss measurement ([`chunk_for_loss`]).
-    /// Never grows it: growth is earned by loss-free progress.
+    /// What the owner learned of the line during the transfer, e.g. its first loss
+    /// measurement ([`chunk_for_loss`]), as chunk bytes: caps the chunk size at it, or, while
+    /// the sender still probes an unknown line, replaces the guess with it. Otherwise it
+    /// never grows the chunk: growth is earned by loss-free progress.
     pub fn limit_chunk(&mut self, bytes: u32) {
         let units = (bytes / UNIT).clamp(1, u32::from(MAX_CHUNK_UNITS)) as u8;
-        if units < self.chunk_units {
+        if self.probing {
+            self.probing = false;
+            self.chunk_units = units;
+            self.clean = 0;
+        } else if units < self.chunk_units {
             self.chunk_units = units;
             self.clean = 0;
         }
@@ -634,10 +658,11 @@ impl Sender {
     /// `MIN_RTO_MS..=TRANSFER_RETRY_MS`, doubled per expiry in a row (up to the same cap);
     /// `TRANSFER_RETRY_MS` before the first sample.
     fn rto(&self) -> u32 {
-        if self.srtt_ms == 0 {
-            return TRANSFER_RETRY_MS;
-        }
-        let base = u32::from(self.srtt_ms) + (4 * u32::from(self.rttvar_ms)).max(1);
+        let base = if self.srtt_ms == 0 {
+            FIRST_RTO_MS
+        } else {
+            u32::from(self.srtt_ms) + (4 * u32::from(self.rttvar_ms)).max(1)
+        };
         let base = base.clamp(MIN_RTO_MS, TRANSFER_RETRY_MS);
         base.checked_shl(u32::from(self.timeouts))
             .unwrap_or(u32::MAX)
@@ -864,20 +889,23 @@ impl Sender {
         self.timeouts = self.timeouts.saturating_add(1);
         self.stats.timeouts = self.stats.timeouts.saturating_add(1);
         self.deadline_ms = now_ms.wrapping_add(self.rto());
-        match self.phase {
-            Phase::Begin => self.begin_due = true,
-            _ => {
-                // No answer for a whole timeout: everything unanswered is taken as lost
-                // (RFC 6298 §5.4), an earlier copy of it possibly still on the line.
-                self.lost = self.outstanding() & !self.sacked;
-                self.suspect = self.lost;
-                self.shrink();
-            }
+        if self.phase == Phase::Begin {
+            self.begin_due = true;
+        } else {
+            self.shrink();
         }
+        // No answer for a whole timeout: everything unanswered is taken as lost (RFC 6298
+        // §5.4), an earlier copy of it possibly still on the line. The chunks sent behind an
+        // unanswered Begin too: once a later Begin is answered they go at once, instead of
+        // filling the window until a further timeout (measured: 400 ms idle after the answer).
+        self.lost = self.outstanding() & !self.sacked;
+        self.suspect = self.lost;
     }
 
-    /// A loss of a unit sent since the chunk size last changed: halve it.
+    /// A loss of a unit sent since the chunk size last changed: halve it (and the line is
+    /// known to lose: no more probing).
     fn shrink(&mut self) {
+        self.probing = false;
         self.chunk_units = (self.chunk_units / 2).max(1);
         self.clean = 0;
         self.shrunk_at = self.tx_seq;
@@ -959,9 +987,13 @@ impl Sender {
             // Begin's is a fraction of a full chunk's (measured: the timer then fired and
             // probes went while chunks were still on the wire, 90 % -> 30 % on a clean line).
             self.phase = Phase::Sending;
-            self.slide(next.div_ceil(UNIT));
+            let k = next.div_ceil(UNIT);
+            self.slide(k);
             (self.acked, self.sent) = (next, self.sent.max(next));
-            (self.sacked, self.lost, self.suspect) = (sack, 0, 0);
+            // Chunks a Begin timeout took as lost (sent behind an unanswered Begin) stay
+            // lost unless the receiver holds them: they go first.
+            let kept = |bits: u32| bits.checked_shr(k).unwrap_or(0) & !sack;
+            (self.sacked, self.lost, self.suspect) = (sack, kept(self.lost), kept(self.suspect));
             self.last_ack_ms = now_ms;
             self.progressed(now_ms);
             return;
@@ -1038,7 +1070,9 @@ impl Sender {
         }
         if progress {
             self.progressed(now_ms);
-            if !loss {
+            if !loss && self.probing {
+                self.chunk_units = self.chunk_units.saturating_mul(2).min(MAX_CHUNK_UNITS);
+            } else if !loss {
                 self.clean = self.clean.saturating_add(1);
                 if self.clean >= GROW_AFTER && self.chunk_units < MAX_CHUNK_UNITS {
                     self.chunk_units += 1;
@@ -1083,9 +1117,47 @@ mod tests {
     }
 
     #[test]
+    fn on_an_unknown_line_chunks_start_at_two_units_and_double_until_the_first_loss() {
+        // Clean: 64, 64, 64, 64 behind the Begin (the first 256 bytes), then doubling with
+        // every clean answer up to the largest.
+        let bytes: std::vec::Vec<u8> = (0..3000).map(|i| i as u8).collect();
+        let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).expect("small");
+        assert_eq!(s.chunk(), 64);
+        let (n, offs) = frames(&mut s, 0, &bytes);
+        assert_eq!(
+            (n, &offs[1..5]),
+            (5, &[0, 64, 128, 192][..]),
+            "Begin and 4 chunks"
+        );
+        s.on_ack(&ack(1, 0, TransferStatus::Receiving), 5);
+        s.on_ack(&ack(1, 64, TransferStatus::Receiving), 6);
+        assert_eq!(s.chunk(), 128);
+        s.on_ack(&ack(1, 128, TransferStatus::Receiving), 7);
+        s.on_ack(&ack(1, 192, TransferStatus::Receiving), 8);
+        assert_eq!(s.chunk(), MAX_CHUNK as u32, "doubling stops at the largest");
+        // A line that loses: the first loss ends probing and halves, and growth is then the
+        // slow one (a unit per eight clean answers).
+        let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).expect("small");
+        frames(&mut s, 0, &bytes);
+        s.on_ack(&ack(1, 0, TransferStatus::Receiving), 5);
+        // 64..128 held, 0..64 lost.
+        let mut a = ack(1, 0, TransferStatus::Receiving);
+        a.sack = 0b1100;
+        s.on_ack(&a, 6);
+        assert_eq!(s.chunk(), 32);
+        s.on_ack(&ack(1, 256, TransferStatus::Receiving), 7);
+        assert_eq!(s.chunk(), 32, "no more doubling after a loss");
+        // A measurement replaces the guess while probing, up or down.
+        let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).expect("small");
+        s.limit_chunk(MAX_CHUNK as u32);
+        assert_eq!(s.chunk(), MAX_CHUNK as u32);
+    }
+
+    #[test]
     fn the_sender_waits_for_the_begin_answer_then_fills_the_window() {
         let bytes = [7u8; 1000];
         let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).expect("small");
+        s.set_chunk(MAX_CHUNK as u32);
         let (n, offs) = frames(&mut s, 0, &bytes);
         assert_eq!(
             (n, offs[1]),
@@ -1116,7 +1188,9 @@ mod tests {
             });
         }
         assert_eq!(s.outcome(), Some(Outcome::TimedOut));
-        assert_eq!(begins, 5, "first Begin and four resends");
+        // Resent after 150, 300, 400, 400 and 400 ms without an answer: the 2 s without
+        // progress end it.
+        assert_eq!(begins, 6, "first Begin and five resends");
     }
 
     #[test]
@@ -1258,6 +1332,9 @@ mod tests {
     ) -> (u32, usize, Sender) {
         let bytes: std::vec::Vec<u8> = (0..len).map(|i| i as u8).collect();
         let mut s = Sender::for_object(ObjectKind::Map, &bytes, 1).expect("small");
+        // These tests follow units lost at known offsets: chunks of the largest size from
+        // the start, as on a line whose loss was measured as none.
+        s.set_chunk(MAX_CHUNK as u32);
         let mut rx = Receiver::new();
         let mut staging = std::vec![0u8; len];
         let mut to_rx: std::collections::VecDeque<ToRx> = Default::default();

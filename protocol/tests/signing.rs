@@ -1,7 +1,8 @@
 //! Link authentication (PROTOCOL.md §13): the signed test vectors byte for byte, and the
 //! properties that make it authentication: every signed message round-trips, any flipped bit
-//! is refused, a replayed or reflected frame is refused, another key is refused, and a side
-//! without a key refuses signed frames while a keyed side refuses unsigned ones.
+//! is refused, a replayed or reflected frame is refused, another key is refused, a frame
+//! bound to another robot or session is refused, and a side without a key refuses signed
+//! frames while a keyed side refuses unsigned ones.
 //!
 //! Regenerate the document's blocks: `PRINT_VECTORS=1 cargo test -p protocol --test signing
 //! -- --nocapture`.
@@ -14,7 +15,7 @@ use common::{any_message, full_telemetry};
 use proptest::prelude::*;
 use protocol::frame::{CRC_LEN, HEADER_LEN};
 use protocol::sign::{
-    ReplayWindows, MAC_LEN, ROBOT_LINK, SIGNATURE_LEN, STATION_LINK, TIMESTAMP_MAX,
+    ReplayWindows, ANY_ROBOT, MAC_LEN, ROBOT_LINK, SIGNATURE_LEN, STATION_LINK, TIMESTAMP_MAX,
 };
 use protocol::*;
 
@@ -37,14 +38,37 @@ fn hex(bytes: &[u8]) -> String {
         .join(" ")
 }
 
-/// (name, seq, link id, timestamp, message): the signed vectors PROTOCOL.md documents.
-fn vectors() -> Vec<(&'static str, u16, u8, u64, Message<'static>)> {
+/// The documented vectors' session nonce, and the robot that accepted it.
+const SESSION: u32 = 0x2a5c_7e19;
+const ROBOT: u8 = 2;
+
+fn bound() -> Binding {
+    Binding::new(SESSION, ROBOT)
+}
+
+/// (name, seq, link id, timestamp, binding, message): the signed vectors PROTOCOL.md
+/// documents.
+fn vectors() -> Vec<(&'static str, u16, u8, u64, Binding, Message<'static>)> {
     vec![
+        (
+            "signed-hello",
+            6,
+            STATION_LINK,
+            0x1f92_d63c_dfff,
+            Binding::new(SESSION, ANY_ROBOT),
+            Message::Hello(Hello {
+                fingerprint: FINGERPRINT,
+                protocol: PROTOCOL_VERSION,
+                session: SESSION,
+                station: "station",
+            }),
+        ),
         (
             "signed-heartbeat",
             7,
             STATION_LINK,
             0x1f92_d63c_e000,
+            bound(),
             Message::Heartbeat(Heartbeat { time_ms: 1000 }),
         ),
         (
@@ -52,6 +76,7 @@ fn vectors() -> Vec<(&'static str, u16, u8, u64, Message<'static>)> {
             41,
             STATION_LINK,
             0x1f92_d63c_e001,
+            bound(),
             Message::Command(Command::Teleop {
                 v_mm_s: 150,
                 w_mrad_s: -500,
@@ -62,6 +87,7 @@ fn vectors() -> Vec<(&'static str, u16, u8, u64, Message<'static>)> {
             10,
             ROBOT_LINK,
             0x1f92_d63c_e002,
+            bound(),
             Message::Nack(Nack {
                 cmd_seq: 41,
                 reason: NackReason::NoHandshake,
@@ -71,8 +97,19 @@ fn vectors() -> Vec<(&'static str, u16, u8, u64, Message<'static>)> {
 }
 
 fn sign(seq: u16, link: u8, ts: u64, msg: &Message<'_>, key: &LinkKey) -> Vec<u8> {
+    sign_bound(seq, link, ts, &Binding::default(), msg, key)
+}
+
+fn sign_bound(
+    seq: u16,
+    link: u8,
+    ts: u64,
+    binding: &Binding,
+    msg: &Message<'_>,
+    key: &LinkKey,
+) -> Vec<u8> {
     let mut buf = [0u8; MAX_FRAME];
-    let n = encode_signed(seq, msg, key, link, ts, &mut buf).expect("fits");
+    let n = encode_signed(seq, msg, key, binding, link, ts, &mut buf).expect("fits");
     buf[..n].to_vec()
 }
 
@@ -129,14 +166,17 @@ fn protocol_md_signed_vectors_match_byte_for_byte() {
         .expect("PROTOCOL.md beside the crate");
     let print = std::env::var_os("PRINT_VECTORS").is_some();
     let mut checked = 0;
-    for (name, seq, link, ts, msg) in vectors() {
-        let wire = sign(seq, link, ts, &msg, &key());
+    for (name, seq, link, ts, binding, msg) in vectors() {
+        let wire = sign_bound(seq, link, ts, &binding, &msg, &key());
         let raw = raw_of(&wire);
         let mac_at = raw.len() - CRC_LEN - MAC_LEN;
         if print {
             println!(
-                "vector `{name}`: seq {seq}, link {link:#04x}, timestamp {ts:#x}, `{msg:?}`\n"
+                "vector `{name}`: seq {seq}, link {link:#04x}, timestamp {ts:#x}, session \
+                 {:#010x}, robot {}, `{msg:?}`\n",
+                binding.session, binding.robot_id
             );
+            println!("    binding: {}", hex(&binding.bytes()));
             println!("    covered: {}", hex(&raw[..mac_at]));
             println!("    mac:     {}", hex(&raw[mac_at..mac_at + MAC_LEN]));
             println!("    raw:     {}", hex(&raw));
@@ -150,10 +190,21 @@ fn protocol_md_signed_vectors_match_byte_for_byte() {
             hex(&wire),
             "vector `{name}` differs from PROTOCOL.md"
         );
-        // The documented MAC is HMAC-SHA256 of the documented covered bytes, truncated.
+        // The documented MAC is HMAC-SHA256 of the documented binding and covered bytes,
+        // truncated.
+        let documented_binding = documented(&doc, name, "binding:").unwrap();
+        assert_eq!(
+            documented_binding,
+            binding.bytes(),
+            "vector `{name}` binding"
+        );
         let covered = documented(&doc, name, "covered:").unwrap();
         let mac = documented(&doc, name, "mac:").unwrap();
-        assert_eq!(key().mac(&covered).to_vec(), mac, "vector `{name}` MAC");
+        assert_eq!(
+            key().mac(&binding, &covered).to_vec(),
+            mac,
+            "vector `{name}` MAC"
+        );
         // And it decodes and verifies on the receiving side.
         let receiver = if link == ROBOT_LINK {
             STATION_LINK
@@ -161,6 +212,7 @@ fn protocol_md_signed_vectors_match_byte_for_byte() {
             ROBOT_LINK
         };
         let mut auth = LinkAuth::new(Some(key()), receiver);
+        auth.bind(bound());
         let mut dec = FrameDecoder::new();
         match dec.feed(&want) {
             Feed::Frame { frame, .. } => {
@@ -173,19 +225,95 @@ fn protocol_md_signed_vectors_match_byte_for_byte() {
         }
         checked += 1;
     }
-    assert!(print || checked == 3);
+    assert!(print || checked == 4);
 }
 
 #[test]
 fn hmac_is_rfc_4231_hmac_sha256() {
     // RFC 4231 test case 2: key "Jefe" (zero-padded to the block, as HMAC does), data
     // "what do ya want for nothing?"; the MAC is the first 6 bytes of 5bdcc146bf60754e...
+    // The binding is the MAC input's first 5 bytes, so the case's data is split after them.
     let mut k = [0u8; 32];
     k[..4].copy_from_slice(b"Jefe");
     let key = LinkKey::new(&k);
+    let binding = Binding::new(u32::from_le_bytes(*b"what"), b' ');
     assert_eq!(
-        key.mac(b"what do ya want for nothing?"),
+        key.mac(&binding, b"do ya want for nothing?"),
         [0x5b, 0xdc, 0xc1, 0x46, 0xbf, 0x60]
+    );
+}
+
+#[test]
+fn a_frame_bound_to_another_robot_or_session_is_refused() {
+    // A fleet shares one key: robot 2's Stop, moved onto robot 1's line, must not verify
+    // there, nor robot 1's Ack on robot 2's station, nor a frame of an earlier session.
+    let stop = Message::Command(Command::Stop);
+    let for_robot_2 = sign_bound(5, STATION_LINK, 100, &bound(), &stop, &key());
+    for (session, robot) in [(SESSION, 1), (SESSION ^ 1, ROBOT), (SESSION, ANY_ROBOT)] {
+        let mut robot_side = LinkAuth::new(Some(key()), ROBOT_LINK);
+        robot_side.bind(Binding::new(session, robot));
+        assert_eq!(
+            judge(&mut robot_side, &for_robot_2),
+            Some(Err(AuthError::BadSignature {
+                link_id: STATION_LINK
+            })),
+            "bound to session {session:#x}, robot {robot}"
+        );
+        assert_eq!(robot_side.replay().last(STATION_LINK), None);
+    }
+    let mut robot_2 = LinkAuth::new(Some(key()), ROBOT_LINK);
+    robot_2.bind(bound());
+    assert_eq!(judge(&mut robot_2, &for_robot_2), Some(Ok(())));
+
+    // The handshake's own frames carry their binding: any robot verifies a Hello bound to
+    // its session and robot 0, whatever session it is in, and a station verifies the reply
+    // of the robot it names, but not one signed by another robot.
+    let hello = Message::Hello(Hello {
+        fingerprint: FINGERPRINT,
+        protocol: PROTOCOL_VERSION,
+        session: 77,
+        station: "s",
+    });
+    let mut robot_1 = LinkAuth::new(Some(key()), ROBOT_LINK);
+    robot_1.bind(Binding::new(SESSION, 1));
+    let wire = sign_bound(
+        6,
+        STATION_LINK,
+        200,
+        &Binding::new(77, ANY_ROBOT),
+        &hello,
+        &key(),
+    );
+    assert_eq!(judge(&mut robot_1, &wire), Some(Ok(())));
+    let reply = |robot_id| {
+        Message::HelloReply(HelloReply {
+            fingerprint: FINGERPRINT,
+            protocol: PROTOCOL_VERSION,
+            session: 77,
+            accepted: true,
+            firmware: "f",
+            firmware_version: "1",
+            profile: ProfileId::MicroRato,
+            capabilities: 0,
+            map_capacity: MapCapacity {
+                width: 1,
+                height: 1,
+            },
+            telemetry_hz: 10,
+            failsafe_ms: 300,
+            robot_id,
+        })
+    };
+    let mut station = LinkAuth::new(Some(key()), STATION_LINK);
+    station.bind(Binding::new(77, ANY_ROBOT));
+    let signed_by_1 = sign_bound(3, ROBOT_LINK, 300, &Binding::new(77, 1), &reply(1), &key());
+    assert_eq!(judge(&mut station, &signed_by_1), Some(Ok(())));
+    let claims_2 = sign_bound(4, ROBOT_LINK, 301, &Binding::new(77, 1), &reply(2), &key());
+    assert_eq!(
+        judge(&mut station, &claims_2),
+        Some(Err(AuthError::BadSignature {
+            link_id: ROBOT_LINK
+        }))
     );
 }
 
@@ -348,7 +476,9 @@ proptest! {
         let msg = m.as_message();
         let mut buf = [0u8; MAX_FRAME];
         // Messages beyond the signed budget are refused, never truncated.
-        let n = match encode_signed(seq, &msg, &key(), STATION_LINK, ts, &mut buf) {
+        // Bound as LinkAuth binds it: a Hello or HelloReply to the session it names.
+        let binding = Binding::default().for_message(&msg);
+        let n = match encode_signed(seq, &msg, &key(), &binding, STATION_LINK, ts, &mut buf) {
             Ok(n) => n,
             Err(e) => {
                 prop_assert_eq!(e, EncodeError::PayloadTooLarge);

@@ -14,13 +14,16 @@
 //! - with a key (`set_key`, PROTOCOL.md §13) every frame sent is signed and only frames that
 //!   verify are acted on: a refused frame changes nothing, not even the link timeout or the
 //!   failsafe clock; a refused `Hello` is answered with `Event HandshakeRefused` and a
-//!   negative reason, so the station can say why instead of timing out.
+//!   negative reason, so the station can say why instead of timing out;
+//! - every signed frame is bound to the session of the `Hello` the robot accepted and to the
+//!   robot id it stated in its `HelloReply`: a frame signed for another robot or session
+//!   (a fleet shares one key) fails its MAC and is refused like a forgery.
 //!
 //! Memory: one 262-byte decoder, `REPLY_CACHE` remembered replies of 24 bytes, a
-//! `TX_QUEUE`-byte queue, the 104-byte signing state, a few dozen bytes of other state.
+//! `TX_QUEUE`-byte queue, the 112-byte signing state, a few dozen bytes of other state.
 
 use heapless::Deque;
-use protocol::sign::{AuthError, AuthStats, LinkAuth, LinkKey, KEY_LEN, ROBOT_LINK};
+use protocol::sign::{AuthError, AuthStats, Binding, LinkAuth, LinkKey, KEY_LEN, ROBOT_LINK};
 use protocol::timing::REPLY_MEMORY_MS;
 use protocol::{
     retry_digest, Ack, AckInfo, Command, Event, EventCode, Feed, Frame, FrameDecoder, HelloReply,
@@ -60,6 +63,9 @@ pub enum Response {
     Reply(Reply),
     /// A frame to send, e.g. a `TransferAck`.
     Send(Message<'static>),
+    /// To `Connected`: the robot's settings in the session that starts now, which its
+    /// `HelloReply` states (a new session resets the telemetry rate, PROTOCOL.md §4).
+    Session(LinkStatus),
 }
 
 /// A command's reply, remembered to answer that command's retries (PROTOCOL.md §7). 24 bytes:
@@ -177,6 +183,11 @@ impl Link {
         self.st.auth.stats()
     }
 
+    /// The session and robot id the robot's signed frames are bound to now.
+    pub fn binding(&self) -> Binding {
+        self.st.auth.binding()
+    }
+
     /// Whether a station has completed the handshake and not timed out.
     pub fn connected(&self) -> bool {
         self.st.session.is_some()
@@ -246,10 +257,17 @@ impl Link {
             match message {
                 Message::Hello(h) => {
                     let accepted = h.fingerprint == FINGERPRINT && h.protocol == PROTOCOL_VERSION;
+                    // The reply names the Hello's session and this robot, and is signed so.
+                    let answer_in = Binding::new(h.session, status.robot_id);
+                    let mut status = status;
                     if accepted {
+                        st.auth.bind(answer_in);
                         st.session = Some(h.session);
                         st.replies = [None; REPLY_CACHE];
                         st.counters.handshakes = st.counters.handshakes.wrapping_add(1);
+                        if let Response::Session(now) = on(Inbound::Connected) {
+                            status = now;
+                        }
                     } else {
                         st.session = None;
                         st.counters.handshakes_refused =
@@ -269,15 +287,13 @@ impl Link {
                         failsafe_ms: status.failsafe_ms,
                         robot_id: status.robot_id,
                     };
-                    st.send(&Message::HelloReply(reply), now_ms);
-                    if accepted {
-                        on(Inbound::Connected);
-                    } else {
+                    st.send_in(answer_in, &Message::HelloReply(reply), now_ms);
+                    if !accepted {
                         let ev = Event {
                             code: EventCode::HandshakeRefused,
                             value: i32::from(h.protocol),
                         };
-                        st.send(&Message::Event(ev), now_ms);
+                        st.send_in(answer_in, &Message::Event(ev), now_ms);
                     }
                 }
                 Message::Command(command) => {
@@ -297,7 +313,7 @@ impl Link {
                             Response::Reply(r) => r,
                             // A command always gets an answer; "nothing" means it was not
                             // acted on.
-                            Response::Nothing | Response::Send(_) => {
+                            Response::Nothing | Response::Send(_) | Response::Session(_) => {
                                 Reply::Nack(NackReason::BadState)
                             }
                         };
@@ -409,11 +425,16 @@ impl LinkState {
     /// Queues a frame if it fits whole; returns whether it was queued.
     // Not inlined: `receive` sends from several places, and each inlined copy kept its own
     // frame buffer in `receive`'s frame, under the decoder's and the handler's (issue 15).
-    #[inline(never)]
     fn send(&mut self, msg: &Message<'_>, now_ms: u32) -> bool {
+        self.send_in(self.auth.binding(), msg, now_ms)
+    }
+
+    /// `send`, signed as if `session` were in force (the answers to a `Hello`).
+    #[inline(never)]
+    fn send_in(&mut self, session: Binding, msg: &Message<'_>, now_ms: u32) -> bool {
         let mut buf = [0u8; MAX_FRAME];
         // The robot has no wall clock: its timestamps count on from the station's.
-        let Ok(n) = self.auth.encode(self.tx_seq, msg, 0, &mut buf) else {
+        let Ok(n) = self.auth.encode_in(session, self.tx_seq, msg, 0, &mut buf) else {
             self.counters.frames_dropped = self.counters.frames_dropped.wrapping_add(1);
             return false;
         };
@@ -433,11 +454,16 @@ impl LinkState {
 
     /// Queues telemetry (or any low-priority frame) only if replies keep their reserve.
     fn send_low_priority(&mut self, msg: &Message<'_>, now_ms: u32) -> bool {
-        if self.tx.capacity() - self.tx.len() < TELEMETRY_RESERVE {
+        self.keeps_reserve() && self.send(msg, now_ms)
+    }
+
+    /// Whether a low-priority frame may be queued now; counts it skipped if not.
+    fn keeps_reserve(&mut self) -> bool {
+        let room = self.tx.capacity() - self.tx.len() >= TELEMETRY_RESERVE;
+        if !room {
             self.counters.telemetry_skipped = self.counters.telemetry_skipped.wrapping_add(1);
-            return false;
         }
-        self.send(msg, now_ms)
+        room
     }
 
     /// Sends a heartbeat if nothing was sent for `period_ms` while connected.

@@ -164,7 +164,7 @@ pub const PARAMS: [ParamInfo; 37] = [
             "mm",
             10.0,
             500.0,
-            "odometry: distance between the wheels (seed 000 §3.1: 52 mm)",
+            "odometry: distance between the wheels (Löffler et al. §3.1: 52 mm)",
         ),
     ),
     needs(
@@ -184,7 +184,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "counts",
         0.0,
         1023.0,
-        "obstacle avoidance: IR activation threshold (seed 000 §4.2: 475)",
+        "obstacle avoidance: IR activation threshold (Löffler et al. §4.2: 475)",
     ),
     pi(
         8,
@@ -192,7 +192,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "counts",
         0.0,
         200.0,
-        "obstacle avoidance: random spread of the threshold (seed 000 §4.2: 25)",
+        "obstacle avoidance: random spread of the threshold (Löffler et al. §4.2: 25)",
     ),
     pi(
         9,
@@ -208,7 +208,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "counts",
         1.0,
         500.0,
-        "edge following: error below this is noise (seed 000 §4.3: 7)",
+        "edge following: error below this is noise (Löffler et al. §4.3: 7)",
     ),
     pi(
         11,
@@ -216,7 +216,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "counts",
         1.0,
         1023.0,
-        "edge following: error below minus this means the wall is lost (seed 000 §4.3: 100)",
+        "edge following: error below minus this means the wall is lost (Löffler et al. §4.3: 100)",
     ),
     pi(
         12,
@@ -224,7 +224,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "cycles",
         1.0,
         10_000.0,
-        "edge following: longest strong curve while the wall is lost (seed 000 §4.3: 120)",
+        "edge following: longest strong curve while the wall is lost (Löffler et al. §4.3: 120)",
     ),
     p(
         13,
@@ -232,7 +232,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "m",
         0.01,
         2.0,
-        "drift to target: turn to it and halve propulsion inside this (seed 000 §4.4: 0.15)",
+        "drift to target: turn to it and halve propulsion inside this (Löffler et al. §4.4: 0.15)",
     ),
     p(
         14,
@@ -240,7 +240,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "m",
         0.005,
         1.0,
-        "drift to target: arrived inside this (seed 000 §4.4: 0.05)",
+        "drift to target: arrived inside this (Löffler et al. §4.4: 0.05)",
     ),
     pi(
         15,
@@ -256,7 +256,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "counts",
         0.0,
         1023.0,
-        "light: source detected below this front reading (seed 000 §6.1: T1 = 470)",
+        "light: source detected below this front reading (Löffler et al. §6.1: T1 = 470)",
     ),
     pi(
         17,
@@ -264,7 +264,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "counts",
         0.0,
         1023.0,
-        "light: optimal distance below this average front reading (seed 000 §6.1: T2 = 200)",
+        "light: optimal distance below this average front reading (Löffler et al. §6.1: T2 = 200)",
     ),
     pi(
         18,
@@ -272,7 +272,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "counts",
         0.0,
         1023.0,
-        "light: source left when every front reading is above this (seed 000 §6.1: T3 = 490)",
+        "light: source left when every front reading is above this (Löffler et al. §6.1: T3 = 490)",
     ),
     p(
         19,
@@ -280,7 +280,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "",
         0.0,
         1.0,
-        "dead reckoning: confidence a beacon calibration adds (seed 004 §4)",
+        "dead reckoning: confidence a beacon calibration adds (Dom Dinis paper §4)",
     ),
     p(
         20,
@@ -288,7 +288,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "",
         0.0,
         1.0,
-        "dead reckoning: confidence a collision removes (seed 004 §4)",
+        "dead reckoning: confidence a collision removes (Dom Dinis paper §4)",
     ),
     p(
         21,
@@ -296,7 +296,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "m",
         -100.0,
         100.0,
-        "beacon position x, map frame (exploration goal)",
+        "beacon position x, map frame (exploration goal); the emulator sets it from its arena",
     ),
     p(
         22,
@@ -304,7 +304,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "m",
         -100.0,
         100.0,
-        "beacon position y, map frame (exploration goal)",
+        "beacon position y, map frame (exploration goal); the emulator sets it from its arena",
     ),
     p(
         23,
@@ -312,7 +312,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "nominal",
         0.0,
         100.0,
-        "guided motion: nominal speed in free motion (seed 004 §4: 75)",
+        "guided motion: nominal speed in free motion (Dom Dinis paper §4: 75)",
     ),
     p(
         24,
@@ -345,7 +345,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "m",
         -100.0,
         100.0,
-        "arena bounds: smallest x (seed 004 §4)",
+        "arena bounds: smallest x (Dom Dinis paper §4)",
     ),
     p(
         28,
@@ -353,7 +353,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "m",
         -100.0,
         100.0,
-        "arena bounds: smallest y (seed 004 §4)",
+        "arena bounds: smallest y (Dom Dinis paper §4)",
     ),
     p(
         29,
@@ -361,7 +361,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "m",
         -100.0,
         100.0,
-        "arena bounds: largest x (seed 004 §4)",
+        "arena bounds: largest x (Dom Dinis paper §4)",
     ),
     p(
         30,
@@ -369,7 +369,7 @@ pub const PARAMS: [ParamInfo; 37] = [
         "m",
         -100.0,
         100.0,
-        "arena bounds: largest y (seed 004 §4)",
+        "arena bounds: largest y (Dom Dinis paper §4)",
     ),
     // GoTo and ExecutePlan give up after this long without getting nearer (robot::progress).
     p(
@@ -414,7 +414,7 @@ pub const PARAMS: [ParamInfo; 37] = [
             "",
             0.0,
             1.0,
-            "exploration: 1 plans on its own 0.15 m map as it goes (default), 0 is seed 004 §5's reactive search on a 0.3 m map; read when a run starts",
+            "exploration: 1 plans on its own 0.15 m map as it goes (default), 0 is the Dom Dinis paper's reactive search (§5) on a 0.3 m map; read when a run starts",
         ),
     ),
     needs(

@@ -158,6 +158,14 @@ impl Profile {
         }
     }
 
+    /// The profile a hardware trace's `START` names (`ProfileId as u8`, as the robot writes
+    /// it).
+    pub fn by_trace_code(code: u8) -> Option<&'static Profile> {
+        [&KHEPERA, &MICRO_RATO, &ALICE]
+            .into_iter()
+            .find(|p| p.id as u8 == code)
+    }
+
     /// Whether the robot has every capability in `bits`.
     pub fn has(&self, bits: u32) -> bool {
         self.capabilities & bits == bits

@@ -337,11 +337,7 @@ fn receive<K: Kit, H: Hal>(
             break;
         }
         budget -= n;
-        let status = LinkStatus {
-            telemetry_hz: core.config.telemetry_hz,
-            failsafe_ms: core.config.failsafe_ms,
-            robot_id: core.config.robot_id,
-        };
+        let status = core.link_status();
         link.receive(&buf[..n], now_ms, identity, status, &mut |inbound| {
             core.handle(inbound, now_ms)
         });
@@ -508,6 +504,15 @@ impl<K: Kit> Core<K> {
         }
     }
 
+    /// What the link states of the robot in a `HelloReply`.
+    fn link_status(&self) -> LinkStatus {
+        LinkStatus {
+            telemetry_hz: self.config.telemetry_hz,
+            failsafe_ms: self.config.failsafe_ms,
+            robot_id: self.config.robot_id,
+        }
+    }
+
     fn handle(&mut self, inbound: Inbound<'_>, now_ms: u32) -> Response {
         match inbound {
             Inbound::Connected => {
@@ -518,7 +523,8 @@ impl<K: Kit> Core<K> {
                 // is kept so that it can resume.
                 self.objects.abort_download();
                 self.objects.new_session();
-                Response::Nothing
+                // The HelloReply states the settings of the session that starts now.
+                Response::Session(self.link_status())
             }
             Inbound::Command { command, .. } => Response::Reply(self.apply(command, now_ms)),
             Inbound::Transfer(m) => self.transfer(&m, now_ms),
@@ -856,6 +862,10 @@ impl<K: Kit> Core<K> {
             self.push_event(EventCode::ModeChanged, mode as i32);
         }
         self.progress.restart(self.cycle_ms);
+        // The report sent at once on entering names the distance left already (a mode with a
+        // target has it from the start: the point, the plan, the goal light).
+        let left = self.distance_left();
+        self.progress.observe(self.cycle_ms, left);
     }
 
     fn push_event(&mut self, code: EventCode, value: i32) {
@@ -1030,6 +1040,16 @@ impl<K: Kit> Core<K> {
 
     /// The motor command for this cycle, by mode.
     fn decide(&mut self) -> MotorCommand {
+        let cmd = self.mode_command();
+        // A task that ended this cycle (it arrived) left the robot Idle: stopped at once.
+        if self.mode == Mode::Idle {
+            MotorCommand::STOP
+        } else {
+            cmd
+        }
+    }
+
+    fn mode_command(&mut self) -> MotorCommand {
         if self.mode == Mode::Wander {
             // ALICE wanders by its whiskers; the others by the arbiter's IR behaviours.
             if let Some(cmd) = K::Alice::wander(self) {
@@ -1115,10 +1135,15 @@ impl<K: Kit> Core<K> {
         cmd
     }
 
+    /// The task is done: `GoalReached`, and the robot goes Idle with its motors stopped, so
+    /// that its mode, its progress reports (none in Idle) and the station's status line say
+    /// the task is over instead of counting time without progress at its end. `arrived`
+    /// stays set until the next mode begins: it says the last task ended by arriving.
     fn mark_arrived(&mut self) {
         if !self.arrived {
-            self.arrived = true;
             self.push_event(EventCode::GoalReached, 0);
+            self.enter(Mode::Idle);
+            self.arrived = true;
         }
     }
 

@@ -1,9 +1,10 @@
 //! Link authentication on the robot (PROTOCOL.md §13): with a key it acts only on frames that
 //! verify; unsigned, forged, replayed and reflected frames change nothing (no motor moves, no
-//! failsafe held off), and a refused Hello is answered with its reason.
+//! failsafe held off), a frame signed for another robot or session (a fleet shares one key)
+//! is refused like a forgery, and a refused Hello is answered with its reason.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use protocol::sign::{LinkAuth, LinkKey, ROBOT_LINK, STATION_LINK};
+use protocol::sign::{LinkAuth, LinkKey, ANY_ROBOT, ROBOT_LINK, STATION_LINK};
 use protocol::*;
 use robot_firmware::scripted::ScriptedHal;
 use robot_firmware::{AnyRobot, MotorCommand, RobotOptions, MICRO_RATO};
@@ -60,6 +61,7 @@ impl Station {
     fn frame(&mut self, msg: &Message<'_>) -> Vec<u8> {
         let mut buf = [0u8; MAX_FRAME];
         self.clock += 100;
+        self.bind_hello(msg);
         let n = self
             .auth
             .encode(self.seq, msg, self.clock, &mut buf)
@@ -88,12 +90,27 @@ impl Station {
 
     /// A frame signed with another key.
     fn send_forged(&mut self, msg: &Message<'_>) {
+        let binding = self.auth.binding().for_message(msg);
+        self.send_signed_as(&LinkKey::new(&OTHER), binding, msg);
+    }
+
+    /// As the station does: a Hello opens its session, no robot named yet.
+    fn bind_hello(&mut self, msg: &Message<'_>) {
+        if let Message::Hello(h) = msg {
+            self.auth.bind(Binding::new(h.session, ANY_ROBOT));
+        }
+    }
+
+    /// A frame signed with `key` and bound to `binding`, whatever the station's own.
+    fn send_signed_as(&mut self, key: &LinkKey, binding: Binding, msg: &Message<'_>) {
         let mut buf = [0u8; MAX_FRAME];
         self.clock += 100;
+        self.bind_hello(msg);
         let n = encode_signed(
             self.seq,
             msg,
-            &LinkKey::new(&OTHER),
+            key,
+            &binding,
             STATION_LINK,
             self.clock,
             &mut buf,
@@ -131,6 +148,11 @@ impl Station {
                         input = rest;
                         if let Err(e) = self.auth.verify(&frame) {
                             panic!("robot frame {:?} refused: {e}", frame.header.kind);
+                        }
+                        if let Message::HelloReply(r) = &frame.message {
+                            if r.accepted {
+                                self.auth.bind(Binding::new(r.session, r.robot_id));
+                            }
                         }
                         seen.push(match frame.message {
                             Message::HelloReply(r) => Seen::HelloReply {
@@ -187,6 +209,32 @@ fn unsigned_and_forged_commands_are_refused_and_no_motor_moves() {
     // The same command signed with the key is obeyed: the refusals above were the key's doing.
     let seq = s.seq;
     s.send(&teleop());
+    let seen = s.run(100);
+    assert_eq!(Station::replies(&seen), [&Seen::Ack(seq)]);
+    assert_ne!(s.hal.motors, MotorCommand::STOP);
+}
+
+#[test]
+fn a_command_signed_for_another_robot_or_session_is_refused_and_no_motor_moves() {
+    // A fleet shares one key: robot 2's signed teleop, moved onto this robot's line (robot 1,
+    // session 7), and one of an earlier session are both refused, as forgeries are.
+    let mut s = manual_session();
+    let moves = s.hal.motor_moves;
+    let own = s.auth.binding();
+    assert_eq!((own.session, own.robot_id), (7, 1));
+    let key = LinkKey::new(&KEY);
+    s.send_signed_as(&key, Binding::new(7, 2), &teleop());
+    s.send_signed_as(&key, Binding::new(6, 1), &teleop());
+    let seen = s.run(100);
+    assert!(Station::replies(&seen).is_empty(), "{seen:?}");
+    assert_eq!(
+        s.hal.motor_moves, moves,
+        "a frame for another robot moved a motor"
+    );
+    assert_eq!(s.robot.link().auth_stats().bad_signature, 2);
+    // Bound to this robot and session, the same command is obeyed.
+    let seq = s.seq;
+    s.send_signed_as(&key, own, &teleop());
     let seen = s.run(100);
     assert_eq!(Station::replies(&seen), [&Seen::Ack(seq)]);
     assert_ne!(s.hal.motors, MotorCommand::STOP);

@@ -33,6 +33,10 @@ struct Bench {
     hal: ScriptedHal,
     seq: u16,
     dec: FrameDecoder,
+    /// The telemetry rate the last `HelloReply` stated.
+    reply_hz: Option<u8>,
+    /// Every `Progress` report, in order.
+    progress: Vec<Progress>,
 }
 
 impl Bench {
@@ -53,6 +57,8 @@ impl Bench {
             hal,
             seq: 0,
             dec: FrameDecoder::new(),
+            reply_hz: None,
+            progress: Vec::new(),
         }
     }
 
@@ -105,6 +111,11 @@ impl Bench {
                 Feed::NeedMore => break,
                 Feed::Error { error, .. } => panic!("robot sent a bad frame: {error}"),
                 Feed::Frame { frame, rest } => {
+                    match frame.message {
+                        Message::HelloReply(r) => self.reply_hz = Some(r.telemetry_hz),
+                        Message::Progress(p) => self.progress.push(p),
+                        _ => {}
+                    }
                     seen.push(match frame.message {
                         Message::HelloReply(r) => Seen::HelloReply {
                             accepted: r.accepted,
@@ -483,6 +494,44 @@ fn refused_commands_change_nothing_and_say_why() {
             }
         }]
     );
+}
+
+#[test]
+fn a_new_session_starts_at_the_default_rate_and_its_hello_reply_says_so() {
+    // The rate set in one session does not carry over (PROTOCOL.md §4): the reply of the
+    // next handshake states the rate the robot then sends at, as GetParam reads it.
+    let mut b = Bench::new(&KHEPERA);
+    b.handshake();
+    assert_eq!(b.reply_hz, Some(10));
+    b.command(Command::SetTelemetryRate { hz: 20 });
+    b.run_alive(1000);
+    b.handshake();
+    assert_eq!(b.reply_hz, Some(10), "the HelloReply's telemetry_hz");
+    let seen = b.run_alive(2000);
+    let n = seen
+        .iter()
+        .filter(|s| matches!(s, Seen::Telemetry(_)))
+        .count();
+    assert!((19..=21).contains(&n), "10 Hz over 2 s gave {n}");
+}
+
+#[test]
+fn the_progress_sent_on_entering_a_go_to_names_the_distance_left() {
+    let mut b = Bench::new(&MICRO_RATO);
+    b.handshake();
+    b.hal.compass = Some(0.0);
+    b.command(Command::GoTo(PointMm {
+        x_mm: 3000,
+        y_mm: 500,
+    }));
+    b.run(5);
+    let first = b.progress.first().expect("a report on entering GoTo");
+    assert_eq!(first.mode, Mode::GoTo);
+    // From (0.5, 0.5): 2.5 m.
+    let left = first
+        .distance_left_mm
+        .expect("GoTo reports its distance left");
+    assert!((2490..=2510).contains(&left), "{left} mm");
 }
 
 #[test]

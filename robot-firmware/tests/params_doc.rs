@@ -6,7 +6,7 @@
 
 use protocol::caps;
 use robot_firmware::params::PARAMS;
-use robot_firmware::{AnyRobot, RobotOptions, KHEPERA, MICRO_RATO};
+use robot_firmware::{AnyRobot, RobotOptions, ALICE, KHEPERA, MICRO_RATO};
 
 const BEGIN: &str = "<!-- parameter table: generated from robot-firmware/src/params.rs by \
                      robot-firmware/tests/params_doc.rs -->";
@@ -47,9 +47,10 @@ fn needs(bits: u32) -> String {
 fn table() -> String {
     let mut khepera = robot(&KHEPERA);
     let mut rato = robot(&MICRO_RATO);
+    let mut alice = robot(&ALICE);
     let mut out = String::from(
         "| id | name | unit | min | max | whole | default: khepera | default: micro-rato | \
-         needs | what it does |\n|---|---|---|---|---|---|---|---|---|---|\n",
+         default: alice | needs | what it does |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let default = |r: &mut AnyRobot, id: u16| match r.param(id) {
         Ok(v) => format!("{v}"),
@@ -58,7 +59,7 @@ fn table() -> String {
     };
     for p in PARAMS.iter() {
         out.push_str(&format!(
-            "| {} | `{}` | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | `{}` | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             p.id,
             p.name,
             p.unit,
@@ -67,6 +68,7 @@ fn table() -> String {
             if p.integer { "yes" } else { "" },
             default(&mut khepera, p.id),
             default(&mut rato, p.id),
+            default(&mut alice, p.id),
             needs(p.requires),
             p.desc.replace('|', "\\|"),
         ));

@@ -103,6 +103,8 @@ fn an_interrupted_upload_resumes_from_the_robots_next() {
     let mut st = Station::new(&MICRO_RATO);
     assert_eq!(st.upload_object(ObjectKind::Map, &map), Outcome::Complete);
     let mut first = Sender::for_object(ObjectKind::Map, &bytes, 1).unwrap();
+    // Chunks of the largest size, as on a line measured clean.
+    first.set_chunk(224);
     // Two chunks (448 bytes) get through, then the line takes no more: the scripted line
     // delivers at once, so without a limit the whole window would land in one millisecond.
     let mut chunks = 0;

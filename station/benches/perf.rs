@@ -108,7 +108,7 @@ fn driven_app(seconds: u32, hz: u32, size: (u16, u16)) -> App {
     let mut actions = Vec::new();
     feed.advance_to(&rec.records, rec.duration_us(), &mut actions);
     for a in actions {
-        app.update(a);
+        app.update(a.into());
     }
     app
 }
@@ -149,8 +149,9 @@ fn ten_minutes() -> [(&'static str, Work); 4] {
 fn mcap(bytes: &[u8], enc: Encoding) -> usize {
     let rec = Recording::parse_strict(bytes).unwrap();
     let out = std::io::BufWriter::new(Vec::with_capacity(64 << 20));
-    station::export::mcap::write(&rec, enc, out, std::path::Path::new("bench.mcap")).unwrap()
-        as usize
+    station::export::mcap::write(&rec, enc, out, std::path::Path::new("bench.mcap"))
+        .unwrap()
+        .messages as usize
 }
 
 /// One-shot figures, printed even without `--bench`.

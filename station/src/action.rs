@@ -7,7 +7,7 @@
 
 use protocol::Mode;
 
-use crate::app::View;
+use crate::app::view::View;
 use crate::link::LinkEvent;
 
 /// One change to the app.
@@ -107,11 +107,46 @@ pub enum Action {
     /// The recorder started, finished or failed.
     Recording(crate::record::live::RecordingNote),
     /// Upload, download, plan on the robot, execute, explore (`app::transfers`).
-    Transfer(crate::app::transfers::TransferAction),
+    Transfer(TransferAction),
     /// Fleet: select robot `i` (0-based) for the panels, the keys and the commands.
     SelectRobot(usize),
     /// Fleet: select the next (+1) or previous (-1) robot.
     StepRobot(i32),
     /// Fleet: send `Stop` to every connected robot.
     StopAll,
+}
+
+/// What a recording replays as is what the live link would have said.
+impl From<station_core::replay::ReplayEvent> for Action {
+    fn from(e: station_core::replay::ReplayEvent) -> Self {
+        match e {
+            station_core::replay::ReplayEvent::Tick { now_ms } => Action::Tick { now_ms },
+            station_core::replay::ReplayEvent::Link(ev) => Action::Link(ev),
+        }
+    }
+}
+
+/// A transfer key or prompt edit.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum TransferAction {
+    /// `u`: open the upload prompt.
+    OpenPrompt,
+    PromptInput(char),
+    PromptBackspace,
+    /// Ctrl-U: clear the prompt (as in a shell).
+    PromptClear,
+    /// End or an arrow: keep the suggestion and edit it.
+    PromptKeep,
+    /// Enter: upload the file named in the prompt.
+    PromptCommit,
+    /// Esc: close the prompt.
+    PromptCancel,
+    /// `M`: download the robot's map and show it.
+    DownloadMap,
+    /// `O`: segment and plan on the robot, then download and draw the plan.
+    PlanOnRobot,
+    /// `X`: execute the robot's installed plan.
+    ExecutePlan,
+    /// `E`: start exploring.
+    StartExploration,
 }

@@ -8,17 +8,21 @@
 //! itself); every command sent is remembered until its `CommandDone` arrives, so its outcome
 //! (with the robot's Nack reason) reaches the log and the parameter editor. Cannot fail.
 
-pub mod arena;
+pub use station_core::arena;
+pub use station_core::format::{mode_from_index, mode_name, mode_name_i32, MODES};
 pub mod fleet;
 pub mod forage;
 pub mod history;
+pub mod layout;
 pub mod localization;
 pub mod log;
 pub mod params;
 pub mod plan_target;
-pub mod qt_feed;
-pub mod qt_state;
+pub use station_core::qt_state;
 pub mod transfers;
+pub mod view;
+
+pub use view::View;
 
 use std::collections::HashMap;
 
@@ -68,43 +72,6 @@ mod groups {
     /// `R` (and any burst of reads): one summary line.
     pub const PARAM_READ: Group = Group::new("param read").summary("parameters read");
     pub const SUPERSEDED: Group = Group::new("superseded");
-}
-
-/// The main area's content.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum View {
-    /// Everything that fits, arranged by the terminal's size.
-    Dashboard,
-    Sensors,
-    Charts,
-    Map,
-    Link,
-    Log,
-    Params,
-}
-
-impl View {
-    pub const ALL: [View; 7] = [
-        View::Dashboard,
-        View::Sensors,
-        View::Charts,
-        View::Map,
-        View::Link,
-        View::Log,
-        View::Params,
-    ];
-
-    pub fn title(&self) -> &'static str {
-        match self {
-            View::Dashboard => "Dashboard",
-            View::Sensors => "Sensors",
-            View::Charts => "Charts",
-            View::Map => "Map",
-            View::Link => "Link",
-            View::Log => "Log",
-            View::Params => "Parameters",
-        }
-    }
 }
 
 /// Keyboard teleop state.
@@ -803,7 +770,7 @@ impl App {
             EventCode::ModeChanged => {
                 (Level::Info, format!("mode changed to {}", mode_name_i32(v)))
             }
-            EventCode::GoalReached => (Level::Info, "goal reached".into()),
+            EventCode::GoalReached => (Level::Info, self.arrival_text()),
             EventCode::FailsafeStop => (
                 Level::Warn,
                 format!("failsafe stop after {v} ms of silence"),
@@ -888,6 +855,18 @@ impl App {
                 (Level::Info, format!("parameter {} changed", param_name(id)))
             }
         };
+        // A task that ended (or a mode that changed) takes its progress with it: the status
+        // line shows what the robot reports now, not the last report of a task that is over.
+        if matches!(
+            e.code,
+            EventCode::ModeChanged
+                | EventCode::GoalReached
+                | EventCode::PlanFinished
+                | EventCode::PlanAborted
+                | EventCode::NoProgress
+        ) {
+            self.progress = None;
+        }
         self.note_grouped(level, Source::Event, text, group);
     }
 
@@ -940,6 +919,9 @@ impl App {
                 }
             }
             CommandOutcome::Nacked { reason, .. } => {
+                if matches!(command, Command::Segment | Command::Plan { .. }) {
+                    self.plan_not_made();
+                }
                 if let Command::SetParam { id, .. } | Command::GetParam { id } = command {
                     if reason == protocol::NackReason::Unsupported {
                         self.params.set_absent(id.0);
@@ -992,6 +974,9 @@ impl App {
                 Some(groups::SUPERSEDED),
             ),
             CommandOutcome::Failed(why) => {
+                if matches!(command, Command::Segment | Command::Plan { .. }) {
+                    self.plan_not_made();
+                }
                 if let Command::SetParam { id, .. } | Command::GetParam { id } = command {
                     self.params.set_failed(id.0, why.to_string());
                 }
@@ -1086,8 +1071,8 @@ impl App {
     fn log_rows(&self) -> usize {
         let screen = ratatui::layout::Rect::new(0, 0, self.size.0, self.size.1);
         let rows = |app: &App| {
-            crate::ui::areas(screen, app)
-                .find(crate::ui::Panel::Log)
+            layout::areas(screen, app)
+                .find(layout::Panel::Log)
                 .map(|r| usize::from(r.height.saturating_sub(2)))
         };
         rows(self).unwrap_or_else(|| usize::from(self.size.1.saturating_sub(4)))
@@ -1100,49 +1085,6 @@ fn pose_m(p: &protocol::Pose) -> (f64, f64, f64) {
         f64::from(p.y_mm) / 1000.0,
         f64::from(p.heading_mrad) / 1000.0,
     )
-}
-
-/// A mode's name for display.
-pub fn mode_name(m: Mode) -> &'static str {
-    match m {
-        Mode::Idle => "Idle",
-        Mode::Manual => "Manual",
-        Mode::GoTo => "GoTo",
-        Mode::Wander => "Wander",
-        Mode::EdgeFollowLeft => "EdgeFollowLeft",
-        Mode::EdgeFollowRight => "EdgeFollowRight",
-        Mode::SeekLight => "SeekLight",
-        Mode::Explore => "Explore",
-        Mode::ExecutePlan => "ExecutePlan",
-        Mode::Forage => "Forage",
-        Mode::Survey => "Survey",
-        Mode::CalibrateLight => "CalibrateLight",
-    }
-}
-
-/// The mode with wire index `i` (as in `Event ModeChanged`).
-pub fn mode_from_index(i: i32) -> Option<Mode> {
-    MODES.get(usize::try_from(i).ok()?).copied()
-}
-
-/// Every mode in wire order; the digit keys 0-9 select the first ten.
-pub const MODES: [Mode; 12] = [
-    Mode::Idle,
-    Mode::Manual,
-    Mode::GoTo,
-    Mode::Wander,
-    Mode::EdgeFollowLeft,
-    Mode::EdgeFollowRight,
-    Mode::SeekLight,
-    Mode::Explore,
-    Mode::ExecutePlan,
-    Mode::Forage,
-    Mode::Survey,
-    Mode::CalibrateLight,
-];
-
-fn mode_name_i32(i: i32) -> String {
-    mode_from_index(i).map_or_else(|| format!("#{i}"), |m| mode_name(m).to_string())
 }
 
 #[cfg(test)]

@@ -10,19 +10,27 @@
 //! refused or did not answer, or the port could not be used.
 
 use std::path::PathBuf;
-use std::process::ExitCode;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
-use protocol::units::{point_mm, OutOfRange};
-use protocol::{Command, Mode, ParamId};
+use clap::{Args, Parser, Subcommand};
 
+use crate::commands::args::{parse_baud, parse_seconds, RequiredPort, StatsPorts};
+use crate::commands::send::SendCmd;
 use crate::link::serial::DEFAULT_BAUD;
 
 /// Terminal control station for small mobile robots over a serial link.
 ///
-/// With no arguments, starts the built-in emulator on a pseudo-terminal and connects to it.
+/// With no arguments, starts the built-in emulator (the micro-rato robot, modelled on Dom
+/// Dinis, in the Micro-Rato'99 labyrinth) on a pseudo-terminal and opens the TUI on it, as
+/// it would open /dev/ttyUSB0; with --port, the TUI on a robot. `?` in the TUI lists the
+/// keys. The commands below do one thing each without the TUI. Guide: docs/station.md.
+///
+/// Examples:
+///   station                                  (the built-in emulator)
+///   station --port /dev/ttyUSB0              (a robot on a serial port)
+///   station --arena builtin:forage           (a simulated Khepera in the foraging arena)
+///   station --robots 3                       (three robots in one simulated world)
 #[derive(Debug, Parser)]
-#[command(name = "station", version, about, long_about = None)]
+#[command(name = "station", version, about, verbatim_doc_comment)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Sub>,
@@ -34,9 +42,10 @@ pub struct Cli {
     /// Without --port the built-in emulator simulates it.
     #[arg(long, value_name = "FILE", global = false)]
     pub arena: Option<PathBuf>,
-    /// The built-in emulator's robot (without --port): default micro-rato, or khepera in
-    /// `builtin:forage` (the foraging robot, with its gripper); `alice` (seed 001, its
-    /// situations feed the QT world model, `T`) in `builtin:alice` unless --arena names another.
+    /// The built-in emulator's robot (without --port): default micro-rato (the Dom Dinis
+    /// robot), or khepera in `builtin:forage` (the foraging robot, with its gripper); `alice`
+    /// (the robot of Zimmer's thesis: its situations feed the QT world model, `T`) in
+    /// `builtin:alice` unless --arena names another.
     #[arg(long, value_enum, global = false)]
     pub profile: Option<emulator::cli::ProfileArg>,
     /// The built-in emulator's start pose `X,Y[,HEADING_DEG]` in metres (without --port;
@@ -86,7 +95,7 @@ pub enum Sub {
           allow_negative_numbers = true)]
         timeout: f64,
         /// Send the command this many times, one after another, and report the round trips'
-        /// p50 / p99 (the README's round-trip figure).
+        /// p50 / p99 (the round-trip figure of docs/performance.md).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000),
           global = true)]
         repeat: u32,
@@ -113,10 +122,10 @@ pub enum Sub {
     /// Read, write, save, load and compare the robot's parameters
     ///
     /// Names and ids are the firmware's table (`list` shows each with its unit, range and
-    /// description). Files are `name = value` lines, `#` comments (README.md, "Parameter
-    /// files"); `load` sets each parameter the file names and reports each change and each
-    /// refusal (exit 1 if any was refused); `diff` exits 1 when the robot differs from the
-    /// file. A bad file is refused with FILE:LINE:COL before the port is opened.
+    /// description). Files are `name = value` lines, `#` comments (docs/station.md,
+    /// "Parameter files"); `load` sets each parameter the file names and reports each change
+    /// and each refusal (exit 1 if any was refused); `diff` exits 1 when the robot differs
+    /// from the file. A bad file is refused with FILE:LINE:COL before the port is opened.
     ///
     /// Examples:
     ///   station params --port /dev/ttyUSB0 list
@@ -125,7 +134,7 @@ pub enum Sub {
     ///   station params --port /dev/ttyUSB0 load robot.parm
     ///   station params --port /dev/ttyUSB0 diff robot.parm
     #[command(verbatim_doc_comment)]
-    Params(crate::params::ParamsArgs),
+    Params(crate::commands::params::ParamsArgs),
     /// Upload a map to the robot: any map file `station plan` reads, or a Map object file
     ///
     /// The map is gridded as `station plan` grids it (--cell, --radius) and sent as a Map
@@ -139,7 +148,7 @@ pub enum Sub {
     ///   station upload-map --port /dev/ttyUSB0 --map builtin:micro-rato-99
     ///   station upload-map --port /dev/ttyUSB0 --map lab.xml --cell 0.25 --json
     #[command(verbatim_doc_comment)]
-    UploadMap(crate::transfer::command::UploadMapArgs),
+    UploadMap(crate::commands::transfer::UploadMapArgs),
     /// Download the robot's map (the one uploaded, or the one it built exploring)
     ///
     /// The file is a Map object (PROTOCOL.md §12), written to a temporary file and renamed
@@ -150,7 +159,7 @@ pub enum Sub {
     ///   station download-map --port /dev/ttyUSB0 --out robot-map.obj
     ///   station download-map --port /dev/ttyUSB0 --ascii
     #[command(verbatim_doc_comment)]
-    DownloadMap(crate::transfer::command::DownloadMapArgs),
+    DownloadMap(crate::commands::transfer::DownloadMapArgs),
     /// Upload a plan to the robot: a Plan object file from `station plan --out-object`
     ///
     /// The robot installs it (any plan it was executing is aborted); `station send execute
@@ -162,7 +171,7 @@ pub enum Sub {
     ///   station upload-plan --port /dev/ttyUSB0 --plan plan.obj
     ///   station send --port /dev/ttyUSB0 execute 0x1234abcd
     #[command(verbatim_doc_comment)]
-    UploadPlan(crate::transfer::command::UploadPlanArgs),
+    UploadPlan(crate::commands::transfer::UploadPlanArgs),
     /// Plan a path on a map file with the robot's own planner; no robot needed
     ///
     /// As the Dom Dinis robot plans: the map becomes a grid (0.3 m cells), its free cells squares, and A* finds
@@ -174,7 +183,7 @@ pub enum Sub {
     ///   station plan --map maze.txt --json          (mazes: cells of half the pitch)
     ///   station plan --map lab.xml --from 0.5,0.5 --to 3.2,2.6 --cell 0.1 --radius 0.12
     #[command(verbatim_doc_comment)]
-    Plan(crate::plan::command::PlanArgs),
+    Plan(crate::commands::plan::PlanArgs),
     /// Segment a map into the free squares the planner searches (Dom Dinis segmentation)
     ///
     /// Squares are in cells: x, y of the corner with the smallest column and row (row 0 is
@@ -183,19 +192,19 @@ pub enum Sub {
     /// Example:
     ///   station segment --map builtin:micro-rato-99 --json
     #[command(verbatim_doc_comment)]
-    Segment(crate::plan::command::SegmentArgs),
+    Segment(crate::commands::plan::SegmentArgs),
     /// Record the link, both directions with timestamps, to a file
     ///
     /// The file is FILE.partial while recording (flushed every second, so a crash loses at
     /// most that) and is renamed to FILE when the recording ends: at --seconds, or on Ctrl-C.
     /// Losing and regaining the robot is recorded as a gap. Without --port, the built-in
-    /// emulator is started and recorded. The format is in README.md, "Recordings".
+    /// emulator is started and recorded. The format is in docs/recordings.md.
     ///
     /// Examples:
     ///   station record --port /dev/ttyUSB0 --out run.rec --seconds 60
     ///   station record --out demo.rec --seconds 20 --rate 50 --json
     #[command(verbatim_doc_comment)]
-    Record(crate::record::command::RecordArgs),
+    Record(crate::commands::record::RecordArgs),
     /// Replay a recording in the TUI (pause, seek, speed), or summarise it with --json
     ///
     /// The robot's recorded bytes go through the station's own link code, so every view
@@ -208,7 +217,7 @@ pub enum Sub {
     ///   station replay run.rec --speed 4 --arena lab.xml
     ///   station replay run.rec --json        (duration, frames, telemetry rate, gaps, errors)
     #[command(verbatim_doc_comment)]
-    Replay(crate::replay::command::ReplayArgs),
+    Replay(crate::commands::replay::ReplayArgs),
     /// Export a recording to MCAP (Foxglove) and/or CSV (telemetry, one row per frame)
     ///
     /// Outputs are written to a temporary file and renamed when complete. A damaged
@@ -218,8 +227,8 @@ pub enum Sub {
     ///   station export run.rec --mcap run.mcap
     ///   station export run.rec --csv run.csv --mcap run.mcap
     #[command(verbatim_doc_comment)]
-    Export(crate::export::ExportArgs),
-    /// Re-run a recorded run through the firmware's own code (seed 001 retracing)
+    Export(crate::commands::export::ExportArgs),
+    /// Re-run a recorded run through the firmware's own code (retracing, Zimmer's ALICE thesis §3.1.2)
     ///
     /// The recording must hold the robot's hardware trace (parameter 34 hal_trace, message
     /// kind 15; `robot-emulator --hal-trace` streams it from power-up). Every pass of the
@@ -235,22 +244,24 @@ pub enum Sub {
     ///
     /// Examples:
     ///   station retrace run.rec
-    ///   station retrace run.rec --param wheel_distance_mm=53 --json
+    ///   station retrace run.rec --param odo_wheel_distance_mm=53.3 --json
     #[command(verbatim_doc_comment)]
-    Retrace(crate::retrace::RetraceArgs),
+    Retrace(crate::commands::retrace::RetraceArgs),
     /// Train the light -> angle map (Khepera light calibration) from a recording of a calibrating robot
     ///
-    /// Uses the telemetry recorded while a Khepera turned next to a light (mode
-    /// calibrate-light): labels from each full turn (or from --light X,Y), the firmware's own
-    /// network code, every fifth example held out. Prints the held-out mean/max angle error
-    /// and writes the map (FILE.json, or binary for any other name) atomically.
+    /// The Kohonen map of the Khepera foraging paper (Löffler, Klahold, Rückert 2001, §5.3):
+    /// 60 neurons learn the light's bearing from the six front light sensors. Uses the
+    /// telemetry recorded while a Khepera turned next to a light (mode calibrate-light):
+    /// labels from each full turn (or from --light X,Y), the firmware's own network code,
+    /// every fifth example held out. Prints the held-out mean/max angle error and writes the
+    /// map (FILE.json, or binary for any other name) atomically.
     ///
     /// Examples:
     ///   station calibrate cal.rec --out som.json
     ///   station calibrate cal.rec --out som.bin --light 0.40,0.30 --json
     ///   station calibrate odometry --port /dev/ttyUSB0   (odometry laps on the robot)
     #[command(verbatim_doc_comment)]
-    Calibrate(crate::calibrate::CalibrateCommand),
+    Calibrate(crate::commands::calibrate::CalibrateCommand),
     /// Upload a light -> angle calibration to the robot (Khepera light calibration)
     ///
     /// The file is what `station calibrate --out` or `station download-calibration --out`
@@ -263,7 +274,7 @@ pub enum Sub {
     ///   station calibrate cal.rec --out som.json
     ///   station upload-calibration --port /dev/ttyUSB0 --calibration som.json
     #[command(verbatim_doc_comment)]
-    UploadCalibration(crate::transfer::calibration::UploadCalibrationArgs),
+    UploadCalibration(crate::commands::calibration::UploadCalibrationArgs),
     /// Download the robot's light -> angle calibration to a file (Khepera light calibration)
     ///
     /// The network the robot trained in mode calibrate-light (or was given), as JSON
@@ -274,8 +285,8 @@ pub enum Sub {
     /// Examples:
     ///   station download-calibration --port /dev/ttyUSB0 --out som.bin
     #[command(verbatim_doc_comment)]
-    DownloadCalibration(crate::transfer::calibration::DownloadCalibrationArgs),
-    /// Mächler's unsupervised landmarks and places (seed 003 ch. 3), run and played back here
+    DownloadCalibration(crate::commands::calibration::DownloadCalibrationArgs),
+    /// Unsupervised landmarks and places (Mächler's thesis, ch. 3), run and played back here
     ///
     /// Runs the unsupervised-places scenario on the station with the firmware's own code and
     /// plays it back: landmarks on the map, the class streams, matches as they happen,
@@ -289,363 +300,10 @@ pub enum Sub {
     Places(crate::places::PlacesArgs),
 }
 
-/// The ports `station stats` watches: one, or several at once (`--port A --port B`), each
-/// reported on its own with its robot's id.
-#[derive(Debug, Args, Clone)]
-pub struct StatsPorts {
-    /// Serial port (or pty) of a robot; repeat it to watch several.
-    #[arg(long, short = 'p', value_name = "PATH", required = true)]
-    pub port: Vec<PathBuf>,
-    /// Baud rate (ignored by ptys).
-    #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
-    pub baud: u32,
-    /// Link authentication key (PROTOCOL.md §13), for every port.
-    #[arg(long, value_name = "PATH")]
-    pub key_file: Option<PathBuf>,
-}
-
-impl StatsPorts {
-    /// Each port as a one-port argument set.
-    pub fn each(&self) -> Vec<RequiredPort> {
-        self.port
-            .iter()
-            .map(|p| RequiredPort {
-                port: p.clone(),
-                baud: self.baud,
-                key_file: self.key_file.clone(),
-            })
-            .collect()
-    }
-}
-
-/// A port that headless commands require.
-#[derive(Debug, Args, Clone)]
-pub struct RequiredPort {
-    /// Serial port (or pty) of the robot.
-    #[arg(long, short = 'p', value_name = "PATH")]
-    pub port: PathBuf,
-    /// Baud rate (ignored by ptys).
-    #[arg(long, short = 'b', default_value_t = DEFAULT_BAUD, value_parser = parse_baud)]
-    pub baud: u32,
-    /// Link authentication key: a file of 64 hex digits, the robot's key (PROTOCOL.md §13).
-    /// Every frame is then signed, and only frames signed with it are accepted.
-    #[arg(long, value_name = "PATH")]
-    pub key_file: Option<PathBuf>,
-}
-
-/// Refuses a port named twice among several `--port`s (two link tasks would fight over one
-/// device); the one check for `station`, `record` and `stats`.
-pub fn distinct_ports<'a>(
-    ports: impl IntoIterator<Item = &'a std::path::Path>,
-) -> Result<(), String> {
-    let mut seen: Vec<&std::path::Path> = Vec::new();
-    for p in ports {
-        if seen.contains(&p) {
-            return Err(format!(
-                "--port {} is given twice; each link needs its own port",
-                crate::terminal_text::printable(&p.display().to_string())
-            ));
-        }
-        seen.push(p);
-    }
-    Ok(())
-}
-
-/// The key in a `--key-file`, if one was given; the error names the file and the fault.
-pub fn load_key(path: Option<&std::path::Path>) -> Result<Option<protocol::LinkKey>, String> {
-    Ok(load_key_bytes(path)?.map(|k| protocol::LinkKey::new(&k)))
-}
-
-/// The raw key in a `--key-file`, for a built-in emulator that must share it.
-pub fn load_key_bytes(
-    path: Option<&std::path::Path>,
-) -> Result<Option<[u8; protocol::sign::KEY_LEN]>, String> {
-    path.map(|p| emulator::link::read_key_file(p).map_err(|e| format!("--key-file: {e}")))
-        .transpose()
-}
-
-/// The commands `send` knows.
-#[derive(Debug, Subcommand, Clone, PartialEq)]
-pub enum SendCmd {
-    /// Switch mode.
-    Mode { mode: ModeArg },
-    /// Manual velocity: forward mm/s, turn mrad/s (counter-clockwise positive).
-    #[command(allow_negative_numbers = true)]
-    Teleop {
-        /// Forward speed, mm/s, -2000 to 2000 (the robot clamps it to its teleop_max_mm_s).
-        #[arg(value_parser = clap::value_parser!(i16).range(-2000..=2000))]
-        v_mm_s: i16,
-        /// Turn rate, mrad/s, -20000 to 20000, positive turning left (counter-clockwise).
-        #[arg(value_parser = clap::value_parser!(i16).range(-20000..=20000))]
-        w_mrad_s: i16,
-    },
-    /// Drive to a point, metres in the map frame.
-    #[command(allow_negative_numbers = true)]
-    Goto {
-        /// X, metres in the map frame (x right).
-        #[arg(value_parser = parse_metres)]
-        x: f64,
-        /// Y, metres in the map frame (y up).
-        #[arg(value_parser = parse_metres)]
-        y: f64,
-    },
-    /// Read or write a parameter by name or id (the firmware's table; a wrong name lists them).
-    Param {
-        #[command(subcommand)]
-        op: ParamOp,
-    },
-    /// Stop the motors and go idle.
-    Stop,
-    /// Telemetry rate in Hz (0 = off, at most 50).
-    Rate {
-        /// Telemetry frames a second, 0 to 50.
-        #[arg(value_parser = clap::value_parser!(u8).range(0..=50))]
-        hz: u8,
-    },
-    /// Start exploring: the robot searches for the goal and maps the arena as it goes
-    ///
-    /// Mode Explore (the Dom Dinis search); needs a compass and a beacon sensor (micro-rato). Follow
-    /// the map it builds with `station download-map --ascii`.
-    Explore,
-    /// Segment the robot's map into free squares (Dom Dinis segmentation).
-    Segment,
-    /// Plan on the robot; prints the new plan's id, which `execute` takes
-    ///
-    /// From where the robot believes it is to its map's goal, unless --from / --to say
-    /// otherwise. The robot segments its map first if needed.
-    Plan {
-        /// Start, metres in the map frame [default: where the robot believes it is].
-        #[arg(long, value_name = "X,Y", value_parser = crate::plan::command::parse_point,
-              allow_hyphen_values = true)]
-        from: Option<(f64, f64)>,
-        /// Goal, metres [default: the goal of the robot's map].
-        #[arg(long, value_name = "X,Y", value_parser = crate::plan::command::parse_point,
-              allow_hyphen_values = true)]
-        to: Option<(f64, f64)>,
-    },
-    /// Execute the robot's installed plan, named by its id
-    ///
-    /// ID is 0x-hex or decimal, as `send plan` and `upload-plan` print it; another id is
-    /// refused (plan id mismatch), so the robot never drives a plan you did not mean.
-    Execute {
-        #[arg(value_name = "ID", value_parser = parse_plan_id)]
-        plan_id: u32,
-    },
-}
-
-#[derive(Debug, Subcommand, Clone, PartialEq)]
-pub enum ParamOp {
-    /// Set a parameter; the robot answers with the value in force or refuses with a reason.
-    #[command(allow_negative_numbers = true)]
-    Set {
-        #[arg(value_parser = parse_param)]
-        name: u16,
-        #[arg(value_parser = parse_value)]
-        value: f32,
-    },
-    /// Read a parameter.
-    Get {
-        #[arg(value_parser = parse_param)]
-        name: u16,
-    },
-}
-
-/// Mode names on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ModeArg {
-    Idle,
-    Manual,
-    Goto,
-    Wander,
-    EdgeLeft,
-    EdgeRight,
-    SeekLight,
-    Explore,
-    ExecutePlan,
-    Forage,
-    /// Floor-grid line correction: wander over the floor grid correcting odometry at every line.
-    Survey,
-    /// Khepera light calibration: turn next to a light and train the light -> angle map.
-    CalibrateLight,
-}
-
-impl From<ModeArg> for Mode {
-    fn from(m: ModeArg) -> Mode {
-        match m {
-            ModeArg::Idle => Mode::Idle,
-            ModeArg::Manual => Mode::Manual,
-            ModeArg::Goto => Mode::GoTo,
-            ModeArg::Wander => Mode::Wander,
-            ModeArg::EdgeLeft => Mode::EdgeFollowLeft,
-            ModeArg::EdgeRight => Mode::EdgeFollowRight,
-            ModeArg::SeekLight => Mode::SeekLight,
-            ModeArg::Explore => Mode::Explore,
-            ModeArg::ExecutePlan => Mode::ExecutePlan,
-            ModeArg::Forage => Mode::Forage,
-            ModeArg::Survey => Mode::Survey,
-            ModeArg::CalibrateLight => Mode::CalibrateLight,
-        }
-    }
-}
-
-impl SendCmd {
-    /// The wire command; a point beyond the wire's millimetres is refused by name.
-    pub fn to_command(&self) -> Result<Command, OutOfRange> {
-        Ok(match *self {
-            SendCmd::Mode { mode } => Command::SetMode(mode.into()),
-            SendCmd::Teleop { v_mm_s, w_mrad_s } => Command::Teleop { v_mm_s, w_mrad_s },
-            SendCmd::Goto { x, y } => Command::GoTo(point_mm(["goto X", "goto Y"], (x, y))?),
-            SendCmd::Param {
-                op: ParamOp::Set { name, value },
-            } => Command::SetParam {
-                id: ParamId(name),
-                value,
-            },
-            SendCmd::Param {
-                op: ParamOp::Get { name },
-            } => Command::GetParam { id: ParamId(name) },
-            SendCmd::Stop => Command::Stop,
-            SendCmd::Rate { hz } => Command::SetTelemetryRate { hz },
-            SendCmd::Explore => Command::StartExploration,
-            SendCmd::Segment => Command::Segment,
-            SendCmd::Plan { from, to } => Command::Plan {
-                from: from
-                    .map(|p| point_mm(["--from X", "--from Y"], p))
-                    .transpose()?,
-                to: to.map(|p| point_mm(["--to X", "--to Y"], p)).transpose()?,
-            },
-            SendCmd::Execute { plan_id } => Command::ExecutePlan { plan_id },
-        })
-    }
-}
-
-/// A plan id: `0x`-prefixed hex (as printed) or decimal.
-fn parse_plan_id(s: &str) -> Result<u32, String> {
-    let t = s.trim();
-    let parsed = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
-        Some(hex) => u32::from_str_radix(hex, 16),
-        None => t.parse::<u32>(),
-    };
-    parsed.map_err(|_| format!("{s:?} is not a plan id (0x-hex like 0x7692f253, or decimal)"))
-}
-
-pub(crate) fn parse_baud(s: &str) -> Result<u32, String> {
-    match s.parse::<u32>() {
-        Ok(b) if (50..=4_000_000).contains(&b) => Ok(b),
-        Ok(b) => Err(format!("{b} is not a usable baud rate (50 ..= 4000000)")),
-        Err(_) => Err(format!("{s:?} is not a number")),
-    }
-}
-
-pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 && v <= 86_400.0 => Ok(v),
-        Ok(v) => Err(format!("{v} s is out of range (> 0, at most a day)")),
-        Err(_) => Err(format!("{s:?} is not a number of seconds")),
-    }
-}
-
-fn parse_metres(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v.abs() <= 1000.0 => Ok(v),
-        Ok(v) if v.is_finite() => Err(format!("{v} m is too far (at most 1000 m)")),
-        _ => Err(format!("{s:?} is not a distance in metres")),
-    }
-}
-
-pub(crate) fn parse_value(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(format!("{s:?} is not a finite number")),
-    }
-}
-
-/// A parameter by name or id.
-pub(crate) fn parse_param(s: &str) -> Result<u16, String> {
-    use robot_firmware::params::{by_name, info, PARAMS};
-    if let Some(p) = by_name(s) {
-        return Ok(p.id);
-    }
-    if let Some(p) = s.parse::<u16>().ok().and_then(info) {
-        return Ok(p.id);
-    }
-    let close: Vec<&str> = PARAMS
-        .iter()
-        .map(|p| p.name)
-        .filter(|n| n.contains(s) || s.contains(n.split('_').next().unwrap_or(n)))
-        .collect();
-    let all: Vec<&str> = PARAMS.iter().map(|p| p.name).collect();
-    Err(if close.is_empty() {
-        format!("unknown parameter {s:?}; known: {}", all.join(", "))
-    } else {
-        format!(
-            "unknown parameter {s:?}; did you mean {}?",
-            close.join(", ")
-        )
-    })
-}
-
-/// Parses the process arguments and runs; the exit code to return.
-pub fn run() -> ExitCode {
-    // Before the TUI's own hook, which chains to this one.
-    emulator::cli::exit_quietly_on_broken_pipe();
-    let cli = Cli::parse();
-    // Just before the runtime's clock starts: the TUI's timers then share its wake-ups.
-    crate::pace::start();
-    let rt = match tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()
-    {
-        Ok(rt) => rt,
-        Err(e) => {
-            eprintln!("station: cannot start the async runtime: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    match rt.block_on(crate::headless::dispatch(cli)) {
-        Ok(code) => code,
-        Err(e) => {
-            // Errors quote file names, file contents and robot refusals.
-            eprintln!(
-                "station: {}",
-                crate::terminal_text::printable_text(&error_text(&e))
-            );
-            ExitCode::FAILURE
-        }
-    }
-}
-
-/// The error and its causes, `: `-separated, leaving out a cause the message before it
-/// already ends with (our file errors say "{path}: {source}" and keep the source as a cause).
-fn error_text(e: &anyhow::Error) -> String {
-    let mut text = e.to_string();
-    for cause in e.chain().skip(1) {
-        let cause = cause.to_string();
-        if !text.ends_with(&cause) {
-            text.push_str(": ");
-            text.push_str(&cause);
-        }
-    }
-    text
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use protocol::PointMm;
-
-    #[test]
-    fn an_error_that_already_quotes_its_cause_prints_it_once() {
-        let read = crate::record::RecordError::Read {
-            path: "x.rec".into(),
-            source: crate::record::ReadError::Truncated { offset: 12 },
-        };
-        let e = anyhow::Error::new(read).context("cannot replay");
-        assert_eq!(
-            error_text(&e),
-            "cannot replay: x.rec: truncated at byte 12: the file ends inside a record (a torn tail)"
-        );
-    }
+    use protocol::{Command, Mode, ParamId, PointMm};
 
     fn parse(args: &[&str]) -> Result<Cli, clap::Error> {
         Cli::try_parse_from(std::iter::once("station").chain(args.iter().copied()))

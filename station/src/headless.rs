@@ -9,32 +9,28 @@
 use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
-use std::time::Duration;
+
+use clap::Parser;
 
 use anyhow::{bail, Context as _};
-use protocol::AckInfo;
-use serde_json::json;
-use tokio::time::Instant;
 
 use crate::app::arena::ArenaOverlay;
-use crate::app::params::format_param_id;
 use crate::app::{App, AppOptions};
 use crate::builtin::start_builtin_emulator_with;
-use crate::cli::{Cli, RequiredPort, SendCmd, Sub};
-use crate::link::api::{command_text, param_name, refusal_text};
-use crate::link::robot_ids::duplicates;
+use crate::cli::{Cli, Sub};
+use crate::commands::ports::ports;
+use crate::commands::send::send;
+use crate::commands::stats::stats;
 use crate::link::serial::{open_exclusive, SerialConnector};
-use crate::link::{
-    spawn_link, CommandOutcome, Connection, LinkEvent, LinkOptions, LinkStats, PeerInfo,
-    RunningLink,
-};
+use crate::link::{spawn_link, LinkOptions};
 use crate::plan::PlanState;
 
+/// Runs what the command line asked for.
 /// Runs what the command line asked for.
 pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         None => {
-            let key = crate::cli::load_key_bytes(cli.port.key_file.as_deref())
+            let key = crate::commands::args::load_key_bytes(cli.port.key_file.as_deref())
                 .map_err(anyhow::Error::msg)?;
             // Several robots: one link each (`fleet`).
             if cli.port.port.len() > 1 || cli.port.robots.is_some_and(|n| n > 1) {
@@ -72,19 +68,19 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             json,
             timeout,
         }) => stats(&port, seconds, json, timeout).await,
-        Some(Sub::Params(args)) => crate::params::run(&args).await,
-        Some(Sub::UploadMap(args)) => crate::transfer::command::upload_map(&args).await,
-        Some(Sub::DownloadMap(args)) => crate::transfer::command::download_map(&args).await,
-        Some(Sub::UploadPlan(args)) => crate::transfer::command::upload_plan(&args).await,
-        Some(Sub::Plan(args)) => crate::plan::command::plan(&args),
-        Some(Sub::Segment(args)) => crate::plan::command::segment(&args),
-        Some(Sub::Record(args)) => crate::record::command::run(&args).await,
-        Some(Sub::Replay(args)) => crate::replay::command::run(&args).await,
-        Some(Sub::Export(args)) => crate::export::run(&args),
-        Some(Sub::Retrace(args)) => crate::retrace::run(&args),
-        Some(Sub::Calibrate(args)) => crate::calibrate::dispatch(&args).await,
-        Some(Sub::UploadCalibration(args)) => crate::transfer::calibration::upload(&args).await,
-        Some(Sub::DownloadCalibration(args)) => crate::transfer::calibration::download(&args).await,
+        Some(Sub::Params(args)) => crate::commands::params::run(&args).await,
+        Some(Sub::UploadMap(args)) => crate::commands::transfer::upload_map(&args).await,
+        Some(Sub::DownloadMap(args)) => crate::commands::transfer::download_map(&args).await,
+        Some(Sub::UploadPlan(args)) => crate::commands::transfer::upload_plan(&args).await,
+        Some(Sub::Plan(args)) => crate::commands::plan::plan(&args),
+        Some(Sub::Segment(args)) => crate::commands::plan::segment(&args),
+        Some(Sub::Record(args)) => crate::commands::record::run(&args).await,
+        Some(Sub::Replay(args)) => crate::commands::replay::run(&args).await,
+        Some(Sub::Export(args)) => crate::commands::export::run(&args),
+        Some(Sub::Retrace(args)) => crate::commands::retrace::run(&args),
+        Some(Sub::Calibrate(args)) => crate::commands::calibrate::dispatch(&args).await,
+        Some(Sub::UploadCalibration(args)) => crate::commands::calibration::upload(&args).await,
+        Some(Sub::DownloadCalibration(args)) => crate::commands::calibration::download(&args).await,
         Some(Sub::Places(args)) => crate::places::command(&args),
     }
 }
@@ -187,528 +183,64 @@ async fn interactive(
     Ok(ExitCode::SUCCESS)
 }
 
-fn ports(json: bool) -> anyhow::Result<ExitCode> {
-    let serial = serialport::available_ports().unwrap_or_default();
-    let mut ptys: Vec<String> = std::fs::read_dir("/dev/pts")
-        .map(|d| {
-            d.flatten()
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| n.chars().all(|c| c.is_ascii_digit()))
-                .map(|n| format!("/dev/pts/{n}"))
-                .collect()
-        })
-        .unwrap_or_default();
-    ptys.sort_by_key(|p| p.rsplit('/').next().and_then(|n| n.parse::<u32>().ok()));
-    let describe = |t: &serialport::SerialPortType| match t {
-        serialport::SerialPortType::UsbPort(u) => format!(
-            "USB {:04x}:{:04x} {} {}",
-            u.vid,
-            u.pid,
-            u.manufacturer.as_deref().unwrap_or(""),
-            u.product.as_deref().unwrap_or("")
-        )
-        .trim_end()
-        .to_string(),
-        serialport::SerialPortType::PciPort => "PCI".into(),
-        serialport::SerialPortType::BluetoothPort => "Bluetooth".into(),
-        serialport::SerialPortType::Unknown => "serial".into(),
+/// Parses the process arguments and runs; the exit code to return.
+pub fn run() -> ExitCode {
+    // Before the TUI's own hook, which chains to this one.
+    emulator::cli::exit_quietly_on_broken_pipe();
+    let cli = Cli::parse();
+    // Just before the runtime's clock starts: the TUI's timers then share its wake-ups.
+    crate::pace::start();
+    let rt = match tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+    {
+        Ok(rt) => rt,
+        Err(e) => {
+            eprintln!("station: cannot start the async runtime: {e}");
+            return ExitCode::FAILURE;
+        }
     };
-    if json {
-        let v = json!({
-            "serial": serial.iter().map(|p| json!({
-                "path": p.port_name,
-                "kind": describe(&p.port_type),
-            })).collect::<Vec<_>>(),
-            "pty": ptys,
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else {
-        if serial.is_empty() {
-            println!("no serial ports found");
-        }
-        for p in &serial {
-            println!("{:<24} {}", p.port_name, describe(&p.port_type));
-        }
-        if !ptys.is_empty() {
-            println!();
-            println!("pseudo-terminals (an emulator's port is one of these; it prints which):");
-            for p in &ptys {
-                println!("  {p}");
-            }
+    match rt.block_on(crate::headless::dispatch(cli)) {
+        Ok(code) => code,
+        Err(e) => {
+            // Errors quote file names, file contents and robot refusals.
+            eprintln!(
+                "station: {}",
+                crate::terminal_text::printable_text(&error_text(&e))
+            );
+            ExitCode::FAILURE
         }
     }
-    Ok(ExitCode::SUCCESS)
 }
 
-/// Starts a link and waits for the handshake; fails fast on a port that cannot be opened or a
-/// robot that refuses us.
-pub(crate) async fn connect(
-    port: &RequiredPort,
-    timeout_s: f64,
-) -> anyhow::Result<(RunningLink, PeerInfo)> {
-    let mut link = spawn_link(
-        SerialConnector::new(&port.port, port.baud),
-        LinkOptions {
-            station: format!("station-cli {}", env!("CARGO_PKG_VERSION")),
-            key: crate::cli::load_key(port.key_file.as_deref()).map_err(anyhow::Error::msg)?,
-            ..LinkOptions::default()
-        },
-    );
-    let deadline = Instant::now() + Duration::from_secs_f64(timeout_s);
-    loop {
-        let ev = match tokio::time::timeout_at(deadline, link.events.recv()).await {
-            Ok(Some(ev)) => ev,
-            Ok(None) => bail!("the link task ended"),
-            Err(_) => bail!(
-                "no handshake with a robot on {} within {timeout_s} s (is the robot on this \
-                 port, at this baud rate?)",
-                port.port.display()
-            ),
+/// The error and its causes, `: `-separated, leaving out a cause the message before it
+/// already ends with (our file errors say "{path}: {source}" and keep the source as a cause).
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.ends_with(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_error_that_already_quotes_its_cause_prints_it_once() {
+        let read = crate::record::RecordError::Read {
+            path: "x.rec".into(),
+            source: crate::record::ReadError::Truncated { offset: 12 },
         };
-        match ev {
-            LinkEvent::Connection(Connection::Connected(p)) => return Ok((link, p)),
-            LinkEvent::Connection(Connection::Closed { reason }) => bail!("{reason}"),
-            LinkEvent::Connection(Connection::Refused { message }) => bail!("{message}"),
-            _ => {}
-        }
-    }
-}
-
-/// Longest wait for the robot's periodic frames to pass before a command goes out, ms (on
-/// top of one telemetry period).
-const QUIET_WAIT_MARGIN_MS: u64 = 50;
-
-/// Waits until the robot's next periodic burst (a telemetry frame, and the emulator's truth
-/// frame that follows it) has been received, so that the line towards us is quiet and the
-/// command's ack does not queue behind it in the robot's transmitter. Returns at once for a
-/// robot that sends no telemetry, and after one telemetry period at most.
-async fn after_periodic_burst(link: &mut RunningLink, peer: &PeerInfo) {
-    if peer.telemetry_hz == 0 {
-        return;
-    }
-    while link.events.try_recv().is_ok() {}
-    let period = 1000 / u64::from(peer.telemetry_hz);
-    let deadline = Instant::now() + Duration::from_millis(period + QUIET_WAIT_MARGIN_MS);
-    let truth_follows = peer.has(protocol::caps::EMULATED);
-    let mut seen_telemetry = false;
-    while let Ok(Some(ev)) = tokio::time::timeout_at(deadline, link.events.recv()).await {
-        match ev {
-            LinkEvent::Telemetry(_) if !truth_follows => return,
-            LinkEvent::Telemetry(_) => seen_telemetry = true,
-            LinkEvent::Truth(_) if seen_telemetry => return,
-            _ => {}
-        }
-    }
-}
-
-/// The robot's arena bounds (parameters `arena_min_x_m`, `arena_max_x_m`, `arena_min_y_m`,
-/// `arena_max_y_m`), or `None` if it does not answer all four.
-async fn arena_bounds(link: &crate::link::LinkHandle) -> Option<[f32; 4]> {
-    use robot_firmware::params::id;
-    let mut out = [0.0f32; 4];
-    let ids = [
-        id::ARENA_MIN_X_M,
-        id::ARENA_MAX_X_M,
-        id::ARENA_MIN_Y_M,
-        id::ARENA_MAX_Y_M,
-    ];
-    for (slot, i) in out.iter_mut().zip(ids) {
-        let get = protocol::Command::GetParam {
-            id: protocol::ParamId(i),
-        };
-        match link.call(get).await {
-            CommandOutcome::Acked {
-                info: AckInfo::Param { value, .. },
-                ..
-            } => *slot = value,
-            _ => return None,
-        }
-    }
-    Some(out)
-}
-
-/// Round trips of a repeated `send`, microseconds (nearest rank).
-#[derive(Debug, serde::Serialize)]
-struct RoundTrips {
-    samples: usize,
-    p50_us: u64,
-    p99_us: u64,
-    max_us: u64,
-}
-
-impl RoundTrips {
-    fn of(mut us: Vec<u64>) -> Option<RoundTrips> {
-        us.sort_unstable();
-        let pick = |q: f64| {
-            let i = ((us.len() as f64 * q).ceil() as usize).clamp(1, us.len());
-            us.get(i - 1).copied().unwrap_or(0)
-        };
-        Some(RoundTrips {
-            samples: us.len(),
-            p50_us: pick(0.5),
-            p99_us: pick(0.99),
-            max_us: *us.last()?,
-        })
-    }
-}
-
-async fn send(
-    port: &RequiredPort,
-    json: bool,
-    timeout: f64,
-    repeat: u32,
-    cmd: &SendCmd,
-) -> anyhow::Result<ExitCode> {
-    let (mut link, peer) = connect(port, timeout).await?;
-    let command = cmd.to_command()?;
-    // The robot starts its telemetry as the session starts: a command sent at once was
-    // answered behind the first telemetry and truth frames (p50 9 ms for 2.1 ms of bytes).
-    let mut round_trips = Vec::new();
-    let mut outcome = CommandOutcome::Failed(crate::link::CommandFailure::NotConnected);
-    for _ in 0..repeat {
-        after_periodic_burst(&mut link, &peer).await;
-        let sent = Instant::now();
-        outcome = link.handle.call(command).await;
-        if !outcome.is_ack() {
-            break;
-        }
-        round_trips.push(sent.elapsed().as_micros() as u64);
-    }
-    let round_trips = if repeat > 1 {
-        RoundTrips::of(round_trips)
-    } else {
-        None
-    };
-    // A plan made on the robot is named by its PlanInstalled event: `execute` needs the id.
-    let plan_id = match (command, outcome.is_ack()) {
-        (protocol::Command::Plan { .. }, true) => {
-            crate::transfer::command::plan_id_after(&mut link.events).await
-        }
-        _ => None,
-    };
-    // A go-to refused as outside the arena: name the robot's bounds, read from it.
-    let bounds = match (command, &outcome) {
-        (
-            protocol::Command::GoTo(_),
-            CommandOutcome::Nacked {
-                reason: protocol::NackReason::BadPoint,
-                ..
-            },
-        ) => arena_bounds(&link.handle).await,
-        _ => None,
-    };
-    link.handle.shutdown();
-    let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;
-    let what = command_text(&command);
-    let (ok, text, value) = match outcome {
-        CommandOutcome::Acked {
-            info,
-            sends,
-            rtt_ms,
-        } => {
-            let (text, detail) = match info {
-                AckInfo::Param { id, value } => (
-                    format!(
-                        "ack: {} = {}",
-                        param_name(id.0),
-                        format_param_id(id.0, value)
-                    ),
-                    json!({"param": param_name(id.0), "id": id.0, "value": value}),
-                ),
-                AckInfo::Object {
-                    object,
-                    id,
-                    len,
-                    crc,
-                } => (
-                    format!("ack: {what}: object {object:?} id {id:#010x}, {len} bytes"),
-                    json!({"object": format!("{object:?}"), "id": id, "len": len, "crc": crc}),
-                ),
-                AckInfo::Done => match plan_id {
-                    Some(id) => (
-                        format!("ack: {what}: plan id {id:#010x}"),
-                        json!({"plan_id": id, "plan_id_hex": format!("{id:#010x}")}),
-                    ),
-                    None => (format!("ack: {what}"), json!(null)),
-                },
-            };
-            let v = json!({"outcome": "ack", "command": what, "sends": sends, "rtt_ms": rtt_ms,
-                           "info": detail});
-            (true, format!("{text} ({rtt_ms} ms)"), v)
-        }
-        CommandOutcome::Nacked { reason, sends } => {
-            let mut why = refusal_text(&command, reason);
-            if let Some([x0, x1, y0, y1]) = bounds {
-                why.push_str(&format!(
-                    " (the robot's arena: x {x0:.2} .. {x1:.2} m, y {y0:.2} .. {y1:.2} m)"
-                ));
-            }
-            let mut v = json!({"outcome": "nack", "command": what, "sends": sends,
-                   "reason": format!("{reason:?}"), "reason_text": why});
-            if let (Some(b), Some(obj)) = (bounds, v.as_object_mut()) {
-                obj.insert(
-                    "arena".into(),
-                    json!({"min_x_m": b[0], "max_x_m": b[1], "min_y_m": b[2], "max_y_m": b[3]}),
-                );
-            }
-            (false, format!("nack: {what}: {why}"), v)
-        }
-        CommandOutcome::Failed(why) => (
-            false,
-            format!("failed: {what}: {why}"),
-            json!({"outcome": "failed", "command": what, "error": why.to_string()}),
-        ),
-    };
-    let mut value = value;
-    if let (Some(r), Some(obj)) = (&round_trips, value.as_object_mut()) {
-        obj.insert("round_trip".into(), serde_json::to_value(r)?);
-    }
-    if json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
-    } else if ok {
-        println!("{}", crate::terminal_text::printable_text(&text));
-    } else {
-        eprintln!("{}", crate::terminal_text::printable_text(&text));
-    }
-    if let (Some(r), false) = (&round_trips, json) {
-        println!(
-            "round trip over {} sends: p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms",
-            r.samples,
-            r.p50_us as f64 / 1000.0,
-            r.p99_us as f64 / 1000.0,
-            r.max_us as f64 / 1000.0
-        );
-    }
-    Ok(if ok {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
-    })
-}
-
-/// The round-trip probe of `station stats`: reading a parameter, which changes nothing.
-const PROBE: protocol::Command = protocol::Command::GetParam {
-    id: protocol::ParamId(0),
-};
-/// Time between two probes, ms: a few a second, a small share of the link.
-const PROBE_PERIOD_MS: u64 = 250;
-
-/// What `station stats` measured on one port.
-struct Watched {
-    port: String,
-    peer: PeerInfo,
-    stats: LinkStats,
-    round_trip: Option<RoundTrips>,
-    probe_failures: Vec<String>,
-}
-
-impl Watched {
-    fn json(&self) -> serde_json::Value {
-        json!({"port": self.port, "peer": self.peer, "stats": self.stats,
-               "round_trip": self.round_trip, "probe": command_text(&PROBE),
-               "probe_failures": self.probe_failures})
-    }
-}
-
-/// `station stats`: one port as before; several watched at once, each reported on its own
-/// (a port that fails does not stop the others), with robots that state the same id named.
-async fn stats(
-    ports: &crate::cli::StatsPorts,
-    seconds: f64,
-    json: bool,
-    timeout: f64,
-) -> anyhow::Result<ExitCode> {
-    let each = ports.each();
-    if let [one] = each.as_slice() {
-        let w = watch(one, seconds, timeout).await?;
-        if json {
-            println!("{}", serde_json::to_string_pretty(&w.json())?);
-        } else {
-            print_watched(&w);
-        }
-        return Ok(ExitCode::SUCCESS);
-    }
-    crate::cli::distinct_ports(each.iter().map(|p| p.port.as_path()))
-        .map_err(anyhow::Error::msg)?;
-    let tasks: Vec<_> = each
-        .into_iter()
-        .map(|p| tokio::spawn(async move { (p.port.clone(), watch(&p, seconds, timeout).await) }))
-        .collect();
-    let mut results = Vec::new();
-    for t in tasks {
-        results.push(t.await.context("a port's watch ended abnormally")?);
-    }
-    let ids: Vec<(String, Option<u8>)> = results
-        .iter()
-        .map(|(p, r)| {
-            (
-                p.display().to_string(),
-                r.as_ref().ok().map(|w| w.peer.robot_id),
-            )
-        })
-        .collect();
-    let dups = duplicates(ids.iter().map(|(p, id)| (p.as_str(), *id)));
-    let failed = results.iter().any(|(_, r)| r.is_err());
-    if json {
-        let links: Vec<serde_json::Value> = results
-            .iter()
-            .map(|(p, r)| match r {
-                Ok(w) => w.json(),
-                Err(e) => json!({"port": p.display().to_string(), "error": format!("{e:#}")}),
-            })
-            .collect();
-        let v = json!({"links": links, "duplicate_robot_ids": dups});
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else {
-        for (i, (p, r)) in results.iter().enumerate() {
-            if i > 0 {
-                println!();
-            }
-            match r {
-                Ok(w) => print_watched(w),
-                Err(e) => {
-                    println!("port        {}", p.display());
-                    println!(
-                        "error       {}",
-                        crate::terminal_text::printable_text(&format!("{e:#}"))
-                    );
-                }
-            }
-        }
-    }
-    for d in &dups {
-        eprintln!(
-            "station: warning: {}",
-            crate::terminal_text::printable_text(&d.warning())
-        );
-    }
-    for (p, r) in &results {
-        if let Err(e) = r {
-            eprintln!("station: {}: {e:#}", p.display());
-        }
-    }
-    Ok(if failed {
-        ExitCode::FAILURE
-    } else {
-        ExitCode::SUCCESS
-    })
-}
-
-/// Watches one port for `seconds`, probing the round trip.
-async fn watch(port: &RequiredPort, seconds: f64, timeout: f64) -> anyhow::Result<Watched> {
-    let (mut link, peer) = connect(port, timeout).await?;
-    let deadline = Instant::now() + Duration::from_secs_f64(seconds);
-    let mut last: Option<LinkStats> = None;
-    // The round trip is measured, not waited for: a harmless probe (reading a parameter
-    // changes nothing on the robot) goes out every PROBE_PERIOD_MS while the link is watched,
-    // at whatever moment of the robot's telemetry cycle it falls (unlike `send --repeat`,
-    // which picks the quiet moment), so it is the round trip a command meets.
-    let mut probes: Vec<u64> = Vec::new();
-    let mut probe_failures: Vec<String> = Vec::new();
-    let mut next_probe = Instant::now();
-    loop {
-        let wake = next_probe.min(deadline);
-        match tokio::time::timeout_at(wake, link.events.recv()).await {
-            Ok(Some(LinkEvent::Stats(s))) => last = Some(*s),
-            Ok(Some(_)) => {}
-            Ok(None) => break,
-            Err(_) if Instant::now() >= deadline => break,
-            Err(_) => {
-                next_probe += Duration::from_millis(PROBE_PERIOD_MS);
-                let sent = Instant::now();
-                match link.handle.call(PROBE).await {
-                    CommandOutcome::Acked { .. } => probes.push(sent.elapsed().as_micros() as u64),
-                    other => probe_failures.push(match other {
-                        CommandOutcome::Nacked { reason, .. } => refusal_text(&PROBE, reason),
-                        CommandOutcome::Failed(why) => why.to_string(),
-                        CommandOutcome::Acked { .. } => String::new(),
-                    }),
-                }
-            }
-        }
-    }
-    let round_trip = RoundTrips::of(probes);
-    link.handle.shutdown();
-    let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;
-    let Some(stats) = last else {
-        bail!("no statistics were published in {seconds} s");
-    };
-    Ok(Watched {
-        port: port.port.display().to_string(),
-        peer,
-        stats,
-        round_trip,
-        probe_failures,
-    })
-}
-
-fn print_watched(w: &Watched) {
-    let (peer, s, round_trip) = (&w.peer, &w.stats, &w.round_trip);
-    let probe = command_text(&PROBE);
-    println!("port        {}", w.port);
-    println!(
-        "robot       {} {} {:?}, robot id {}",
-        crate::terminal_text::printable(&peer.firmware),
-        crate::terminal_text::printable(&peer.firmware_version),
-        peer.profile,
-        peer.robot_id
-    );
-    println!(
-        "state       {} for {:.1} s",
-        s.state,
-        s.session_ms as f64 / 1000.0
-    );
-    println!(
-        "frames      in {} out {}  bytes in {} ({:.0}/s) out {} ({:.0}/s)",
-        s.frames_in, s.frames_out, s.bytes_in, s.bytes_in_per_s, s.bytes_out, s.bytes_out_per_s
-    );
-    println!(
-        "telemetry   {:.1} Hz ({} frames)",
-        s.telemetry_hz, s.telemetry_frames
-    );
-    println!(
-        "loss        robot {} ({:.2}%)  truth {}  duplicates {}",
-        s.robot_seq.lost, s.robot_seq.loss_percent, s.truth_seq.lost, s.robot_seq.duplicates
-    );
-    println!(
-        "errors      CRC {}  bad frames {}  dropped bytes {}",
-        s.decoder.crc_errors,
-        s.decoder.errors(),
-        s.decoder.bytes_dropped
-    );
-    if s.auth.keyed || s.auth.refused() > 0 {
-        let a = &s.auth;
-        println!(
-            "auth        {}; verified {}  bad signature {}  stale {}  unsigned {}  \
-             unexpected signature {}",
-            if a.keyed { "signed" } else { "no key" },
-            a.verified,
-            a.bad_signature,
-            a.stale_timestamp,
-            a.unsigned,
-            a.unexpected_signature
-        );
-    }
-    println!(
-        "commands    {} ok, {} refused, {} failed, {} superseded",
-        s.commands.acked, s.commands.nacked, s.commands.failed, s.commands.superseded
-    );
-    match round_trip {
-        Some(r) => println!(
-            "round trip  p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms over {} probes ({probe}, \
-             every {PROBE_PERIOD_MS} ms)",
-            r.p50_us as f64 / 1000.0,
-            r.p99_us as f64 / 1000.0,
-            r.max_us as f64 / 1000.0,
-            r.samples
-        ),
-        None => println!("round trip  no answer to any probe ({probe})"),
-    }
-    if let Some(why) = w.probe_failures.first() {
-        println!(
-            "probes      {} unanswered or refused: {}",
-            w.probe_failures.len(),
-            crate::terminal_text::printable_text(why)
+        let e = anyhow::Error::new(read).context("cannot replay");
+        assert_eq!(
+            error_text(&e),
+            "cannot replay: x.rec: truncated at byte 12: the file ends inside a record (a torn tail)"
         );
     }
 }

@@ -1,46 +1,34 @@
 //! The station: terminal UI and command line for a robot on a serial link.
 //!
+//! Layers, each importing only from those below it (`tests/tests/module_layers.rs` checks):
+//! 1. `station_core` (its own crate: no terminal, no command line): the link, transfers,
+//!    recordings, replay events, export, planning, retracing, calibration, formatting. Its
+//!    modules are re-exported here under their own names (`station::link`, ...).
+//! 2. The application: `action` (everything that can change the app, as data) and `app` (the
+//!    state and `App::update`). No drawing, no terminal, no I/O.
+//! 3. The views: `ui` (draw only) and `replay::screen`.
+//! 4. The terminal and the command line: `tui` (the terminal loop), `input` (keys and mouse to
+//!    actions), `fleet` (one app per robot), `replay` (a recording driving the app), `places`;
+//!    `cli` (the clap definitions), `headless` (their dispatch), `commands` (one module per
+//!    command that works without the TUI).
+//!
 //! Data flows one way: terminal and link events become `action::Action`s, `app::App::update`
 //! applies them, `ui::render` draws the app. One task (`link`) owns the serial port.
-//!
-//! - `link`: the port's owner: handshake, heartbeat, retries, reconnect, statistics.
-//! - `action`, `app`, `input`: the UI's state machine and what feeds it; `fleet`: one `App`
-//!   per robot when several are driven at once, and the picker.
-//! - `ui`: drawing, pure.
-//! - `params`: `station params` and its parameter files.
-//! - `plan`: planning on the station with the robot's nav code (`station plan`, map layers).
-//! - `record`, `replay`, `export`: recordings of both directions of a link, the TUI driven by
-//!   one, and their export to MCAP and CSV.
-//! - `transfer`: map and plan uploads and downloads (the engine, `station upload-map` ...).
-//! - `tui`: the terminal loop; `pace`: the timer grid its periodic work shares; `cli`,
-//!   `headless`, `builtin`: the binary's edge.
-//! - `terminal_text`: the one sanitiser for wire- and file-supplied text before a terminal.
-//! - `output_file`: how every file the station writes reaches its name (atomic, O_EXCL
-//!   temporary, no special file replaced).
 #![deny(unsafe_code)]
 
 pub mod action;
 pub mod app;
-pub mod awaited_replies;
-pub mod builtin;
-pub mod calibrate;
-pub mod calibrate_odometry;
 pub mod cli;
-pub mod export;
+pub mod commands;
 pub mod fleet;
 pub mod headless;
 pub mod input;
-pub mod link;
-/// Lives in the emulator crate so that `robot-emulator arena generate` writes the same way.
-pub use emulator::output_file;
-pub mod pace;
-pub mod params;
 pub mod places;
-pub mod plan;
-pub mod record;
 pub mod replay;
-pub mod retrace;
-pub mod terminal_text;
-pub mod transfer;
 pub mod tui;
 pub mod ui;
+
+pub use station_core::{
+    arena, awaited_replies, builtin, calibrate, export, format, input_file, json_text, link,
+    output_file, pace, param_file, plan, qt_state, record, retrace, terminal_text, transfer,
+};

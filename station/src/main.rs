@@ -1,5 +1,5 @@
 //! `station`: see `station --help`. Everything lives in the library; this only runs it.
 
 fn main() -> std::process::ExitCode {
-    station::cli::run()
+    station::headless::run()
 }

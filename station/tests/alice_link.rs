@@ -73,7 +73,7 @@ fn replayed(sits: &[AliceSituation]) -> App {
     let mut actions = Vec::new();
     feed.advance_to(&rec.records, u64::MAX / 2, &mut actions);
     for a in actions {
-        app.update(a);
+        app.update(a.into());
     }
     app
 }
@@ -194,6 +194,67 @@ fn mcap_export_has_the_model_with_its_counts() {
             .all(|e| e["confidence"].as_f64().unwrap() > 0.0));
     }
     assert!(snaps.last().unwrap()["cell_count"].as_u64().unwrap() > 20);
+}
+
+/// Issue 31 item 3: random situations each a robot second after the last grow the network to
+/// its 2,000-cell cap and each was due a snapshot of all of it: 2,000 of them (116 KB) made a
+/// 261 MB MCAP. The snapshots now stay within their budget, in proportion to the recording,
+/// and the export says how many it left out.
+#[test]
+fn random_situations_a_second_apart_export_in_proportion_to_the_recording() {
+    let mut state = 31u64;
+    let mut rand = |bits: u32| {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> (64 - bits)) as u32
+    };
+    let n = 2000;
+    let sits: Vec<AliceSituation> = (0..n)
+        .map(|i| AliceSituation {
+            time_ms: 1000 * (i + 1),
+            seq: i as u16,
+            whiskers: rand(24),
+            light: std::array::from_fn(|_| rand(8) as u8),
+            odometry: protocol::Pose {
+                x_mm: rand(14) as i32 - 8192,
+                y_mm: rand(14) as i32 - 8192,
+                heading_mrad: rand(12) as i16 - 2048,
+            },
+        })
+        .collect();
+    let bytes = recording(&sits);
+    let rec = Recording::parse_strict(&bytes).unwrap();
+    let data: u64 = rec.records.iter().map(|r| r.data.len() as u64).sum();
+    let mut out = Vec::new();
+    let written = station::export::mcap::write(
+        &rec,
+        station::export::mcap::Encoding::Protobuf,
+        std::io::Cursor::new(&mut out),
+        std::path::Path::new("random.mcap"),
+    )
+    .unwrap();
+    // The budget, and one snapshot over it at most: 2,000 cells of about 160 bytes.
+    let budget = station::export::qt::BUDGET_FLOOR + station::export::qt::BUDGET_PER_BYTE * data;
+    println!(
+        "{} recorded bytes ({data} of record data): {} MCAP bytes, budget {budget}; {:?}",
+        bytes.len(),
+        out.len(),
+        written.notes
+    );
+    assert!(
+        (out.len() as u64) < budget + 400_000,
+        "{} bytes from {} ({} messages)",
+        out.len(),
+        bytes.len(),
+        written.messages
+    );
+    let note = written.notes.join("\n");
+    assert!(
+        note.contains("/qt_model: ")
+            && note.contains("snapshots due (one a second of robot time) left out"),
+        "{note}"
+    );
 }
 
 /// The message's size on the wire and its share of a 115200 baud link at the thesis's

@@ -538,9 +538,10 @@ fn noisy_run() -> usize {
     );
     // Frames lost at the end of a session (before a link timeout or a refused handshake) have
     // no later sequence number to reveal them, so the reported loss can only fall short of
-    // the true loss by those; the tolerance is one percentage point.
+    // the true loss by those: 8 of about 11,500 frames here (0.04 percentage points); the
+    // tolerance the docs state is 0.1 percentage points.
     assert!(
-        (reported_pct - true_pct).abs() <= 1.0,
+        (reported_pct - true_pct).abs() <= 0.1,
         "reported loss {reported_pct:.2} % vs true {true_pct:.2} %"
     );
     identical

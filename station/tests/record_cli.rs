@@ -1,6 +1,8 @@
 //! `station record` and `station replay` as a user runs them: against the real firmware on an
 //! emulator pty, interrupted by Ctrl-C and killed outright, and with bad arguments and bad
 //! files, each with its exit code and message, never a panic, and never a stray output file.
+//! Nothing here waits a fixed time or judges a wall-clock rate: the tests move on when the
+//! recording holds what they wait for, and judge telemetry rates on the robot's own clock.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::path::{Path, PathBuf};
@@ -8,8 +10,10 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use emulator::link::{spawn_device, Running, ServeOptions};
+use protocol::{Feed, FrameDecoder, Message};
 use station::link::sim::{SimCore, SimOptions};
 use station::record::synth::demo;
+use station::record::{RecordKind, Recording};
 
 fn station(args: &[&str], cwd: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_station"))
@@ -95,20 +99,59 @@ fn record_then_replay_json_against_the_firmware_on_a_pty() {
     assert_eq!(s["frames_to_robot"]["Hello"], 1);
     assert_eq!(s["frames_to_robot"]["Command"], 1, "the --rate command");
     assert_eq!(s["commands"]["acked"], 1);
-    let hz = s["telemetry"]["mean_hz"].as_f64().unwrap();
-    assert!((12.0..=22.0).contains(&hz), "{hz}: 10 Hz then 20 Hz");
+    // 20 Hz from the rate command on (sent as the session starts, so at most the first
+    // frame comes before it): on the robot's clock the frames are 50 ms apart (the station's
+    // clock would measure this machine's load too).
+    let times = telemetry_times(&d.join("run.rec"));
+    let steps: Vec<u32> = times.windows(2).map(|w| w[1].wrapping_sub(w[0])).collect();
+    assert!(steps.len() >= 10, "telemetry over 2 s: {times:?}");
+    assert!(
+        steps.iter().skip(1).all(|&dt| dt == 50),
+        "telemetry steps (ms) on the robot's clock: {steps:?}"
+    );
     assert_eq!(s["errors"]["crc_errors"], 0);
     let _ = std::fs::remove_dir_all(&d);
 }
 
-fn wait_for(path: &Path) {
+/// The robot clock (`time_ms`) of every telemetry frame in a recording (finished or not).
+fn telemetry_times(path: &Path) -> Vec<u32> {
+    let Ok(rec) = Recording::open(path) else {
+        return Vec::new();
+    };
+    let mut dec = FrameDecoder::new();
+    let mut times = Vec::new();
+    for r in rec
+        .records
+        .iter()
+        .filter(|r| r.kind == RecordKind::FromRobot)
+    {
+        let mut input = r.data.as_slice();
+        loop {
+            match dec.feed(input) {
+                Feed::NeedMore => break,
+                Feed::Error { rest, .. } => input = rest,
+                Feed::Frame { frame, rest } => {
+                    if let Message::Telemetry(t) = frame.message {
+                        times.push(t.time_ms);
+                    }
+                    input = rest;
+                }
+            }
+        }
+    }
+    times
+}
+
+/// Waits until the unfinished recording at `partial` holds more than `frames` telemetry
+/// frames (the station flushes it every second); a bound only for a failure.
+fn wait_for_telemetry(partial: &Path, frames: usize) {
     let t0 = Instant::now();
-    while !path.exists() {
+    while telemetry_times(partial).len() <= frames {
         assert!(
-            t0.elapsed() < Duration::from_secs(10),
-            "{path:?} never appeared"
+            t0.elapsed() < Duration::from_secs(20),
+            "{partial:?} never held {frames} telemetry frames"
         );
-        std::thread::sleep(Duration::from_millis(20));
+        std::thread::sleep(Duration::from_millis(50));
     }
 }
 
@@ -136,8 +179,7 @@ fn ctrl_c_finishes_the_recording_and_a_kill_leaves_a_readable_partial() {
     };
     // Ctrl-C: a clean end under the final name.
     let child = spawn("int.rec");
-    wait_for(&d.join("int.rec.partial"));
-    std::thread::sleep(Duration::from_millis(1500));
+    wait_for_telemetry(&d.join("int.rec.partial"), 5);
     kill(child.id(), "-INT");
     let o = child.wait_with_output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -148,8 +190,7 @@ fn ctrl_c_finishes_the_recording_and_a_kill_leaves_a_readable_partial() {
 
     // A kill: the .partial keeps everything up to the last flush (each second).
     let child = spawn("kill.rec");
-    wait_for(&d.join("kill.rec.partial"));
-    std::thread::sleep(Duration::from_millis(2500));
+    wait_for_telemetry(&d.join("kill.rec.partial"), 5);
     kill(child.id(), "-KILL");
     let _ = child.wait_with_output().unwrap();
     assert!(!d.join("kill.rec").exists());

@@ -173,7 +173,7 @@ async fn the_replayed_app_ends_in_the_state_the_live_app_saw() {
     let mut actions = Vec::new();
     feed.advance_to(&rec.records, rec.duration_us(), &mut actions);
     for a in actions {
-        app.update(a);
+        app.update(a.into());
     }
     assert!(app.connected());
     assert_eq!(app.telemetry.unwrap().mode, Mode::Wander);

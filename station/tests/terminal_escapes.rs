@@ -2,7 +2,8 @@
 //! HelloReply names its firmware `ESC ] 0; ... BEL ESC [2J` (retitle the terminal, clear it)
 //! is shown through the real `station` binary, in the schema-mismatch refusal and in `station
 //! stats`' text output, and no ESC or BEL byte comes out. The robot is the real firmware on an
-//! emulator pty, its HelloReply rewritten on the way out.
+//! emulator pty, its HelloReply rewritten on the way out. And a recording's header text (issue
+//! 31 item 5: CSI, U+009B, came out raw in `station replay --json`) in every JSON report.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::path::{Path, PathBuf};
@@ -101,13 +102,16 @@ fn station(args: &[&str]) -> Output {
         .unwrap()
 }
 
-/// stdout and stderr together, checked free of ESC and BEL.
+/// stdout and stderr together, checked free of every character the terminal-text rule escapes
+/// (ESC, BEL, DEL, the C1 controls, bidirectional overrides) but line breaks and tabs.
 fn clean_output(o: &Output) -> String {
     let all = [o.stdout.as_slice(), o.stderr.as_slice()].concat();
     let text = String::from_utf8_lossy(&all).into_owned();
     assert!(
-        !all.contains(&0x1b) && !all.contains(&0x07),
-        "a control byte reached the terminal: {}",
+        !text
+            .chars()
+            .any(|c| c != '\n' && c != '\t' && station::terminal_text::must_escape(c)),
+        "a control character reached the terminal: {}",
         text.escape_debug()
     );
     text
@@ -140,5 +144,42 @@ fn a_hostile_firmware_name_in_station_stats_is_printed_escaped() {
         text.contains("robot       evil\\x1b]0;pwned\\x07\\x1b[2J 1.0\\x1b[31m"),
         "{text}"
     );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Issue 31 item 5: serde_json escapes only C0, so `replay --json` copied a header's CSI
+/// (U+009B), DEL and bidirectional overrides to the terminal raw. Every JSON report now
+/// escapes them as JSON does (`\u009b`), and the JSON reads back the same text.
+#[test]
+fn a_recordings_header_text_in_json_reports_is_escaped() {
+    let d = dir("json");
+    let hostile = "robot\u{9b}31m\u{1b}]0;x\u{7}\u{7f}\u{202e}gnp";
+    let meta = station::record::Meta {
+        created_unix_ms: 1_700_000_000_000,
+        writer: hostile.into(),
+        port: hostile.into(),
+        baud: 115_200,
+        arena: hostile.into(),
+        ..station::record::Meta::default()
+    };
+    let mut s = station::record::synth::Synth::new(&meta);
+    s.handshake(station::record::synth::demo_peer());
+    let rec = d.join("hostile.rec");
+    std::fs::write(&rec, s.finish(2_000_000, "end")).unwrap();
+    let rec = rec.display().to_string();
+    let o = station(&["replay", &rec, "--json"]);
+    let text = clean_output(&o);
+    assert!(o.status.success(), "{text}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(
+        v.to_string().contains("robot\u{9b}31m") && text.contains("robot\\u009b31m"),
+        "{text}"
+    );
+    // The summary's text form, and the export's report, by the terminal-text rule.
+    let o = station(&["replay", &rec, "--summary"]);
+    clean_output(&o);
+    let out = d.join("out.mcap").display().to_string();
+    let o = station(&["export", &rec, "--mcap", &out]);
+    clean_output(&o);
     let _ = std::fs::remove_dir_all(&d);
 }

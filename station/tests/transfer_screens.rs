@@ -185,12 +185,14 @@ fn the_map_grows_on_screen_while_the_robot_explores() {
     let (free, obstacle, unknown) = shown.counts();
     println!("after 40 s of exploring: {free} free, {obstacle} obstacle, {unknown} unknown");
     assert!(free > 0 && unknown > 0, "partially known");
-    // A second later the map is asked for again; unchanged, nothing travels but the one chunk
-    // the robot puts behind its Begin before the answer says the station holds it (§8).
+    // A second later the map is asked for again; unchanged, nothing travels but the chunks
+    // the robot puts behind its Begin before the answer says the station holds it: the
+    // object's first 256 bytes at most, four of the 64-byte chunks a sender probes a line
+    // with (PROTOCOL.md §8).
     now += 1_000;
     app.update(Action::Tick { now_ms: now });
     assert!(
-        serve_download(&mut app, &mut now, &map) <= 1,
+        serve_download(&mut app, &mut now, &map) <= 4,
         "already held"
     );
     // The robot kept reporting meanwhile (else the header rightly calls its mode stale).
@@ -316,4 +318,81 @@ fn the_upload_prompt_suggestion_is_replaced_by_typing_kept_by_end_and_cleared_by
         app.transfers.prompt.as_deref(),
         Some(format!("{}x", emulator::builtin::MICRO_RATO_99).as_str())
     );
+}
+
+/// `O` for a chosen target, refused: `X` must not execute the robot's earlier plan (to the
+/// map's goal) while the footer names the chosen target. After the refusal there is no plan
+/// for that target, and `X` says so; `G` names the goal again, whose plan `X` then runs.
+#[test]
+fn x_executes_only_the_plan_the_screen_names() {
+    let mut app = app();
+    let done = |app: &mut App, command, outcome| {
+        app.update(Action::Link(LinkEvent::CommandDone {
+            id: 0,
+            command,
+            outcome,
+        }));
+    };
+    let ack = CommandOutcome::Acked {
+        info: AckInfo::Done,
+        sends: 1,
+        rtt_ms: 5,
+    };
+    // A plan to the map's goal, installed.
+    app.update(key(&app, 'O'));
+    app.take_outbox();
+    done(&mut app, Command::Segment, ack);
+    done(
+        &mut app,
+        Command::Plan {
+            from: None,
+            to: None,
+        },
+        ack,
+    );
+    let goal_plan = 0x600d_0001;
+    app.update(Action::Link(LinkEvent::Robot(Event {
+        code: EventCode::PlanInstalled,
+        value: goal_plan as i32,
+    })));
+    app.take_outbox();
+
+    // The cursor becomes the target; the robot refuses to plan there.
+    app.update(key(&app, 'g'));
+    app.update(key(&app, 'O'));
+    let sent: Vec<Command> = app.take_outbox().into_iter().map(|(_, c)| c).collect();
+    let to = match sent.as_slice() {
+        [Command::Segment, Command::Plan { to: Some(to), .. }] => *to,
+        other => panic!("{other:?}"),
+    };
+    done(&mut app, Command::Segment, ack);
+    let refused = CommandOutcome::Nacked {
+        reason: protocol::NackReason::BadPoint,
+        sends: 1,
+    };
+    done(
+        &mut app,
+        Command::Plan {
+            from: None,
+            to: Some(to),
+        },
+        refused,
+    );
+    let footer = screen(&app, 160, 40);
+    assert!(footer.contains("plan to ("), "{footer}");
+    app.update(key(&app, 'X'));
+    let sent: Vec<Command> = app.take_outbox().into_iter().map(|(_, c)| c).collect();
+    assert!(
+        sent.is_empty(),
+        "X ran a plan the screen does not name: {sent:?}"
+    );
+    let last = app.log.window(1).last().unwrap().text.clone();
+    assert!(last.contains("no plan to the chosen target ("), "{last}");
+    assert!(last.contains("refused"), "{last}");
+
+    // `G`: the map's goal again, and its plan is the robot's installed one.
+    app.update(key(&app, 'G'));
+    app.update(key(&app, 'X'));
+    let sent: Vec<Command> = app.take_outbox().into_iter().map(|(_, c)| c).collect();
+    assert_eq!(sent, vec![Command::ExecutePlan { plan_id: goal_plan }]);
 }

@@ -3,8 +3,8 @@
 //!
 //! Each session has its own tmux server (`-L`, a socket named after the test and process),
 //! so tests run in parallel and a failing test never touches the user's tmux. The session and
-//! its server end when the [`Tmux`] is dropped. Tests that need tmux call [`Tmux::available`]
-//! first and say so when it is missing, rather than fail on a machine without it.
+//! its server end when the [`Tmux`] is dropped. Tests that need tmux call [`Tmux::require`]
+//! first: without tmux they fail, unless `SKIP_TUI_TESTS=1` skips them loudly.
 // A test helper: panicking, with the screen, is how it fails the test that uses it.
 #![allow(clippy::panic)]
 
@@ -24,6 +24,24 @@ impl Tmux {
             .arg("-V")
             .output()
             .is_ok_and(|o| o.status.success())
+    }
+
+    /// For a test that drives the TUI: true when tmux is there. Without it the test fails,
+    /// saying how to install it, unless `SKIP_TUI_TESTS=1` asks to skip such tests knowingly;
+    /// then it says loudly that it did not run, and the caller returns. A TUI test must
+    /// never pass without running.
+    pub fn require(test: &str) -> bool {
+        if Self::available() {
+            return true;
+        }
+        if std::env::var_os("SKIP_TUI_TESTS").is_some_and(|v| v == "1") {
+            eprintln!("SKIPPED (SKIP_TUI_TESTS=1, tmux not installed): {test} did not run");
+            return false;
+        }
+        panic!(
+            "{test} drives the TUI in tmux, which is not installed (Debian: apt-get install \
+             tmux); set SKIP_TUI_TESTS=1 to skip the TUI tests knowingly"
+        );
     }
 
     /// Starts `program args` in a `cols` x `rows` session named after `name` (unique per

@@ -64,7 +64,7 @@ fn replayed(rec: &Recording, until_us: u64) -> App {
     let mut actions = Vec::new();
     feed.advance_to(&rec.records, until_us, &mut actions);
     for a in actions {
-        app.update(a);
+        app.update(a.into());
     }
     app
 }

@@ -24,8 +24,9 @@ fn cells(screen: &str) -> Option<usize> {
 
 #[test]
 fn the_qt_layer_grows_live_from_a_wandering_alice_and_t_hides_it() {
-    if !Tmux::available() {
-        eprintln!("tmux is not installed: skipping the TUI-as-a-person test");
+    if !e2e_tests::tmux::Tmux::require(
+        "the_qt_layer_grows_live_from_a_wandering_alice_and_t_hides_it",
+    ) {
         return;
     }
     let d = std::env::temp_dir();

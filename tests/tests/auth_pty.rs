@@ -86,7 +86,7 @@ async fn the_right_key_drives_the_robot_and_every_frame_verifies() {
     // The station's link task with the key drives the robot (teleop, seen moving in the
     // emulator's signed EmuTruth), and nothing is refused.
     let opts = LinkOptions {
-        key: station::cli::load_key(Some(&key)).unwrap(),
+        key: station::commands::args::load_key(Some(&key)).unwrap(),
         ..LinkOptions::default()
     };
     let mut running = spawn_link(SerialConnector::new(&link, 115_200), opts);
@@ -215,7 +215,7 @@ fn bad_key_files_are_refused_naming_the_file_and_the_fault() {
         e.contains("missing.key") && e.contains("cannot read"),
         "{e}"
     );
-    let e = station::cli::load_key(Some(&short)).unwrap_err();
+    let e = station::commands::args::load_key(Some(&short)).unwrap_err();
     assert!(e.contains("--key-file") && e.contains("short.key"), "{e}");
     // A good key that others may read: refused by both, with the mode and the fix.
     let open = key_file(&d, "open.key", KEY);
@@ -224,7 +224,7 @@ fn bad_key_files_are_refused_naming_the_file_and_the_fault() {
     let fix = format!("chmod 600 {}", open.display());
     let e = emu(&open);
     assert!(e.contains("(mode 0644)") && e.contains(&fix), "{e}");
-    let e = station::cli::load_key(Some(&open)).unwrap_err();
+    let e = station::commands::args::load_key(Some(&open)).unwrap_err();
     assert!(e.contains("--key-file") && e.contains(&fix), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }

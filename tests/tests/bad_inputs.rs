@@ -4,7 +4,9 @@
 //! say what is wrong and where (the manifest's fragment: the file with its line:column or
 //! byte offset, or the argument), never panic, and leave no file behind (no output, no
 //! temporary or `.partial` file): each runs in a fresh copy of the corpus whose listing must
-//! not change.
+//! not change. No output holds a raw control character. A case whose place is `out:N` is a hostile input the command must turn into
+//! bounded output instead: it exits with the manifest's status (0 allowed), says the
+//! fragment, and the files it adds total at most N bytes (none hidden or temporary).
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::path::{Path, PathBuf};
@@ -104,6 +106,11 @@ fn has_location(msg: &str, kind: &str) -> bool {
     }
 }
 
+/// The byte limit of an `out:N` case.
+fn output_limit(location: &str) -> Option<u64> {
+    location.strip_prefix("out:").and_then(|n| n.parse().ok())
+}
+
 /// Runs a case, killing it if it has not ended in 30 s (a bad input must not start serving).
 fn run(bin: &Path, args: &[String], cwd: &Path) -> std::process::Output {
     let mut child = Command::new(bin)
@@ -169,7 +176,8 @@ fn every_malformed_input_is_refused_clearly_without_panic_or_leftovers() {
         );
         let what = format!("MANIFEST.tsv:{}: {} {}", c.line, c.binary, c.args.join(" "));
         let mut problems = Vec::new();
-        if out.status.code() != Some(c.exit) || c.exit == 0 {
+        let limit = output_limit(&c.location);
+        if out.status.code() != Some(c.exit) || (c.exit == 0 && limit.is_none()) {
             problems.push(format!("exit {:?}, expected {}", out.status.code(), c.exit));
         }
         if !text.contains(&c.fragment) {
@@ -185,7 +193,7 @@ fn every_malformed_input_is_refused_clearly_without_panic_or_leftovers() {
         if !has_location(&c.fragment, &c.location) {
             problems.push(format!("the fragment has no {} position", c.location));
         }
-        if c.location != "arg" {
+        if c.location != "arg" && limit.is_none() {
             let named = c
                 .args
                 .iter()
@@ -196,11 +204,35 @@ fn every_malformed_input_is_refused_clearly_without_panic_or_leftovers() {
                 problems.push("the message names no file".into());
             }
         }
+        // What a terminal would act on (ESC, BEL, DEL, C1 such as CSI U+009B, bidirectional
+        // overrides) never comes out raw, from an error or a JSON report (issue 31 item 5).
+        if let Some(c) = text
+            .chars()
+            .find(|&c| c != '\n' && c != '\t' && station::terminal_text::must_escape(c))
+        {
+            problems.push(format!("a raw control character {c:?} in the output"));
+        }
         if text.contains("panicked at") || text.contains("RUST_BACKTRACE") {
             problems.push("panicked".into());
         }
         let after = listing(&work);
-        if after != before {
+        if let Some(limit) = limit {
+            let added: Vec<_> = after.iter().filter(|f| !before.contains(f)).collect();
+            let bytes: u64 = added.iter().map(|(_, len)| len).sum();
+            if bytes > limit {
+                problems.push(format!(
+                    "{bytes} bytes written, more than {limit}: {added:?}"
+                ));
+            }
+            let hidden = added.iter().any(|(p, _)| {
+                p.file_name()
+                    .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+                    || p.to_string_lossy().ends_with(".partial")
+            });
+            if hidden || before.iter().any(|f| !after.contains(f)) {
+                problems.push(format!("files changed or left behind: {added:?}"));
+            }
+        } else if after != before {
             let extra: Vec<_> = after.iter().filter(|f| !before.contains(f)).collect();
             problems.push(format!("files changed or left behind: {extra:?}"));
         }

@@ -142,11 +142,14 @@ fn the_station_can_close_and_reopen_the_port() {
     }
 }
 
-/// Issue 13 item 9: a 1 MiB burst from the station used to queue whole in front of the robot's
-/// UART and drain at the baud rate, so the emulator stopped answering for 91 s. Its serial
-/// port now holds what a real one holds; the rest is dropped and counted.
+/// A 1 MiB burst from the station once queued whole in front of the robot's UART and drained
+/// at the baud rate, so the emulator stopped answering for 91 s. Its serial port now holds
+/// what a real one holds (a 4 KB line buffer, clear in 0.36 s of line time) and the rest is
+/// dropped and counted: that count is the verdict. The robot then answers a Hello and a Stop;
+/// the wait for them is bounded (10 s) only so that a failure ends, and the time it took is
+/// printed, not judged (wall time on a loaded machine).
 #[test]
-fn after_a_one_mebibyte_burst_the_robot_answers_within_a_second_or_two() {
+fn a_one_mebibyte_burst_is_dropped_beyond_the_ports_buffer_and_the_robot_answers_after_it() {
     let baud = 115_200;
     let mut emu = start(baud);
     let mut st = TestStation::open(emu.path(), baud).unwrap();
@@ -155,8 +158,6 @@ fn after_a_one_mebibyte_burst_the_robot_answers_within_a_second_or_two() {
     let burst = vec![0x55u8; 1 << 20];
     let written = st.write_raw(&burst, Duration::from_secs(20));
     assert_eq!(written, burst.len(), "the pty took the burst");
-    // The line carries 11,520 B/s: a 4 KB line buffer is clear in 0.36 s of simulated time.
-    // The bound is generous for a loaded machine; the old 1 MiB queue needed 91 s.
     let t0 = std::time::Instant::now();
     st.handshake(Duration::from_secs(10))
         .expect("the robot answers a Hello soon after the burst");

@@ -154,7 +154,13 @@ fn two_robots_are_told_apart_recorded_in_one_file_and_exported_per_robot() {
         let n = s["telemetry"]["frames"].as_u64().unwrap();
         // About 3 s at 20 Hz once the rate is set.
         assert!(n >= 30, "link {k}: {n} telemetry frames");
-        assert_eq!(s["frames_from_robot"]["EmuTruth"].as_u64(), Some(n), "{s}");
+        // One truth frame follows each telemetry frame; the recording's time limit can fall
+        // between the last two (seen on a loaded machine: 61 telemetry, 60 truth).
+        let truth = s["frames_from_robot"]["EmuTruth"].as_u64().unwrap_or(0);
+        assert!(
+            truth == n || truth + 1 == n,
+            "{n} telemetry, {truth} truth: {s}"
+        );
         frames.push(n);
     }
 

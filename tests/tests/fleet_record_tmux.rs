@@ -36,8 +36,9 @@ fn all_connected(s: &[String]) -> bool {
 
 #[test]
 fn r_records_every_robot_of_the_fleet_and_the_replay_shows_all_three() {
-    if !Tmux::available() {
-        eprintln!("tmux is not installed: skipping the fleet recording TUI test");
+    if !e2e_tests::tmux::Tmux::require(
+        "r_records_every_robot_of_the_fleet_and_the_replay_shows_all_three",
+    ) {
         return;
     }
     let d = dir("rec");

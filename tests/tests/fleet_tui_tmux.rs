@@ -23,11 +23,7 @@ fn dir(name: &str) -> PathBuf {
 }
 
 fn tmux_or_skip() -> bool {
-    let ok = Tmux::available();
-    if !ok {
-        eprintln!("tmux is not installed: skipping the fleet TUI test");
-    }
-    ok
+    Tmux::require(module_path!())
 }
 
 struct Emulator(Child);

@@ -69,8 +69,9 @@ fn see(t: &Tmux, what: &str, secs: u64) -> String {
 
 #[test]
 fn the_plan_goes_to_the_maps_goal_after_a_go_to_and_the_target_is_explicit() {
-    if !Tmux::available() {
-        println!("skipped: tmux is not installed");
+    if !e2e_tests::tmux::Tmux::require(
+        "the_plan_goes_to_the_maps_goal_after_a_go_to_and_the_target_is_explicit",
+    ) {
         return;
     }
     let d = dir("tour");

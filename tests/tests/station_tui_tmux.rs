@@ -22,11 +22,7 @@ fn dir(name: &str) -> PathBuf {
 }
 
 fn tmux_or_skip() -> bool {
-    let ok = Tmux::available();
-    if !ok {
-        eprintln!("tmux is not installed: skipping the TUI-as-a-person test");
-    }
-    ok
+    Tmux::require(module_path!())
 }
 
 /// The log panel of the 150-column dashboard: its last 43 columns.

@@ -61,9 +61,10 @@ class Port:
         tty.setraw(self.fd)
         self.buf = bytearray()
 
-    def frames(self, timeout):
-        """Decoded frames (kind, seq, payload) read within `timeout` s, with the time each
-        delimiter was read; returns as soon as at least one is whole."""
+    def raw_frames(self, timeout, wanted=lambda raw: True):
+        """Decoded frames `raw` (COBS removed, CRC not checked) for which `wanted(raw)`, with
+        the time each delimiter was read, within `timeout` s; returns as soon as at least one
+        is whole."""
         end = time.monotonic() + timeout
         got = []
         while not got:
@@ -75,7 +76,7 @@ class Port:
                 continue
             now = time.monotonic()
             try:
-                self.buf += os.read(self.fd, 4096)
+                self.buf += os.read(self.fd, 65536)
             except BlockingIOError:
                 continue
             while b"\x00" in self.buf:
@@ -83,12 +84,19 @@ class Port:
                 enc = bytes(self.buf[:i])
                 del self.buf[: i + 1]
                 raw = uncobs(enc) if enc else None
-                # Only the kinds awaited (HelloReply, Ack, Nack) are checked: the CRC in Python
-                # costs about 0.2 ms a telemetry frame, time an answer arriving meanwhile waits.
-                if (raw and len(raw) >= 8 and raw[1] in WANTED
-                        and crc32c(raw[:-4]) == int.from_bytes(raw[-4:], "little")):
-                    got.append((raw[1], raw[2] | raw[3] << 8, raw[4:-4], now))
+                if raw and wanted(raw):
+                    got.append((raw, now))
         return got
+
+    def frames(self, timeout):
+        """Decoded frames (kind, seq, payload) read within `timeout` s, with the time each
+        delimiter was read; returns as soon as at least one is whole."""
+        # Only the kinds awaited (HelloReply, Ack, Nack) are checked: the CRC in Python
+        # costs about 0.2 ms a telemetry frame, time an answer arriving meanwhile waits.
+        ok = lambda raw: (len(raw) >= 8 and raw[1] in WANTED
+                          and crc32c(raw[:-4]) == int.from_bytes(raw[-4:], "little"))
+        return [(raw[1], raw[2] | raw[3] << 8, raw[4:-4], now)
+                for raw, now in self.raw_frames(timeout, ok)]
 
     def drain(self):
         """Forgets the whole frames already received (the telemetry of the pause before a

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The TUI's command round trip (README Performance, "command round trip in the TUI"; issue 15)
+# The TUI's command round trip (docs/performance.md, "command round trip in the TUI")
 # and the TUI's CPU and wake-ups over the same window.
 #
 # Runs `robot-emulator --speed 1 --link P` and `station --port P` in a detached tmux session

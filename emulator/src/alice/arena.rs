@@ -34,8 +34,12 @@ pub fn alice() -> Arena {
             .collect(),
         height_m: None,
     };
-    let mut a =
-        crate::builtin::walled_box("ALICE test scene (seed 001)", BUILTIN_ALICE, SIDE_M, SIDE_M);
+    let mut a = crate::builtin::walled_box(
+        "ALICE test scene (Zimmer §4.5)",
+        BUILTIN_ALICE,
+        SIDE_M,
+        SIDE_M,
+    );
     a.walls = vec![pillar];
     // Spots at the border, of different strengths, 1 m high (the thesis: "two respectively
     // three light sources are mounted at the border").
@@ -94,7 +98,7 @@ pub fn builtin(name: &str) -> Option<Arena> {
 /// along the corridor, one in the upper right behind the obstacles.
 pub fn navigation_scene() -> Arena {
     let mut a = crate::builtin::walled_box(
-        "ALICE navigation scene (seed 001 §5.3)",
+        "ALICE navigation scene (Zimmer §5.3)",
         BUILTIN_ALICE_NAVIGATION,
         NAV_SCENE_M.0,
         NAV_SCENE_M.1,

@@ -512,15 +512,8 @@ impl<'a> Warnings<'a> {
             let path = self.t.path.display();
             let text = format!("{path}:{line}:{col}: {message}");
             // Warnings reach terminals; attribute values may hold control characters (&#7;).
-            let mut clean = String::with_capacity(text.len());
-            for c in text.chars() {
-                if c.is_control() {
-                    clean.extend(c.escape_default());
-                } else {
-                    clean.push(c);
-                }
-            }
-            self.kept.push(clean);
+            self.kept
+                .push(crate::terminal_text::printable(&text).into_owned());
         } else {
             self.more += 1;
         }

@@ -8,6 +8,8 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use crate::input_file::{self, InputError, InputKind};
+
 /// Largest file any importer reads: a 16-bit 8192 x 8192 PGM is 128 MiB, anything past this
 /// is refused before it is read.
 pub const MAX_FILE_BYTES: u64 = 160 * 1024 * 1024;
@@ -169,19 +171,8 @@ pub(crate) fn excerpt(s: &str) -> String {
 
 /// [`excerpt`] with a longer limit, for a library's message that may quote the file.
 pub(crate) fn excerpt_n(s: &str, max_chars: usize) -> String {
-    let mut out = String::new();
-    let mut end = s.len();
-    for (n, (i, c)) in s.char_indices().enumerate() {
-        if n == max_chars {
-            end = i;
-            break;
-        }
-        if c.is_control() {
-            out.extend(c.escape_default());
-        } else {
-            out.push(c);
-        }
-    }
+    let end = s.char_indices().nth(max_chars).map_or(s.len(), |(i, _)| i);
+    let mut out = crate::terminal_text::printable(s.get(..end).unwrap_or(s)).into_owned();
     if end < s.len() {
         out.push_str(&format!("… ({} more bytes)", s.len() - end));
     }
@@ -192,38 +183,31 @@ pub(crate) fn to_u32(n: usize) -> u32 {
     u32::try_from(n).unwrap_or(u32::MAX)
 }
 
-/// Reads a whole file, refusing one past [`MAX_FILE_BYTES`].
-pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>, ArenaError> {
-    let meta = std::fs::metadata(path).map_err(|e| ArenaError::io(path, e))?;
-    if !meta.is_file() {
-        return Err(ArenaError::at_file(path, "not a regular file"));
+/// What an arena file may be (`input_file`'s rule).
+pub const ARENA_FILE: InputKind = InputKind {
+    what: "arena files",
+    max_bytes: MAX_FILE_BYTES,
+    pipes: false,
+};
+
+impl From<InputError> for ArenaError {
+    fn from(e: InputError) -> Self {
+        match e {
+            InputError::Io { path, source } => ArenaError::io(&path, source),
+            other => ArenaError::at_file(other.path(), other.reason()),
+        }
     }
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(ArenaError::at_file(
-            path,
-            format!(
-                "file is {} bytes; arena files are limited to {MAX_FILE_BYTES} bytes",
-                meta.len()
-            ),
-        ));
-    }
-    std::fs::read(path).map_err(|e| ArenaError::io(path, e))
 }
 
-/// Reads at most the first `max` bytes of a regular file (a header, before deciding to read
+/// Reads a whole arena file (a regular file of at most [`MAX_FILE_BYTES`]).
+pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>, ArenaError> {
+    Ok(input_file::read(path, &ARENA_FILE)?)
+}
+
+/// Reads at most the first `max` bytes of an arena file (a header, before deciding to read
 /// the rest).
 pub(crate) fn read_head(path: &Path, max: u64) -> Result<Vec<u8>, ArenaError> {
-    use std::io::Read;
-    let file = std::fs::File::open(path).map_err(|e| ArenaError::io(path, e))?;
-    let meta = file.metadata().map_err(|e| ArenaError::io(path, e))?;
-    if !meta.is_file() {
-        return Err(ArenaError::at_file(path, "not a regular file"));
-    }
-    let mut out = Vec::new();
-    file.take(max)
-        .read_to_end(&mut out)
-        .map_err(|e| ArenaError::io(path, e))?;
-    Ok(out)
+    Ok(input_file::read_head(path, &ARENA_FILE, max)?)
 }
 
 /// Reads a whole UTF-8 text file; invalid UTF-8 is reported at its line and column.
@@ -343,7 +327,7 @@ mod tests {
     #[test]
     fn excerpts_are_short_and_escape_control_characters() {
         assert_eq!(excerpt("origin"), "origin");
-        assert_eq!(excerpt("a\x1b]0;x\x07"), "a\\u{1b}]0;x\\u{7}");
+        assert_eq!(excerpt("a\x1b]0;x\x07"), "a\\x1b]0;x\\x07");
         let long = "0, ".repeat(2_000_000);
         let e = excerpt(&long);
         assert!(e.len() < 100, "{e}");

@@ -461,8 +461,11 @@ fn pgm_without_yaml(path: &Path) -> ArenaError {
     let found = std::fs::read_dir(dir).ok().and_then(|entries| {
         entries.flatten().map(|e| e.path()).find(|p| {
             let yaml = matches!(p.extension().and_then(|e| e.to_str()), Some("yaml" | "yml"));
-            yaml && std::fs::read_to_string(p)
-                .is_ok_and(|t| !file_name.is_empty() && t.contains(&file_name))
+            yaml && error::read_bytes(p).is_ok_and(|t| {
+                !file_name.is_empty()
+                    && t.windows(file_name.len())
+                        .any(|w| w == file_name.as_bytes())
+            })
         })
     });
     let hint = match found {

@@ -37,7 +37,8 @@ use crate::sensors::Noise;
 use crate::sim::SimConfig;
 
 /// The scoring rule, as reports state it.
-pub const SCORING: &str = "seed 004 §2: shortest time, fewest collisions with the environment \
+pub const SCORING: &str =
+    "the Dom Dinis paper §2: shortest time, fewest collisions with the environment \
      or the other robots (no formula given). Here: robots in the goal area first, by arrival \
      time, then by collisions (walls + robots); then the others, nearest the goal first, then \
      by collisions; then by robot number";

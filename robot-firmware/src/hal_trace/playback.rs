@@ -37,6 +37,15 @@ pub enum TraceError {
     NoStart { offset: usize },
     /// More entries of one kind in a pass than a pass can make.
     TooMany { offset: usize, what: &'static str },
+    /// More passes, or more robot time, between two control cycles than the firmware makes
+    /// (see [`Playback`]'s bound): `claimed` against `limit`, in `unit`.
+    Implausible {
+        offset: usize,
+        field: &'static str,
+        claimed: u64,
+        limit: u64,
+        unit: &'static str,
+    },
 }
 
 impl core::fmt::Display for TraceError {
@@ -58,6 +67,19 @@ impl core::fmt::Display for TraceError {
             TraceError::TooMany { offset, what } => {
                 write!(f, "trace byte {offset}: more {what} in one pass than a pass makes")
             }
+            TraceError::Implausible {
+                offset,
+                field,
+                claimed,
+                limit,
+                unit,
+            } => write!(
+                f,
+                "trace byte {offset}: {field} makes {claimed} {unit} without a control cycle; \
+                 the firmware runs one every {period} us and makes at most a pass a \
+                 microsecond, so at most {limit} {unit} come between two (two periods)",
+                period = limit / 2
+            ),
         }
     }
 }
@@ -192,6 +214,15 @@ pub struct Playback<'a> {
     step: StepInputs<'a>,
     /// Idle passes still to play from an `IDLE` entry, and their spacing.
     idle: (u64, u64),
+    /// The profile `START` names.
+    profile: &'static crate::profile::Profile,
+    /// Most passes, and most µs of robot time, between two control cycles (`between_cycles`).
+    bound: u64,
+    /// The clock of the last control cycle (or of the first pass, before one), and the passes
+    /// since it.
+    since_cycle: Option<(u64, u64)>,
+    /// Where the entry that began the pass just loaded is in the stream.
+    pass_at: usize,
     /// Where the next pass's entries begin.
     next_pass: Option<usize>,
     clock: u64,
@@ -226,11 +257,20 @@ impl<'a> Playback<'a> {
         }
         let start = read_start(&mut cur)?;
         let at = cur.at;
+        let profile =
+            crate::profile::Profile::by_trace_code(start.profile).ok_or(TraceError::BadValue {
+                offset: 2,
+                field: "START profile",
+            })?;
         Ok(Playback {
             cur,
             start,
             step: StepInputs::default(),
             idle: (0, 0),
+            profile,
+            bound: between_cycles(profile),
+            since_cycle: None,
+            pass_at: at,
             next_pass: Some(at),
             clock: 0,
             encoders: [0, 0],
@@ -255,6 +295,46 @@ impl<'a> Playback<'a> {
     /// Byte offset in the stream of the pass about to be played.
     pub fn offset(&self) -> usize {
         self.cur.at
+    }
+
+    /// The robot's profile, as `START` names it (a profile this firmware lacks is refused).
+    pub fn profile(&self) -> &'static crate::profile::Profile {
+        self.profile
+    }
+
+    /// Byte offset in the stream of the entry that began the pass just loaded (its `STEP`, or
+    /// the `IDLE` it is one of).
+    pub fn pass_offset(&self) -> usize {
+        self.pass_at
+    }
+
+    /// Checks that a run of `n` passes ending at robot time `end` (µs), the first at `first`,
+    /// keeps within the bound since the last control cycle; `entry` and the fields name the
+    /// claim. The run's passes are not control cycles.
+    fn within_bound(
+        &mut self,
+        entry: usize,
+        (n, first, end): (u64, u64, u64),
+        (passes_field, time_field): (&'static str, &'static str),
+    ) -> Result<(), TraceError> {
+        let (since, before) = *self.since_cycle.get_or_insert((first, 0));
+        let passes = before.saturating_add(n);
+        let time = end.saturating_sub(since);
+        let refuse = |field, claimed, unit| TraceError::Implausible {
+            offset: entry,
+            field,
+            claimed,
+            limit: self.bound,
+            unit,
+        };
+        if passes > self.bound {
+            return Err(refuse(passes_field, passes, "passes"));
+        }
+        if time > self.bound {
+            return Err(refuse(time_field, time, "us of robot time"));
+        }
+        self.since_cycle = Some((since, passes));
+        Ok(())
     }
 
     /// Loads the next pass. `Next::Step`: call `Robot::step` with this `Hal` now.
@@ -298,8 +378,13 @@ impl<'a> Playback<'a> {
                         field: "IDLE count",
                     });
                 }
+                // Refused before a pass is played: 2^32 - 1 passes 0 µs apart took 95 s.
+                let first = self.clock.wrapping_add(dt);
+                let end = self.clock.saturating_add(n.saturating_mul(dt));
+                self.within_bound(entry_at, (n, first, end), ("IDLE count", "IDLE spacing"))?;
                 self.next_pass = Some(self.cur.at);
                 self.idle = (n, dt);
+                self.pass_at = entry_at;
                 self.next_step()
             }
             tag::STEP => {
@@ -312,6 +397,13 @@ impl<'a> Playback<'a> {
                 };
                 match self.read_pass(&mut step)? {
                     Some(next) => {
+                        if step.cycle {
+                            self.since_cycle = Some((step.clock_us, 0));
+                        } else {
+                            let t = step.clock_us;
+                            self.within_bound(entry_at, (1, t, t), ("STEP", "STEP time"))?;
+                        }
+                        self.pass_at = entry_at;
                         self.next_pass = Some(next);
                         self.clock = step.clock_us;
                         self.tx_left = step.tx_short;
@@ -502,6 +594,19 @@ impl<'a> Playback<'a> {
             }
         }
     }
+}
+
+/// The bound on a trace between two control cycles for `profile`, µs of robot time and passes
+/// alike: two control periods. The firmware runs a control cycle (its sensors read, so a `STEP`, never `IDLE`)
+/// in the first pass at least a period after the last, so a genuine trace has less than one
+/// period of passes between two, and a main loop that reads its clock, its port and its link
+/// takes more than a microsecond a pass on these robots (the emulator makes one a
+/// millisecond). A claim past the bound is refused before it is played: playing is a
+/// `Robot::step` a pass, and one 8-byte `IDLE` entry can claim 2^32 - 1 passes. Retracing is
+/// then work in proportion to the trace: at most two periods of passes per control cycle,
+/// whose entries take at least 11 bytes.
+fn between_cycles(profile: &crate::profile::Profile) -> u64 {
+    2 * u64::from(profile.cycle_us)
 }
 
 fn read_start(c: &mut Cursor<'_>) -> Result<StartInfo, TraceError> {

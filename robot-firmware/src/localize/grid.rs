@@ -9,8 +9,10 @@
 //! A control cycle moves the sensor along a short path; [`GridGeometry::swept`] says which
 //! band that path entered, or how far it would have to be shifted, perpendicular to the
 //! band, to enter the nearest one. Invariants: shifts are the smallest signed moves that make
-//! the path cross the edge of a band it meets first, 0 when it already does; no function panics on any input (huge or
-//! non-finite coordinates give saturated indices and non-finite shifts, never a panic).
+//! the path cross the edge of a band it meets first, 0 when it already does; no function
+//! panics on any input. A path or grid that names no band (a non-finite coordinate, a pitch
+//! that is not a positive finite number) gives line 0 and a shift of 0, so a correction built
+//! on it moves no pose; huge finite coordinates give saturated indices.
 
 use crate::odometry::Point;
 
@@ -80,7 +82,14 @@ impl GridGeometry {
             Axis::X => (a.x, b.x, self.origin.x),
             Axis::Y => (a.y, b.y, self.origin.y),
         };
-        let (index, shift_m) = swept_1d(u - o, v - o, self.pitch_m, self.line_width_m / 2.0);
+        let (u, v, half) = (u - o, v - o, self.line_width_m / 2.0);
+        let names_a_band =
+            [u, v, half, self.pitch_m].iter().all(|x| x.is_finite()) && self.pitch_m > 0.0;
+        let (index, shift_m) = if names_a_band {
+            swept_1d(u, v, self.pitch_m, half)
+        } else {
+            (0, 0.0)
+        };
         Swept {
             line: GridLine { axis, index },
             shift_m,
@@ -206,9 +215,24 @@ mod tests {
     }
 
     #[test]
-    fn non_finite_and_huge_inputs_do_not_panic() {
-        let _ = G.swept(Point::new(f32::NAN, 1e30), Point::new(f32::INFINITY, -1e30));
-        let zero = GridGeometry { pitch_m: 0.0, ..G };
-        let _ = zero.swept(Point::new(0.1, 0.2), Point::new(0.3, 0.4));
+    fn a_path_or_grid_that_names_no_band_moves_no_pose() {
+        let nowhere = Swept {
+            line: GridLine {
+                axis: Axis::X,
+                index: 0,
+            },
+            shift_m: 0.0,
+        };
+        let nan = G.swept(Point::new(f32::NAN, 0.3), Point::new(0.2, f32::INFINITY));
+        assert_eq!(nan, nowhere);
+        for pitch_m in [0.0, -0.1, f32::NAN, f32::INFINITY] {
+            let bad = GridGeometry { pitch_m, ..G };
+            let s = bad.swept(Point::new(0.1, 0.2), Point::new(0.3, 0.4));
+            assert_eq!(s, nowhere, "pitch {pitch_m}");
+        }
+        // Huge but finite: a saturated index and a finite shift, no panic.
+        let far = G.swept(Point::new(1e30, -1e30), Point::new(1e30, -1e30));
+        assert!(far.shift_m.is_finite(), "{far:?}");
+        assert!(matches!(far.line.index, i32::MAX | i32::MIN | 0), "{far:?}");
     }
 }

@@ -468,6 +468,7 @@ mod tests {
         run(&mut robot, &mut hal, 400);
         let core = &mut robot.core;
         assert!(core.arrived, "{:?}", core.pose());
+        assert_eq!(core.mode, Mode::Idle, "a go-to that arrived ends in Idle");
         let here = core.pose().point();
         assert_eq!(
             MapMarker::cell_at(core.objects.nav().grid(), here),

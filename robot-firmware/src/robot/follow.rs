@@ -397,6 +397,16 @@ pub(super) mod tests {
             "{here:?}"
         );
         assert!(robot.core.arrived);
+        // The task is over: Idle, and no progress report counts on at its end.
+        assert_eq!(robot.core.mode, Mode::Idle);
+        let now = robot.core.cycle_ms.wrapping_add(5000);
+        assert_eq!(
+            robot.core.progress.report_due(Mode::Idle, now, (0, 0)),
+            None
+        );
+        let finished = events.iter().position(|e| e.0 == EventCode::PlanFinished);
+        let reached = events.iter().position(|e| e.0 == EventCode::GoalReached);
+        assert!(finished < reached, "{events:?}");
     }
 
     #[test]

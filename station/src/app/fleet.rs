@@ -9,6 +9,10 @@
 
 use protocol::Command;
 
+/// The "stop all" key: unused by the single-robot key map, shown in the footer and help (the
+/// fleet's input handles it).
+pub const STOP_ALL_KEY: char = '!';
+
 use super::log::{Level, Source};
 use super::App;
 use crate::link::CommandId;

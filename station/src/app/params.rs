@@ -8,6 +8,7 @@
 
 use protocol::NackReason;
 use robot_firmware::params::{ParamInfo, PARAMS};
+pub use station_core::format::{format_param, format_param_id, format_value, range_text};
 
 use crate::link::api::nack_text;
 
@@ -175,35 +176,6 @@ pub fn status_text(info: &ParamInfo, s: &ParamStatus) -> String {
         },
         ParamStatus::Failed(why) => format!("failed: {why}"),
         ParamStatus::Absent => "not on this robot".into(),
-    }
-}
-
-/// A value of parameter `info` with the decimals its unit and range need
-/// (`robot_firmware::params::display_decimals`): 0.080 mm per pulse, not 0.
-pub fn format_param(info: &ParamInfo, v: f32) -> String {
-    format!("{v:.*}", robot_firmware::params::display_decimals(info))
-}
-
-/// A value of parameter `id` as `format_param` shows it (plain for an unknown id).
-pub fn format_param_id(id: u16, v: f32) -> String {
-    robot_firmware::params::info(id).map_or_else(|| format_value(v), |p| format_param(p, v))
-}
-
-/// `info`'s range in its unit, each bound with the parameter's decimals.
-pub fn range_text(info: &ParamInfo) -> String {
-    format!(
-        "{} .. {}",
-        format_param(info, info.min),
-        format_param(info, info.max)
-    )
-}
-
-/// A value without needless decimals.
-pub fn format_value(v: f32) -> String {
-    if v.fract() == 0.0 && v.abs() < 1e7 {
-        format!("{v:.0}")
-    } else {
-        format!("{v}")
     }
 }
 

@@ -13,6 +13,20 @@ use protocol::{Mode, Progress};
 use super::log::{Level, Source};
 use super::App;
 
+/// What the station calls a map it received from the robot.
+pub const ROBOT_MAP_NAME: &str = "robot map";
+
+/// Where the robot's installed plan goes, as the station knows it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PlanFor {
+    /// Made by the robot at `O`, for this target.
+    Target(PlanTarget),
+    /// Uploaded from this file.
+    Uploaded(String),
+    /// Installed by something else (another station on the link): not shown here.
+    Elsewhere,
+}
+
 /// Where a plan goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PlanTarget {
@@ -37,6 +51,16 @@ impl PlanTarget {
             PlanTarget::Chosen((x, y)) => format!("the chosen target ({x:.2}, {y:.2})"),
             PlanTarget::MapGoal(Some((x, y))) => format!("the map's goal ({x:.2}, {y:.2})"),
             PlanTarget::MapGoal(None) => "the map's goal".into(),
+        }
+    }
+
+    /// Whether two targets are the same place for a plan: the same chosen point, or both
+    /// the map's goal (wherever the station's map puts it now).
+    pub fn same(&self, other: &PlanTarget) -> bool {
+        match (self, other) {
+            (PlanTarget::Chosen(a), PlanTarget::Chosen(b)) => a == b,
+            (PlanTarget::MapGoal(_), PlanTarget::MapGoal(_)) => true,
+            _ => false,
         }
     }
 
@@ -115,7 +139,7 @@ impl App {
             .map
             .plan
             .planner()
-            .filter(|p| p.map().source == super::transfers::ROBOT_MAP_NAME);
+            .filter(|p| p.map().source == ROBOT_MAP_NAME);
         match robot_map {
             Some(p) => format!(" (the robot's map has {} squares)", p.squares().len()),
             None => String::new(),
@@ -141,6 +165,30 @@ impl App {
                 format!(" (the robot's arena: x {x0:.2} .. {x1:.2} m, y {y0:.2} .. {y1:.2} m)")
             }
             _ => " (reading the robot's arena bounds: see the parameter editor, p)".into(),
+        }
+    }
+
+    /// The `GoalReached` event in words: what the task that arrived was, and where (the
+    /// robot says only that its task reached its end; the goal is the goal only when
+    /// exploring found it, or a plan to the map's goal got there).
+    pub(super) fn arrival_text(&self) -> String {
+        let at = self
+            .pose()
+            .map_or(String::new(), |(x, y, _)| format!(" at ({x:.2}, {y:.2})"));
+        let mode = self
+            .progress
+            .map(|p| p.mode)
+            .or_else(|| self.telemetry.map(|t| t.mode));
+        let to_goal = matches!(
+            &self.transfers.plan_for,
+            Some(PlanFor::Target(PlanTarget::MapGoal(_)))
+        );
+        match mode {
+            Some(Mode::Explore) => format!("goal reached{at}: exploration found the goal area"),
+            Some(Mode::GoTo) => format!("arrived{at}: the go-to point"),
+            Some(Mode::ExecutePlan) if to_goal => format!("goal reached{at}: the plan's end"),
+            Some(Mode::ExecutePlan) => format!("arrived{at}: the plan's end"),
+            _ => format!("task ended{at}: the robot arrived"),
         }
     }
 

@@ -10,7 +10,10 @@
 //! with a progress bar; `M` downloads the robot's map and shows it (the station's planner and
 //! the grid layer then use it); `E` sends `StartExploration`; `O` sends `Segment` and `Plan`
 //! (to the plan's target, `app::plan_target`); `X` sends `ExecutePlan` with
-//! the installed plan's id.
+//! the installed plan's id, but only for the plan the screen names: one the robot made for
+//! the target the footer shows, or one uploaded. While `O` waits for the robot's answer `X`
+//! waits too, and after a refused `O` there is no plan for its target (not even one the robot
+//! made for it earlier): `X` says so and sends nothing.
 //!
 //! Live map: while telemetry says the robot is in Explore mode, the map is downloaded every
 //! [`LIVE_MAP_PERIOD_MS`] (nothing travels when its id is unchanged: the engine answers the
@@ -28,6 +31,7 @@ use protocol::{Command, EventCode, Mode, ObjectKind, PointMm};
 
 use super::log::{Level, Source};
 use super::plan_target::PlanTarget;
+pub use super::plan_target::{PlanFor, ROBOT_MAP_NAME};
 use super::App;
 use crate::link::{CommandOutcome, LinkEvent, SendWhen, TransferOut};
 use crate::plan::{End, MapOptions};
@@ -41,33 +45,8 @@ use crate::transfer::{
 pub const LIVE_MAP_PERIOD_MS: u64 = 1000;
 /// Longest path the prompt takes.
 const PROMPT_MAX: usize = 1024;
-/// What the station calls a map it received from the robot.
-pub const ROBOT_MAP_NAME: &str = "robot map";
 
-/// A transfer key or prompt edit.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum TransferAction {
-    /// `u`: open the upload prompt.
-    OpenPrompt,
-    PromptInput(char),
-    PromptBackspace,
-    /// Ctrl-U: clear the prompt (as in a shell).
-    PromptClear,
-    /// End or an arrow: keep the suggestion and edit it.
-    PromptKeep,
-    /// Enter: upload the file named in the prompt.
-    PromptCommit,
-    /// Esc: close the prompt.
-    PromptCancel,
-    /// `M`: download the robot's map and show it.
-    DownloadMap,
-    /// `O`: segment and plan on the robot, then download and draw the plan.
-    PlanOnRobot,
-    /// `X`: execute the robot's installed plan.
-    ExecutePlan,
-    /// `E`: start exploring.
-    StartExploration,
-}
+pub use crate::action::TransferAction;
 
 /// Why a job was started.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -104,6 +83,12 @@ pub struct Transfers {
     pub map_have: Option<(u32, u32)>,
     /// The robot's installed plan's id, from `PlanInstalled` or an upload.
     pub plan_id: Option<u32>,
+    /// Where that plan goes; `X` executes it only when it is the plan the screen names.
+    pub plan_for: Option<PlanFor>,
+    /// The target of the last `O`, until the robot installs its plan or refuses.
+    plan_asked: Option<PlanTarget>,
+    /// The target of the last `O` the robot refused (or did not answer).
+    plan_refused: Option<PlanTarget>,
     /// The robot's plan as downloaded or uploaded: its id and waypoints, metres.
     pub robot_plan: Option<(u32, Vec<(f64, f64)>)>,
     purposes: HashMap<JobId, Purpose>,
@@ -196,15 +181,11 @@ impl App {
                 self.transfers.submit(spec, Purpose::Map);
             }
             TransferAction::PlanOnRobot => self.plan_on_robot(),
-            TransferAction::ExecutePlan => match self.transfers.plan_id {
-                Some(plan_id) => {
+            TransferAction::ExecutePlan => match self.executable_plan() {
+                Ok(plan_id) => {
                     self.send(Command::ExecutePlan { plan_id });
                 }
-                None => self.note(
-                    Level::Warn,
-                    Source::Command,
-                    "no plan on the robot yet: O plans on it, u uploads one".into(),
-                ),
+                Err(why) => self.note(Level::Warn, Source::Command, why),
             },
             TransferAction::StartExploration => {
                 self.send(Command::StartExploration);
@@ -212,6 +193,60 @@ impl App {
             }
         }
         self.pump_transfers();
+    }
+
+    /// The id `X` may execute: the installed plan if it is the one the screen names, else
+    /// why not.
+    fn executable_plan(&self) -> Result<u32, String> {
+        let t = &self.transfers;
+        let now = self.plan_target();
+        let Some(id) = t.plan_id else {
+            return Err("X: no plan on the robot yet: O plans on it, u uploads one".into());
+        };
+        if let Some(asked) = t.plan_asked {
+            return Err(format!(
+                "X: the robot is still planning to {}; X when its plan is shown",
+                asked.describe()
+            ));
+        }
+        if t.plan_refused.is_some_and(|r| r.same(&now)) {
+            return Err(format!(
+                "X: no plan to {}: the robot refused to plan there (see the log); O plans \
+                 again, G goes back to the map's goal",
+                now.describe()
+            ));
+        }
+        match &t.plan_for {
+            Some(PlanFor::Target(to)) if to.same(&now) => Ok(id),
+            Some(PlanFor::Uploaded(_)) => Ok(id),
+            Some(PlanFor::Target(to)) => Err(format!(
+                "X: the robot's plan goes to {}, not {}; O plans to {}",
+                to.describe(),
+                now.describe(),
+                now.describe()
+            )),
+            Some(PlanFor::Elsewhere) => Err(format!(
+                "X: the robot's plan {id:#010x} was installed elsewhere, not shown here; O plans \
+                 to {}",
+                now.describe()
+            )),
+            None => Err(format!(
+                "X: no plan to {} on the robot; O plans there",
+                now.describe()
+            )),
+        }
+    }
+
+    /// The `O` the robot refused or left unanswered: there is no plan for its target, not
+    /// even one the robot made for it before.
+    pub(super) fn plan_not_made(&mut self) {
+        let t = &mut self.transfers;
+        if let Some(asked) = t.plan_asked.take() {
+            if matches!(&t.plan_for, Some(PlanFor::Target(to)) if to.same(&asked)) {
+                t.plan_for = None;
+            }
+            t.plan_refused = Some(asked);
+        }
     }
 
     fn upload_file(&mut self, path: &str) {
@@ -265,6 +300,9 @@ impl App {
             Source::Command,
             format!("planning on the robot to {}", target.describe()),
         );
+        // Until the robot answers, X waits for this plan rather than run an earlier one.
+        self.transfers.plan_asked = Some(target);
+        self.transfers.plan_refused = None;
         let to = match to.map(|p| point_mm(["goal x", "goal y"], p)).transpose() {
             Ok(to) => to,
             Err(e) => {
@@ -325,6 +363,13 @@ impl App {
         match ev {
             LinkEvent::Robot(e) if e.code == EventCode::PlanInstalled => {
                 let id = e.value as u32;
+                let t = &mut self.transfers;
+                if let Some(asked) = t.plan_asked.take() {
+                    t.plan_for = Some(PlanFor::Target(asked));
+                } else if t.plan_id != Some(id) {
+                    // Not ours (an upload names its plan when it completes, below).
+                    t.plan_for = Some(PlanFor::Elsewhere);
+                }
                 self.transfers.plan_id = Some(id);
                 let have = self
                     .transfers
@@ -428,8 +473,8 @@ impl App {
             }
             (crate::transfer::Direction::Upload, object) => {
                 self.note(Level::Info, Source::Command, r.text());
-                if let Some(Purpose::Upload(_, bytes)) = &purpose {
-                    self.after_upload(object, r.id, bytes);
+                if let Some(Purpose::Upload(path, bytes)) = &purpose {
+                    self.after_upload(path, object, r.id, bytes);
                 }
             }
             (crate::transfer::Direction::Download, ObjectKind::LightCalibration) => {
@@ -440,12 +485,14 @@ impl App {
     }
 
     /// The robot holds what was uploaded: show it as the robot's.
-    fn after_upload(&mut self, object: ObjectKind, id: Option<u32>, bytes: &[u8]) {
+    fn after_upload(&mut self, path: &str, object: ObjectKind, id: Option<u32>, bytes: &[u8]) {
         let held = id.map(|i| (i, i));
         match object {
             ObjectKind::Map => self.show_robot_map(bytes, held, true),
             ObjectKind::Plan => {
                 self.transfers.plan_id = id;
+                self.transfers.plan_for = Some(PlanFor::Uploaded(path.to_string()));
+                self.transfers.plan_asked = None;
                 self.set_robot_plan(id, bytes);
             }
             ObjectKind::Regions | ObjectKind::LightCalibration => {}

@@ -16,8 +16,7 @@ use crate::action::Action;
 use crate::app::App;
 use crate::ui::{self, Panel};
 
-/// The "stop all" key: unused by the single-robot key map, shown in the footer and help.
-pub const STOP_ALL_KEY: char = '!';
+pub use crate::app::fleet::STOP_ALL_KEY;
 
 /// Whether a terminal event is the fleet's (`Some`), and its action if it has one: `Alt-4`
 /// with three robots is the fleet's and does nothing (it must not fall through to the robot's

@@ -38,7 +38,8 @@ pub async fn interactive(
             ports.len()
         );
     }
-    crate::cli::distinct_ports(ports.iter().map(PathBuf::as_path)).map_err(anyhow::Error::msg)?;
+    crate::commands::args::distinct_ports(ports.iter().map(PathBuf::as_path))
+        .map_err(anyhow::Error::msg)?;
     if !std::io::stdout().is_terminal() {
         bail!("the TUI needs a terminal; for scripts use `station send` or `station stats`");
     }

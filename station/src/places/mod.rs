@@ -91,7 +91,7 @@ pub fn command(args: &PlacesArgs) -> anyhow::Result<ExitCode> {
         });
         println!(
             "{}",
-            serde_json::to_string_pretty(&summary).context("cannot print JSON")?
+            crate::json_text::pretty(&summary).context("cannot print JSON")?
         );
         return Ok(ExitCode::SUCCESS);
     }

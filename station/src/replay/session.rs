@@ -14,7 +14,7 @@ use ratatui::Frame;
 
 use super::player::{Player, SEEK_STEP_US};
 use super::screen::{self, ReplayStatus};
-use super::ReplayFeed;
+use super::{ReplayEvent, ReplayFeed};
 use crate::action::Action;
 use crate::app::log::{Level, LogLine, Source};
 use crate::app::{App, AppOptions, View};
@@ -39,7 +39,7 @@ pub struct ReplaySession {
     pub player: Player,
     pub help: bool,
     pub quit: bool,
-    actions: Vec<Action>,
+    actions: Vec<ReplayEvent>,
     /// `--retrace`: drawn over the map and noted in the log after every restart.
     retrace: Option<std::sync::Arc<crate::retrace::overlay::RetraceOverlay>>,
 }
@@ -116,11 +116,13 @@ impl ReplaySession {
             self.actions.clear();
             self.feeds[i].advance_to(&self.links[i].records, target, &mut self.actions);
             for a in self.actions.drain(..) {
-                changed |= !matches!(a, Action::Tick { .. });
+                changed |= !matches!(a, ReplayEvent::Tick { .. });
                 match a {
                     // Through the fleet: it checks the robots' ids against each other.
-                    Action::Link(ev) => self.fleet.on_link(i, ev),
-                    a => self.fleet.members[i].app.update(a),
+                    ReplayEvent::Link(ev) => self.fleet.on_link(i, ev),
+                    ReplayEvent::Tick { now_ms } => {
+                        self.fleet.members[i].app.update(Action::Tick { now_ms })
+                    }
                 }
             }
             // Nothing the app might want to send goes anywhere: neither commands nor the

@@ -5,14 +5,14 @@
 //! reads without colour too; the selected robot is drawn by the map's own believed-pose layer
 //! in its fleet colour, its number reversed.
 
-use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::layout::Rect;
 use ratatui::style::{Color, Modifier, Style, Stylize};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::canvas::{Context, Points};
 use ratatui::widgets::{Block, Paragraph};
 use ratatui::Frame;
 
-use super::map::{MapLayer, MapView};
+use super::layer::{MapLayer, MapView};
 use crate::app::App;
 
 /// The robots' colours, by index: none is a colour the map uses for something else (magenta
@@ -37,17 +37,6 @@ pub fn colour(i: usize) -> Color {
 /// Robot `i`'s glyph on the map: its number in the fleet, as the picker's keys count.
 pub fn glyph(i: usize) -> char {
     char::from_digit((i % 9) as u32 + 1, 10).unwrap_or('?')
-}
-
-/// The fleet panel above the main area, with several robots; the rest of `main`.
-pub fn split(app: &App, main: Rect) -> (Option<Rect>, Rect) {
-    let Some(f) = app.fleet.as_ref().filter(|_| app.in_fleet()) else {
-        return (None, main);
-    };
-    let rows = (f.robots.len() as u16 + 2).min(main.height / 2);
-    let [panel, rest] =
-        Layout::vertical([Constraint::Length(rows), Constraint::Fill(1)]).areas(main);
-    (Some(panel), rest)
 }
 
 /// The fleet panel: label, profile, mode and activity, link health, battery, stale marker.
@@ -124,7 +113,7 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         format!(
             " Fleet: {} of {n} — Tab/Alt-1..{n}/click picks, {} stops all ",
             f.selected + 1,
-            crate::fleet::input::STOP_ALL_KEY
+            crate::app::fleet::STOP_ALL_KEY
         )
     };
     frame.render_widget(

@@ -10,7 +10,7 @@ use ratatui::style::{Color, Stylize};
 use ratatui::text::{Line as TLine, Span};
 use ratatui::widgets::canvas::{Circle, Context};
 
-use super::map::{MapLayer, MapView};
+use super::layer::{MapLayer, MapView};
 use crate::app::App;
 
 /// Layer name (hidden like the others).

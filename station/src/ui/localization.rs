@@ -20,7 +20,7 @@ use ratatui::Frame;
 
 use protocol::LineVerdict;
 
-use super::map::{MapLayer, MapView};
+use super::layer::{MapLayer, MapView};
 use crate::app::App;
 
 /// Layer names (keys in `input.rs` and the help).

@@ -18,7 +18,7 @@ use ratatui::widgets::canvas::{Context, Line, Points, Rectangle};
 
 use robot_firmware::nav::Cell;
 
-use super::map::{MapLayer, MapView};
+use super::layer::{MapLayer, MapView};
 use crate::app::App;
 use crate::plan::NavMap;
 

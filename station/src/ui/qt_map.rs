@@ -6,7 +6,7 @@
 use ratatui::style::Color;
 use ratatui::widgets::canvas::{Context, Line, Points};
 
-use super::map::{MapLayer, MapView};
+use super::layer::{MapLayer, MapView};
 use crate::app::App;
 
 /// Layer name (key in `input.rs` and the help).

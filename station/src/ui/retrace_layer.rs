@@ -4,7 +4,7 @@
 use ratatui::style::{Color, Stylize as _};
 use ratatui::widgets::canvas::{Context, Points};
 
-use super::map::{MapLayer, MapView};
+use super::layer::{MapLayer, MapView};
 use crate::app::App;
 
 /// The retraced robot's believed track.

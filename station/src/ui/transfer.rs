@@ -13,7 +13,7 @@ use ratatui::widgets::canvas::{Context, Line as CLine};
 use ratatui::widgets::{Block, Clear, Gauge, Paragraph};
 use ratatui::Frame;
 
-use super::map::{MapLayer, MapView};
+use super::layer::{MapLayer, MapView};
 use crate::app::App;
 
 /// The robot's plan.

@@ -10,6 +10,8 @@ station/tests/data/recording-v1.rec is the one the committed files were made fro
 Arena files (arenas/) are copies of emulator/tests/data/bad. MANIFEST.tsv says how each file
 is used and what the error must say; keep the two in step.
 
+`python3 generate.py small` writes the cases that need no good file (recordings/18-...).
+
 The large hostile arenas (hundreds of KB each: deep nesting, tens of thousands of unknown keys,
 huge values) are not committed: `python3 generate.py big DIR` writes them into DIR/generated/,
 and tests/tests/bad_inputs.rs does that itself before running the cases that name them.
@@ -20,7 +22,7 @@ import struct
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
-from wire import crc32c, varint  # noqa: E402  (one CRC and varint for every script: tests/tools/wire.py)
+from wire import cobs, crc32c, varint  # noqa: E402  (one CRC and varint for every script: tests/tools/wire.py)
 
 
 def write(path, data):
@@ -80,6 +82,17 @@ def record2(t_us, kind, link, data):
     """A record of format version 2: the link id follows the kind."""
     body = varint(t_us) + bytes([kind, link]) + varint(len(data)) + data
     return body + struct.pack("<I", crc32c(body))
+
+
+def frame(kind, seq, payload):
+    """A link frame (PROTOCOL.md §2-§4): version 1, kind, seq, the payload, CRC-32C; COBS with
+    its delimiter."""
+    raw = bytes([1, kind]) + struct.pack("<H", seq) + payload
+    return cobs(raw + struct.pack("<I", crc32c(raw))) + b"\x00"
+
+
+def zigzag(n):
+    return varint((n << 1) ^ (n >> 63) if n < 0 else n << 1)
 
 
 def header(meta, version=1):
@@ -231,9 +244,48 @@ def big(out, scale=1):
     write(os.path.join(g, "huge_map.yaml"),
           b"image: huge_map.pgm\nresolution: 0.5\norigin: [0, 0, 0]\nnegate: 0\n"
           b"occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    write(os.path.join(g, "random_situations.rec"), random_situations(2000 * scale))
+
+
+def random_situations(n):
+    """A recording of `n` ALICE situations (kind 16) with random light, whiskers and odometry,
+    each a robot second after the last: every one grows the station's QT network, to its
+    2,000-cell cap, and each is due a `/qt_model` snapshot of the whole network (issue 31:
+    116 KB of them made a 277 MB MCAP). Deterministic (an LCG)."""
+    state = 31
+
+    def rand(bits):
+        nonlocal state
+        state = (state * 6364136223846793005 + 1442695040888963407) % (1 << 64)
+        return state >> (64 - bits)
+
+    meta = json.dumps({"created_unix_ms": 0, "writer": "generate.py", "port": "corpus",
+                       "baud": 115200}).encode()
+    body = record(0, 2, b"\x02corpus")
+    for i in range(n):
+        payload = (varint(1000 * (i + 1)) + varint(i % 65536) + varint(rand(24))
+                   + bytes(rand(8) for _ in range(24))
+                   + zigzag(rand(14) - 8192) + zigzag(rand(14) - 8192) + zigzag(rand(12) - 2048))
+        body += record(1000 * (i + 1), 0, frame(16, i % 65536, payload))
+    return header(meta) + body + record(1000 * (n + 1), 3, b"end")
+
+
+def small():
+    """Cases built from nothing: a recording whose header text holds what a terminal acts on
+    (CSI as U+009B, ESC ] ... BEL, DEL, a bidirectional override), written raw as a careless
+    writer would, and a torn tail so that `replay --json` prints its summary and fails (issue
+    31: the summary's JSON copied U+009B to the terminal raw)."""
+    text = "robot\u009b31m\u001b]0;owned\u0007\u007f\u202egnp"
+    meta = json.dumps({"created_unix_ms": 0, "writer": text, "port": text, "baud": 115200,
+                       "arena": text}, ensure_ascii=False).encode()
+    body = record(0, 2, b"\x02" + text.encode()) + record(1000, 0, b"\x00")
+    write("recordings/18-control-text.rec", header(meta) + body + record(2000, 3, b"end")[:-3])
 
 
 if __name__ == "__main__":
+    if sys.argv[1:2] == ["small"]:
+        small()
+        sys.exit(0)
     if sys.argv[1:2] == ["big"]:
         big(sys.argv[2], int(sys.argv[3]) if len(sys.argv) > 3 else 1)
         sys.exit(0)

@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
-"""Time and peak memory of every bad-input case (README "Reliability").
+"""Time and peak memory of every bad-input case (docs/reliability.md).
 
     cargo build --release -p station -p emulator
     python3 tests/corpus/bad/measure.py [--bin-dir target/release] [--scale N] [--json]
 
 Runs each MANIFEST.tsv case as tests/tests/bad_inputs.rs does (a fresh copy of this folder,
-the large cases from `generate.py big DIR SCALE`), but only measures: wall time and the
-child's peak resident set (ru_maxrss from wait4). The test checks the messages; this reports
-how long a refusal takes and how much memory it holds, which a test must not assert.
+the large cases from `generate.py big DIR SCALE`), but only measures: wall time, the child's
+peak resident set (ru_maxrss from wait4) and the bytes of the files it added (an `out:N`
+case's bounded output; 0 for a refusal). The test checks the messages; this reports how long
+a refusal takes and how much memory it holds, which a test must not assert.
 """
 import json
 import os
@@ -32,6 +33,16 @@ def cases():
                 continue
             binary, args = line.split("\t")[:2]
             out.append((n, binary, args.split(" ")))
+    return out
+
+
+def files(top):
+    """Every file under `top` and its length."""
+    out = {}
+    for d, _, names in os.walk(top):
+        for n in names:
+            p = os.path.join(d, n)
+            out[p] = os.path.getsize(p)
     return out
 
 
@@ -82,10 +93,12 @@ def main():
             shutil.copytree(HERE, work)
             if any(a.startswith("generated/") for a in args):
                 shutil.copytree(os.path.join(big, "generated"), os.path.join(work, "generated"))
+            before = files(work)
             wall, rss, code = run(os.path.join(bin_dir, binary), args, work)
+            added = sum(n for p, n in files(work).items() if before.get(p) != n)
             rows.append(
                 {"line": line, "binary": binary, "args": " ".join(args), "wall_s": round(wall, 4),
-                 "max_rss_bytes": rss, "exit": code}
+                 "max_rss_bytes": rss, "exit": code, "output_bytes": added}
             )
     walls = sorted(r["wall_s"] for r in rows)
     slowest = max(rows, key=lambda r: r["wall_s"])
@@ -98,6 +111,7 @@ def main():
         "slowest": f"MANIFEST.tsv:{slowest['line']}: {slowest['binary']} {slowest['args']}",
         "max_rss_mb": round(biggest["max_rss_bytes"] / 1e6, 1),
         "biggest": f"MANIFEST.tsv:{biggest['line']}: {biggest['binary']} {biggest['args']}",
+        "max_output_bytes": max(r["output_bytes"] for r in rows),
     }
     if as_json:
         print(json.dumps({"summary": summary, "cases": rows}, indent=1))

@@ -5,13 +5,7 @@ malformed, for `station retrace` (MANIFEST.tsv rows). Needs nothing else:
 import json
 import struct
 
-from generate import crc32c, header, record, varint, write
-from wire import cobs
-
-
-def frame(kind, seq, payload):
-    raw = bytes([1, kind]) + struct.pack("<H", seq) + payload
-    return cobs(raw + struct.pack("<I", crc32c(raw))) + b"\x00"
+from generate import frame, header, record, varint, write
 
 
 def hal_trace(offset, data, dropped=0):
@@ -43,3 +37,17 @@ if __name__ == "__main__":
                                                      + b"\x03\x00")))
     good = rec(hal_trace(0, START + b"\x03\x00\x16\x00\x00\x03\x00"))
     write("retrace/05-torn-tail.rec", good[:-3])
+    # Issue 31 item 2: claims of work or robot time the recording does not bound. A control
+    # cycle (a STEP with its IR reading) opens the trace, as the firmware's first pass does.
+    cycle = b"\x03\x00\x07" + bytes(8)
+    # One 8-byte IDLE entry claiming 2^32 - 1 passes 0 us apart (95 s of CPU before; `--until-ms`
+    # did not stop it, the clock never moving).
+    write("retrace/06-idle-passes.rec",
+          rec(hal_trace(0, START + cycle + b"\x02" + varint(2**32 - 1) + varint(0) + b"\x03\x00")))
+    # 1000 idle passes a second apart: 1000 s of robot time without a control cycle.
+    write("retrace/07-idle-time.rec",
+          rec(hal_trace(0, START + cycle + b"\x02" + varint(1000) + varint(10**6) + b"\x03\x00")))
+    # Control cycles 10^12 us (11.6 days) apart in a recording spanning 10 ms.
+    far = b"\x03" + varint(10**12) + b"\x07" + bytes(8)
+    write("retrace/08-robot-time.rec",
+          rec(hal_trace(0, START + cycle + far + far + b"\x03\x00")))
