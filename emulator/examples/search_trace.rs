@@ -152,6 +152,9 @@ fn main() {
         return;
     }
     print_map(&sim, &arena, &track, None);
+    if std::env::var_os("RUN2").is_some() {
+        run2(&mut sim, &arena, track[0]);
+    }
     println!(
         "final true ({:.2},{:.2}), collisions {}",
         sim.truth().x,
@@ -214,4 +217,75 @@ fn print_map(
         }
         println!("{line}");
     }
+}
+
+/// Run 2 of explore-then-plan as the scenario does it: segment, plan from the start to where
+/// the goal was met, carry the robot back, execute; traced like run 1.
+fn run2(sim: &mut Sim, arena: &emulator::arena::Arena, start: (f64, f64)) {
+    let found = sim.believed();
+    apply(sim, Command::Stop, "Stop").unwrap();
+    apply(sim, Command::Segment, "Segment").unwrap();
+    let mm = |v: f64| (v * 1000.0).round() as i32;
+    let plan = Command::Plan {
+        from: Some(protocol::PointMm {
+            x_mm: mm(start.0),
+            y_mm: mm(start.1),
+        }),
+        to: Some(protocol::PointMm {
+            x_mm: mm(found.x),
+            y_mm: mm(found.y),
+        }),
+    };
+    apply(sim, plan, "Plan").unwrap();
+    let mut pts = [robot_firmware::odometry::Point::new(0.0, 0.0); 64];
+    let n = sim.robot().objects().plan_points(&mut pts);
+    println!(
+        "--- run 2 plan: {:?}",
+        pts[..n].iter().map(|p| (p.x, p.y)).collect::<Vec<_>>()
+    );
+    let heading = sim.truth().heading;
+    let s0 = emulator::arena::Pose {
+        x: start.0,
+        y: start.1,
+        heading,
+    };
+    sim.place(s0).unwrap();
+    let pose = protocol::Pose {
+        x_mm: mm(start.0),
+        y_mm: mm(start.1),
+        heading_mrad: (heading * 1000.0).round() as i16,
+    };
+    apply(sim, Command::SetPose { pose }, "SetPose").unwrap();
+    let id = sim.robot().objects().plan().unwrap().0;
+    apply(sim, Command::ExecutePlan { plan_id: id }, "ExecutePlan").unwrap();
+    let mut track = Vec::new();
+    for i in 0..300_000u64 {
+        sim.step();
+        let p = sim.truth();
+        if i % 100 == 0 {
+            track.push((p.x, p.y));
+        }
+        if i % 10_000 == 0 {
+            let b = sim.believed();
+            println!(
+                "run2 {:5.1}s true ({:.2},{:.2}) bel ({:.2},{:.2}) mode {:?} motor {:?}",
+                i as f64 / 1000.0,
+                p.x,
+                p.y,
+                b.x,
+                b.y,
+                sim.robot().mode(),
+                sim.robot().dom_dinis().unwrap().core.motor
+            );
+        }
+        if sim.robot().arrived() || sim.robot().mode() == protocol::Mode::Idle {
+            println!(
+                "run 2 ends at {:.1} s, arrived {}",
+                i as f64 / 1000.0,
+                sim.robot().arrived()
+            );
+            break;
+        }
+    }
+    print_map(sim, arena, &track, None);
 }

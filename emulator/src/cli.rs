@@ -145,9 +145,9 @@ pub struct BenchArgs {
 /// Which Dom Dinis search a run uses (the firmware parameter `search_mode`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SearchArg {
-    /// Seed 004 §5's reactive goal search on a 0.3 m map (the paper's).
+    /// The Dom Dinis paper's reactive goal search (§5) on a 0.3 m map.
     Reactive,
-    /// Plans on its own 0.15 m map as it goes, unknown cells free (issue 32).
+    /// Plans on its own 0.15 m map as it goes, unknown cells taken as free (the default).
     Planned,
 }
 

@@ -29,10 +29,12 @@ use crate::behaviour::{MotorCommand, XorShift32};
 use crate::nav::{Cell, Grid, GridPoint};
 use crate::odometry::{wrap_angle, Point, Pose};
 
+pub mod cell_set;
 pub mod far_marks;
 pub mod motion;
 pub mod planned;
 
+pub use cell_set::CellSet;
 pub use far_marks::{FarMarks, WithFarMarks};
 pub use planned::{Planned, PlannedPhase};
 
@@ -108,7 +110,9 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> MapMarker for Grid<S> {
     fn cell_centre(&self, x: i32, y: i32) -> Option<Point> {
         let (cx, cy) = (u16::try_from(x).ok()?, u16::try_from(y).ok()?);
         self.contains(x, y).then(|| {
-            let (mx, my) = self.geometry().grid_to_metres(GridPoint::cell_centre(cx, cy));
+            let (mx, my) = self
+                .geometry()
+                .grid_to_metres(GridPoint::cell_centre(cx, cy));
             Point::new(mx, my)
         })
     }
@@ -446,6 +450,8 @@ pub struct Explorer {
     planned: Planned,
     /// The planned search's walls seen from afar.
     far: FarMarks,
+    /// The cells the robot has stood in during this run: free whatever a later reading says.
+    visited: CellSet,
 }
 
 impl Explorer {
@@ -460,6 +466,7 @@ impl Explorer {
             touching: false,
             planned: Planned::new(),
             far: FarMarks::new(),
+            visited: CellSet::new(),
         }
     }
 
@@ -487,6 +494,7 @@ impl Explorer {
         self.hits = [HitRecord::default(); HIT_MEMORY];
         self.planned = Planned::new();
         self.far.clear();
+        self.visited.clear();
     }
 
     /// One control cycle of the search `params.mode` selects: marks the map and returns the
@@ -522,7 +530,7 @@ impl Explorer {
         let p = self.params;
         let new_walls = if mode == SearchMode::Planned {
             let mut map = WithFarMarks::new(map, &mut self.far, p.far_detour_m);
-            self.planned.mark(inp, &p, &mut map) > 0
+            self.planned.mark(inp, &p, &mut map, &mut self.visited) > 0
         } else {
             mark_map(inp, &self.params, map) > 0
         };
@@ -850,7 +858,7 @@ fn cell_u8(cell: Option<(i32, i32)>) -> Option<(u8, u8)> {
 /// cells that became obstacles.
 pub fn mark_map(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) -> u32 {
     if p.mode == SearchMode::Planned {
-        return planned::mark_visited(inp, p, map);
+        return planned::mark_visited(inp, p, map, None);
     }
     let here = inp.pose.point();
     let mut walls = 0;

@@ -15,88 +15,13 @@
 //!
 //! What can fail: nothing; cells off the map or beyond 64 x 64 are not kept.
 
+use super::cell_set::CellSet;
 use super::{MapMarker, RouteStep};
 use crate::nav::Cell;
 use crate::odometry::Point;
-use crate::MAP_CAPACITY;
-
-const BYTES: usize = MAP_CAPACITY * MAP_CAPACITY / 8;
 
 /// The cells where a far reading saw a wall and the map holds nothing yet.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FarMarks {
-    bits: [u8; BYTES],
-    count: u16,
-}
-
-impl Default for FarMarks {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl FarMarks {
-    pub const fn new() -> Self {
-        FarMarks {
-            bits: [0; BYTES],
-            count: 0,
-        }
-    }
-
-    /// Forgets every mark.
-    pub fn clear(&mut self) {
-        self.bits = [0; BYTES];
-        self.count = 0;
-    }
-
-    /// How many cells are marked.
-    pub fn len(&self) -> usize {
-        usize::from(self.count)
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.count == 0
-    }
-
-    fn slot(cell: (i32, i32)) -> Option<(usize, u8)> {
-        let (x, y) = (usize::try_from(cell.0).ok()?, usize::try_from(cell.1).ok()?);
-        (x < MAP_CAPACITY && y < MAP_CAPACITY).then(|| {
-            let i = y * MAP_CAPACITY + x;
-            (i / 8, 1 << (i % 8))
-        })
-    }
-
-    fn set(&mut self, cell: (i32, i32), on: bool) {
-        let Some((byte, bit)) = Self::slot(cell) else {
-            return;
-        };
-        let Some(b) = self.bits.get_mut(byte) else {
-            return;
-        };
-        if (*b & bit != 0) != on {
-            *b ^= bit;
-            self.count = if on {
-                self.count.saturating_add(1)
-            } else {
-                self.count.saturating_sub(1)
-            };
-        }
-    }
-
-    /// The marked cells, (column, row).
-    fn cells(&self) -> impl Iterator<Item = (i32, i32)> + '_ {
-        self.bits
-            .iter()
-            .enumerate()
-            .filter(|(_, &b)| b != 0)
-            .flat_map(|(byte, &b)| {
-                (0..8)
-                    .filter(move |k| b & (1 << k) != 0)
-                    .map(move |k| byte * 8 + k)
-            })
-            .map(|i| ((i % MAP_CAPACITY) as i32, (i / MAP_CAPACITY) as i32))
-    }
-}
+pub type FarMarks = CellSet;
 
 /// `map` with the far marks `marks` beside it: [`MapMarker::mark_far`] keeps a far reading's
 /// wall, a real mark of the cell replaces it, forgetting walls forgets them, and

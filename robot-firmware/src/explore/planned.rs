@@ -23,7 +23,9 @@
 //! Pure: pose, readings, time and the map in; motor command out. Cannot fail or panic.
 
 use super::motion::{follow, front_blocked, steer};
-use super::{mark_wall, ray_point, ExploreInput, ExploreParams, ExploreStats, MapMarker, WallSide};
+use super::{
+    mark_wall, ray_point, CellSet, ExploreInput, ExploreParams, ExploreStats, MapMarker, WallSide,
+};
 use crate::behaviour::MotorCommand;
 use crate::nav::Cell;
 use crate::odometry::{wrap_angle, Point};
@@ -40,13 +42,21 @@ const BEAM_HALF_RAD: f32 = 0.5236;
 
 /// The planned search's map: the cells the robot stands in are free, and stay free (its
 /// centre has been there, so a route may cross them whatever a later reading, shifted by the
-/// position's error, says); each IR reading marks a wall a little inside the wall it sees,
-/// unless that cell is one the robot stood in: a wall of the map when the beam is no wider
-/// than a cell there, a far mark beyond. Rays mark nothing free: the planner takes
-/// unknown cells as free anyway, and a free cell here means the robot stood in it. Returns
-/// the number of cells that became walls.
-pub fn mark_visited(inp: &ExploreInput<'_>, p: &ExploreParams, map: &mut dyn MapMarker) -> u32 {
-    mark_visited_counting(inp, p, map).0
+/// position's error, says: `visited` holds them); each IR ray marks the unknown cells it
+/// crosses free, as the paper's map does, and each reading marks a wall a little inside the
+/// wall it sees, unless that cell is one the robot stood in: a wall of the map when the beam
+/// is no wider than a cell there, a far mark beyond. Rays' free cells change no route (the
+/// planner takes unknown cells as free anyway); they make the map a later plan executes on
+/// (`Plan` over free cells) as wide as the space seen, not a band along the robot's track.
+/// Without `visited` (marking outside a search run), a free cell is taken as stood in.
+/// Returns the number of cells that became walls.
+pub fn mark_visited(
+    inp: &ExploreInput<'_>,
+    p: &ExploreParams,
+    map: &mut dyn MapMarker,
+    visited: Option<&mut CellSet>,
+) -> u32 {
+    mark_visited_counting(inp, p, map, visited).0
 }
 
 /// [`mark_visited`], also counting the cells the robot stands in for the first time.
@@ -54,6 +64,7 @@ fn mark_visited_counting(
     inp: &ExploreInput<'_>,
     p: &ExploreParams,
     map: &mut dyn MapMarker,
+    mut visited: Option<&mut CellSet>,
 ) -> (u32, u32) {
     let here = inp.pose.point();
     let mut fresh = 0;
@@ -65,11 +76,21 @@ fn mark_visited_counting(
         (0.0, -BODY_M),
     ] {
         let q = Point::new(here.x + dx, here.y + dy);
-        if map.cell_at(q).is_some_and(|c| c != Cell::Free) {
-            fresh += 1;
-        }
+        let new = match (visited.as_deref_mut(), map.index(q)) {
+            (Some(v), Some(c)) => {
+                let new = !v.contains(c);
+                v.set(c, true);
+                new
+            }
+            _ => map.cell_at(q).is_some_and(|c| c != Cell::Free),
+        };
+        fresh += u32::from(new);
         map.mark(q, Cell::Free);
     }
+    let stood_in = |map: &dyn MapMarker, v: &Option<&mut CellSet>, q: Point| match v {
+        Some(v) => map.index(q).is_some_and(|c| v.contains(c)),
+        None => map.cell_at(q) == Some(Cell::Free),
+    };
     // A reading is a wall of the map only where the beam is no wider than a cell (0.13 m from
     // the sensor on a 0.15 m map); farther, the wall it reports may be anywhere across the
     // beam (the end of a wall at its side reads as a wall straight ahead): a far mark
@@ -77,10 +98,14 @@ fn mark_visited_counting(
     let within = map.cell_m() / (2.0 * libm::tanf(BEAM_HALF_RAD));
     let mut walls = 0;
     for &(reading, angle) in inp.ir {
-        if let Some(d) = p.ir.distance(reading) {
+        let seen = p.ir.distance(reading);
+        if visited.is_some() {
+            mark_ray_free(inp, angle, seen.unwrap_or(p.ir.range_m), map);
+        }
+        if let Some(d) = seen {
             // The sensor sits at the body edge; the wall is d beyond it.
             let q = ray_point(inp, angle, d + 0.12 + WALL_DEPTH_M);
-            if map.cell_at(q).is_some_and(|c| c != Cell::Free) {
+            if map.cell_at(q).is_some() && !stood_in(map, &visited, q) {
                 if d <= within {
                     walls += mark_wall(map, q);
                 } else {
@@ -90,6 +115,19 @@ fn mark_visited_counting(
         }
     }
     (walls, fresh)
+}
+
+/// Marks the unknown cells along the ray at `angle` free, from the body's edge to `reach` m
+/// from the centre (the paper's map: space a sensor saw through is free).
+fn mark_ray_free(inp: &ExploreInput<'_>, angle: f32, reach: f32, map: &mut dyn MapMarker) {
+    let mut t = 0.05;
+    while t < reach {
+        let q = ray_point(inp, angle, t);
+        if map.cell_at(q) == Some(Cell::Unknown) {
+            map.mark(q, Cell::Free);
+        }
+        t += 0.05;
+    }
 }
 
 /// What the planned search is doing.
@@ -156,8 +194,9 @@ impl Planned {
         inp: &ExploreInput<'_>,
         p: &ExploreParams,
         map: &mut dyn MapMarker,
+        visited: &mut CellSet,
     ) -> u32 {
-        let (walls, fresh) = mark_visited_counting(inp, p, map);
+        let (walls, fresh) = mark_visited_counting(inp, p, map, Some(visited));
         if fresh > 0 {
             self.fresh_ms = inp.now_ms;
         }
