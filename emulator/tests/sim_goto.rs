@@ -98,7 +98,11 @@ fn micro_rato_go_to_a_visible_point_in_the_micro_rato_99_arena() {
     assert!(report.reached, "{report:?}");
     assert_eq!(report.collisions, 0, "{report:?}");
     assert!(report.pose_error_m < 0.3, "{report:?}");
-    assert!((report.sim_s - (3.3 / 0.23)).abs() < 6.0, "{report:?}");
+    // Nothing stands between: the route is the straight line (3.3 m), driven at the planned
+    // search's seek speed (about 0.15 m/s; a go-to at guided motion's 0.23 m/s met walls four
+    // times as often on the benchmark's labs).
+    assert!(report.distance_m < 3.3 * 1.1, "{report:?}");
+    assert!((report.sim_s - (3.3 / 0.15)).abs() < 6.0, "{report:?}");
 }
 
 #[test]

@@ -164,7 +164,7 @@ impl<K: Kit<Explorer = crate::explore::Explorer>> Core<K> {
         cmd
     }
 
-    /// A go-to on the robot's map (issue 32: the search's planner serves go-to too): the route
+    /// A go-to on the robot's map (the search's planner serves go-to too): the route
     /// over what the map knows, unknown cells free, replanned as it goes, instead of steering
     /// straight at the point; without a map, the exploration map is made first; `None` if it
     /// cannot be (guided motion then steers straight).
