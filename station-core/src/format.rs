@@ -134,7 +134,11 @@ pub fn task_name(m: Mode) -> &'static str {
 
 /// The `NoProgress` event in words: which mode gave up (`mode`, from its last progress report
 /// if one came), after how long, how far from its target, and the parameter that sets the limit.
-pub fn no_progress_text(mode: Option<Mode>, distance_left_mm: Option<u32>, stuck_ms: i32) -> String {
+pub fn no_progress_text(
+    mode: Option<Mode>,
+    distance_left_mm: Option<u32>,
+    stuck_ms: i32,
+) -> String {
     let mode = mode.map_or("the motion mode", task_name);
     let left = distance_left_mm.map_or(String::new(), |mm| {
         format!(", {:.1} m from its target", f64::from(mm) / 1000.0)

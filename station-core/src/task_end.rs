@@ -82,11 +82,12 @@ pub struct TaskWatch {
 }
 
 impl TaskWatch {
-    /// A task in `mode` (GoTo, ExecutePlan, Explore), its command just acknowledged.
-    pub fn new(mode: Mode) -> TaskWatch {
+    /// A task in `mode` (GoTo, ExecutePlan, Explore), its command just acknowledged; `before`
+    /// is the last telemetry frame before the Ack (where the robot was), if one came.
+    pub fn new(mode: Mode, before: Option<Telemetry>) -> TaskWatch {
         TaskWatch {
             mode,
-            telemetry: None,
+            telemetry: before,
             progress: None,
             loss: LinkLoss::default(),
         }
@@ -168,7 +169,7 @@ impl TaskWatch {
         Some(Ended::new(Ending::LinkLost, format!("link lost: {why}")))
     }
 
-    /// The last telemetry frame since the Ack.
+    /// The last telemetry frame (since the Ack, or the one before it).
     pub fn telemetry(&self) -> Option<&Telemetry> {
         self.telemetry.as_ref()
     }
@@ -179,9 +180,12 @@ impl TaskWatch {
     }
 
     fn arrived(&self) -> String {
-        let at = self
-            .telemetry
-            .map(|t| (f64::from(t.pose.x_mm) / 1000.0, f64::from(t.pose.y_mm) / 1000.0));
+        let at = self.telemetry.map(|t| {
+            (
+                f64::from(t.pose.x_mm) / 1000.0,
+                f64::from(t.pose.y_mm) / 1000.0,
+            )
+        });
         arrival_text(Some(self.mode), at, false)
     }
 }
@@ -211,7 +215,7 @@ mod tests {
 
     #[test]
     fn a_go_to_arrives_by_its_event_and_what_follows_is_not_read() {
-        let mut w = TaskWatch::new(Mode::GoTo);
+        let mut w = TaskWatch::new(Mode::GoTo, None);
         assert_eq!(w.on_event(0, &event(EventCode::ModeChanged, 2)), None);
         assert_eq!(w.on_event(1, &telemetry(Mode::GoTo, 0)), None);
         let end = w.on_event(2, &event(EventCode::GoalReached, 0)).unwrap();
@@ -221,19 +225,25 @@ mod tests {
 
     #[test]
     fn telemetry_decides_when_the_event_was_lost() {
-        let mut w = TaskWatch::new(Mode::GoTo);
+        let mut w = TaskWatch::new(Mode::GoTo, None);
         assert_eq!(w.on_event(0, &telemetry(Mode::GoTo, 0)), None);
-        let end = w.on_event(1, &telemetry(Mode::Idle, flags::ARRIVED)).unwrap();
+        let end = w
+            .on_event(1, &telemetry(Mode::Idle, flags::ARRIVED))
+            .unwrap();
         assert_eq!(end.ending, Ending::Arrived);
-        let mut w = TaskWatch::new(Mode::Explore);
+        let mut w = TaskWatch::new(Mode::Explore, None);
         let end = w.on_event(1, &telemetry(Mode::Idle, 0)).unwrap();
         assert_eq!(end.ending, Ending::Stopped);
-        assert!(end.reason.contains("exploration ended without arriving"), "{}", end.reason);
+        assert!(
+            end.reason.contains("exploration ended without arriving"),
+            "{}",
+            end.reason
+        );
     }
 
     #[test]
     fn giving_up_stopping_and_aborting_are_told_apart() {
-        let mut w = TaskWatch::new(Mode::GoTo);
+        let mut w = TaskWatch::new(Mode::GoTo, None);
         let p = Progress {
             mode: Mode::GoTo,
             waypoint: 0,
@@ -251,16 +261,18 @@ mod tests {
             "go-to gave up: no progress for 5 s, 1.5 m from its target; the robot stopped \
              (limit: parameter stuck_limit_s)"
         );
-        let mut w = TaskWatch::new(Mode::ExecutePlan);
+        let mut w = TaskWatch::new(Mode::ExecutePlan, None);
         assert_eq!(w.on_event(0, &event(EventCode::PlanFinished, 4)), None);
         assert_eq!(
-            w.on_event(0, &event(EventCode::GoalReached, 0)).unwrap().ending,
+            w.on_event(0, &event(EventCode::GoalReached, 0))
+                .unwrap()
+                .ending,
             Ending::Arrived
         );
-        let mut w = TaskWatch::new(Mode::ExecutePlan);
+        let mut w = TaskWatch::new(Mode::ExecutePlan, None);
         let end = w.on_event(0, &event(EventCode::PlanAborted, 3)).unwrap();
         assert_eq!(end.ending, Ending::GaveUp);
-        let mut w = TaskWatch::new(Mode::GoTo);
+        let mut w = TaskWatch::new(Mode::GoTo, None);
         let end = w.on_event(0, &event(EventCode::ModeChanged, 0)).unwrap();
         assert_eq!(end.ending, Ending::Stopped);
         assert!(end.reason.contains("changed to Idle"), "{}", end.reason);
@@ -268,14 +280,14 @@ mod tests {
 
     #[test]
     fn a_closed_port_is_a_lost_link_at_once_and_a_silent_one_after_the_grace() {
-        let mut w = TaskWatch::new(Mode::GoTo);
+        let mut w = TaskWatch::new(Mode::GoTo, None);
         let closed = LinkEvent::Connection(Connection::Closed {
             reason: "EOF".into(),
         });
         let end = w.on_event(0, &closed).unwrap();
         assert_eq!(end.ending, Ending::LinkLost);
         assert!(end.reason.contains("EOF"), "{}", end.reason);
-        let mut w = TaskWatch::new(Mode::GoTo);
+        let mut w = TaskWatch::new(Mode::GoTo, None);
         let hs = LinkEvent::Connection(Connection::Handshaking { port: "p".into() });
         assert_eq!(w.on_event(10, &hs), None);
         let at = w.deadline_us().unwrap();

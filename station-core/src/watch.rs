@@ -220,7 +220,12 @@ pub fn keys(kind: Kind) -> Vec<String> {
     let mut found: Vec<(usize, String)> = match line.value() {
         Value::Object(m) => m
             .keys()
-            .map(|k| (text.find(&format!("\"{k}\":")).unwrap_or(usize::MAX), k.clone()))
+            .map(|k| {
+                (
+                    text.find(&format!("\"{k}\":")).unwrap_or(usize::MAX),
+                    k.clone(),
+                )
+            })
             .collect(),
         _ => Vec::new(),
     };
@@ -423,7 +428,9 @@ mod tests {
             text(&prog),
             r#"{"kind":"progress","time_s":3.0,"robot_time_s":12.345,"mode":"ExecutePlan","waypoint":2,"waypoints":5,"distance_left_m":1.234,"elapsed_s":14.0,"stuck_s":0.0,"give_up_s":120.0,"text":"waypoint 2 of 5, 1.2 m left, 14 s"}"#
         );
-        assert!(lines.line(0, &LinkEvent::Truth(Default::default())).is_none());
+        assert!(lines
+            .line(0, &LinkEvent::Truth(Default::default()))
+            .is_none());
     }
 
     #[test]
@@ -450,7 +457,10 @@ mod tests {
         });
         assert_eq!(f.pick(&lines.line(0, &ev).unwrap()), None);
         let e = Fields::parse("pose.x", &[Kind::Telemetry]).unwrap_err();
-        assert!(e.contains("no line has \"pose.x\"") && e.contains("x_m, y_m"), "{e}");
+        assert!(
+            e.contains("no line has \"pose.x\"") && e.contains("x_m, y_m"),
+            "{e}"
+        );
         assert!(Fields::parse(" , ", &Kind::ALL).is_err());
         // A key of a kind not chosen is refused too.
         assert!(Fields::parse("level", &[Kind::Telemetry]).is_err());
@@ -461,7 +471,10 @@ mod tests {
     fn keys_are_in_line_order() {
         let k = keys(Kind::Telemetry);
         assert_eq!(&k[..4], ["kind", "time_s", "robot_time_s", "mode"]);
-        assert_eq!(keys(Kind::Log), ["kind", "time_s", "robot_time_s", "level", "text"]);
+        assert_eq!(
+            keys(Kind::Log),
+            ["kind", "time_s", "robot_time_s", "level", "text"]
+        );
     }
 
     #[test]

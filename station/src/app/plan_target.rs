@@ -8,7 +8,7 @@
 //! The target is drawn on the map (`◎`), named in the footer beside `O`, and every plan
 //! request's log line says where it plans to. Cannot fail.
 
-use protocol::{Mode, Progress};
+use protocol::Progress;
 
 use super::log::{Level, Source};
 use super::App;
