@@ -83,7 +83,7 @@ pub enum Sub {
         #[arg(long)]
         json: bool,
     },
-    /// Send one command, print the robot's Ack or Nack (exit 1 when refused or unanswered)
+    /// Send one command, print the robot's Ack or Nack (exit 1 when refused or unanswered, or as --wait says)
     ///
     /// With --wait, a command that starts a task (goto, execute, explore) is followed to the
     /// task's end: the exit code says how it ended (below), a line on stderr says why, and

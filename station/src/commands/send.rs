@@ -33,7 +33,8 @@ pub enum SendCmd {
         w_mrad_s: i16,
     },
     /// Drive to a point, metres in the map frame.
-    #[command(allow_negative_numbers = true)]
+    #[command(allow_negative_numbers = true,
+              after_help = crate::commands::wait::help_table())]
     Goto {
         /// X, metres in the map frame (x right).
         #[arg(value_parser = parse_metres)]
@@ -59,6 +60,7 @@ pub enum SendCmd {
     ///
     /// Mode Explore (the Dom Dinis search); needs a compass and a beacon sensor (micro-rato). Follow
     /// the map it builds with `station download-map --ascii`.
+    #[command(after_help = crate::commands::wait::help_table())]
     Explore,
     /// Segment the robot's map into free squares (Dom Dinis segmentation).
     Segment,
@@ -80,6 +82,7 @@ pub enum SendCmd {
     ///
     /// ID is 0x-hex or decimal, as `send plan` and `upload-plan` print it; another id is
     /// refused (plan id mismatch), so the robot never drives a plan you did not mean.
+    #[command(after_help = crate::commands::wait::help_table())]
     Execute {
         #[arg(value_name = "ID", value_parser = parse_plan_id)]
         plan_id: u32,
