@@ -15,7 +15,7 @@
 //! asserted is how each run ended, never how fast.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -78,21 +78,45 @@ fn run(args: &[&str], limit: Duration) -> Output {
     finish(child, limit, args)
 }
 
-/// Waits for `child` (its output piped) for up to `limit`, then kills it and panics.
+/// Waits for `child` for up to `limit`, then kills it and panics. Its piped output is read
+/// as it comes (a child writing more than a pipe holds would otherwise never end).
 fn finish(mut child: Child, limit: Duration, what: &[&str]) -> Output {
+    fn drain(r: Option<impl Read + Send + 'static>) -> std::thread::JoinHandle<Vec<u8>> {
+        std::thread::spawn(move || {
+            let mut buf = Vec::new();
+            if let Some(mut r) = r {
+                let _ = r.read_to_end(&mut buf);
+            }
+            buf
+        })
+    }
+    let stdout = drain(child.stdout.take());
+    let stderr = drain(child.stderr.take());
     let end = Instant::now() + limit;
-    while child.try_wait().unwrap().is_none() {
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
         if Instant::now() >= end {
             let _ = child.kill();
-            let out = child.wait_with_output().unwrap();
+            let status = child.wait().unwrap();
+            let out = Output {
+                status,
+                stdout: stdout.join().unwrap(),
+                stderr: stderr.join().unwrap(),
+            };
             panic!(
                 "station {what:?} still running after {limit:?}: {}",
                 text(&out)
             );
         }
         std::thread::sleep(Duration::from_millis(20));
+    };
+    Output {
+        status,
+        stdout: stdout.join().unwrap(),
+        stderr: stderr.join().unwrap(),
     }
-    child.wait_with_output().unwrap()
 }
 
 fn text(o: &Output) -> String {
@@ -108,15 +132,19 @@ fn code(s: ExitStatus) -> i32 {
     s.code().unwrap_or(-1)
 }
 
-/// `station ARGS` with stdout a pipe nobody reads any more: every write fails with EPIPE.
+/// `station ARGS` with stdout a pipe whose reader stops after the first line (`| head -1`):
+/// every write after the pipe's buffer is full or the reader gone fails with EPIPE.
 fn with_closed_stdout(args: &[&str], limit: Duration) -> ExitStatus {
-    let (reader, writer) = std::io::pipe().unwrap();
-    drop(reader);
-    let child = station(args)
-        .stdout(writer)
+    let mut child = station(args)
+        .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert!(!first.is_empty(), "station {args:?} wrote nothing");
     finish(child, limit, args).status
 }
 
@@ -359,7 +387,16 @@ fn a_wait_ends_with_the_link_lost_code_when_the_emulator_is_killed() {
 #[test]
 fn export_csv_to_stdout_is_the_file_export() {
     let d = scratch_dir("scripting", "csv");
-    let rec = record_emulator(&d, "run", &["--seed", SEED], &["rate 50"], 2.0);
+    // Four times real time at 50 Hz: more rows (over 90 kB) than a pipe (64 kB) and the
+    // reader's buffer (8 kB) hold, so that a reader that stops early makes the export's
+    // writes fail.
+    let rec = record_emulator(
+        &d,
+        "run",
+        &["--seed", SEED, "--speed", "4"],
+        &["rate 50"],
+        3.0,
+    );
     let file = d.join("run.csv");
     let o = run(
         &[
@@ -377,7 +414,7 @@ fn export_csv_to_stdout_is_the_file_export() {
     );
     assert!(o.status.success(), "{}", text(&o));
     let written = std::fs::read(&file).unwrap();
-    assert!(written.len() > 1000, "{} bytes", written.len());
+    assert!(written.len() > 90_000, "{} bytes", written.len());
     assert_eq!(o.stdout, written);
     assert!(!d.join("-").exists(), "no file named -");
     // A reader that stops early (`| head -1`) is not a failure.
