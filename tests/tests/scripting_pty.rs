@@ -17,7 +17,7 @@
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitStatus, Output, Stdio};
+use std::process::{Child, ChildStdout, Command, ExitStatus, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use e2e_tests::procs::{emulator_on, record_emulator, scratch_dir};
@@ -132,19 +132,25 @@ fn code(s: ExitStatus) -> i32 {
     s.code().unwrap_or(-1)
 }
 
-/// `station ARGS` with stdout a pipe whose reader stops after the first line (`| head -1`):
-/// every write after the pipe's buffer is full or the reader gone fails with EPIPE.
-fn with_closed_stdout(args: &[&str], limit: Duration) -> ExitStatus {
+/// `station ARGS` started, and the first line it wrote; the rest of its stdout is the reader's.
+fn first_line(args: &[&str]) -> (Child, String, BufReader<ChildStdout>) {
     let mut child = station(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
     let mut first = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut first)
-        .unwrap();
+    out.read_line(&mut first).unwrap();
     assert!(!first.is_empty(), "station {args:?} wrote nothing");
+    (child, first, out)
+}
+
+/// `station ARGS` with stdout a pipe whose reader stops after the first line (`| head -1`):
+/// every write after the pipe's buffer is full or the reader gone fails with EPIPE.
+fn with_closed_stdout(args: &[&str], limit: Duration) -> ExitStatus {
+    let (child, _, out) = first_line(args);
+    drop(out);
     finish(child, limit, args).status
 }
 
@@ -225,25 +231,30 @@ fn watch_prints_json_lines_with_the_pose_and_ends_as_asked() {
 #[test]
 fn watch_ends_with_the_link_lost_code_when_the_robot_goes() {
     let d = scratch_dir("scripting", "watch-lost");
-    let mut emu = Emu::start(&d);
-    let mut child = station(&["watch", "--port", emu.port(), "--kind", "telemetry"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut first = String::new();
-    BufReader::new(child.stdout.as_mut().unwrap())
-        .read_line(&mut first)
-        .unwrap();
+    let emu = Emu::start(&d);
+    let p = emu.port().to_string();
+    let (first, o) = killed_mid_run(emu, &["watch", "--port", &p, "--kind", "telemetry"]);
     assert!(first.starts_with(r#"{"kind":"telemetry""#), "{first}");
-    emu.kill();
-    let o = finish(child, Duration::from_secs(20), &["watch"]);
     assert_eq!(code(o.status), LINK_LOST, "{}", text(&o));
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("link lost"),
         "{}",
         text(&o)
     );
+}
+
+/// Runs `station ARGS`, kills the emulator once the first line is out, and returns that line
+/// and how the run ended (its stdout still read, so that it ends for the link alone).
+fn killed_mid_run(mut emu: Emu, args: &[&str]) -> (String, Output) {
+    let (child, first, mut out) = first_line(args);
+    let rest = std::thread::spawn(move || {
+        let mut buf = Vec::new();
+        let _ = out.read_to_end(&mut buf);
+    });
+    emu.kill();
+    let o = finish(child, Duration::from_secs(20), args);
+    let _ = rest.join();
+    (first, o)
 }
 
 #[test]
@@ -352,30 +363,22 @@ fn a_go_to_with_wait_ends_with_the_code_of_how_it_ended() {
 #[test]
 fn a_wait_ends_with_the_link_lost_code_when_the_emulator_is_killed() {
     let d = scratch_dir("scripting", "wait-lost");
-    let mut emu = Emu::start(&d);
+    let emu = Emu::start(&d);
+    let p = emu.port().to_string();
     // Two metres up: far longer than the test takes to kill the emulator.
-    let mut child = station(&[
+    let args = [
         "send",
         "--port",
-        emu.port(),
+        &p,
         "goto",
         "0.5",
         "2.5",
         "--wait",
         "--timeout",
         "120",
-    ])
-    .stdout(Stdio::piped())
-    .stderr(Stdio::piped())
-    .spawn()
-    .unwrap();
-    let mut ack = String::new();
-    BufReader::new(child.stdout.as_mut().unwrap())
-        .read_line(&mut ack)
-        .unwrap();
+    ];
+    let (ack, o) = killed_mid_run(emu, &args);
     assert!(ack.starts_with("ack: goto"), "{ack}");
-    emu.kill();
-    let o = finish(child, Duration::from_secs(20), &["send --wait"]);
     assert_eq!(code(o.status), LINK_LOST, "{}", text(&o));
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("link_lost after "),

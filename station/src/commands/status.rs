@@ -119,14 +119,7 @@ fn print_snapshot(s: &Snapshot) {
         |v: &Value| crate::terminal_text::printable_text(v.as_str().unwrap_or("?")).into_owned();
     let num = |v: &Value| v.as_f64();
     let peer = &s.peer;
-    println!("port        {}", crate::terminal_text::printable(&s.port));
-    println!(
-        "robot       {} {} {:?}, robot id {}",
-        crate::terminal_text::printable(&peer.firmware),
-        crate::terminal_text::printable(&peer.firmware_version),
-        peer.profile,
-        peer.robot_id
-    );
+    super::stats::print_robot(&s.port, peer);
     match &s.telemetry {
         Some(t) => {
             let task = s

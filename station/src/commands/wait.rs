@@ -135,6 +135,17 @@ impl Waited {
     }
 }
 
+/// The sooner of `deadline` and the end of a lost session's grace (`grace_us` after
+/// `started`), if either is set: when a wait must look at the clock without an event.
+pub fn wake_at(
+    started: Instant,
+    deadline: Option<Instant>,
+    grace_us: Option<u64>,
+) -> Option<Instant> {
+    let grace = grace_us.map(|us| started + Duration::from_micros(us));
+    [deadline, grace].into_iter().flatten().min()
+}
+
 /// Follows the task in `mode`, its command just acknowledged with the robot `at` the pose of
 /// that telemetry frame, until it ends, the link is lost or `deadline` passes. Times count
 /// from `started`.
@@ -148,11 +159,7 @@ pub async fn until_end(
     let mut watch = TaskWatch::new(mode, at);
     let t_us = || started.elapsed().as_micros() as u64;
     let ended = loop {
-        let grace = watch
-            .deadline_us()
-            .map(|us| started + Duration::from_micros(us));
-        let wake = [deadline, grace].into_iter().flatten().min();
-        let next = match wake {
+        let next = match wake_at(started, deadline, watch.deadline_us()) {
             Some(at) => tokio::time::timeout_at(at, link.events.recv()).await.ok(),
             None => Some(link.events.recv().await),
         };

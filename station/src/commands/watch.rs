@@ -11,7 +11,7 @@ use tokio::time::Instant;
 
 use super::args::{parse_seconds, RequiredPort};
 use super::connect::connect;
-use super::wait::{code, usage};
+use super::wait::{code, usage, wake_at};
 use crate::link::LinkEvent;
 use crate::task_end::Ending;
 use crate::watch::{Fields, Kind, Lines, LinkLoss};
@@ -95,10 +95,7 @@ pub async fn run(args: &WatchArgs) -> anyhow::Result<ExitCode> {
     tokio::pin!(ctrl_c);
     let t_us = || started.elapsed().as_micros() as u64;
     let end = loop {
-        let grace = loss
-            .deadline_us()
-            .map(|us| started + Duration::from_micros(us));
-        let wake = [deadline, grace].into_iter().flatten().min();
+        let wake = wake_at(started, deadline, loss.deadline_us());
         let until = async {
             match wake {
                 Some(at) => tokio::time::sleep_until(at).await,
