@@ -242,10 +242,11 @@ pub struct Fields(Vec<String>);
 impl Fields {
     /// The comma-separated names in `list`, each checked against the keys of the `kinds` lines.
     pub fn parse(list: &str, kinds: &[Kind]) -> Result<Fields, String> {
+        // Every line keeps its `kind` anyway: naming it again would write the key twice.
         let names: Vec<String> = list
             .split(',')
             .map(|s| s.trim().to_string())
-            .filter(|s| !s.is_empty())
+            .filter(|s| !s.is_empty() && s != "kind")
             .collect();
         if names.is_empty() {
             return Err("--fields names no field (e.g. --fields x_m,y_m,heading_rad)".into());
@@ -462,6 +463,11 @@ mod tests {
             "{e}"
         );
         assert!(Fields::parse(" , ", &Kind::ALL).is_err());
+        let f = Fields::parse("kind,x_m", &Kind::ALL).unwrap();
+        assert_eq!(
+            String::from_utf8(f.pick(&tel).unwrap()).unwrap(),
+            r#"{"kind":"telemetry","x_m":0.1}"#
+        );
         // A key of a kind not chosen is refused too.
         assert!(Fields::parse("level", &[Kind::Telemetry]).is_err());
         assert!(Fields::parse("level", &[Kind::Log]).is_ok());
