@@ -3,7 +3,7 @@
 //!
 //! Layer: pure functions, no state.
 
-use protocol::{Mode, ObjectKind};
+use protocol::{LogLevel, Mode, ObjectKind, Progress};
 use robot_firmware::params::ParamInfo;
 
 /// A mode's name for display.
@@ -86,5 +86,90 @@ pub fn object_name(o: ObjectKind) -> &'static str {
         ObjectKind::Plan => "plan",
         ObjectKind::Regions => "regions",
         ObjectKind::LightCalibration => "light calibration",
+    }
+}
+
+/// What a `Progress` report says, in words: "waypoint 2 of 5, 1.2 m left, 14 s, stuck 6 s
+/// (gives up at 120)"; `None` when it says nothing (Idle). `short` drops the time. The TUI's
+/// header and `station status` show it.
+pub fn progress_text(p: &Progress, short: bool) -> Option<String> {
+    if p.mode == Mode::Idle {
+        return None;
+    }
+    let mut parts = Vec::new();
+    if p.waypoints > 0 {
+        if p.waypoint > p.waypoints {
+            parts.push("final approach".to_string());
+        } else {
+            parts.push(format!("waypoint {} of {}", p.waypoint, p.waypoints));
+        }
+    }
+    if let Some(mm) = p.distance_left_mm {
+        parts.push(format!("{:.1} m left", f64::from(mm) / 1000.0));
+    }
+    if !short {
+        parts.push(format!("{} s", p.elapsed_ms / 1000));
+    }
+    // Stuck from 5 s on: shorter pauses are turns and wall following, not news.
+    if p.stuck_ms >= 5000 {
+        let s = p.stuck_ms / 1000;
+        parts.push(if p.give_up_ms > 0 {
+            format!("stuck {s} s (gives up at {})", p.give_up_ms / 1000)
+        } else {
+            format!("no progress {s} s")
+        });
+    }
+    (!parts.is_empty()).then(|| parts.join(", "))
+}
+
+/// A task mode's name in a sentence ("go-to gave up"), for the modes that end by arriving.
+pub fn task_name(m: Mode) -> &'static str {
+    match m {
+        Mode::GoTo => "go-to",
+        Mode::ExecutePlan => "plan execution",
+        Mode::Explore => "exploration",
+        _ => "the motion mode",
+    }
+}
+
+/// The `NoProgress` event in words: which mode gave up (`mode`, from its last progress report
+/// if one came), after how long, how far from its target, and the parameter that sets the limit.
+pub fn no_progress_text(
+    mode: Option<Mode>,
+    distance_left_mm: Option<u32>,
+    stuck_ms: i32,
+) -> String {
+    let mode = mode.map_or("the motion mode", task_name);
+    let left = distance_left_mm.map_or(String::new(), |mm| {
+        format!(", {:.1} m from its target", f64::from(mm) / 1000.0)
+    });
+    format!(
+        "{mode} gave up: no progress for {:.0} s{left}; the robot stopped (limit: parameter \
+         stuck_limit_s)",
+        f64::from(stuck_ms) / 1000.0
+    )
+}
+
+/// A log level's name for text and JSON.
+pub fn log_level_name(l: LogLevel) -> &'static str {
+    match l {
+        LogLevel::Debug => "debug",
+        LogLevel::Info => "info",
+        LogLevel::Warn => "warn",
+        LogLevel::Error => "error",
+    }
+}
+
+/// The `GoalReached` event in words: what the task that arrived was (`mode`), and where (the
+/// robot says only that its task reached its end; the goal is the goal only when exploring
+/// found it, or when the plan was made `to_goal`, to the map's goal).
+pub fn arrival_text(mode: Option<Mode>, at: Option<(f64, f64)>, to_goal: bool) -> String {
+    let at = at.map_or(String::new(), |(x, y)| format!(" at ({x:.2}, {y:.2})"));
+    match mode {
+        Some(Mode::Explore) => format!("goal reached{at}: exploration found the goal area"),
+        Some(Mode::GoTo) => format!("arrived{at}: the go-to point"),
+        Some(Mode::ExecutePlan) if to_goal => format!("goal reached{at}: the plan's end"),
+        Some(Mode::ExecutePlan) => format!("arrived{at}: the plan's end"),
+        _ => format!("task ended{at}: the robot arrived"),
     }
 }

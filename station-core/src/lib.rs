@@ -15,6 +15,8 @@
 //! - `param_file`: parameter files; `format`: values, modes, parameters and objects in words.
 //! - `arena`: what the map draws of an arena; `qt_state`: ALICE's world model as the station
 //!   runs it; `builtin`: the built-in emulator the station starts without `--port`.
+//! - `watch`: the robot as JSON lines for scripts (`station watch`, `status`) and when a link
+//!   counts as lost; `task_end`: how a task the station started ended (`send --wait`).
 //! - `terminal_text`, `json_text`, `input_file`, `output_file`: the one sanitiser for text
 //!   reaching a terminal, the one JSON writer, the one file reader and the one file writer
 //!   (in the emulator crate, which writes and reads files the same way).
@@ -36,4 +38,6 @@ pub mod qt_state;
 pub mod record;
 pub mod replay;
 pub mod retrace;
+pub mod task_end;
 pub mod transfer;
+pub mod watch;

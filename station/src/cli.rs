@@ -1,7 +1,7 @@
 //! The command line: `station [--port P]`, `station ports`, `station send ...`,
 //! `station stats ...`, `station upload-map ...`, `station download-map ...`,
 //! `station upload-plan ...`, `station plan ...`, `station segment ...`, `station record ...`,
-//! `station replay ...`, `station export ...`.
+//! `station replay ...`, `station export ...`, `station watch ...`, `station status ...`.
 //!
 //! Layer: argument parsing (clap derive) and dispatch; `main.rs` only calls `run`. Parsing
 //! turns every argument into a checked value or a clear error (clap exits 2 on usage errors);
@@ -83,25 +83,68 @@ pub enum Sub {
         #[arg(long)]
         json: bool,
     },
-    /// Send one command, print the robot's Ack or Nack (exit 1 when refused or unanswered).
+    /// Send one command, print the robot's Ack or Nack (exit 1 when refused or unanswered, or as --wait says)
+    ///
+    /// With --wait, a command that starts a task (goto, execute, explore) is followed to the
+    /// task's end: the exit code says how it ended (below), a line on stderr says why, and
+    /// --json adds it as `wait`. Scripting guide: docs/scripting.md.
+    ///
+    /// Examples:
+    ///   station send --port /dev/ttyUSB0 goto 1.0 0.5
+    ///   station send --port /dev/ttyUSB0 goto 1.0 0.5 --wait --timeout 60
+    ///   station send --port /dev/ttyUSB0 execute 0x7692f253 --wait --json
+    #[command(verbatim_doc_comment, after_help = crate::commands::wait::help_table())]
     Send {
         #[command(flatten)]
         port: RequiredPort,
         /// Print JSON (before or after the command: `send --port P plan --json`).
         #[arg(long, global = true)]
         json: bool,
-        /// Seconds to wait for the handshake.
-        #[arg(long, default_value_t = 5.0, value_parser = parse_seconds, global = true,
-          allow_negative_numbers = true)]
-        timeout: f64,
+        /// Seconds to wait for the handshake [default: 5]; with --wait, the most to wait in
+        /// all, handshake and task [default: no limit].
+        #[arg(long, value_parser = parse_seconds, global = true, allow_negative_numbers = true)]
+        timeout: Option<f64>,
         /// Send the command this many times, one after another, and report the round trips'
         /// p50 / p99 (the round-trip figure of docs/performance.md).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000),
           global = true)]
         repeat: u32,
+        /// Wait until the task the command starts (goto, execute, explore) ends: arrived, gave
+        /// up, refused, stopped, timed out or link lost, each its own exit code.
+        #[arg(long, global = true)]
+        wait: bool,
         #[command(subcommand)]
         command: SendCmd,
     },
+    /// Print the robot's telemetry, progress, events and log lines as JSON, one object a line
+    ///
+    /// Until Ctrl-C, --count lines or --seconds; each line is flushed as it is written, for a
+    /// pipe into jq or a script. Every line has `kind` (telemetry, progress, event, log),
+    /// `time_s` (the station's clock, seconds since the command started) and `robot_time_s`
+    /// (the robot's clock; for lines other than telemetry, the last telemetry frame's).
+    /// Telemetry keys are the CSV export's columns (x_m, y_m, heading_rad, battery_v, ...;
+    /// docs/recordings.md), null for a sensor the robot lacks. Exit status 0 at the end asked
+    /// for, on Ctrl-C or when stdout closes; 7 when the link is lost (a line on stderr says
+    /// why). The port is the robot's alone: not while the TUI has it. Guide: docs/scripting.md.
+    ///
+    /// Examples:
+    ///   station watch --port /dev/ttyUSB0 --count 10
+    ///   station watch --port /dev/ttyUSB0 --fields x_m,y_m,heading_rad | jq -c .
+    ///   station watch --port /dev/ttyUSB0 --kind event,log --seconds 60
+    #[command(verbatim_doc_comment)]
+    Watch(crate::commands::watch::WatchArgs),
+    /// Print the robot's state once: mode, pose, sensors, task progress, link statistics
+    ///
+    /// Waits for the first telemetry frame, the link's statistics and, while a task runs, its
+    /// progress report (about 1.5 s at most), then prints them and exits. --json gives one
+    /// object: `peer`, `telemetry` (a `station watch` telemetry line's keys), `progress`
+    /// (null when no task runs) and `stats` (as `station stats --json`).
+    ///
+    /// Examples:
+    ///   station status --port /dev/ttyUSB0
+    ///   station status --port /dev/ttyUSB0 --json | jq .telemetry.x_m
+    #[command(verbatim_doc_comment)]
+    Status(crate::commands::status::StatusArgs),
     /// Watch the link for a while and print its statistics, with the round trip of a harmless
     /// probe (a parameter read) sent every 250 ms.
     Stats {
@@ -383,7 +426,13 @@ mod tests {
             panic!("not a send");
         };
         assert!(json);
-        assert_eq!(timeout, 2.0);
+        assert_eq!(timeout, Some(2.0));
+        let cli = parse(&["send", "--port", "p", "goto", "1", "1", "--wait"]).unwrap();
+        let Some(Sub::Send { wait, command, .. }) = cli.command else {
+            panic!("not a send");
+        };
+        assert!(wait);
+        assert_eq!(command.task_mode(), Some(protocol::Mode::GoTo));
     }
 
     #[test]

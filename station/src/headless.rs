@@ -4,7 +4,8 @@
 //! Layer: the binary's edge (anyhow lives here and in `main`). Headless commands start the same
 //! link task as the TUI, wait for the handshake (failing at once, with the reason, when the
 //! port cannot be opened or the robot refuses us), do their one thing and print plain text or
-//! JSON. Exit codes: 0 done, 1 refused / unanswered / port unusable, 2 usage (clap).
+//! JSON. Exit codes: 0 done, 1 refused / unanswered / port unusable, 2 usage (clap); a wait
+//! (`send --wait`, `watch`) has its own for each way it ends (`commands::wait::CODES`).
 
 use std::io::IsTerminal;
 use std::path::Path;
@@ -19,7 +20,7 @@ use crate::app::{App, AppOptions};
 use crate::builtin::start_builtin_emulator_with;
 use crate::cli::{Cli, Sub};
 use crate::commands::ports::ports;
-use crate::commands::send::send;
+use crate::commands::send::{send, SendArgs};
 use crate::commands::stats::stats;
 use crate::link::serial::{open_exclusive, SerialConnector};
 use crate::link::{spawn_link, LinkOptions};
@@ -60,8 +61,21 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             json,
             timeout,
             repeat,
+            wait,
             command,
-        }) => send(&port, json, timeout, repeat, &command).await,
+        }) => {
+            send(SendArgs {
+                port: &port,
+                json,
+                timeout,
+                repeat,
+                wait,
+                cmd: &command,
+            })
+            .await
+        }
+        Some(Sub::Watch(args)) => crate::commands::watch::run(&args).await,
+        Some(Sub::Status(args)) => crate::commands::status::run(&args).await,
         Some(Sub::Stats {
             port,
             seconds,

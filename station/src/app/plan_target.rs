@@ -8,7 +8,7 @@
 //! The target is drawn on the map (`◎`), named in the footer beside `O`, and every plan
 //! request's log line says where it plans to. Cannot fail.
 
-use protocol::{Mode, Progress};
+use protocol::Progress;
 
 use super::log::{Level, Source};
 use super::App;
@@ -111,24 +111,13 @@ impl App {
         had
     }
 
-    /// The `NoProgress` event in words: which mode gave up, after how long, how far from its
-    /// target, and the parameter that sets the limit.
+    /// The `NoProgress` event in words (`format::no_progress_text`), from the last report.
     pub(super) fn no_progress_text(&self, stuck_ms: i32) -> String {
-        let mode = self.progress.map_or("the motion mode", |p| match p.mode {
-            Mode::GoTo => "go-to",
-            Mode::ExecutePlan => "plan execution",
-            _ => "the motion mode",
-        });
-        let left = self
-            .progress
-            .and_then(|p| p.distance_left_mm)
-            .map_or(String::new(), |mm| {
-                format!(", {:.1} m from its target", f64::from(mm) / 1000.0)
-            });
-        format!(
-            "{mode} gave up: no progress for {:.0} s{left}; the robot stopped (limit: parameter \
-             stuck_limit_s)",
-            f64::from(stuck_ms) / 1000.0
+        let p = self.progress.as_ref();
+        crate::format::no_progress_text(
+            p.map(|p| p.mode),
+            p.and_then(|p| p.distance_left_mm),
+            stuck_ms,
         )
     }
 
@@ -172,9 +161,7 @@ impl App {
     /// robot says only that its task reached its end; the goal is the goal only when
     /// exploring found it, or a plan to the map's goal got there).
     pub(super) fn arrival_text(&self) -> String {
-        let at = self
-            .pose()
-            .map_or(String::new(), |(x, y, _)| format!(" at ({x:.2}, {y:.2})"));
+        let at = self.pose().map(|(x, y, _)| (x, y));
         let mode = self
             .progress
             .map(|p| p.mode)
@@ -183,13 +170,7 @@ impl App {
             &self.transfers.plan_for,
             Some(PlanFor::Target(PlanTarget::MapGoal(_)))
         );
-        match mode {
-            Some(Mode::Explore) => format!("goal reached{at}: exploration found the goal area"),
-            Some(Mode::GoTo) => format!("arrived{at}: the go-to point"),
-            Some(Mode::ExecutePlan) if to_goal => format!("goal reached{at}: the plan's end"),
-            Some(Mode::ExecutePlan) => format!("arrived{at}: the plan's end"),
-            _ => format!("task ended{at}: the robot arrived"),
-        }
+        crate::format::arrival_text(mode, at, to_goal)
     }
 
     /// A `Progress` report from the robot.
@@ -202,33 +183,10 @@ impl App {
     pub fn progress_text(&self, short: bool) -> Option<String> {
         let p = self.progress?;
         let mode = self.telemetry.map(|t| t.mode);
-        if p.mode == Mode::Idle || mode.is_some_and(|m| m != p.mode) {
+        if mode.is_some_and(|m| m != p.mode) {
             return None;
         }
-        let mut parts = Vec::new();
-        if p.waypoints > 0 {
-            if p.waypoint > p.waypoints {
-                parts.push("final approach".to_string());
-            } else {
-                parts.push(format!("waypoint {} of {}", p.waypoint, p.waypoints));
-            }
-        }
-        if let Some(mm) = p.distance_left_mm {
-            parts.push(format!("{:.1} m left", f64::from(mm) / 1000.0));
-        }
-        if !short {
-            parts.push(format!("{} s", p.elapsed_ms / 1000));
-        }
-        // Stuck from 5 s on: shorter pauses are turns and wall following, not news.
-        if p.stuck_ms >= 5000 {
-            let s = p.stuck_ms / 1000;
-            parts.push(if p.give_up_ms > 0 {
-                format!("stuck {s} s (gives up at {})", p.give_up_ms / 1000)
-            } else {
-                format!("no progress {s} s")
-            });
-        }
-        (!parts.is_empty()).then(|| parts.join(", "))
+        crate::format::progress_text(&p, short)
     }
 }
 

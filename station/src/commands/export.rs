@@ -28,9 +28,9 @@ pub struct ExportArgs {
     /// (for tools that parse JSON text). Other topics are always JSON.
     #[arg(long, value_enum, value_name = "ENCODING", default_value_t = McapEncoding::Protobuf, requires = "mcap")]
     pub mcap_encoding: McapEncoding,
-    /// Write the telemetry as CSV, one row per frame (columns in docs/recordings.md); a
-    /// recording of several robots writes one file each (OUT with `.robot<ID>` or `.link<K>`
-    /// before its extension).
+    /// Write the telemetry as CSV, one row per frame (columns in docs/recordings.md); `-`
+    /// writes it to stdout. A recording of several robots writes one file each (OUT with
+    /// `.robot<ID>` or `.link<K>` before its extension; not to stdout).
     #[arg(long, value_name = "OUT")]
     pub csv: Option<PathBuf>,
     /// Export a damaged or torn recording up to its last good record instead of refusing it.
@@ -63,11 +63,19 @@ impl From<McapEncoding> for mcap::Encoding {
     }
 }
 
+/// The output name that means stdout.
+const STDOUT: &str = "-";
+
 /// Runs `station export`.
 pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
+    let to_stdout = args.csv.as_deref() == Some(Path::new(STDOUT));
+    if args.mcap.as_deref() == Some(Path::new(STDOUT)) {
+        bail!("--mcap - : MCAP is binary and written whole before it is named; give a file name");
+    }
     let outs: Vec<&Path> = [args.mcap.as_deref(), args.csv.as_deref()]
         .into_iter()
         .flatten()
+        .filter(|p| *p != Path::new(STDOUT))
         .collect();
     for out in &outs {
         check_out(out, &args.file, args.force)?;
@@ -84,7 +92,16 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         vec![rec]
     };
     let labels = robots::labels(&links);
+    if to_stdout && links.len() > 1 {
+        bail!(
+            "--csv - : {} holds {} robots' links, a CSV each; give a file name (OUT.robot<ID>.csv \
+             each)",
+            args.file.display(),
+            links.len()
+        );
+    }
     let csvs: Vec<PathBuf> = match &args.csv {
+        Some(_) if to_stdout => Vec::new(),
         Some(out) => labels.iter().map(|l| robots::csv_path(out, l)).collect(),
         None => Vec::new(),
     };
@@ -121,6 +138,18 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         let n = csv::write(rec, f.writer()).map_err(|e| io(out, e))?;
         done.push(f);
         notes.push(format!("wrote {} ({n} telemetry rows)", out.display()));
+    }
+    // Stdout before the files take their names: a failed write leaves no file behind. A
+    // reader that stops early (`| head`) is not a failure.
+    if let (true, Some(rec)) = (to_stdout, links.first()) {
+        let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+        let wrote =
+            csv::write(rec, &mut out).and_then(|n| std::io::Write::flush(&mut out).map(|()| n));
+        match wrote {
+            Ok(n) => notes.push(format!("wrote the CSV to stdout ({n} telemetry rows)")),
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {}
+            Err(e) => return Err(anyhow::Error::new(e).context("cannot write the CSV to stdout")),
+        }
     }
     for f in done {
         f.commit()?;

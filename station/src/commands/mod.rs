@@ -16,4 +16,7 @@ pub mod replay;
 pub mod retrace;
 pub mod send;
 pub mod stats;
+pub mod status;
 pub mod transfer;
+pub mod wait;
+pub mod watch;

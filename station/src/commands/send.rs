@@ -15,6 +15,7 @@ use super::connect::connect;
 use crate::app::params::format_param_id;
 use crate::link::api::{command_text, param_name, refusal_text};
 use crate::link::{CommandOutcome, LinkEvent, PeerInfo, RunningLink};
+use crate::task_end::{Ended, Ending};
 
 /// The commands `send` knows.
 #[derive(Debug, Subcommand, Clone, PartialEq)]
@@ -32,7 +33,8 @@ pub enum SendCmd {
         w_mrad_s: i16,
     },
     /// Drive to a point, metres in the map frame.
-    #[command(allow_negative_numbers = true)]
+    #[command(allow_negative_numbers = true,
+              after_help = crate::commands::wait::help_table())]
     Goto {
         /// X, metres in the map frame (x right).
         #[arg(value_parser = parse_metres)]
@@ -58,6 +60,7 @@ pub enum SendCmd {
     ///
     /// Mode Explore (the Dom Dinis search); needs a compass and a beacon sensor (micro-rato). Follow
     /// the map it builds with `station download-map --ascii`.
+    #[command(after_help = crate::commands::wait::help_table())]
     Explore,
     /// Segment the robot's map into free squares (Dom Dinis segmentation).
     Segment,
@@ -79,6 +82,7 @@ pub enum SendCmd {
     ///
     /// ID is 0x-hex or decimal, as `send plan` and `upload-plan` print it; another id is
     /// refused (plan id mismatch), so the robot never drives a plan you did not mean.
+    #[command(after_help = crate::commands::wait::help_table())]
     Execute {
         #[arg(value_name = "ID", value_parser = parse_plan_id)]
         plan_id: u32,
@@ -141,6 +145,17 @@ impl From<ModeArg> for Mode {
 }
 
 impl SendCmd {
+    /// The mode of the task this command starts, which `--wait` follows to its end; `None`
+    /// for a command that starts no task.
+    pub fn task_mode(&self) -> Option<Mode> {
+        match self {
+            SendCmd::Goto { .. } => Some(Mode::GoTo),
+            SendCmd::Execute { .. } => Some(Mode::ExecutePlan),
+            SendCmd::Explore => Some(Mode::Explore),
+            _ => None,
+        }
+    }
+
     /// The wire command; a point beyond the wire's millimetres is refused by name.
     pub fn to_command(&self) -> Result<Command, OutOfRange> {
         Ok(match *self {
@@ -249,23 +264,85 @@ impl RoundTrips {
     }
 }
 
-pub async fn send(
-    port: &RequiredPort,
-    json: bool,
-    timeout: f64,
-    repeat: u32,
-    cmd: &SendCmd,
-) -> anyhow::Result<ExitCode> {
-    let (mut link, peer) = connect(port, timeout).await?;
+/// Seconds `send` waits for the handshake when --timeout does not say.
+pub const HANDSHAKE_S: f64 = 5.0;
+
+/// Submits `command` and waits for its answer in the link's event stream, so that what the
+/// stream holds after it (events, telemetry) is known to come after the answer. Also gives the
+/// last telemetry frame before the answer: where the robot was when it took the command.
+async fn call_in_order(
+    link: &mut RunningLink,
+    command: Command,
+) -> (CommandOutcome, Option<protocol::Telemetry>) {
+    let id = link.handle.submit(command);
+    let mut last = None;
+    while let Some(ev) = link.events.recv().await {
+        match ev {
+            LinkEvent::CommandDone {
+                id: done, outcome, ..
+            } if done == id => return (outcome, last),
+            LinkEvent::Telemetry(t) => last = Some(t),
+            _ => {}
+        }
+    }
+    (
+        CommandOutcome::Failed(crate::link::CommandFailure::Shutdown),
+        last,
+    )
+}
+
+/// What `station send` was asked to do.
+pub struct SendArgs<'a> {
+    pub port: &'a RequiredPort,
+    pub json: bool,
+    /// --timeout: the handshake's limit; with `wait`, the whole command's.
+    pub timeout: Option<f64>,
+    pub repeat: u32,
+    /// --wait: follow the task the command starts to its end.
+    pub wait: bool,
+    pub cmd: &'a SendCmd,
+}
+
+pub async fn send(args: SendArgs<'_>) -> anyhow::Result<ExitCode> {
+    let SendArgs {
+        port,
+        json,
+        timeout,
+        repeat,
+        wait,
+        cmd,
+    } = args;
+    let started = Instant::now();
+    let task = match (wait, cmd.task_mode()) {
+        (false, _) => None,
+        (true, None) => {
+            return Ok(super::wait::usage(
+                "--wait goes with goto, execute or explore (the commands that start a task)",
+            ))
+        }
+        (true, Some(_)) if repeat > 1 => {
+            return Ok(super::wait::usage("--wait and --repeat do not go together"))
+        }
+        (true, Some(mode)) => Some(mode),
+    };
     let command = cmd.to_command()?;
+    let (mut link, peer) = connect(port, timeout.unwrap_or(HANDSHAKE_S)).await?;
     // The robot starts its telemetry as the session starts: a command sent at once was
     // answered behind the first telemetry and truth frames (p50 9 ms for 2.1 ms of bytes).
     let mut round_trips = Vec::new();
+    let mut at_command = None;
     let mut outcome = CommandOutcome::Failed(crate::link::CommandFailure::NotConnected);
     for _ in 0..repeat {
         after_periodic_burst(&mut link, &peer).await;
         let sent = Instant::now();
-        outcome = link.handle.call(command).await;
+        outcome = match task {
+            Some(_) => {
+                let (outcome, before) = call_in_order(&mut link, command).await;
+                at_command = before;
+                outcome
+            }
+            None => link.handle.call(command).await,
+        };
         if !outcome.is_ack() {
             break;
         }
@@ -294,9 +371,9 @@ pub async fn send(
         ) => arena_bounds(&link.handle).await,
         _ => None,
     };
-    link.handle.shutdown();
-    let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;
     let what = command_text(&command);
+    // The refusal in words, for --wait's reason too.
+    let mut refusal: Option<String> = None;
     let (ok, text, value) = match outcome {
         CommandOutcome::Acked {
             info,
@@ -340,7 +417,7 @@ pub async fn send(
             )
         }
         CommandOutcome::Nacked { reason, sends } => {
-            let mut why = refusal_text(&command, reason);
+            let why = refusal.insert(refusal_text(&command, reason));
             if let Some([x0, x1, y0, y1]) = bounds {
                 why.push_str(&format!(
                     " (the robot's arena: x {x0:.2} .. {x1:.2} m, y {y0:.2} .. {y1:.2} m)"
@@ -369,12 +446,44 @@ pub async fn send(
             obj.insert("round_trip".into(), serde_json::to_value(r)?);
         }
     }
+    if !json {
+        if ok {
+            println!("{}", crate::terminal_text::printable_text(&text));
+        } else {
+            eprintln!("{}", crate::terminal_text::printable_text(&text));
+        }
+    }
+    // --wait: the task's end, once the robot took the command.
+    let waited = match (task, &outcome) {
+        (Some(mode), CommandOutcome::Acked { .. }) => {
+            let deadline = timeout.map(|s| started + Duration::from_secs_f64(s));
+            Some(super::wait::until_end(&mut link, mode, at_command, deadline, started).await)
+        }
+        (Some(_), CommandOutcome::Nacked { .. }) => Some(super::wait::Waited {
+            ended: Ended::new(Ending::Refused, refusal.unwrap_or_default()),
+            seconds: started.elapsed().as_secs_f64(),
+            telemetry: None,
+        }),
+        (Some(_), CommandOutcome::Failed(crate::link::CommandFailure::LinkLost)) => {
+            Some(super::wait::Waited {
+                ended: Ended::new(Ending::LinkLost, "link lost before the robot answered"),
+                seconds: started.elapsed().as_secs_f64(),
+                telemetry: None,
+            })
+        }
+        _ => None,
+    };
+    link.handle.shutdown();
+    let _ = tokio::time::timeout(Duration::from_secs(1), link.task).await;
+    if let (Some(w), Some(obj)) = (&waited, value.as_object_mut()) {
+        obj.insert("wait".into(), w.json());
+    }
     if json {
         println!("{}", crate::json_text::pretty(&value)?);
-    } else if ok {
-        println!("{}", crate::terminal_text::printable_text(&text));
-    } else {
-        eprintln!("{}", crate::terminal_text::printable_text(&text));
+    }
+    if let Some(w) = &waited {
+        eprintln!("{}", crate::terminal_text::printable_text(&w.line()));
+        return Ok(w.exit_code());
     }
     if let (Some(r), false) = (&round_trips, json) {
         println!(

@@ -171,10 +171,9 @@ async fn watch(port: &RequiredPort, seconds: f64, timeout: f64) -> anyhow::Resul
     })
 }
 
-fn print_watched(w: &Watched) {
-    let (peer, s, round_trip) = (&w.peer, &w.stats, &w.round_trip);
-    let probe = command_text(&PROBE);
-    println!("port        {}", w.port);
+/// The port and the robot on it, as its HelloReply states, the first lines of a report.
+pub fn print_robot(port: &str, peer: &PeerInfo) {
+    println!("port        {}", crate::terminal_text::printable(port));
     println!(
         "robot       {} {} {:?}, robot id {}",
         crate::terminal_text::printable(&peer.firmware),
@@ -182,6 +181,12 @@ fn print_watched(w: &Watched) {
         peer.profile,
         peer.robot_id
     );
+}
+
+fn print_watched(w: &Watched) {
+    let (peer, s, round_trip) = (&w.peer, &w.stats, &w.round_trip);
+    let probe = command_text(&PROBE);
+    print_robot(&w.port, peer);
     println!(
         "state       {} for {:.1} s",
         s.state,
