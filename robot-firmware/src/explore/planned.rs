@@ -38,7 +38,7 @@ const WALL_DEPTH_M: f32 = 0.05;
 /// body's own cell and a neighbour it reaches well into).
 const BODY_M: f32 = 0.1;
 /// Half the aperture of an IR obstacle sensor's beam (CiberRato's see 60 degrees).
-const BEAM_HALF_RAD: f32 = 0.5236;
+const BEAM_HALF_RAD: f32 = core::f32::consts::FRAC_PI_6;
 
 /// The planned search's map: the cells the robot stands in are free, and stay free (its
 /// centre has been there, so a route may cross them whatever a later reading, shifted by the
