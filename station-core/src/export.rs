@@ -13,7 +13,6 @@
 
 pub mod csv;
 pub mod mcap;
-pub mod mcap_file;
 pub mod mcap_msg;
 pub mod mcap_proto;
 pub mod qt;

@@ -1,7 +1,7 @@
 //! A recording as MCAP, for Foxglove: each message logged at the time it crossed the link.
 //!
-//! Layer: formatting over `export::walk`, writing through the `mcap` crate to any seekable
-//! writer. Channels:
+//! Layer: formatting over `export::walk`, written by the `mcap` crate's `Writer` to any writer
+//! (seeking is not needed: each chunk is put together in memory and written whole). Channels:
 //! - `/telemetry`: every telemetry frame, the fields of `csv::TelemetryRow` (SI-ish units);
 //! - `/pose`, `/truth_pose`: the believed and the true pose as `foxglove.PoseInFrame` in frame
 //!   `map`, so the 3D panel draws them;
@@ -27,11 +27,12 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::Path;
 
+use mcap::records::{MessageHeader, Metadata};
+use mcap::write::NoSeek;
 use protocol::{LogLevel, Message};
 use serde_json::{json, Value};
 
 use super::csv::TelemetryRow;
-use super::mcap_file::Writer;
 use super::mcap_msg::{Body, PoseInFrame, Truth};
 use super::mcap_proto;
 use super::{walk, Direction, ExportError, Item};
@@ -186,28 +187,53 @@ pub fn write_robots<W: Write>(
 ) -> Result<Written, ExportError> {
     let err = mcap_error(path);
     let library = format!("station {}", env!("CARGO_PKG_VERSION"));
-    let mut out = Writer::new(w, "", &library).map_err(err)?;
+    let mut out = mcap::WriteOptions::new()
+        .compression(None)
+        .profile("")
+        .library(library)
+        .disable_seeking(true)
+        .create(NoSeek::new(w))
+        .map_err(err)?;
+    // First, while no chunk is open: a metadata record closes the open chunk, and a chunk of
+    // schemas and channels without messages has no message index to find it by.
+    let meta = serde_json::to_value(meta).unwrap_or(Value::Null);
+    let meta: BTreeMap<String, String> = meta
+        .as_object()
+        .map(|m| {
+            m.iter()
+                .map(|(k, v)| (k.clone(), v.as_str().map_or(v.to_string(), str::to_string)))
+                .collect()
+        })
+        .unwrap_or_default();
+    out.write_metadata(&Metadata {
+        name: "recording".into(),
+        metadata: meta,
+    })
+    .map_err(err)?;
     let mut schemas = BTreeMap::new();
     let mut written = Written::default();
-    let mut first = true;
     for (prefix, rec) in robots {
         write_robot(
             &mut out,
             &mut schemas,
             (prefix, rec),
             enc,
-            first.then_some(meta),
             path,
             &mut written,
         )?;
-        first = false;
     }
     out.finish().map_err(err)?;
+    out.into_inner()
+        .flush()
+        .map_err(|e| err(mcap::McapError::Io(e)))?;
     Ok(written)
 }
 
+/// The file being written.
+type Out<W> = mcap::Writer<NoSeek<W>>;
+
 /// How a failure to write the file is reported.
-fn mcap_error(path: &Path) -> impl Fn(std::io::Error) -> ExportError + Copy + '_ {
+fn mcap_error(path: &Path) -> impl Fn(mcap::McapError) -> ExportError + Copy + '_ {
     move |e| ExportError::Mcap {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -224,13 +250,12 @@ pub fn topic_name(prefix: &str, topic: &str) -> String {
     }
 }
 
-/// One robot's channels and messages into `out` (and the file's metadata, when given).
+/// One robot's channels and messages into `out`.
 fn write_robot<W: Write>(
-    out: &mut Writer<W>,
+    out: &mut Out<W>,
     schemas: &mut BTreeMap<&'static str, (u16, bool)>,
     (prefix, rec): (&str, &Recording),
     enc: Encoding,
-    file_meta: Option<&crate::record::Meta>,
     path: &Path,
     written: &mut Written,
 ) -> Result<(), ExportError> {
@@ -272,18 +297,6 @@ fn write_robot<W: Write>(
             .map_err(err)?;
         topics.push((topic, id, 0u32, protobuf));
     }
-    if let Some(file_meta) = file_meta {
-        let meta = serde_json::to_value(file_meta).unwrap_or(Value::Null);
-        let meta: BTreeMap<String, String> = meta
-            .as_object()
-            .map(|m| {
-                m.iter()
-                    .map(|(k, v)| (k.clone(), v.as_str().map_or(v.to_string(), str::to_string)))
-                    .collect()
-            })
-            .unwrap_or_default();
-        out.metadata("recording", &meta).map_err(err)?;
-    }
     written.messages += write_messages(out, &mut topics, rec, path, |note| {
         let robot = match prefix {
             "" => String::new(),
@@ -296,7 +309,7 @@ fn write_robot<W: Write>(
 
 /// Every message of `rec` on its channel (`topics`: topic, channel id, messages so far).
 fn write_messages<W: Write>(
-    out: &mut Writer<W>,
+    out: &mut Out<W>,
     topics: &mut [(&'static str, u16, u32, bool)],
     rec: &Recording,
     path: &Path,
@@ -308,8 +321,10 @@ fn write_messages<W: Write>(
     let mut failure = None;
     let mut scene = super::scene::Scene::new(rec);
     let mut qt = super::qt::QtExport::new(&rec.records);
-    // Reused for every item: its messages.
+    // Reused for every item: its messages, and a message's bytes.
     let mut messages = Vec::new();
+    let mut data = Vec::new();
+    let mut encoder = mcap_proto::Encoder::default();
     walk(rec, |item| {
         if failure.is_some() {
             return;
@@ -327,9 +342,15 @@ fn write_messages<W: Write>(
             };
             body.stamp(ns);
             *n += 1;
-            let protobuf = *protobuf;
-            if let Err(e) = out.message(*channel_id, *n, ns, ns, |data| body.write(protobuf, data))
-            {
+            data.clear();
+            body.write(protobuf.then_some(&mut encoder), &mut data);
+            let header = MessageHeader {
+                channel_id: *channel_id,
+                sequence: *n,
+                log_time: ns,
+                publish_time: ns,
+            };
+            if let Err(e) = out.write_to_known_channel(&header, &data) {
                 failure = Some(err(e));
                 return;
             }
