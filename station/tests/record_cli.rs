@@ -113,6 +113,75 @@ fn record_then_replay_json_against_the_firmware_on_a_pty() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// `station record --send` keeps what the station says of its commands' outcomes and of the
+/// robot's events (station log records), and the export carries them on `/log` beside an
+/// accepted go-to's marker on `/plan`.
+#[test]
+fn record_keeps_the_stations_words_and_the_export_marks_the_goal() {
+    let d = dir("words");
+    let (_emu, port) = robot(&d);
+    let p = port.to_str().unwrap();
+    let o = station(
+        &[
+            "record",
+            "--port",
+            p,
+            "--out",
+            "run.rec",
+            "--seconds",
+            "2",
+            "--send",
+            "goto 1.0 0.5",
+        ],
+        &d,
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let rec = Recording::open(&d.join("run.rec")).unwrap();
+    let lines: Vec<_> = rec.records.iter().filter_map(|r| r.station_log()).collect();
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.text.starts_with("ok: goto 1.000 0.500 m")
+                && l.level == protocol::LogLevel::Info),
+        "{lines:?}"
+    );
+    assert!(
+        lines.iter().any(|l| l.text == "mode changed to GoTo"),
+        "{lines:?}"
+    );
+
+    let o = station(&["export", "run.rec", "--mcap", "run.mcap"], &d);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let bytes = std::fs::read(d.join("run.mcap")).unwrap();
+    let mut logged = Vec::new();
+    let mut goal = None;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let v: serde_json::Value = match m.channel.topic.as_str() {
+            "/log" | "/plan" => serde_json::from_slice(&m.data).unwrap(),
+            _ => continue,
+        };
+        if m.channel.topic == "/log" {
+            logged.push((v["name"].clone(), v["message"].clone()));
+        } else if v["entities"][0]["id"] == "goal" {
+            goal = Some(v["entities"][0]["spheres"][0]["pose"]["position"].clone());
+        }
+    }
+    assert!(
+        logged.iter().any(|(n, t)| n == "station/command"
+            && t.as_str().unwrap().starts_with("ok: goto 1.000 0.500 m")),
+        "{logged:?}"
+    );
+    let goal = goal.expect("a goal marker");
+    assert_eq!(
+        (goal["x"].as_f64(), goal["y"].as_f64()),
+        (Some(1.0), Some(0.5))
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// The robot clock (`time_ms`) of every telemetry frame in a recording (finished or not).
 fn telemetry_times(path: &Path) -> Vec<u32> {
     let Ok(rec) = Recording::open(path) else {

@@ -6,7 +6,10 @@
 //! - `/pose`, `/truth_pose`: the believed and the true pose as `foxglove.PoseInFrame` in frame
 //!   `map`, so the 3D panel draws them;
 //! - `/truth`: the emulator's `EmuTruth`;
-//! - `/events`: robot events; `/log`: robot log lines as `foxglove.Log` (the Log panel);
+//! - `/events`: robot events by name (`format::event_name`) and in the station's words, with
+//!   their wire code and value; `/log`: as `foxglove.Log` (the Log panel), the robot's log
+//!   lines (`name` "robot") and the station's own, recorded while it ran (`name`
+//!   `station/command`, `station/event`, ...: refusals, give-ups, events in its words);
 //! - `/link`: connection changes, gap markers included;
 //! - `/tf`, `/map`, `/regions`, `/plan`, `/arena`: the scene for the 3D panel (`scene`);
 //! - `/qt_model`: the QT world model rebuilt from an ALICE's situations, once a second within a
@@ -36,6 +39,7 @@ use super::csv::TelemetryRow;
 use super::mcap_msg::{Body, PoseInFrame, Truth};
 use super::mcap_proto;
 use super::{walk, Direction, ExportError, Item};
+use crate::format::{event_name, event_text};
 use crate::link::api::command_text;
 use crate::record::Recording;
 
@@ -99,7 +103,7 @@ fn channels() -> Vec<(&'static str, &'static str, Value)> {
         (
             "/events",
             "station.Event",
-            obj(json!({"code": string(), "value": int()})),
+            obj(json!({"name": string(), "text": string(), "code": string(), "value": int()})),
         ),
         (
             "/log",
@@ -391,7 +395,24 @@ fn item_messages(item: &Item<'_>, out: &mut Vec<(&'static str, Body)>) -> u64 {
             frame_messages(*t_us, *dir, *seq, msg, out);
             *t_us
         }
+        Item::StationLog { t_us, line } => {
+            out.push(("/log", log(line.level, &line.text, line.source.name())));
+            *t_us
+        }
     }
+}
+
+/// A `/log` line as `foxglove.Log`; `name` says whose (`robot`, `station/command`, ...).
+fn log(level: LogLevel, text: &str, name: &str) -> Body {
+    // foxglove.Log levels: 1 debug, 2 info, 3 warning, 4 error, 5 fatal.
+    let level = match level {
+        LogLevel::Debug => 1,
+        LogLevel::Info => 2,
+        LogLevel::Warn => 3,
+        LogLevel::Error => 4,
+    };
+    Body::Json(json!({"timestamp": null, "level": level, "message": text,
+                      "name": name, "file": "", "line": 0}))
 }
 
 fn dir_name(d: Direction) -> &'static str {
@@ -435,22 +456,10 @@ fn frame_messages(
         }
         (Direction::FromRobot, Message::Event(e)) => out.push(json(
             "/events",
-            json!({"code": format!("{:?}", e.code), "value": e.value}),
+            json!({"name": event_name(e.code), "text": event_text(e).1,
+                   "code": format!("{:?}", e.code), "value": e.value}),
         )),
-        (Direction::FromRobot, Message::Log(l)) => {
-            // foxglove.Log levels: 1 debug, 2 info, 3 warning, 4 error, 5 fatal.
-            let level = match l.level {
-                LogLevel::Debug => 1,
-                LogLevel::Info => 2,
-                LogLevel::Warn => 3,
-                LogLevel::Error => 4,
-            };
-            out.push(json(
-                "/log",
-                json!({"timestamp": null, "level": level, "message": l.text,
-                       "name": "robot", "file": "", "line": 0}),
-            ));
-        }
+        (Direction::FromRobot, Message::Log(l)) => out.push(("/log", log(l.level, l.text, "robot"))),
         (Direction::FromRobot, Message::Ack(a)) => out.push(json(
             "/replies",
             json!({"cmd_seq": a.cmd_seq, "outcome": "ack", "detail": a.info}),
