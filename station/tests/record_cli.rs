@@ -62,28 +62,22 @@ fn robot(d: &Path) -> (Running, PathBuf) {
     (emu, link)
 }
 
+/// `station record` of `port` into `d/run.rec` for two seconds with `args`, which succeeds; its
+/// stdout and stderr.
+fn record_two_seconds(d: &Path, port: &Path, args: &[&str]) -> (String, String) {
+    let p = port.to_str().unwrap();
+    let base = ["record", "--port", p, "--out", "run.rec", "--seconds", "2"];
+    let o = station(&[&base[..], args].concat(), d);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    (out, err)
+}
+
 #[test]
 fn record_then_replay_json_against_the_firmware_on_a_pty() {
     let d = dir("pty");
     let (_emu, port) = robot(&d);
-    let p = port.to_str().unwrap();
-    let o = station(
-        &[
-            "record",
-            "--port",
-            p,
-            "--out",
-            "run.rec",
-            "--seconds",
-            "2",
-            "--rate",
-            "20",
-            "--json",
-        ],
-        &d,
-    );
-    let (out, err) = text(&o);
-    assert!(o.status.success(), "{out}\n{err}");
+    let (out, _) = record_two_seconds(&d, &port, &["--rate", "20", "--json"]);
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["connected"], true);
     assert_eq!(v["end"], "time limit");
@@ -120,23 +114,7 @@ fn record_then_replay_json_against_the_firmware_on_a_pty() {
 fn record_keeps_the_stations_words_and_the_export_marks_the_goal() {
     let d = dir("words");
     let (_emu, port) = robot(&d);
-    let p = port.to_str().unwrap();
-    let o = station(
-        &[
-            "record",
-            "--port",
-            p,
-            "--out",
-            "run.rec",
-            "--seconds",
-            "2",
-            "--send",
-            "goto 1.0 0.5",
-        ],
-        &d,
-    );
-    let (out, err) = text(&o);
-    assert!(o.status.success(), "{out}\n{err}");
+    record_two_seconds(&d, &port, &["--send", "goto 1.0 0.5"]);
     let rec = Recording::open(&d.join("run.rec")).unwrap();
     let lines: Vec<_> = rec.records.iter().filter_map(|r| r.station_log()).collect();
     assert!(
