@@ -13,7 +13,6 @@
 
 pub mod csv;
 pub mod mcap;
-pub mod mcap_file;
 pub mod mcap_msg;
 pub mod mcap_proto;
 pub mod qt;
@@ -26,7 +25,7 @@ use anyhow::bail;
 use protocol::{Feed, FrameDecoder, FrameError, Message};
 
 use crate::output_file::OutputError;
-use crate::record::{LinkState, RecordKind, Recording};
+use crate::record::{LinkState, RecordKind, Recording, StationLine};
 
 /// Why an export failed.
 #[derive(Debug, thiserror::Error)]
@@ -71,6 +70,8 @@ pub enum Item<'a> {
         state: LinkState,
         text: &'a str,
     },
+    /// A line the station logged while it recorded.
+    StationLog { t_us: u64, line: &'a StationLine },
 }
 
 /// Decodes every frame of a recording, both ways, in recorded order.
@@ -92,6 +93,12 @@ pub fn walk(rec: &Recording, mut f: impl FnMut(Item<'_>)) {
                         state,
                         text: &text,
                     });
+                }
+                continue;
+            }
+            RecordKind::StationLog => {
+                if let Some(line) = r.station_log() {
+                    f(Item::StationLog { t_us, line: &line });
                 }
                 continue;
             }

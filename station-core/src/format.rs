@@ -3,7 +3,7 @@
 //!
 //! Layer: pure functions, no state.
 
-use protocol::{LogLevel, Mode, ObjectKind, Progress};
+use protocol::{Event, EventCode, LogLevel, Mode, ObjectKind, Progress};
 use robot_firmware::params::ParamInfo;
 
 /// A mode's name for display.
@@ -171,5 +171,124 @@ pub fn arrival_text(mode: Option<Mode>, at: Option<(f64, f64)>, to_goal: bool) -
         Some(Mode::ExecutePlan) if to_goal => format!("goal reached{at}: the plan's end"),
         Some(Mode::ExecutePlan) => format!("arrived{at}: the plan's end"),
         _ => format!("task ended{at}: the robot arrived"),
+    }
+}
+
+/// An event's name: what the export's `/events` and the station's reports call it.
+pub fn event_name(code: EventCode) -> &'static str {
+    match code {
+        EventCode::ModeChanged => "mode changed",
+        EventCode::GoalReached => "goal reached",
+        EventCode::FailsafeStop => "failsafe stop",
+        EventCode::Collision => "collision",
+        EventCode::LineCrossed => "floor line crossed",
+        EventCode::PoseCorrected => "pose corrected",
+        EventCode::BeaconCalibration => "beacon calibration",
+        EventCode::MapUpdated => "map updated",
+        EventCode::PlanInstalled => "plan installed",
+        EventCode::PlanFinished => "plan finished",
+        EventCode::PlanAborted => "plan aborted",
+        EventCode::HandshakeRefused => "handshake refused",
+        EventCode::ParamChanged => "parameter changed",
+        EventCode::ObjectGrasped => "object gripped",
+        EventCode::ObjectDelivered => "object delivered",
+        EventCode::SourceEmpty => "light source empty",
+        EventCode::LightCalibrated => "light calibrated",
+        EventCode::LightBearing => "light bearing",
+        EventCode::CalibrationInstalled => "light calibration installed",
+        EventCode::NoProgress => "no progress",
+    }
+}
+
+/// An event in the station's words, with its severity in the station's log: what the event
+/// alone says. The TUI's log says more of a few where it knows more (where the robot arrived,
+/// which mode gave up how far from its target, the floor line a correction completes).
+pub fn event_text(e: &Event) -> (LogLevel, String) {
+    let v = e.value;
+    match e.code {
+        EventCode::ModeChanged => (
+            LogLevel::Info,
+            format!("mode changed to {}", mode_name_i32(v)),
+        ),
+        EventCode::GoalReached => (LogLevel::Info, "goal reached: the robot arrived".into()),
+        EventCode::FailsafeStop => (
+            LogLevel::Warn,
+            format!("failsafe stop after {v} ms of silence"),
+        ),
+        EventCode::Collision => (LogLevel::Warn, "collision".into()),
+        EventCode::LineCrossed => (LogLevel::Debug, format!("floor line {v} crossed")),
+        EventCode::PoseCorrected => (LogLevel::Info, format!("pose corrected by {v} mm")),
+        // Once a second while the robot sees the beacon standing still: detail, not news.
+        EventCode::BeaconCalibration => (
+            LogLevel::Debug,
+            format!(
+                "beacon calibration, confidence {:.3}",
+                f64::from(v) / 1000.0
+            ),
+        ),
+        EventCode::MapUpdated => (LogLevel::Debug, "map updated".into()),
+        EventCode::PlanInstalled => (LogLevel::Info, "plan installed".into()),
+        EventCode::PlanFinished => (
+            LogLevel::Info,
+            format!("plan finished: all {v} waypoints done, the robot stopped"),
+        ),
+        EventCode::NoProgress => (
+            LogLevel::Warn,
+            format!(
+                "gave up: no progress for {:.0} s; the robot stopped (limit: parameter \
+                 stuck_limit_s)",
+                f64::from(v) / 1000.0
+            ),
+        ),
+        EventCode::PlanAborted => (LogLevel::Warn, format!("plan aborted at waypoint {v}")),
+        // Negative: the robot could not authenticate our Hello (PROTOCOL.md §13).
+        EventCode::HandshakeRefused if v < 0 => (
+            LogLevel::Warn,
+            format!("robot refused our handshake: link authentication, reason {v}"),
+        ),
+        EventCode::HandshakeRefused => (
+            LogLevel::Error,
+            format!("robot refused our handshake (it saw protocol {v})"),
+        ),
+        EventCode::ObjectGrasped => (LogLevel::Info, format!("object gripped ({v} so far)")),
+        EventCode::ObjectDelivered => (
+            LogLevel::Info,
+            format!("object delivered home ({v} so far)"),
+        ),
+        EventCode::SourceEmpty => (LogLevel::Info, format!("light source empty ({v} known)")),
+        EventCode::LightCalibrated if v > 0 => (
+            LogLevel::Info,
+            format!("light calibration done ({v} examples)"),
+        ),
+        EventCode::LightCalibrated => (
+            LogLevel::Warn,
+            match v {
+                protocol::calibration::NO_LIGHT => {
+                    "light calibration failed: no light near the robot".into()
+                }
+                protocol::calibration::NO_DIRECTION => {
+                    "light calibration failed: the first turn gave no light direction".into()
+                }
+                protocol::calibration::STALLED => {
+                    "light calibration aborted: the robot stalled mid-turn (wheels blocked?)".into()
+                }
+                _ => format!("light calibration failed (code {v})"),
+            },
+        ),
+        EventCode::CalibrationInstalled => (
+            LogLevel::Info,
+            format!("light calibration {:08x} installed", v as u32),
+        ),
+        EventCode::LightBearing => (
+            LogLevel::Debug,
+            format!("light at {:+.1} deg", f64::from(v) / 10.0),
+        ),
+        EventCode::ParamChanged => {
+            let id = u16::try_from(v).unwrap_or(u16::MAX);
+            (
+                LogLevel::Info,
+                format!("parameter {} changed", crate::link::api::param_name(id)),
+            )
+        }
     }
 }

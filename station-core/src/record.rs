@@ -27,7 +27,8 @@
 //!          crc       u32      CRC-32C of every header byte before it
 //! record   t_us      varint   microseconds since the recording started, never decreasing,
 //!                             at most `MAX_T_US` (a year)
-//!          kind      u8       0 from robot, 1 to robot, 2 link event, 3 end (below)
+//!          kind      u8       0 from robot, 1 to robot, 2 link event, 3 end, 4 station
+//!                             log line (below)
 //!          link      u8       version 2 only: which link (an index into `links`); a
 //!                             version 1 record is link 0
 //!          len       varint   length of data, at most 1 MiB
@@ -47,7 +48,14 @@
 //!   3 refused; the rest is UTF-8 text (the reason, the port, the robot, the refusal).
 //! - 3 `End`: the recording was finished cleanly; UTF-8 text says why (time limit, stopped,
 //!   interrupted). Nothing may follow it.
-//! - 4..=255: reserved for later additions to versions 1 and 2; a reader skips records of a
+//! - 4 `StationLog`: a line of the station's own log while it recorded (a refusal, a give-up,
+//!   an event in the station's words; the robot's own log lines are in its frames).
+//!   `data[0]` is the level (0 debug, 1 info, 2 warn, 3 error), `data[1]` what it is about
+//!   (0 a robot event, 1 a command, 2 the link, 3 the arena), the rest UTF-8 text. A reader
+//!   takes an unknown level as info and an unknown subject as the station's; a record of
+//!   fewer than two bytes says nothing. Added within version 2: a reader that predates it
+//!   skips it as a reserved kind, and a file without it reads as before.
+//! - 5..=255: reserved for later additions to versions 1 and 2; a reader skips records of a
 //!   kind it does not know (after checking their CRC). A change to anything above is a new
 //!   version.
 //!
@@ -102,6 +110,8 @@ pub enum RecordKind {
     ToRobot,
     Link,
     End,
+    /// A line of the station's own log (`Record::station_log`).
+    StationLog,
     /// A kind this reader does not know (skipped by consumers).
     Unknown(u8),
 }
@@ -114,6 +124,7 @@ impl RecordKind {
             RecordKind::ToRobot => 1,
             RecordKind::Link => 2,
             RecordKind::End => 3,
+            RecordKind::StationLog => 4,
             RecordKind::Unknown(c) => c,
         }
     }
@@ -125,6 +136,7 @@ impl RecordKind {
             1 => RecordKind::ToRobot,
             2 => RecordKind::Link,
             3 => RecordKind::End,
+            4 => RecordKind::StationLog,
             c => RecordKind::Unknown(c),
         }
     }
@@ -161,6 +173,104 @@ impl LinkState {
     }
 }
 
+/// What a station log line is about (`RecordKind::StationLog`'s `data[1]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LogSource {
+    /// A robot event, in the station's words.
+    Event,
+    /// A command's outcome (a refusal, a failure, an answer).
+    Command,
+    /// The link: connection changes, the recording itself.
+    Link,
+    /// The arena file.
+    Arena,
+    /// Anything else the station said (and a subject this reader does not know).
+    Station,
+}
+
+impl LogSource {
+    pub fn code(self) -> u8 {
+        match self {
+            LogSource::Event => 0,
+            LogSource::Command => 1,
+            LogSource::Link => 2,
+            LogSource::Arena => 3,
+            LogSource::Station => 255,
+        }
+    }
+
+    pub fn from_code(c: u8) -> LogSource {
+        match c {
+            0 => LogSource::Event,
+            1 => LogSource::Command,
+            2 => LogSource::Link,
+            3 => LogSource::Arena,
+            _ => LogSource::Station,
+        }
+    }
+
+    /// Its name, as the export's `/log` names a line's origin (`station/command`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            LogSource::Event => "station/event",
+            LogSource::Command => "station/command",
+            LogSource::Link => "station/link",
+            LogSource::Arena => "station/arena",
+            LogSource::Station => "station",
+        }
+    }
+}
+
+/// A line of the station's log, as a `StationLog` record holds it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StationLine {
+    pub level: protocol::LogLevel,
+    pub source: LogSource,
+    pub text: String,
+}
+
+/// Longest station log text recorded, bytes: a log line is a sentence; a longer one is cut
+/// (at a character boundary) rather than split over records.
+pub const MAX_STATION_TEXT: usize = 4096;
+
+impl StationLine {
+    /// The record's data: level, source, then the text (cut to `MAX_STATION_TEXT`).
+    pub fn encode(&self) -> Vec<u8> {
+        let mut end = self.text.len().min(MAX_STATION_TEXT);
+        while !self.text.is_char_boundary(end) {
+            end -= 1;
+        }
+        let level = match self.level {
+            protocol::LogLevel::Debug => 0,
+            protocol::LogLevel::Info => 1,
+            protocol::LogLevel::Warn => 2,
+            protocol::LogLevel::Error => 3,
+        };
+        let mut data = Vec::with_capacity(2 + end);
+        data.push(level);
+        data.push(self.source.code());
+        data.extend_from_slice(self.text.get(..end).unwrap_or_default().as_bytes());
+        data
+    }
+
+    /// A record's data read back (see `RecordKind::StationLog`); `None` when it is too short.
+    pub fn decode(data: &[u8]) -> Option<StationLine> {
+        let (&level, rest) = data.split_first()?;
+        let (&source, text) = rest.split_first()?;
+        Some(StationLine {
+            level: match level {
+                0 => protocol::LogLevel::Debug,
+                2 => protocol::LogLevel::Warn,
+                3 => protocol::LogLevel::Error,
+                _ => protocol::LogLevel::Info,
+            },
+            source: LogSource::from_code(source),
+            text: String::from_utf8_lossy(text).into_owned(),
+        })
+    }
+}
+
 /// One record.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Record {
@@ -182,6 +292,14 @@ impl Record {
             LinkState::from_code(code)?,
             String::from_utf8_lossy(text).into_owned(),
         ))
+    }
+
+    /// A `StationLog` record's line, if this is one and it says anything.
+    pub fn station_log(&self) -> Option<StationLine> {
+        if self.kind != RecordKind::StationLog {
+            return None;
+        }
+        StationLine::decode(&self.data)
     }
 
     /// A `Link` record.
@@ -863,6 +981,48 @@ mod tests {
         encode_record(&mut b, 5, RecordKind::Unknown(200), 0, b"future");
         let r = Recording::parse_strict(&b).unwrap();
         assert_eq!(r.records[0].kind, RecordKind::Unknown(200));
+    }
+
+    /// A station log record (kind 4) reads back in a version 2 file: the format version is
+    /// unchanged, since a reader that predates the kind skips it as reserved.
+    #[test]
+    fn a_station_log_record_reads_back() {
+        let line = StationLine {
+            level: protocol::LogLevel::Error,
+            source: LogSource::Command,
+            text: "refused: go-to (9.00, 0.50): out of the arena".into(),
+        };
+        let mut b = encode_header(&Meta::default());
+        encode_record(&mut b, 5, RecordKind::StationLog, 0, &line.encode());
+        let r = Recording::parse_strict(&b).unwrap();
+        assert_eq!(r.version, VERSION);
+        assert_eq!(r.records[0].kind, RecordKind::StationLog);
+        assert_eq!(r.records[0].data[..2], [3, 1], "level, then subject");
+        assert_eq!(r.records[0].station_log(), Some(line));
+        assert_eq!(RecordKind::from_code(4), RecordKind::StationLog);
+    }
+
+    #[test]
+    fn station_log_lines_read_leniently_and_are_cut_at_a_character() {
+        assert_eq!(
+            StationLine::decode(&[9, 77, b'x']),
+            Some(StationLine {
+                level: protocol::LogLevel::Info,
+                source: LogSource::Station,
+                text: "x".into()
+            }),
+            "an unknown level is info, an unknown subject the station's"
+        );
+        assert_eq!(StationLine::decode(&[1]), None);
+        let line = StationLine {
+            level: protocol::LogLevel::Info,
+            source: LogSource::Link,
+            text: "€".repeat(MAX_STATION_TEXT),
+        };
+        let data = line.encode();
+        assert!(data.len() <= 2 + MAX_STATION_TEXT);
+        let text = std::str::from_utf8(&data[2..]).unwrap();
+        assert_eq!(text.len(), MAX_STATION_TEXT / 3 * 3);
     }
 
     #[test]

@@ -159,7 +159,8 @@ impl ReplayFeed {
                     self.on_link(now_ms, state, &text, out);
                 }
             }
-            RecordKind::End | RecordKind::Unknown(_) => {}
+            // The replayed app says its own lines again, from the frames it replays.
+            RecordKind::StationLog | RecordKind::End | RecordKind::Unknown(_) => {}
         }
     }
 

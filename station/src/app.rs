@@ -30,10 +30,11 @@ use protocol::units::point_mm;
 use protocol::{AckInfo, Command, EmuTruth, Event, EventCode, Mode, Telemetry};
 
 use crate::action::Action;
-use crate::link::api::{command_text, param_name, refusal_text};
+use crate::link::api::{command_text, refusal_text};
 use crate::link::{
     CommandFailure, CommandId, CommandOutcome, Connection, LinkEvent, LinkStats, PeerInfo, SendWhen,
 };
+use crate::record::StationLine;
 use arena::ArenaOverlay;
 use history::{EncoderUnwrap, History, Track};
 use log::{Group, Level, LogBuffer, LogLine, Source};
@@ -59,6 +60,9 @@ const STATS_HISTORY: usize = 120;
 const STALE_PERIODS: u64 = 3;
 /// ... and at least this old, ms (a slow rate is not stale between two frames).
 const STALE_MIN_MS: u64 = 1000;
+/// Most station lines held for the recording between two drains of the loop (it drains
+/// after every wake-up; this only bounds an app whose loop never does).
+const STATION_LINES_HELD: usize = 1024;
 
 /// Log groups: repeats of each are one line with a count (`app::log`).
 mod groups {
@@ -205,6 +209,9 @@ pub struct App {
     pub chart: usize,
     /// The recording in progress (`R`): file name and station time it started.
     pub recording: Option<(String, u64)>,
+    /// While recording, the lines the station logged (not the robot's: its log lines are in
+    /// its frames) waiting for the loop to record them (`take_station_lines`).
+    station_lines: Vec<StationLine>,
     /// Map and plan transfers, the robot's objects, the upload prompt (`app::transfers`).
     pub transfers: transfers::Transfers,
     /// Floor-grid line correction (seed 003): tracks, line events, PPD, errors.
@@ -277,6 +284,7 @@ impl App {
             rate_hz: None,
             chart: 0,
             recording: None,
+            station_lines: Vec::new(),
             transfers: transfers::Transfers::default(),
             localization: localization::LocalizationState::default(),
             qt: qt_state::QtState::default(),
@@ -309,6 +317,12 @@ impl App {
     /// for now (a key press included) goes at once.
     pub fn take_outbox_timed(&mut self) -> Vec<(CommandId, Command, SendWhen)> {
         std::mem::take(&mut self.outbox)
+    }
+
+    /// The lines the station logged since the last call, while recording: the recording keeps
+    /// them (`record::RecordKind::StationLog`).
+    pub fn take_station_lines(&mut self) -> Vec<StationLine> {
+        std::mem::take(&mut self.station_lines)
     }
 
     pub fn connected(&self) -> bool {
@@ -766,85 +780,22 @@ impl App {
             }
             _ => None,
         };
+        // The event in the station's words (`format::event_text`), saying more where the app
+        // knows more.
         let (level, text) = match e.code {
-            EventCode::ModeChanged => {
-                (Level::Info, format!("mode changed to {}", mode_name_i32(v)))
-            }
             EventCode::GoalReached => (Level::Info, self.arrival_text()),
-            EventCode::FailsafeStop => (
-                Level::Warn,
-                format!("failsafe stop after {v} ms of silence"),
-            ),
-            EventCode::Collision => (Level::Warn, "collision".into()),
-            EventCode::LineCrossed => {
-                self.lines_crossed = Some(v);
-                (Level::Debug, format!("floor line {v} crossed"))
-            }
+            EventCode::NoProgress => (Level::Warn, self.no_progress_text(v)),
             EventCode::PoseCorrected => match self.lines_crossed.filter(|_| surveying) {
                 Some(n) => (
                     Level::Info,
                     format!("floor line {n} crossed, pose corrected by {v} mm"),
                 ),
-                None => (Level::Info, format!("pose corrected by {v} mm")),
+                None => event_words(&e),
             },
-            // Once a second while the robot sees the beacon standing still: detail, not news.
-            EventCode::BeaconCalibration => (
-                Level::Debug,
-                format!(
-                    "beacon calibration, confidence {:.3}",
-                    f64::from(v) / 1000.0
-                ),
-            ),
-            EventCode::MapUpdated => (Level::Debug, "map updated".into()),
-            EventCode::PlanInstalled => (Level::Info, "plan installed".into()),
-            EventCode::PlanFinished => (
-                Level::Info,
-                format!("plan finished: all {v} waypoints done, the robot stopped"),
-            ),
-            EventCode::NoProgress => (Level::Warn, self.no_progress_text(v)),
-            EventCode::PlanAborted => (Level::Warn, format!("plan aborted at waypoint {v}")),
-            // Negative: the robot could not authenticate our Hello (PROTOCOL.md §13).
-            EventCode::HandshakeRefused if v < 0 => (
-                Level::Warn,
-                format!("robot refused our handshake: link authentication, reason {v}"),
-            ),
-            EventCode::HandshakeRefused => (
-                Level::Error,
-                format!("robot refused our handshake (it saw protocol {v})"),
-            ),
-            EventCode::ObjectGrasped => (Level::Info, format!("object gripped ({v} so far)")),
-            EventCode::ObjectDelivered => {
-                (Level::Info, format!("object delivered home ({v} so far)"))
+            EventCode::LineCrossed => {
+                self.lines_crossed = Some(v);
+                event_words(&e)
             }
-            EventCode::SourceEmpty => (Level::Info, format!("light source empty ({v} known)")),
-            EventCode::LightCalibrated if v > 0 => (
-                Level::Info,
-                format!("light calibration done ({v} examples)"),
-            ),
-            EventCode::LightCalibrated => (
-                Level::Warn,
-                match v {
-                    protocol::calibration::NO_LIGHT => {
-                        "light calibration failed: no light near the robot".into()
-                    }
-                    protocol::calibration::NO_DIRECTION => {
-                        "light calibration failed: the first turn gave no light direction".into()
-                    }
-                    protocol::calibration::STALLED => {
-                        "light calibration aborted: the robot stalled mid-turn (wheels blocked?)"
-                            .into()
-                    }
-                    _ => format!("light calibration failed (code {v})"),
-                },
-            ),
-            EventCode::CalibrationInstalled => (
-                Level::Info,
-                format!("light calibration {:08x} installed", v as u32),
-            ),
-            EventCode::LightBearing => (
-                Level::Debug,
-                format!("light at {:+.1} deg", f64::from(v) / 10.0),
-            ),
             EventCode::ParamChanged => {
                 let id = u16::try_from(v).unwrap_or(u16::MAX);
                 // Changed by whoever (this editor, the rate keys, another station): read the
@@ -852,8 +803,9 @@ impl App {
                 if !self.replaying && robot_firmware::params::info(id).is_some() {
                     self.read_param_quietly(id);
                 }
-                (Level::Info, format!("parameter {} changed", param_name(id)))
+                event_words(&e)
             }
+            _ => event_words(&e),
         };
         // A task that ended (or a mode that changed) takes its progress with it: the status
         // line shows what the robot reports now, not the last report of a task that is over.
@@ -1045,6 +997,15 @@ impl App {
 
     /// Logs a line that joins the recent entry of its group, if any (`app::log`).
     fn note_grouped(&mut self, level: Level, source: Source, text: String, group: Option<Group>) {
+        if self.recording.is_some() && self.station_lines.len() < STATION_LINES_HELD {
+            if let Some(source) = source.recorded() {
+                self.station_lines.push(StationLine {
+                    level: level.into(),
+                    source,
+                    text: text.clone(),
+                });
+            }
+        }
         let line = LogLine::new(self.now_ms, level, source, text);
         self.log.push(match group {
             Some(g) => line.grouped(g),
@@ -1077,6 +1038,12 @@ impl App {
         };
         rows(self).unwrap_or_else(|| usize::from(self.size.1.saturating_sub(4)))
     }
+}
+
+/// An event as `format::event_text` says it, at the log's level.
+fn event_words(e: &Event) -> (Level, String) {
+    let (level, text) = station_core::format::event_text(e);
+    (level.into(), text)
 }
 
 fn pose_m(p: &protocol::Pose) -> (f64, f64, f64) {

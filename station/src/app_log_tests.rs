@@ -172,3 +172,51 @@ fn zooming_about_a_point_keeps_it_in_place_and_zooming_out_recentres() {
     m.zoom_by(1e9, (0.0, 0.0));
     assert_eq!(m.zoom(), MAX_ZOOM);
 }
+
+/// While recording, what the station logs waits for the loop to record it, each line as it
+/// was said (before coalescing) with its subject; the robot's own log lines do not (its frames
+/// hold them); before and after the recording nothing is kept.
+#[test]
+fn while_recording_the_stations_own_lines_wait_for_the_recording() {
+    use crate::record::live::RecordingNote;
+    use crate::record::LogSource;
+    let mut app = connected_app();
+    event(&mut app, EventCode::PlanFinished, 4);
+    assert!(app.take_station_lines().is_empty(), "not recording");
+    app.update(Action::Recording(RecordingNote::Started {
+        file: "run.rec".into(),
+        links: 1,
+    }));
+    event(&mut app, EventCode::PlanFinished, 4);
+    event(&mut app, EventCode::NoProgress, 40_000);
+    app.update(Action::Link(LinkEvent::Log {
+        level: protocol::LogLevel::Info,
+        text: "the robot's own words".into(),
+    }));
+    let lines = app.take_station_lines();
+    let said: Vec<(LogSource, &str)> = lines.iter().map(|l| (l.source, l.text.as_str())).collect();
+    assert_eq!(
+        said,
+        [
+            (LogSource::Link, "recording to run.rec (R stops)"),
+            (
+                LogSource::Event,
+                "plan finished: all 4 waypoints done, the robot stopped"
+            ),
+            (
+                LogSource::Event,
+                "the motion mode gave up: no progress for 40 s; the robot stopped (limit: \
+                 parameter stuck_limit_s)"
+            ),
+        ]
+    );
+    assert_eq!(lines[2].level, protocol::LogLevel::Warn);
+    assert!(app.take_station_lines().is_empty(), "taken once");
+    app.update(Action::Recording(RecordingNote::Stopped {
+        file: "run.rec".into(),
+        seconds: 1.0,
+        bytes: 100,
+    }));
+    event(&mut app, EventCode::Collision, 0);
+    assert!(app.take_station_lines().is_empty(), "no longer recording");
+}

@@ -9,7 +9,8 @@
 //! is on the `pace` grid, so the tick, the redraw limit and the paced link share wake-ups. The
 //! viewport is fixed and resized on the terminal's resize events (a full-screen viewport asks
 //! the terminal for its size before every frame, opening `/dev/tty` each time). The link's tap
-//! goes to the `TuiRecorder` (the `R` key), which writes it only while recording. The terminal
+//! goes to the `TuiRecorder` (the `R` key), which writes it only while recording, with the
+//! lines each robot's app logs meanwhile (`App::take_station_lines`). The terminal
 //! is restored on quit, on error, on panic (a hook installed before raw mode is entered) and on
 //! SIGTERM, SIGHUP and SIGINT, which end the TUI as `q` does. What can fail: terminal I/O
 //! (`io::Error`).
@@ -275,6 +276,17 @@ async fn event_loop(
             // wakes the loop instead.
             () = &mut redraw, if dirty && !holding => {}
             () = &mut stop_signal => break Ok(()),
+        }
+        // What each robot's app logged, to the recording (while one runs).
+        let mut failed = None;
+        for (i, m) in fleet.members.iter_mut().enumerate() {
+            for line in m.app.take_station_lines() {
+                failed = recorder.on_station_log(i, &line).or(failed);
+            }
+        }
+        if let Some(note) = failed {
+            fleet.update(Action::Recording(note));
+            dirty = true;
         }
         // Each robot's commands and transfers to its own link.
         for (i, (m, link)) in fleet.members.iter_mut().zip(links.iter()).enumerate() {

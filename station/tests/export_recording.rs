@@ -716,3 +716,160 @@ fn calibrate_refuses_a_recording_of_two_robots() {
     assert!(err.contains("holds 2 robots"), "{err}");
     assert_eq!(files(&d), ["two.rec"]);
 }
+
+/// What a user asked of the MCAP: events by name, not raw codes; `/log` with the station's own
+/// lines (a refusal) beside the robot's; the goal, the beacon and the targets as markers. A
+/// recording with the station's log lines and a go-to refused, a go-to and a plan request
+/// accepted, and the beacon's parameters read on the micro-rato arena is exported and read
+/// back with the mcap crate.
+#[test]
+fn mcap_export_names_events_logs_the_station_and_marks_goal_beacon_and_targets() {
+    use protocol::{Ack, AckInfo, Command, Event, EventCode, Message, Nack, NackReason};
+    use protocol::{ParamId, PointMm};
+    use station::record::synth::{demo_peer, telemetry, Synth};
+    use station::record::{LogSource, Meta, StationLine};
+
+    let arena_name = emulator::builtin::MICRO_RATO_99;
+    let arena = emulator::builtin::load(arena_name, &Default::default()).unwrap();
+    let meta = Meta {
+        created_unix_ms: 1_700_000_000_000,
+        port: "memory".into(),
+        protocol: protocol::PROTOCOL_VERSION,
+        arena: arena_name.into(),
+        ..Meta::default()
+    };
+    let mut s = Synth::new(&meta);
+    s.handshake(demo_peer());
+    s.from_robot(10_000, &Message::Telemetry(telemetry(0, 10)));
+    let refusal = "refused: goto 9.000 0.500 m: bad point: outside the arena";
+    let point = |x_mm, y_mm| PointMm { x_mm, y_mm };
+    // Each command at `t`, answered 1 ms later by `answer(seq)`.
+    let mut t = 20_000;
+    let mut ask = |s: &mut Synth, c: Command, answer: &dyn Fn(u16) -> Message<'static>| {
+        let seq = s.to_robot(t, &Message::Command(c));
+        s.from_robot(t + 1_000, &answer(seq));
+        t += 10_000;
+    };
+    let ack = |info| move |cmd_seq| Message::Ack(Ack { cmd_seq, info });
+    ask(&mut s, Command::GoTo(point(9_000, 500)), &|cmd_seq| {
+        Message::Nack(Nack {
+            cmd_seq,
+            reason: NackReason::BadPoint,
+        })
+    });
+    ask(
+        &mut s,
+        Command::GoTo(point(1_200, 800)),
+        &ack(AckInfo::Done),
+    );
+    let to = Some(point(500, 700));
+    ask(
+        &mut s,
+        Command::Plan { from: None, to },
+        &ack(AckInfo::Done),
+    );
+    for (id, value) in [(21, 2.5), (22, 1.25)] {
+        let info = AckInfo::Param {
+            id: ParamId(id),
+            value,
+        };
+        ask(&mut s, Command::GetParam { id: ParamId(id) }, &ack(info));
+    }
+    s.station_log(
+        t,
+        &StationLine {
+            level: protocol::LogLevel::Error,
+            source: LogSource::Command,
+            text: refusal.into(),
+        },
+    );
+    s.from_robot(
+        200_000,
+        &Message::Event(Event {
+            code: EventCode::ModeChanged,
+            value: 2,
+        }),
+    );
+    let d = dir("marks");
+    std::fs::write(d.join("marks.rec"), s.finish(300_000, "done")).unwrap();
+    let o = station(&["export", "marks.rec", "--mcap", "marks.mcap"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(d.join("marks.mcap")).unwrap();
+    support::check_container(&bytes);
+    let mut topics: BTreeMap<String, Vec<serde_json::Value>> = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        topics
+            .entry(m.channel.topic.clone())
+            .or_default()
+            .push(support::message_json(&m));
+    }
+
+    let events = &topics["/events"];
+    assert_eq!(events.len(), 1);
+    assert_eq!(events[0]["name"], "mode changed");
+    assert_eq!(events[0]["text"], "mode changed to GoTo");
+    assert_eq!(events[0]["value"], 2);
+
+    let log = &topics["/log"];
+    let station_lines: Vec<&serde_json::Value> = log
+        .iter()
+        .filter(|l| l["name"].as_str().unwrap().starts_with("station"))
+        .collect();
+    assert_eq!(station_lines.len(), 1, "{log:?}");
+    assert_eq!(station_lines[0]["name"], "station/command");
+    assert_eq!(station_lines[0]["message"], refusal);
+    assert_eq!(station_lines[0]["level"], 4, "foxglove.Log ERROR");
+    assert!(station_lines[0]["timestamp"]["sec"].as_u64().unwrap() >= 1_700_000_000);
+
+    // Each marker entity by id: its sphere's place and its label.
+    let marks = |topic: &str| -> BTreeMap<String, serde_json::Value> {
+        let mut by_id = BTreeMap::new();
+        for update in &topics[topic] {
+            for e in update["entities"].as_array().unwrap() {
+                by_id.insert(e["id"].as_str().unwrap().to_string(), e.clone());
+            }
+        }
+        by_id
+    };
+    let at = |e: &serde_json::Value| {
+        let p = &e["spheres"][0]["pose"]["position"];
+        (p["x"].as_f64().unwrap(), p["y"].as_f64().unwrap())
+    };
+    let plan = marks("/plan");
+    assert_eq!(
+        at(&plan["goal"]),
+        (1.2, 0.8),
+        "the accepted go-to, not the refused one"
+    );
+    assert_eq!(plan["goal"]["texts"][0]["text"], "goal");
+    assert_eq!(at(&plan["plan_target"]), (0.5, 0.7));
+    assert_eq!(topics["/plan"].len(), 2);
+
+    // The arena's beacon at the start, then where the robot's parameters put it.
+    let first = &topics["/arena"][0]["entities"];
+    let ids: Vec<&str> = first
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["id"].as_str().unwrap())
+        .collect();
+    assert_eq!(ids[0], "arena");
+    assert!(ids.contains(&"beacon"), "{ids:?}");
+    assert_eq!(ids.contains(&"targets"), !arena.targets.is_empty());
+    assert_eq!(ids.contains(&"arena_goal"), arena.goal.is_some());
+    let b = arena.beacon().unwrap().position;
+    let beacon = first
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["id"] == "beacon")
+        .unwrap();
+    assert_eq!(at(beacon), (b.x, b.y));
+    assert_eq!(at(&marks("/arena")["beacon"]), (2.5, 1.25));
+
+    // The station's lines are skipped by a replay, which says them again from the frames.
+    let o = station(&["replay", "marks.rec", "--json"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let _ = std::fs::remove_dir_all(&d);
+}

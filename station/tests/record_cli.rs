@@ -62,28 +62,22 @@ fn robot(d: &Path) -> (Running, PathBuf) {
     (emu, link)
 }
 
+/// `station record` of `port` into `d/run.rec` for two seconds with `args`, which succeeds; its
+/// stdout and stderr.
+fn record_two_seconds(d: &Path, port: &Path, args: &[&str]) -> (String, String) {
+    let p = port.to_str().unwrap();
+    let base = ["record", "--port", p, "--out", "run.rec", "--seconds", "2"];
+    let o = station(&[&base[..], args].concat(), d);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    (out, err)
+}
+
 #[test]
 fn record_then_replay_json_against_the_firmware_on_a_pty() {
     let d = dir("pty");
     let (_emu, port) = robot(&d);
-    let p = port.to_str().unwrap();
-    let o = station(
-        &[
-            "record",
-            "--port",
-            p,
-            "--out",
-            "run.rec",
-            "--seconds",
-            "2",
-            "--rate",
-            "20",
-            "--json",
-        ],
-        &d,
-    );
-    let (out, err) = text(&o);
-    assert!(o.status.success(), "{out}\n{err}");
+    let (out, _) = record_two_seconds(&d, &port, &["--rate", "20", "--json"]);
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["connected"], true);
     assert_eq!(v["end"], "time limit");
@@ -110,6 +104,59 @@ fn record_then_replay_json_against_the_firmware_on_a_pty() {
         "telemetry steps (ms) on the robot's clock: {steps:?}"
     );
     assert_eq!(s["errors"]["crc_errors"], 0);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `station record --send` keeps what the station says of its commands' outcomes and of the
+/// robot's events (station log records), and the export carries them on `/log` beside an
+/// accepted go-to's marker on `/plan`.
+#[test]
+fn record_keeps_the_stations_words_and_the_export_marks_the_goal() {
+    let d = dir("words");
+    let (_emu, port) = robot(&d);
+    record_two_seconds(&d, &port, &["--send", "goto 1.0 0.5"]);
+    let rec = Recording::open(&d.join("run.rec")).unwrap();
+    let lines: Vec<_> = rec.records.iter().filter_map(|r| r.station_log()).collect();
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.text.starts_with("ok: goto 1.000 0.500 m")
+                && l.level == protocol::LogLevel::Info),
+        "{lines:?}"
+    );
+    assert!(
+        lines.iter().any(|l| l.text == "mode changed to GoTo"),
+        "{lines:?}"
+    );
+
+    let o = station(&["export", "run.rec", "--mcap", "run.mcap"], &d);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let bytes = std::fs::read(d.join("run.mcap")).unwrap();
+    let mut logged = Vec::new();
+    let mut goal = None;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let v: serde_json::Value = match m.channel.topic.as_str() {
+            "/log" | "/plan" => serde_json::from_slice(&m.data).unwrap(),
+            _ => continue,
+        };
+        if m.channel.topic == "/log" {
+            logged.push((v["name"].clone(), v["message"].clone()));
+        } else if v["entities"][0]["id"] == "goal" {
+            goal = Some(v["entities"][0]["spheres"][0]["pose"]["position"].clone());
+        }
+    }
+    assert!(
+        logged.iter().any(|(n, t)| n == "station/command"
+            && t.as_str().unwrap().starts_with("ok: goto 1.000 0.500 m")),
+        "{logged:?}"
+    );
+    let goal = goal.expect("a goal marker");
+    assert_eq!(
+        (goal["x"].as_f64(), goal["y"].as_f64()),
+        (Some(1.0), Some(0.5))
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -1,12 +1,15 @@
 //! A recording as MCAP, for Foxglove: each message logged at the time it crossed the link.
 //!
-//! Layer: formatting over `export::walk`, writing through the `mcap` crate to any seekable
-//! writer. Channels:
+//! Layer: formatting over `export::walk`, written by the `mcap` crate's `Writer` to any writer
+//! (seeking is not needed: each chunk is put together in memory and written whole). Channels:
 //! - `/telemetry`: every telemetry frame, the fields of `csv::TelemetryRow` (SI-ish units);
 //! - `/pose`, `/truth_pose`: the believed and the true pose as `foxglove.PoseInFrame` in frame
 //!   `map`, so the 3D panel draws them;
 //! - `/truth`: the emulator's `EmuTruth`;
-//! - `/events`: robot events; `/log`: robot log lines as `foxglove.Log` (the Log panel);
+//! - `/events`: robot events by name (`format::event_name`) and in the station's words, with
+//!   their wire code and value; `/log`: as `foxglove.Log` (the Log panel), the robot's log
+//!   lines (`name` "robot") and the station's own, recorded while it ran (`name`
+//!   `station/command`, `station/event`, ...: refusals, give-ups, events in its words);
 //! - `/link`: connection changes, gap markers included;
 //! - `/tf`, `/map`, `/regions`, `/plan`, `/arena`: the scene for the 3D panel (`scene`);
 //! - `/qt_model`: the QT world model rebuilt from an ALICE's situations, once a second within a
@@ -27,14 +30,16 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::Path;
 
+use mcap::records::{MessageHeader, Metadata};
+use mcap::write::NoSeek;
 use protocol::{LogLevel, Message};
 use serde_json::{json, Value};
 
 use super::csv::TelemetryRow;
-use super::mcap_file::Writer;
 use super::mcap_msg::{Body, PoseInFrame, Truth};
 use super::mcap_proto;
 use super::{walk, Direction, ExportError, Item};
+use crate::format::{event_name, event_text};
 use crate::link::api::command_text;
 use crate::record::Recording;
 
@@ -98,7 +103,7 @@ fn channels() -> Vec<(&'static str, &'static str, Value)> {
         (
             "/events",
             "station.Event",
-            obj(json!({"code": string(), "value": int()})),
+            obj(json!({"name": string(), "text": string(), "code": string(), "value": int()})),
         ),
         (
             "/log",
@@ -146,8 +151,8 @@ const INTEGER_COLUMNS: &[&str] = &[
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Encoding {
     /// Protocol Buffers: Foxglove's well-known schemas for poses and transforms, the station's
-    /// for telemetry and truth; a file of about 40 % of JSON's bytes, written in about half
-    /// the time.
+    /// for telemetry and truth; a file of about 40 % of JSON's bytes, written in about two
+    /// thirds of the time.
     #[default]
     Protobuf,
     /// JSON text with JSON schemas, for scripts that parse the messages' JSON themselves (an
@@ -186,28 +191,53 @@ pub fn write_robots<W: Write>(
 ) -> Result<Written, ExportError> {
     let err = mcap_error(path);
     let library = format!("station {}", env!("CARGO_PKG_VERSION"));
-    let mut out = Writer::new(w, "", &library).map_err(err)?;
+    let mut out = mcap::WriteOptions::new()
+        .compression(None)
+        .profile("")
+        .library(library)
+        .disable_seeking(true)
+        .create(NoSeek::new(w))
+        .map_err(err)?;
+    // First, while no chunk is open: a metadata record closes the open chunk, and a chunk of
+    // schemas and channels without messages has no message index to find it by.
+    let meta = serde_json::to_value(meta).unwrap_or(Value::Null);
+    let meta: BTreeMap<String, String> = meta
+        .as_object()
+        .map(|m| {
+            m.iter()
+                .map(|(k, v)| (k.clone(), v.as_str().map_or(v.to_string(), str::to_string)))
+                .collect()
+        })
+        .unwrap_or_default();
+    out.write_metadata(&Metadata {
+        name: "recording".into(),
+        metadata: meta,
+    })
+    .map_err(err)?;
     let mut schemas = BTreeMap::new();
     let mut written = Written::default();
-    let mut first = true;
     for (prefix, rec) in robots {
         write_robot(
             &mut out,
             &mut schemas,
             (prefix, rec),
             enc,
-            first.then_some(meta),
             path,
             &mut written,
         )?;
-        first = false;
     }
     out.finish().map_err(err)?;
+    out.into_inner()
+        .flush()
+        .map_err(|e| err(mcap::McapError::Io(e)))?;
     Ok(written)
 }
 
+/// The file being written.
+type Out<W> = mcap::Writer<NoSeek<W>>;
+
 /// How a failure to write the file is reported.
-fn mcap_error(path: &Path) -> impl Fn(std::io::Error) -> ExportError + Copy + '_ {
+fn mcap_error(path: &Path) -> impl Fn(mcap::McapError) -> ExportError + Copy + '_ {
     move |e| ExportError::Mcap {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -224,13 +254,12 @@ pub fn topic_name(prefix: &str, topic: &str) -> String {
     }
 }
 
-/// One robot's channels and messages into `out` (and the file's metadata, when given).
+/// One robot's channels and messages into `out`.
 fn write_robot<W: Write>(
-    out: &mut Writer<W>,
+    out: &mut Out<W>,
     schemas: &mut BTreeMap<&'static str, (u16, bool)>,
     (prefix, rec): (&str, &Recording),
     enc: Encoding,
-    file_meta: Option<&crate::record::Meta>,
     path: &Path,
     written: &mut Written,
 ) -> Result<(), ExportError> {
@@ -272,18 +301,6 @@ fn write_robot<W: Write>(
             .map_err(err)?;
         topics.push((topic, id, 0u32, protobuf));
     }
-    if let Some(file_meta) = file_meta {
-        let meta = serde_json::to_value(file_meta).unwrap_or(Value::Null);
-        let meta: BTreeMap<String, String> = meta
-            .as_object()
-            .map(|m| {
-                m.iter()
-                    .map(|(k, v)| (k.clone(), v.as_str().map_or(v.to_string(), str::to_string)))
-                    .collect()
-            })
-            .unwrap_or_default();
-        out.metadata("recording", &meta).map_err(err)?;
-    }
     written.messages += write_messages(out, &mut topics, rec, path, |note| {
         let robot = match prefix {
             "" => String::new(),
@@ -296,7 +313,7 @@ fn write_robot<W: Write>(
 
 /// Every message of `rec` on its channel (`topics`: topic, channel id, messages so far).
 fn write_messages<W: Write>(
-    out: &mut Writer<W>,
+    out: &mut Out<W>,
     topics: &mut [(&'static str, u16, u32, bool)],
     rec: &Recording,
     path: &Path,
@@ -308,8 +325,10 @@ fn write_messages<W: Write>(
     let mut failure = None;
     let mut scene = super::scene::Scene::new(rec);
     let mut qt = super::qt::QtExport::new(&rec.records);
-    // Reused for every item: its messages.
+    // Reused for every item: its messages, and a message's bytes.
     let mut messages = Vec::new();
+    let mut data = Vec::new();
+    let mut encoder = mcap_proto::Encoder::default();
     walk(rec, |item| {
         if failure.is_some() {
             return;
@@ -327,9 +346,15 @@ fn write_messages<W: Write>(
             };
             body.stamp(ns);
             *n += 1;
-            let protobuf = *protobuf;
-            if let Err(e) = out.message(*channel_id, *n, ns, ns, |data| body.write(protobuf, data))
-            {
+            data.clear();
+            body.write(protobuf.then_some(&mut encoder), &mut data);
+            let header = MessageHeader {
+                channel_id: *channel_id,
+                sequence: *n,
+                log_time: ns,
+                publish_time: ns,
+            };
+            if let Err(e) = out.write_to_known_channel(&header, &data) {
                 failure = Some(err(e));
                 return;
             }
@@ -370,7 +395,24 @@ fn item_messages(item: &Item<'_>, out: &mut Vec<(&'static str, Body)>) -> u64 {
             frame_messages(*t_us, *dir, *seq, msg, out);
             *t_us
         }
+        Item::StationLog { t_us, line } => {
+            out.push(("/log", log(line.level, &line.text, line.source.name())));
+            *t_us
+        }
     }
+}
+
+/// A `/log` line as `foxglove.Log`; `name` says whose (`robot`, `station/command`, ...).
+fn log(level: LogLevel, text: &str, name: &str) -> Body {
+    // foxglove.Log levels: 1 debug, 2 info, 3 warning, 4 error, 5 fatal.
+    let level = match level {
+        LogLevel::Debug => 1,
+        LogLevel::Info => 2,
+        LogLevel::Warn => 3,
+        LogLevel::Error => 4,
+    };
+    Body::Json(json!({"timestamp": null, "level": level, "message": text,
+                      "name": name, "file": "", "line": 0}))
 }
 
 fn dir_name(d: Direction) -> &'static str {
@@ -414,22 +456,10 @@ fn frame_messages(
         }
         (Direction::FromRobot, Message::Event(e)) => out.push(json(
             "/events",
-            json!({"code": format!("{:?}", e.code), "value": e.value}),
+            json!({"name": event_name(e.code), "text": event_text(e).1,
+                   "code": format!("{:?}", e.code), "value": e.value}),
         )),
-        (Direction::FromRobot, Message::Log(l)) => {
-            // foxglove.Log levels: 1 debug, 2 info, 3 warning, 4 error, 5 fatal.
-            let level = match l.level {
-                LogLevel::Debug => 1,
-                LogLevel::Info => 2,
-                LogLevel::Warn => 3,
-                LogLevel::Error => 4,
-            };
-            out.push(json(
-                "/log",
-                json!({"timestamp": null, "level": level, "message": l.text,
-                       "name": "robot", "file": "", "line": 0}),
-            ));
-        }
+        (Direction::FromRobot, Message::Log(l)) => out.push(("/log", log(l.level, l.text, "robot"))),
         (Direction::FromRobot, Message::Ack(a)) => out.push(json(
             "/replies",
             json!({"cmd_seq": a.cmd_seq, "outcome": "ack", "detail": a.info}),

@@ -54,19 +54,19 @@ impl Body {
 }
 
 impl Body {
-    /// Appends the body in its channel's encoding: `protobuf` for the typed bodies on a binary
-    /// channel (`mcap_proto`), else JSON. The one place a topic's message is written.
-    pub fn write(&self, protobuf: bool, out: &mut Vec<u8>) {
-        if !protobuf {
+    /// Appends the body in its channel's encoding: `protobuf` (by `encoder`, given on a binary
+    /// channel) for the typed bodies, else JSON. The one place a topic's message is written.
+    pub fn write(&self, encoder: Option<&mut mcap_proto::Encoder>, out: &mut Vec<u8>) {
+        let Some(enc) = encoder else {
             return self.write_json(out);
-        }
+        };
         match self {
-            Body::Telemetry { row, caps } => mcap_proto::telemetry(out, row, |field| {
+            Body::Telemetry { row, caps } => enc.telemetry(out, row, |field| {
                 caps.is_none_or(|c| super::scene::robot_has(field, c))
             }),
-            Body::Pose(p) => mcap_proto::pose_in_frame(out, p),
-            Body::Transform(f) => mcap_proto::frame_transform(out, f),
-            Body::Truth(t) => mcap_proto::truth(out, t),
+            Body::Pose(p) => enc.pose_in_frame(out, p),
+            Body::Transform(f) => enc.frame_transform(out, f),
+            Body::Truth(t) => enc.truth(out, t),
             // No binary channel carries these (`mcap_proto::descriptor_set` has no schema for
             // their topics), so this is never reached; JSON keeps the bytes readable if it is.
             Body::Json(_) | Body::JsonText(_) => self.write_json(out),

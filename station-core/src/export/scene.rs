@@ -10,9 +10,15 @@
 //!   download) once it is complete and its CRC-32C checks; one INT8 field `occupancy`
 //!   (0 free, 100 obstacle, -1 unknown, as ROS's OccupancyGrid);
 //! - `/regions`, `/plan` `foxglove.SceneUpdate`: the squares of a Regions object (placed on
-//!   the last map) as line loops, a Plan's waypoints as a line strip;
-//! - `/arena` `foxglove.SceneUpdate`: the walls of the recording's arena (`Meta::arena`),
-//!   once, at the start, when the file or built-in name can be loaded.
+//!   the last map) as line loops, a Plan's waypoints as a line strip (entity `plan`); on
+//!   `/plan` too, the point of each go-to the robot accepted (`goal`) and the target of each
+//!   plan request it accepted (`plan_target`), as labelled markers;
+//! - `/arena` `foxglove.SceneUpdate`: the recording's arena (`Meta::arena`) at the start, when
+//!   its file or built-in name can be loaded: its walls (`arena`), target areas as circles
+//!   (`targets`), its goal point (`arena_goal`); and the beacon (`beacon`) where the arena puts
+//!   it, moved again whenever the robot reports `beacon_x_m` or `beacon_y_m` (an Ack of a
+//!   parameter read or write), so a recording without an arena shows it too once both are
+//!   known.
 //!
 //! Invariants: an object is published only whole and verified (a torn or corrupted transfer
 //! publishes nothing); memory is bounded by `MAX_OBJECT` per object in flight and
@@ -21,7 +27,8 @@
 use std::collections::BTreeMap;
 
 use protocol::object::{MapView, PlanView, RegionsView};
-use protocol::{caps, Message, ObjectKind};
+use protocol::{caps, AckInfo, Command, Message, ObjectKind};
+use robot_firmware::params;
 use serde_json::{json, Value};
 
 use super::mcap_msg::{Body, FrameTransform};
@@ -34,6 +41,52 @@ use crate::record::Recording;
 const MAX_OBJECT: u32 = robot_firmware::transfer::OBJECT_CAPACITY as u32;
 /// Objects reassembled at once (the link stages one per direction).
 const MAX_IN_FLIGHT: usize = 4;
+/// Go-to and plan commands waiting for their answer (the link has a few in flight at most;
+/// one never answered is dropped when this many newer ones wait).
+const MAX_ASKED: usize = 8;
+
+/// A point the scene marks with a sphere and its name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mark {
+    /// Where the robot was sent (`GoTo`), on `/plan`.
+    Goal,
+    /// Where the robot was asked to plan to (`Plan`), on `/plan`.
+    PlanTarget,
+    /// The arena file's goal point, on `/arena`.
+    ArenaGoal,
+    /// The beacon, on `/arena`.
+    Beacon,
+}
+
+impl Mark {
+    /// Its entity id and label, and colour.
+    fn look(self) -> (&'static str, &'static str, Value) {
+        match self {
+            Mark::Goal => ("goal", "goal", colour(1.0, 0.2, 0.2)),
+            Mark::PlanTarget => ("plan_target", "plan target", colour(1.0, 0.5, 0.5)),
+            Mark::ArenaGoal => ("arena_goal", "arena goal", colour(0.2, 0.8, 0.2)),
+            Mark::Beacon => ("beacon", "beacon", colour(1.0, 0.85, 0.0)),
+        }
+    }
+
+    /// The marker at `at` (metres, map frame): a sphere with its label above it.
+    fn entity(self, at: (f64, f64)) -> Value {
+        let (id, label, c) = self.look();
+        let sphere = json!({
+            "pose": origin_pose(at.0, at.1),
+            "size": {"x": MARK_M, "y": MARK_M, "z": MARK_M},
+            "color": c.clone(),
+        });
+        let text = json!({
+            "pose": pose_at(at.0, at.1, MARK_M * 1.5), "billboard": true, "font_size": 14.0,
+            "scale_invariant": true, "color": c, "text": label,
+        });
+        entity(id, vec![], vec![sphere], vec![text])
+    }
+}
+
+/// A marker's sphere, metres across.
+const MARK_M: f64 = 0.08;
 
 /// An object being put together from recorded chunks.
 struct Partial {
@@ -54,7 +107,13 @@ struct Placement {
 /// The state `mcap::write` carries along the walk.
 #[derive(Default)]
 pub struct Scene {
+    /// The arena's `/arena` update, until it is published.
     arena: Option<Value>,
+    /// The beacon's position as far as known (x, y), and where it was last published.
+    beacon: [Option<f64>; 2],
+    beacon_shown: Option<(f64, f64)>,
+    /// Go-to and plan commands waiting for their answer: sequence number, marker, point.
+    asked: Vec<(u16, Mark, (f64, f64))>,
     caps: Option<u32>,
     partial: BTreeMap<u32, Partial>,
     /// The object id each direction's latest `TransferBegin` tagged: `TransferData` names
@@ -68,11 +127,11 @@ impl Scene {
     /// be: the export goes on without `/arena`).
     pub fn new(rec: &Recording) -> Scene {
         let name = rec.meta.arena.trim();
-        let arena = if name.is_empty() {
+        let loaded = if name.is_empty() {
             None
         } else {
             match emulator::builtin::load(name, &emulator::arena::LoadOptions::default()) {
-                Ok(a) => Some(walls(&a)),
+                Ok(a) => Some(a),
                 Err(e) => {
                     eprintln!(
                         "station: arena {}: {}; /arena left out",
@@ -83,10 +142,23 @@ impl Scene {
                 }
             }
         };
-        Scene {
-            arena,
-            ..Scene::default()
+        let mut scene = Scene::default();
+        if let Some(a) = loaded {
+            let mut entities = vec![walls(&a)];
+            if !a.targets.is_empty() {
+                entities.push(targets(&a.targets));
+            }
+            if let Some(g) = a.goal {
+                entities.push(Mark::ArenaGoal.entity((g.x, g.y)));
+            }
+            if let Some(b) = a.beacon() {
+                scene.beacon = [Some(b.position.x), Some(b.position.y)];
+                scene.beacon_shown = Some((b.position.x, b.position.y));
+                entities.push(Mark::Beacon.entity((b.position.x, b.position.y)));
+            }
+            scene.arena = Some(scene_update(entities));
         }
+        scene
     }
 
     /// Adds this item's scene messages to `out` and marks sensors the robot lacks as null.
@@ -94,7 +166,7 @@ impl Scene {
         if let Some(a) = self.arena.take() {
             out.push(("/arena", Body::Json(a)));
         }
-        let Item::Frame { dir, msg, .. } = item else {
+        let Item::Frame { dir, msg, seq, .. } = item else {
             return;
         };
         match (dir, msg) {
@@ -118,6 +190,33 @@ impl Scene {
                     Body::Transform(FrameTransform::from_map("truth", &t.pose)),
                 ));
             }
+            (Direction::ToRobot, Message::Command(c)) => {
+                let asked = match *c {
+                    Command::GoTo(p) => Some((Mark::Goal, p)),
+                    Command::Plan { to: Some(p), .. } => Some((Mark::PlanTarget, p)),
+                    _ => None,
+                };
+                if let Some((mark, p)) = asked {
+                    // A resend has the same sequence number: the newest is kept.
+                    self.asked.retain(|(s, ..)| s != seq);
+                    if self.asked.len() >= MAX_ASKED {
+                        self.asked.remove(0);
+                    }
+                    self.asked.push((*seq, mark, (mm(p.x_mm), mm(p.y_mm))));
+                }
+            }
+            (Direction::FromRobot, Message::Ack(a)) => {
+                if let Some(i) = self.asked.iter().position(|(s, ..)| *s == a.cmd_seq) {
+                    let (_, mark, at) = self.asked.remove(i);
+                    out.push(("/plan", Body::Json(scene_update(vec![mark.entity(at)]))));
+                }
+                if let AckInfo::Param { id, value } = a.info {
+                    self.on_param(id.0, f64::from(value), out);
+                }
+            }
+            (Direction::FromRobot, Message::Nack(n)) => {
+                self.asked.retain(|(s, ..)| *s != n.cmd_seq);
+            }
             (d, Message::TransferBegin(b)) => {
                 self.tagged[usize::from(*d == Direction::ToRobot)] = Some((b.tag, b.id));
                 self.begin(b.id, b.object, b.len, b.crc);
@@ -132,6 +231,25 @@ impl Scene {
                 }
             }
             _ => {}
+        }
+    }
+
+    /// A parameter value the robot reported: the beacon's, when it moved it.
+    fn on_param(&mut self, id: u16, value: f64, out: &mut Vec<(&'static str, Body)>) {
+        let axis = match id {
+            params::id::BEACON_X_M => 0,
+            params::id::BEACON_Y_M => 1,
+            _ => return,
+        };
+        self.beacon[axis] = Some(value);
+        if let [Some(x), Some(y)] = self.beacon {
+            if self.beacon_shown != Some((x, y)) {
+                self.beacon_shown = Some((x, y));
+                out.push((
+                    "/arena",
+                    Body::Json(scene_update(vec![Mark::Beacon.entity((x, y))])),
+                ));
+            }
         }
     }
 
@@ -239,7 +357,11 @@ fn quaternion(heading: f64) -> Value {
 }
 
 fn origin_pose(x: f64, y: f64) -> Value {
-    json!({"position": {"x": x, "y": y, "z": 0.0}, "orientation": quaternion(0.0)})
+    pose_at(x, y, 0.0)
+}
+
+fn pose_at(x: f64, y: f64, z: f64) -> Value {
+    json!({"position": {"x": x, "y": y, "z": z}, "orientation": quaternion(0.0)})
 }
 
 /// foxglove.NumericType INT8.
@@ -276,6 +398,7 @@ fn colour(r: f64, g: f64, b: f64) -> Value {
 
 /// foxglove.LinePrimitive types.
 const LINE_STRIP: u32 = 0;
+const LINE_LOOP: u32 = 1;
 const LINE_LIST: u32 = 2;
 
 fn line(kind: u32, points: Vec<Value>, thickness: f64, c: Value) -> Value {
@@ -285,15 +408,18 @@ fn line(kind: u32, points: Vec<Value>, thickness: f64, c: Value) -> Value {
     })
 }
 
-fn entity(id: &str, lines: Vec<Value>) -> Value {
+/// A `foxglove.SceneUpdate` adding (or replacing, by id) `entities`.
+fn scene_update(entities: Vec<Value>) -> Value {
+    json!({"deletions": [], "entities": entities})
+}
+
+/// A `foxglove.SceneEntity` in frame `map`, for good (no lifetime).
+fn entity(id: &str, lines: Vec<Value>, spheres: Vec<Value>, texts: Vec<Value>) -> Value {
     json!({
-        "deletions": [],
-        "entities": [{
-            "timestamp": null, "frame_id": "map", "id": id,
-            "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [],
-            "arrows": [], "cubes": [], "spheres": [], "cylinders": [], "lines": lines,
-            "triangles": [], "texts": [], "models": [],
-        }],
+        "timestamp": null, "frame_id": "map", "id": id,
+        "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [],
+        "arrows": [], "cubes": [], "spheres": spheres, "cylinders": [], "lines": lines,
+        "triangles": [], "texts": texts, "models": [],
     })
 }
 
@@ -319,10 +445,12 @@ fn regions(r: &RegionsView<'_>, at: Placement) -> Value {
             points.push(point(b.0, b.1));
         }
     }
-    entity(
+    scene_update(vec![entity(
         "regions",
         vec![line(LINE_LIST, points, 0.01, colour(0.2, 0.6, 1.0))],
-    )
+        vec![],
+        vec![],
+    )])
 }
 
 fn plan(p: &PlanView<'_>) -> Value {
@@ -330,10 +458,12 @@ fn plan(p: &PlanView<'_>) -> Value {
         .waypoints()
         .map(|w| point(mm(w.x_mm), mm(w.y_mm)))
         .collect();
-    entity(
+    scene_update(vec![entity(
         "plan",
         vec![line(LINE_STRIP, points, 0.03, colour(1.0, 0.5, 0.0))],
-    )
+        vec![],
+        vec![],
+    )])
 }
 
 fn walls(a: &emulator::arena::Arena) -> Value {
@@ -345,7 +475,30 @@ fn walls(a: &emulator::arena::Arena) -> Value {
     entity(
         "arena",
         vec![line(LINE_LIST, points, 0.02, colour(0.6, 0.6, 0.6))],
+        vec![],
+        vec![],
     )
+}
+
+/// The arena's target areas, each a circle on the floor.
+fn targets(areas: &[emulator::arena::Target]) -> Value {
+    const SIDES: usize = 32;
+    let lines = areas
+        .iter()
+        .map(|t| {
+            let points = (0..SIDES)
+                .map(|i| {
+                    let a = std::f64::consts::TAU * i as f64 / SIDES as f64;
+                    point(
+                        t.centre.x + t.radius_m * a.cos(),
+                        t.centre.y + t.radius_m * a.sin(),
+                    )
+                })
+                .collect();
+            line(LINE_LOOP, points, 0.02, colour(0.2, 0.8, 0.2))
+        })
+        .collect();
+    entity("targets", lines, vec![], vec![])
 }
 
 /// Standard base64 with padding (RFC 4648 §4): how JSON-encoded MCAP carries `bytes` fields.
@@ -382,7 +535,12 @@ pub fn channels() -> Vec<(&'static str, &'static str, Value)> {
     let line = obj(json!({
         "type": int(), "pose": pose.clone(), "thickness": num(),
         "scale_invariant": {"type": "boolean"}, "points": array(vec3.clone()),
-        "color": colour.clone(), "colors": array(colour), "indices": array(int()),
+        "color": colour.clone(), "colors": array(colour.clone()), "indices": array(int()),
+    }));
+    let sphere = obj(json!({"pose": pose.clone(), "size": vec3.clone(), "color": colour.clone()}));
+    let text = obj(json!({
+        "pose": pose.clone(), "billboard": {"type": "boolean"}, "font_size": num(),
+        "scale_invariant": {"type": "boolean"}, "color": colour, "text": string(),
     }));
     let scene = obj(json!({
         "deletions": array(obj(json!({"timestamp": time.clone(), "type": int(), "id": string()}))),
@@ -390,9 +548,9 @@ pub fn channels() -> Vec<(&'static str, &'static str, Value)> {
             "timestamp": time.clone(), "frame_id": string(), "id": string(),
             "lifetime": time.clone(), "frame_locked": {"type": "boolean"},
             "metadata": array(obj(json!({"key": string(), "value": string()}))),
-            "arrows": array(json!({})), "cubes": array(json!({})), "spheres": array(json!({})),
+            "arrows": array(json!({})), "cubes": array(json!({})), "spheres": array(sphere),
             "cylinders": array(json!({})), "lines": array(line), "triangles": array(json!({})),
-            "texts": array(json!({})), "models": array(json!({})),
+            "texts": array(text), "models": array(json!({})),
         }))),
     }));
     vec![

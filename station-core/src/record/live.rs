@@ -1,5 +1,5 @@
-//! Recording a live link: the link task's tap (every byte both ways) and its connection
-//! changes, turned into records on one clock.
+//! Recording a live link: the link task's tap (every byte both ways), its connection changes
+//! and the lines the station logs about it, turned into records on one clock.
 //!
 //! Layer: glue between the link's outputs and `RecordWriter`, used by `station record` and by
 //! the TUI's record key. The tap stamps bytes with the link task's clock (µs since the task
@@ -18,7 +18,7 @@ use serde::Serialize;
 use tokio::time::Instant;
 
 use super::writer::{RecordWriter, Written};
-use super::{LinkState, Meta, RecordError, RecordKind};
+use super::{LinkState, Meta, RecordError, RecordKind, StationLine};
 use crate::link::{Connection, PeerInfo, TapDirection, TapRecord};
 
 /// Byte and event counts of a recording in progress.
@@ -193,6 +193,17 @@ impl LiveRecorder {
         data.push(state.code());
         data.extend_from_slice(text.as_bytes());
         self.writer.append_link(t, RecordKind::Link, link, &data)
+    }
+
+    /// Records a line the station logged about link `link` (a refusal, a give-up, an event
+    /// in its words), now.
+    pub fn on_station_log(&mut self, link: u8, line: &StationLine) -> Result<(), RecordError> {
+        if usize::from(link) >= self.links.len() {
+            return Ok(());
+        }
+        let t = self.elapsed_us();
+        self.writer
+            .append_link(t, RecordKind::StationLog, link, &line.encode())
     }
 
     /// Flushes and syncs when due.
@@ -406,6 +417,12 @@ impl TuiRecorder {
         };
         self.links.get_mut(link)?.connection = c.clone();
         let r = self.active.as_mut()?.on_link_connection(link_id(link), c);
+        self.check(r)
+    }
+
+    /// Records a line the station logged about robot `link`, if recording.
+    pub fn on_station_log(&mut self, link: usize, line: &StationLine) -> Option<RecordingNote> {
+        let r = self.active.as_mut()?.on_station_log(link_id(link), line);
         self.check(r)
     }
 

@@ -13,7 +13,7 @@ use protocol::{
 };
 
 use super::live::link_record;
-use super::{encode_header, encode_record, Meta, RecordKind};
+use super::{encode_header, encode_record, Meta, RecordKind, StationLine};
 use crate::link::{Connection, PeerInfo};
 
 /// A recording being built.
@@ -73,6 +73,11 @@ impl Synth {
         let mut data = vec![state.code()];
         data.extend_from_slice(text.as_bytes());
         self.raw(t_us, RecordKind::Link, &data);
+    }
+
+    /// A line of the station's log.
+    pub fn station_log(&mut self, t_us: u64, line: &StationLine) {
+        self.raw(t_us, RecordKind::StationLog, &line.encode());
     }
 
     /// The opening of a session with `peer`: handshaking, the station's wake-up byte and

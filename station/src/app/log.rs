@@ -65,6 +65,17 @@ impl Level {
     }
 }
 
+impl From<Level> for protocol::LogLevel {
+    fn from(l: Level) -> Self {
+        match l {
+            Level::Debug => protocol::LogLevel::Debug,
+            Level::Info => protocol::LogLevel::Info,
+            Level::Warn => protocol::LogLevel::Warn,
+            Level::Error => protocol::LogLevel::Error,
+        }
+    }
+}
+
 impl From<protocol::LogLevel> for Level {
     fn from(l: protocol::LogLevel) -> Self {
         match l {
@@ -89,6 +100,21 @@ pub enum Source {
     Link,
     /// The arena file's importer (warnings about the file).
     Arena,
+}
+
+impl Source {
+    /// What a recording calls a line of this source; `None` for the robot's own lines, which
+    /// the recording holds as the robot's frames.
+    pub fn recorded(self) -> Option<crate::record::LogSource> {
+        use crate::record::LogSource;
+        match self {
+            Source::Robot => None,
+            Source::Event => Some(LogSource::Event),
+            Source::Command => Some(LogSource::Command),
+            Source::Link => Some(LogSource::Link),
+            Source::Arena => Some(LogSource::Arena),
+        }
+    }
 }
 
 /// Which repeats an entry joins.

@@ -45,8 +45,8 @@ pub struct ExportArgs {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum McapEncoding {
     /// Protocol Buffers: Foxglove's well-known schemas for poses and transforms, the station's
-    /// for telemetry and truth; a file of about 40 % of JSON's bytes, written in about half
-    /// the time.
+    /// for telemetry and truth; a file of about 40 % of JSON's bytes, written in about two
+    /// thirds of the time.
     #[default]
     Protobuf,
     /// JSON text with JSON schemas, for scripts that parse the messages' JSON themselves (an

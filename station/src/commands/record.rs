@@ -3,7 +3,9 @@
 //! Layer: the binary's edge (anyhow). Checks everything it can before it creates a file (the
 //! output name, the port), then runs the link with its tap into a `LiveRecorder` until the time
 //! is up or Ctrl-C, and finishes the file cleanly either way. The link reconnects by itself
-//! while it records; every loss and return of the session is a link record (a gap marker).
+//! while it records; every loss and return of the session is a link record (a gap marker), and
+//! what the station says of the robot's events and its commands' outcomes is a station log
+//! record.
 //! Exit codes: 0 recorded, 1 no file could be made or written, or no robot ever answered (the
 //! file is kept: it shows what the port said), 2 usage.
 
@@ -13,7 +15,7 @@ use std::time::Duration;
 
 use anyhow::{bail, Context as _};
 use clap::Args;
-use protocol::Command;
+use protocol::{Command, LogLevel};
 use serde_json::json;
 use tokio::sync::mpsc;
 use tokio::time::Instant;
@@ -23,9 +25,10 @@ use crate::commands::args::{parse_baud, parse_seconds};
 use crate::link::robot_ids::duplicates;
 use crate::link::serial::{open_exclusive, SerialConnector, DEFAULT_BAUD};
 use crate::link::{spawn_link, Connection, LinkEvent, LinkOptions, TapRecord};
+use station_core::link::api::{command_text, refusal_text, CommandOutcome};
 use station_core::record::live::{LiveCounts, LiveRecorder};
 use station_core::record::writer::Written;
-use station_core::record::{partial_path, Meta, MAX_LINKS};
+use station_core::record::{partial_path, LogSource, Meta, StationLine, MAX_LINKS};
 
 /// Arguments of `station record`.
 #[derive(Debug, Args, Clone)]
@@ -213,7 +216,10 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
                     }
                     rec.on_link_connection(id, &c)
                 }
-                FromLink::Event(..) => Ok(()),
+                FromLink::Event(id, e) => match station_line(&e) {
+                    Some(line) => rec.on_station_log(id, &line),
+                    None => Ok(()),
+                },
             },
             _ = flush.tick() => rec.tick(Instant::now()),
             () = until => break "time limit",
@@ -268,6 +274,40 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// What the station says of a link event, for the recording's log as the TUI's log says it:
+/// a robot event in the station's words (`format::event_text`), a command's outcome. The rest
+/// (frames, connection changes) the recording holds already.
+fn station_line(e: &LinkEvent) -> Option<StationLine> {
+    let (level, source, text) = match e {
+        LinkEvent::Robot(e) => {
+            let (level, text) = station_core::format::event_text(e);
+            (level, LogSource::Event, text)
+        }
+        LinkEvent::CommandDone {
+            command, outcome, ..
+        } => {
+            let what = command_text(command);
+            let (level, text) = match outcome {
+                CommandOutcome::Acked { rtt_ms, .. } => {
+                    (LogLevel::Info, format!("ok: {what} ({rtt_ms} ms)"))
+                }
+                CommandOutcome::Nacked { reason, .. } => (
+                    LogLevel::Error,
+                    format!("refused: {what}: {}", refusal_text(command, *reason)),
+                ),
+                CommandOutcome::Failed(why) => (LogLevel::Error, format!("failed: {what}: {why}")),
+            };
+            (level, LogSource::Command, text)
+        }
+        _ => return None,
+    };
+    Some(StationLine {
+        level,
+        source,
+        text,
+    })
 }
 
 /// Warns (once per id) of two links whose robots state the same id.
