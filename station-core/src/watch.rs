@@ -89,6 +89,9 @@ struct EventLine {
     time_s: f64,
     robot_time_s: Option<f64>,
     code: String,
+    /// The event's name and sentence, as the export's `/events` and the station's log say it.
+    name: &'static str,
+    text: String,
     value: i32,
     /// `ModeChanged`: the new mode's name.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -125,6 +128,8 @@ impl Lines {
                     time_s,
                     robot_time_s: self.robot_time_s,
                     code: format!("{:?}", e.code),
+                    name: crate::format::event_name(e.code),
+                    text: crate::format::event_text(e).1,
                     value: e.value,
                     mode: (e.code == EventCode::ModeChanged)
                         .then(|| crate::format::mode_name_i32(e.value)),
@@ -371,7 +376,7 @@ mod tests {
         let before = lines.line(500_000, &ev).unwrap();
         assert_eq!(
             text(&before),
-            r#"{"kind":"event","time_s":0.5,"robot_time_s":null,"code":"GoalReached","value":0}"#
+            r#"{"kind":"event","time_s":0.5,"robot_time_s":null,"code":"GoalReached","name":"goal reached","text":"goal reached: the robot arrived","value":0}"#
         );
         let t = Telemetry {
             time_ms: 12_345,
