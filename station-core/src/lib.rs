@@ -38,6 +38,7 @@ pub mod qt_state;
 pub mod record;
 pub mod replay;
 pub mod retrace;
+pub mod share;
 pub mod task_end;
 pub mod transfer;
 pub mod watch;

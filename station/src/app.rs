@@ -991,6 +991,11 @@ impl App {
         self.note(level, Source::Link, text);
     }
 
+    /// Logs a line of the station's own about the link (what the TUI's start-up set up).
+    pub fn note_link(&mut self, level: Level, text: String) {
+        self.note(level, Source::Link, text);
+    }
+
     fn note(&mut self, level: Level, source: Source, text: String) {
         self.note_grouped(level, source, text, None);
     }

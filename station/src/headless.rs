@@ -192,7 +192,9 @@ async fn interactive(
     app.map.plan = plan;
     // The squares are busy on a small map panel: `r` shows them.
     app.map.hidden.push(crate::ui::map_layers::REGIONS);
+    let (link, shared) = crate::fleet::start::share_link(link, &path, &mut app);
     crate::tui::run(app, link, recorder).await?;
+    drop(shared);
     drop(builtin);
     Ok(ExitCode::SUCCESS)
 }

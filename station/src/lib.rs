@@ -30,6 +30,6 @@ pub mod ui;
 
 pub use station_core::{
     arena, awaited_replies, builtin, calibrate, export, format, input_file, json_text, link,
-    output_file, pace, param_file, plan, qt_state, record, retrace, task_end, terminal_text,
+    output_file, pace, param_file, plan, qt_state, record, retrace, share, task_end, terminal_text,
     transfer, watch,
 };

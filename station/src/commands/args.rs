@@ -33,6 +33,7 @@ impl StatsPorts {
                 port: p.clone(),
                 baud: self.baud,
                 key_file: self.key_file.clone(),
+                via: None,
             })
             .collect()
     }
@@ -51,6 +52,11 @@ pub struct RequiredPort {
     /// Every frame is then signed, and only frames signed with it are accepted.
     #[arg(long, value_name = "PATH")]
     pub key_file: Option<PathBuf>,
+    /// Reach the robot through the shared link of the station holding its port, at this
+    /// socket. Without it, a station holding --port is found and used by itself (its socket
+    /// is in $XDG_RUNTIME_DIR/station); with neither, the port is opened directly.
+    #[arg(long, value_name = "SOCKET")]
+    pub via: Option<PathBuf>,
 }
 
 /// Refuses a port named twice among several `--port`s (two link tasks would fight over one

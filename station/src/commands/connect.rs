@@ -7,7 +7,11 @@ use tokio::time::Instant;
 
 use super::args::RequiredPort;
 use crate::link::serial::SerialConnector;
-use crate::link::{spawn_link, Connection, LinkEvent, LinkOptions, PeerInfo, RunningLink};
+use crate::link::{
+    spawn_link, Connection, Connector, LinkEvent, LinkOptions, OpenError, PeerInfo, RunningLink,
+    Transport,
+};
+use crate::share::ShareConnector;
 
 /// Starts a link and waits for the handshake; fails fast on a port that cannot be opened or a
 /// robot that refuses us.
@@ -15,12 +19,12 @@ pub async fn connect(
     port: &RequiredPort,
     timeout_s: f64,
 ) -> anyhow::Result<(RunningLink, PeerInfo)> {
+    let (connector, key) = port_connector(port)?;
     let mut link = spawn_link(
-        SerialConnector::new(&port.port, port.baud),
+        connector,
         LinkOptions {
             station: format!("station-cli {}", env!("CARGO_PKG_VERSION")),
-            key: crate::commands::args::load_key(port.key_file.as_deref())
-                .map_err(anyhow::Error::msg)?,
+            key,
             ..LinkOptions::default()
         },
     );
@@ -42,4 +46,66 @@ pub async fn connect(
             _ => {}
         }
     }
+}
+
+/// The robot's port as a command opens it: the shared link of a station that holds it
+/// (`--via`, or found by the port's name), else the serial port itself.
+pub enum PortConnector {
+    Serial(SerialConnector),
+    Shared(ShareConnector),
+}
+
+impl Connector for PortConnector {
+    fn name(&self) -> String {
+        match self {
+            PortConnector::Serial(c) => c.name(),
+            PortConnector::Shared(c) => c.name(),
+        }
+    }
+
+    fn open(&mut self) -> Result<Box<dyn Transport>, OpenError> {
+        match self {
+            PortConnector::Serial(c) => c.open(),
+            PortConnector::Shared(c) => c.open(),
+        }
+    }
+
+    fn present(&self) -> bool {
+        match self {
+            PortConnector::Serial(c) => c.present(),
+            PortConnector::Shared(c) => c.present(),
+        }
+    }
+
+    fn awaiting_reply(&self, awaiting: bool) {
+        if let PortConnector::Serial(c) = self {
+            c.awaiting_reply(awaiting);
+        }
+    }
+}
+
+/// Which way a command reaches the robot, and the link key it uses: none over a shared link,
+/// whose local leg is not signed (the holder verifies the robot's signatures); a note on
+/// stderr says a shared link is used.
+pub fn port_connector(
+    port: &RequiredPort,
+) -> anyhow::Result<(PortConnector, Option<protocol::LinkKey>)> {
+    let shared = match &port.via {
+        Some(via) => Some(via.clone()),
+        None => crate::share::serving(&port.port),
+    };
+    if let Some(path) = shared {
+        eprintln!(
+            "station: {} is held by another station; going through its shared link {}",
+            crate::terminal_text::printable(&port.port.display().to_string()),
+            crate::terminal_text::printable(&path.display().to_string())
+        );
+        return Ok((PortConnector::Shared(ShareConnector::new(path)), None));
+    }
+    let key =
+        crate::commands::args::load_key(port.key_file.as_deref()).map_err(anyhow::Error::msg)?;
+    Ok((
+        PortConnector::Serial(SerialConnector::new(&port.port, port.baud)),
+        key,
+    ))
 }

@@ -114,10 +114,11 @@ pub async fn interactive(
     let mut taps = Vec::with_capacity(targets.len());
     let mut links = Vec::with_capacity(targets.len());
     let mut members = Vec::with_capacity(targets.len());
+    let mut shares = Vec::with_capacity(targets.len());
     for (path, label) in &targets {
         let (tap, tapped) = tokio::sync::mpsc::unbounded_channel();
         taps.push((tapped, tokio::time::Instant::now()));
-        links.push(spawn_link(
+        let link = spawn_link(
             SerialConnector::new(path, baud).paced(true),
             LinkOptions {
                 tap: Some(tap),
@@ -125,13 +126,16 @@ pub async fn interactive(
                 key: key.map(|k| protocol::LinkKey::new(&k)),
                 ..LinkOptions::default()
             },
-        ));
+        );
         let mut app = App::new(AppOptions {
             port_label: label.clone(),
             arena: overlay.clone(),
         });
         app.map.plan = plan.clone();
         app.map.hidden.push(crate::ui::map_layers::REGIONS);
+        let (link, guard) = share_link(link, path, &mut app);
+        links.push(link);
+        shares.push(guard);
         members.push(Member {
             app,
             port: path.display().to_string(),
@@ -139,6 +143,39 @@ pub async fn interactive(
     }
     let recorder = crate::record::live::TuiRecorder::new_links(taps, meta);
     crate::tui::run_fleet(Fleet::new(members), links, recorder).await?;
+    drop(shares);
     drop(builtin);
     Ok(ExitCode::SUCCESS)
+}
+
+/// Shares a robot's link with the user's other station programs (`station_core::share`), and
+/// says so in the robot's log: where the socket is, or why the link is not shared. The guard
+/// keeps the socket until the TUI ends.
+pub fn share_link(
+    link: crate::link::RunningLink,
+    port: &std::path::Path,
+    app: &mut App,
+) -> (crate::link::RunningLink, Option<crate::share::Shared>) {
+    use crate::app::log::Level;
+    let path = crate::share::socket_path(port);
+    let shown =
+        |p: &std::path::Path| crate::terminal_text::printable(&p.display().to_string()).to_string();
+    match crate::share::share_link(link, &path) {
+        Ok((link, shared)) => {
+            app.note_link(
+                Level::Info,
+                format!(
+                    "shared: `station ... --port {}` from another terminal goes through this \
+                     station ({})",
+                    shown(port),
+                    shown(&path)
+                ),
+            );
+            (link, Some(shared))
+        }
+        Err((link, why)) => {
+            app.note_link(Level::Warn, format!("link not shared: {why}"));
+            (link, None)
+        }
+    }
 }
