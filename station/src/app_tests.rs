@@ -43,14 +43,16 @@ fn connecting_fetches_every_parameter_and_logs_the_fetch_once() {
     let mut app = App::new(AppOptions::default());
     let mut peer = peer();
     peer.capabilities &= !protocol::caps::ENCODERS;
+    let caps = peer.capabilities;
     app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
         peer,
     ))));
     let fetch = app.take_outbox();
     let params = robot_firmware::params::PARAMS;
+    // Every parameter the robot's capabilities support, none it cannot have.
     let wanted: Vec<u16> = params
         .iter()
-        .filter(|p| p.requires & protocol::caps::ENCODERS == 0)
+        .filter(|p| p.requires & !caps == 0)
         .map(|p| p.id)
         .collect();
     let asked: Vec<u16> = fetch
