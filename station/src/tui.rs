@@ -44,7 +44,7 @@ const DRIVING_TICK: Duration = pace::SLOT;
 const IDLE_TICK: Duration = pace::SLOT.saturating_mul(2);
 /// About the most redraws a second for changes that come from the link or the clock; a key
 /// redraws at once. 50 Hz telemetry and truth are 100 events a second: drawing each took the
-/// whole TUI to ~5 % of a core (README "Performance").
+/// whole TUI to ~5 % of a core (docs/performance.md, the TUI CPU rows).
 pub const LINK_FPS: u32 = 10;
 /// The time between two redraws for the link's changes: `LINK_FPS` on whole slots (96 ms).
 pub const LINK_FRAME: Duration = pace::SLOT.saturating_mul(3);

@@ -70,7 +70,7 @@ pub struct Params {
     /// frame shares. Measured at 0.2 m (d_acc / w_pos, the offset that alone makes a miss),
     /// seeds 1-10: with exact odometry the wall's sides fold in 2 seeds instead of 6, under
     /// ALICE's drift in 6 as without it, and the continued eps_o = 0.005 run then keeps the
-    /// heading better than the base in 3 of seeds 1-4 (see README, QT world model).
+    /// heading better than the base in 3 of seeds 1-4 (docs/reproductions.md, the ALICE rows).
     pub or_pos_tolerance: f64,
     /// Light patterns whose principal axes are less distinct than this ratio of the second
     /// moments (1 = circular) give no orientation estimate (ours 1.15: a round pattern has
@@ -147,7 +147,7 @@ pub enum OrMethod {
     /// with the nearest cell's (modulo 180 degrees).
     Axis,
     /// Ours: the turn that best aligns the whole ring with the nearest cell's (circular
-    /// correlation). See the README's ALICE section for what the axis method did in the
+    /// correlation). docs/reproductions.md's ALICE rows say what the axis method did in the
     /// scenarios.
     Shift,
 }

@@ -2,7 +2,7 @@
 //! truth for the same robot time alongside when the recording has it.
 //!
 //! Layer: pure formatting over `export::walk`, writing to any `io::Write`. The columns are
-//! `COLUMNS` (documented in README.md, "Recordings"); `TelemetryRow` is the same data for the
+//! `COLUMNS` (documented in docs/recordings.md, "CSV"); `TelemetryRow` is the same data for the
 //! MCAP `/telemetry` channel. Invariants: a header line, then one line per telemetry frame in
 //! recorded order; the truth columns are empty unless an `EmuTruth` with the frame's robot time
 //! follows it. What can fail: the writer (`io::Error`).

@@ -1,7 +1,7 @@
 //! Which robot each link of a recording is, for exports that write one output per robot:
 //! the names of their CSV files and the prefixes of their MCAP topics.
 //!
-//! Layer: pure, over a parsed `Recording`. The rule (README.md, "Export"): a link whose robot
+//! Layer: pure, over a parsed `Recording`. The rule (docs/recordings.md, "Export"): a link whose robot
 //! stated an id that no other link of the file states is `robot<ID>`; any other link (never
 //! connected, recorded before robots had ids, or sharing its id) is `link<K>`, K its link id
 //! + 1 (the order of `--port`). A file of one link has no label: today's names. Cannot fail.
