@@ -7,12 +7,12 @@
 //! named in the log.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
+mod support;
+
 use protocol::transfer::Sender;
 use protocol::{
-    caps, AckInfo, Command, Event, EventCode, MapCapacity, Message, Mode, NackReason, Pose,
-    ProfileId, Telemetry,
+    caps, AckInfo, Command, Event, EventCode, Message, Mode, NackReason, Pose, ProfileId, Telemetry,
 };
-use ratatui::crossterm::event::{Event as TermEvent, KeyCode, KeyEvent, KeyModifiers};
 use robot_firmware::link::Reply;
 use robot_firmware::transfer::MAP_OBJECT_MAX;
 use station::action::Action;
@@ -22,20 +22,10 @@ use station::link::{CommandOutcome, Connection, LinkEvent, PeerInfo, TransferIn,
 use station::plan::PlanState;
 
 fn peer() -> PeerInfo {
-    PeerInfo {
-        session: 0x1234_5678,
-        firmware: "robot-firmware".into(),
-        firmware_version: "0.1.0".into(),
-        profile: ProfileId::MicroRato,
-        capabilities: caps::COMPASS | caps::BEACON | caps::TRANSFERS | caps::EMULATED,
-        map_capacity: MapCapacity {
-            width: 64,
-            height: 64,
-        },
-        telemetry_hz: 10,
-        failsafe_ms: 300,
-        robot_id: 1,
-    }
+    support::tui::peer(
+        ProfileId::MicroRato,
+        caps::COMPASS | caps::BEACON | caps::TRANSFERS | caps::EMULATED,
+    )
 }
 
 fn arena() -> emulator::arena::Arena {
@@ -58,8 +48,7 @@ fn app() -> App {
 }
 
 fn key(app: &App, c: char) -> Action {
-    let ev = TermEvent::Key(KeyEvent::new(KeyCode::Char(c), KeyModifiers::NONE));
-    station::input::action_for(app, &ev).unwrap()
+    support::tui::key(app, c).unwrap()
 }
 
 /// The robot's telemetry as the app would receive it.

@@ -3,9 +3,9 @@
 //! telemetry mark an object taken, the gripper carrying and the objects home.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use protocol::{caps, Event, EventCode, MapCapacity, Mode, Pose, ProfileId, Telemetry};
-use ratatui::backend::TestBackend;
-use ratatui::Terminal;
+mod support;
+
+use protocol::{caps, Event, EventCode, Mode, Pose, ProfileId, Telemetry};
 use station::action::Action;
 use station::app::arena::ArenaOverlay;
 use station::app::{App, AppOptions, View};
@@ -18,25 +18,15 @@ fn forage_arena() -> ArenaOverlay {
 }
 
 fn peer() -> PeerInfo {
-    PeerInfo {
-        session: 0x1234_5678,
-        firmware: "robot-firmware".into(),
-        firmware_version: "0.1.0".into(),
-        profile: ProfileId::Khepera,
-        capabilities: caps::ENCODERS
+    support::tui::peer(
+        ProfileId::Khepera,
+        caps::ENCODERS
             | caps::IR_PROXIMITY
             | caps::AMBIENT_LIGHT
             | caps::GRIPPER
             | caps::CAMERA
             | caps::EMULATED,
-        map_capacity: MapCapacity {
-            width: 64,
-            height: 64,
-        },
-        telemetry_hz: 10,
-        failsafe_ms: 300,
-        robot_id: 1,
-    }
+    )
 }
 
 fn telemetry(i: u32, x_mm: i32, y_mm: i32, carrying: bool) -> Telemetry {
@@ -94,11 +84,7 @@ fn story() -> App {
     app
 }
 
-fn screen(app: &App, w: u16, h: u16) -> String {
-    let mut t = Terminal::new(TestBackend::new(w, h)).unwrap();
-    t.draw(|f| station::ui::render(app, f)).unwrap();
-    t.backend().to_string()
-}
+use support::tui::screen;
 
 #[test]
 fn progress_follows_the_robots_events() {

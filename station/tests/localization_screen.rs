@@ -5,10 +5,10 @@
 //! nearest-line track, line events and PPD samples; the panel beside it the errors over time.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
+mod support;
+
 use emulator::sim::{Sim, SimConfig};
-use protocol::{caps, Command, EmuTruth, MapCapacity, Mode, Pose, ProfileId};
-use ratatui::backend::TestBackend;
-use ratatui::Terminal;
+use protocol::{caps, Command, EmuTruth, Mode, Pose, ProfileId};
 use robot_firmware::KHEPERA;
 use station::action::Action;
 use station::app::arena::ArenaOverlay;
@@ -16,20 +16,7 @@ use station::app::{App, AppOptions, View};
 use station::link::{Connection, LinkEvent, PeerInfo};
 
 fn peer() -> PeerInfo {
-    PeerInfo {
-        session: 7,
-        firmware: "robot-firmware".into(),
-        firmware_version: "0.1.0".into(),
-        profile: ProfileId::Khepera,
-        capabilities: KHEPERA.capabilities | caps::EMULATED,
-        map_capacity: MapCapacity {
-            width: 64,
-            height: 64,
-        },
-        telemetry_hz: 10,
-        failsafe_ms: 300,
-        robot_id: 1,
-    }
+    support::tui::peer(ProfileId::Khepera, KHEPERA.capabilities | caps::EMULATED)
 }
 
 /// 90 s of survey, fed to a station app.
@@ -77,11 +64,7 @@ fn surveyed() -> App {
     app
 }
 
-fn screen(app: &App, w: u16, h: u16) -> String {
-    let mut t = Terminal::new(TestBackend::new(w, h)).unwrap();
-    t.draw(|f| station::ui::render(app, f)).unwrap();
-    t.backend().to_string()
-}
+use support::tui::screen;
 
 #[test]
 fn the_map_shows_the_tracks_line_events_ppd_and_the_error_chart() {

@@ -3,9 +3,9 @@
 //! robot (or the map's start) to the cursor or goal, `o r n m e` toggle the layers.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use ratatui::backend::TestBackend;
-use ratatui::crossterm::event::{Event, KeyCode, KeyEvent, KeyModifiers};
-use ratatui::Terminal;
+mod support;
+
+use ratatui::crossterm::event::{Event, KeyModifiers};
 use robot_firmware::nav::{grid_bytes, Cell, Geometry, Grid};
 use station::action::Action;
 use station::app::arena::ArenaOverlay;
@@ -69,16 +69,9 @@ fn planned() -> App {
     app
 }
 
-fn screen(app: &App, w: u16, h: u16) -> String {
-    let mut t = Terminal::new(TestBackend::new(w, h)).unwrap();
-    t.draw(|f| station::ui::render(app, f)).unwrap();
-    t.backend().to_string()
-}
+use support::tui::screen;
 
-fn key(app: &App, c: char) -> Option<Action> {
-    let ev = Event::Key(KeyEvent::new(KeyCode::Char(c), KeyModifiers::NONE));
-    station::input::action_for(app, &ev)
-}
+use support::tui::key;
 
 #[test]
 fn map_with_grid_regions_and_plan_at_80x24() {

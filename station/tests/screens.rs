@@ -3,12 +3,12 @@
 //! on screen is volatile except what `redact` filters (none today: kept for port paths).
 #![allow(clippy::unwrap_used, clippy::panic)]
 
+mod support;
+
 use protocol::{
-    caps, AckInfo, Command, EmuTruth, Event, EventCode, LogLevel, MapCapacity, Mode, NackReason,
-    Packed10x8, ParamId, Pose, ProfileId, Telemetry,
+    caps, AckInfo, Command, EmuTruth, Event, EventCode, LogLevel, Mode, NackReason, Packed10x8,
+    ParamId, Pose, ProfileId, Telemetry,
 };
-use ratatui::backend::TestBackend;
-use ratatui::Terminal;
 use station::action::Action;
 use station::app::arena::ArenaOverlay;
 use station::app::{App, AppOptions, View};
@@ -23,25 +23,15 @@ fn arena() -> ArenaOverlay {
 }
 
 fn peer() -> PeerInfo {
-    PeerInfo {
-        session: 0x1234_5678,
-        firmware: "robot-firmware".into(),
-        firmware_version: "0.1.0".into(),
-        profile: ProfileId::Khepera,
-        capabilities: caps::ENCODERS
+    support::tui::peer(
+        ProfileId::Khepera,
+        caps::ENCODERS
             | caps::IR_PROXIMITY
             | caps::AMBIENT_LIGHT
             | caps::LINE_SENSOR
             | caps::BATTERY
             | caps::EMULATED,
-        map_capacity: MapCapacity {
-            width: 64,
-            height: 64,
-        },
-        telemetry_hz: 10,
-        failsafe_ms: 300,
-        robot_id: 1,
-    }
+    )
 }
 
 fn telemetry(i: u32) -> Telemetry {
@@ -222,9 +212,7 @@ fn story() -> App {
 }
 
 fn screen(app: &App, w: u16, h: u16) -> String {
-    let mut t = Terminal::new(TestBackend::new(w, h)).unwrap();
-    t.draw(|f| station::ui::render(app, f)).unwrap();
-    redact(&t.backend().to_string())
+    redact(&support::tui::screen(app, w, h))
 }
 
 /// Filters what may differ between runs (nothing in this fixed story; pty paths elsewhere).

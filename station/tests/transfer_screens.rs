@@ -4,14 +4,14 @@
 //! `Sender`; the map comes from the emulator's simulation exploring Micro-Rato'99 for 40 s.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
+mod support;
+
 use protocol::transfer::Sender;
 use protocol::{
-    caps, crc32c, AckInfo, Command, Event, EventCode, MapCapacity, Message, Mode, ObjectKind, Pose,
-    ProfileId, Telemetry,
+    caps, crc32c, AckInfo, Command, Event, EventCode, Message, Mode, ObjectKind, Pose, ProfileId,
+    Telemetry,
 };
-use ratatui::backend::TestBackend;
 use ratatui::crossterm::event::{Event as TermEvent, KeyCode, KeyEvent, KeyModifiers};
-use ratatui::Terminal;
 use robot_firmware::transfer::MAP_OBJECT_MAX;
 use station::action::Action;
 use station::app::arena::ArenaOverlay;
@@ -22,20 +22,10 @@ use station::plan::{MapOptions, NavMap, PlanState, Planner};
 use station::transfer::objects::{map_object, plan_object};
 
 fn peer() -> PeerInfo {
-    PeerInfo {
-        session: 0x1234_5678,
-        firmware: "robot-firmware".into(),
-        firmware_version: "0.1.0".into(),
-        profile: ProfileId::MicroRato,
-        capabilities: caps::COMPASS | caps::BEACON | caps::TRANSFERS | caps::EMULATED,
-        map_capacity: MapCapacity {
-            width: 64,
-            height: 64,
-        },
-        telemetry_hz: 10,
-        failsafe_ms: 300,
-        robot_id: 1,
-    }
+    support::tui::peer(
+        ProfileId::MicroRato,
+        caps::COMPASS | caps::BEACON | caps::TRANSFERS | caps::EMULATED,
+    )
 }
 
 fn app() -> App {
@@ -68,15 +58,10 @@ fn telemetry(app: &mut App, mode: Mode, (x, y, h): (f64, f64, f64)) {
     app.update(Action::Link(LinkEvent::Telemetry(t)));
 }
 
-fn screen(app: &App, w: u16, h: u16) -> String {
-    let mut t = Terminal::new(TestBackend::new(w, h)).unwrap();
-    t.draw(|f| station::ui::render(app, f)).unwrap();
-    t.backend().to_string()
-}
+use support::tui::screen;
 
 fn key(app: &App, c: char) -> Action {
-    let ev = TermEvent::Key(KeyEvent::new(KeyCode::Char(c), KeyModifiers::NONE));
-    station::input::action_for(app, &ev).unwrap()
+    support::tui::key(app, c).unwrap()
 }
 
 /// The Micro-Rato'99 simulation after 40 s of exploring: its map object and true pose.

@@ -6,6 +6,8 @@
 //! schemas: the names, numbers and types all come from the file.
 #![allow(clippy::unwrap_used, clippy::panic, dead_code)]
 
+pub mod tui;
+
 use std::collections::BTreeMap;
 
 use serde_json::{json, Map, Value};
