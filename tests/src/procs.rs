@@ -45,6 +45,20 @@ pub fn emulator_on(link: &Path, args: &[&str]) -> Child {
     child
 }
 
+/// `robot-emulator --link LINK ARGS` served from this process: its own command line and serve
+/// options, for tests that hold it as a value (dropped: stopped).
+pub fn emulator_in_process(link: &Path, args: &[&str]) -> emulator::link::RunningEmulator {
+    use clap::Parser;
+    let link = link.display().to_string();
+    let mut argv = vec!["robot-emulator", "--link", link.as_str()];
+    argv.extend_from_slice(args);
+    let cli = emulator::cli::Cli::try_parse_from(argv).expect("emulator arguments");
+    let opts = cli.serve.options().expect("emulator options");
+    let arena = emulator::builtin::load(&opts.arena, &opts.load).expect("the arena loads");
+    let sim = emulator::sim::Sim::new(arena, opts.sim.clone()).expect("the world starts");
+    emulator::link::spawn_device(move || Ok(sim), opts.serve).expect("the emulator serves")
+}
+
 /// Records `seconds` of `robot-emulator EMU_ARGS` into `DIR/NAME.rec` with the real
 /// `station record`, sending each of `send` once connected; returns the recording's path.
 pub fn record_emulator(

@@ -5,39 +5,16 @@
 //! 100 100` on a 5 m arena exits 1 naming the robot's bounds.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use std::path::PathBuf;
 use std::time::Duration;
 
+use e2e_tests::procs::{emulator_in_process, scratch_dir};
 use e2e_tests::tmux::Tmux;
-use emulator::link::{spawn_device, RunningEmulator};
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("plans-e2e-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn emulator(link: &std::path::Path) -> RunningEmulator {
-    use clap::Parser;
-    let args = [
-        "robot-emulator",
-        "--link",
-        &link.display().to_string(),
-        "--seed",
-        "5",
-    ];
-    let cli = emulator::cli::Cli::try_parse_from(args).unwrap();
-    let opts = cli.serve.options().unwrap();
-    let arena = emulator::builtin::load(&opts.arena, &opts.load).unwrap();
-    let sim = emulator::sim::Sim::new(arena, opts.sim.clone()).unwrap();
-    spawn_device(move || Ok(sim), opts.serve).unwrap()
-}
 
 #[test]
 fn station_send_goto_outside_the_arena_exits_1_naming_the_robots_bounds() {
-    let d = dir("goto");
+    let d = scratch_dir("plans", "goto");
     let link = d.join("robot");
-    let _emu = emulator(&link);
+    let _emu = emulator_in_process(&link, &["--seed", "5"]);
     let out = std::process::Command::new(e2e_tests::workspace_bin("station"))
         .args(["send", "--port"])
         .arg(&link)
@@ -74,7 +51,7 @@ fn the_plan_goes_to_the_maps_goal_after_a_go_to_and_the_target_is_explicit() {
     ) {
         return;
     }
-    let d = dir("tour");
+    let d = scratch_dir("plans", "tour");
     let t = Tmux::start(
         "plans",
         160,

@@ -6,40 +6,18 @@
 //! frames it never signed.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::Parser;
-use emulator::link::{spawn_device, RunningEmulator};
+use e2e_tests::procs::{emulator_in_process, scratch_dir};
 use protocol::sign::{LinkAuth, LinkKey, STATION_LINK};
 use protocol::{Hello, Message, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION};
 use station::link::serial::SerialConnector;
 use station::link::{spawn_link, Connection, LinkEvent, LinkOptions};
 
 const KEY: &str = "6b1f0a2c9d8e7f60514233241506f7e8d9cabbac9d8e7f60514233241506f7e8";
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("after-e2e-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// `robot-emulator --link PATH --seed 5`, without a key.
-fn emulator(link: &Path) -> RunningEmulator {
-    let args = [
-        "robot-emulator",
-        "--link",
-        &link.display().to_string(),
-        "--seed",
-        "5",
-    ];
-    let cli = emulator::cli::Cli::try_parse_from(args).unwrap();
-    let opts = cli.serve.options().unwrap();
-    let arena = emulator::builtin::load(&opts.arena, &opts.load).unwrap();
-    let sim = emulator::sim::Sim::new(arena, opts.sim.clone()).unwrap();
-    spawn_device(move || Ok(sim), opts.serve).unwrap()
-}
 
 /// A headless `station` command line, run as the binary runs it; the error is what it prints
 /// before exiting 1.
@@ -77,10 +55,10 @@ fn keyed_hello_left_unanswered(link: &Path) {
 
 #[tokio::test]
 async fn a_refusal_left_for_a_keyed_station_is_not_the_next_stations() {
-    let d = dir("refusal");
+    let d = scratch_dir("after", "refusal");
     let link = d.join("robot");
     let port = link.display().to_string();
-    let _emu = emulator(&link);
+    let _emu = emulator_in_process(&link, &["--seed", "5"]);
     keyed_hello_left_unanswered(&link);
     // Without a key: the robot's refusal of signed frames is not about ours.
     assert_eq!(
@@ -92,10 +70,10 @@ async fn a_refusal_left_for_a_keyed_station_is_not_the_next_stations() {
 
 #[tokio::test]
 async fn a_station_after_another_heartbeats_at_the_robots_pace() {
-    let d = dir("heartbeats");
+    let d = scratch_dir("after", "heartbeats");
     let link = d.join("robot");
     let port = link.display().to_string();
-    let _emu = emulator(&link);
+    let _emu = emulator_in_process(&link, &["--seed", "5"]);
     assert_eq!(
         station(&["send", "--port", &port, "stop"]).await,
         Ok(ExitCode::SUCCESS)
