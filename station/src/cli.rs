@@ -53,6 +53,37 @@ pub struct Cli {
     #[arg(long, value_name = "X,Y[,DEG]", value_parser = emulator::cli::parse_pose,
           allow_negative_numbers = true, conflicts_with = "port")]
     pub start: Option<[f64; 3]>,
+    #[command(flatten)]
+    pub tui: TuiArgs,
+}
+
+/// How the TUI behaves (not its subcommands).
+#[derive(Debug, Args, Clone, Default)]
+pub struct TuiArgs {
+    /// A click on the map sends the robot there at once. Without it a click places the go-to
+    /// cursor and Enter sends the robot (as `g` does).
+    #[arg(long)]
+    pub click_goes: bool,
+    /// Where `R` writes its recordings [default: $XDG_DATA_HOME/station/recordings, else
+    /// ~/.local/share/station/recordings]. Created, readable by you alone, when `R` first
+    /// records; the log says each file's full path.
+    #[arg(long, value_name = "DIR")]
+    pub record_dir: Option<PathBuf>,
+    /// While `R` records, the robot streams its hardware trace (parameter 34 hal_trace set to
+    /// 1, and put back when the recording ends), so `station retrace` can re-run the
+    /// recording through the firmware's code.
+    #[arg(long)]
+    pub record_hal_trace: bool,
+}
+
+impl TuiArgs {
+    /// Where `R` records: `--record-dir`, else the data directory, else why there is none.
+    pub fn record_dir(&self) -> Result<PathBuf, String> {
+        match &self.record_dir {
+            Some(d) => Ok(d.clone()),
+            None => crate::record::default_recordings_dir(),
+        }
+    }
 }
 
 /// Which port to use.

@@ -135,6 +135,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         AppOptions {
             port_label: label.clone(),
             arena,
+            ..AppOptions::default()
         },
         args.speed,
     )

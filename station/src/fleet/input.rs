@@ -28,7 +28,8 @@ pub fn fleet_action_for(app: &App, ev: &Event) -> Option<Option<Action>> {
             let typing = app.help
                 || app.transfers.prompt.is_some()
                 || app.log.filter_input.is_some()
-                || app.params.input.is_some();
+                || app.params.input.is_some()
+                || app.params.searching;
             if typing {
                 return None;
             }
