@@ -43,6 +43,7 @@ fn connecting_fetches_every_parameter_and_logs_the_fetch_once() {
     let mut app = App::new(AppOptions::default());
     let mut peer = peer();
     peer.capabilities &= !protocol::caps::ENCODERS;
+    let caps = peer.capabilities;
     app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
         peer,
     ))));
@@ -50,7 +51,7 @@ fn connecting_fetches_every_parameter_and_logs_the_fetch_once() {
     let params = robot_firmware::params::PARAMS;
     let wanted: Vec<u16> = params
         .iter()
-        .filter(|p| p.requires & protocol::caps::ENCODERS == 0)
+        .filter(|p| p.requires & caps == p.requires)
         .map(|p| p.id)
         .collect();
     let asked: Vec<u16> = fetch
@@ -288,6 +289,66 @@ fn the_rate_keys_step_through_the_standard_rates() {
     }));
     app.update(Action::RateStep(-1));
     assert_eq!(app.take_outbox()[0].1, hz(5));
+}
+
+#[test]
+fn a_click_only_places_the_cursor_and_enter_sends_the_robot_there() {
+    let mut app = connected_app();
+    app.update(Action::CursorAt {
+        x_m: 1.25,
+        y_m: -0.5,
+    });
+    assert!(app.take_outbox().is_empty(), "a click alone sends nothing");
+    assert!(app.map.cursor_mode);
+    app.update(Action::GoToCursor);
+    assert_eq!(
+        app.take_outbox()[0].1,
+        Command::GoTo(protocol::PointMm {
+            x_mm: 1250,
+            y_mm: -500
+        })
+    );
+    assert!(!app.map.cursor_mode);
+}
+
+#[test]
+fn recording_with_the_hardware_trace_turns_it_on_and_puts_it_back() {
+    use crate::record::live::RecordingNote;
+    use robot_firmware::params::id::HAL_TRACE;
+    let set = |v: f32| Command::SetParam {
+        id: protocol::ParamId(HAL_TRACE),
+        value: v,
+    };
+    let mut app = App::new(AppOptions {
+        record_hal_trace: true,
+        ..AppOptions::default()
+    });
+    app.update(Action::Link(LinkEvent::Connection(Connection::Connected(
+        peer(),
+    ))));
+    app.take_outbox();
+    app.params.set_value(HAL_TRACE, 0.0);
+    app.update(Action::Recording(RecordingNote::Started {
+        file: "/r/x.rec".into(),
+        links: 1,
+    }));
+    let sent: Vec<Command> = app.take_outbox().into_iter().map(|(_, c)| c).collect();
+    assert_eq!(sent, [set(1.0)]);
+    app.params.set_value(HAL_TRACE, 1.0);
+    app.update(Action::Recording(RecordingNote::Stopped {
+        file: "/r/x.rec".into(),
+        seconds: 1.0,
+        bytes: 10,
+    }));
+    let sent: Vec<Command> = app.take_outbox().into_iter().map(|(_, c)| c).collect();
+    assert_eq!(sent, [set(0.0)]);
+    // Without the option a recording asks the robot nothing.
+    let mut plain = connected_app();
+    plain.update(Action::Recording(RecordingNote::Started {
+        file: "/r/y.rec".into(),
+        links: 1,
+    }));
+    assert!(plain.take_outbox().is_empty());
 }
 
 #[test]

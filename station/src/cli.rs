@@ -514,6 +514,92 @@ mod tests {
         }
     }
 
+    /// `words` split as `sh` would: whitespace, with '...' and "..." quoting.
+    fn shell_words(line: &str) -> Vec<String> {
+        let (mut words, mut word, mut quote, mut any) = (Vec::new(), String::new(), None, false);
+        for c in line.chars() {
+            match (quote, c) {
+                (Some(q), c) if c == q => quote = None,
+                (Some(_), c) => word.push(c),
+                (None, '\'' | '"') => {
+                    quote = Some(c);
+                    any = true;
+                }
+                (None, c) if c.is_whitespace() => {
+                    if any || !word.is_empty() {
+                        words.push(std::mem::take(&mut word));
+                    }
+                    any = false;
+                }
+                (None, c) => word.push(c),
+            }
+        }
+        if any || !word.is_empty() {
+            words.push(word);
+        }
+        words
+    }
+
+    /// Every `station ...` line of every help text, as typed: without the comment in
+    /// parentheses after it or what it is piped into.
+    fn help_examples(cmd: &clap::Command, out: &mut Vec<String>) {
+        let texts = [
+            cmd.get_long_about(),
+            cmd.get_about(),
+            cmd.get_after_help(),
+            cmd.get_after_long_help(),
+            cmd.get_before_help(),
+        ];
+        for text in texts.into_iter().flatten() {
+            for line in text.to_string().lines() {
+                let line = line.trim();
+                if !line.starts_with("station ") && line != "station" {
+                    continue;
+                }
+                let line = line.split(" | ").next().unwrap_or(line);
+                let line = match line.find("  (") {
+                    Some(i) => &line[..i],
+                    None => line,
+                };
+                out.push(line.trim().to_string());
+            }
+        }
+        for sub in cmd.get_subcommands() {
+            help_examples(sub, out);
+        }
+    }
+
+    #[test]
+    fn every_example_in_the_help_parses_as_written() {
+        use clap::CommandFactory;
+        let mut examples = Vec::new();
+        help_examples(&Cli::command(), &mut examples);
+        assert!(examples.len() > 40, "{examples:?}");
+        for ex in &examples {
+            let words = shell_words(ex);
+            if let Err(e) = Cli::try_parse_from(&words) {
+                panic!("the example `{ex}` does not parse:\n{e}");
+            }
+        }
+        // The examples that name parameters name real ones.
+        assert!(examples
+            .iter()
+            .any(|e| e.contains("--param odo_wheel_distance_mm=")));
+    }
+
+    #[test]
+    fn a_mistyped_parameter_suggests_the_real_name_wherever_one_is_named() {
+        for args in [
+            &["retrace", "run.rec", "--param", "wheel_distance_mm=53"][..],
+            &["replay", "run.rec", "--retrace", "--param", "wheel_distance_mm=53"][..],
+            &["send", "--port", "p", "param", "get", "wheel_distance_mm"][..],
+            &["params", "--port", "p", "set", "wheel_distance_mm", "53"][..],
+        ] {
+            let e = parse(args).unwrap_err().to_string();
+            assert!(e.contains("did you mean odo_wheel_distance_mm?"), "{args:?}: {e}");
+        }
+    }
+
     #[test]
     fn no_arguments_means_the_built_in_emulator() {
         let cli = parse(&[]).expect("parses");

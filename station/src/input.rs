@@ -342,6 +342,98 @@ mod tests {
         );
     }
 
+    fn key_event(code: KeyCode) -> Event {
+        Event::Key(KeyEvent::new(code, KeyModifiers::NONE))
+    }
+
+    #[test]
+    fn no_key_or_click_in_the_help_reaches_the_robot() {
+        let mut app = App::new(AppOptions::default());
+        app.update(Action::ToggleHelp);
+        let robot = |a: &Option<Action>| {
+            matches!(
+                a,
+                Some(
+                    Action::Drive { .. }
+                        | Action::StopDriving
+                        | Action::SetMode(_)
+                        | Action::GoToCursorStart
+                        | Action::GoToCursor
+                        | Action::GoToPoint { .. }
+                        | Action::CursorAt { .. }
+                        | Action::Transfer(_)
+                        | Action::ToggleRecording
+                        | Action::Quit
+                )
+            )
+        };
+        let mut codes = vec![
+            KeyCode::Up,
+            KeyCode::Down,
+            KeyCode::Left,
+            KeyCode::Right,
+            KeyCode::PageUp,
+            KeyCode::PageDown,
+            KeyCode::Home,
+            KeyCode::End,
+            KeyCode::Enter,
+            KeyCode::Tab,
+            KeyCode::F(4),
+        ];
+        codes.extend("wasd 0123456789gREXOM".chars().map(KeyCode::Char));
+        for code in codes {
+            let a = action_for(&app, &key_event(code));
+            assert!(!robot(&a), "{code:?} in the help gave {a:?}");
+            assert_ne!(a, Some(Action::ToggleHelp), "{code:?} closed the help");
+        }
+        // PgUp then an arrow: the help is still open and the arrow scrolls it.
+        app.update(Action::HelpScroll(3));
+        let page_up = action_for(&app, &key_event(KeyCode::PageUp));
+        assert_eq!(page_up, Some(Action::HelpScroll(0)));
+        for close in [KeyCode::Esc, KeyCode::Char('?'), KeyCode::Char('q')] {
+            assert_eq!(
+                action_for(&app, &key_event(close)),
+                Some(Action::ToggleHelp)
+            );
+        }
+        let click = Event::Mouse(MouseEvent {
+            kind: MouseEventKind::Down(MouseButton::Left),
+            column: 40,
+            row: 10,
+            modifiers: KeyModifiers::NONE,
+        });
+        assert_eq!(action_for(&app, &click), None);
+    }
+
+    #[test]
+    fn a_click_on_the_map_places_the_cursor_unless_clicks_go() {
+        for goes in [false, true] {
+            let mut app = App::new(AppOptions {
+                click_goes: goes,
+                ..AppOptions::default()
+            });
+            app.update(Action::Resize {
+                width: 80,
+                height: 24,
+            });
+            let screen = Rect::new(0, 0, 80, 24);
+            let map = ui::areas(screen, &app).find(Panel::Map).unwrap();
+            let inner = inner_of(ui::map::map_area(&app, map));
+            let click = Event::Mouse(MouseEvent {
+                kind: MouseEventKind::Down(MouseButton::Left),
+                column: inner.x + inner.width / 2,
+                row: inner.y + inner.height / 2,
+                modifiers: KeyModifiers::NONE,
+            });
+            let a = action_for(&app, &click);
+            if goes {
+                assert!(matches!(a, Some(Action::GoToPoint { .. })), "{a:?}");
+            } else {
+                assert!(matches!(a, Some(Action::CursorAt { .. })), "{a:?}");
+            }
+        }
+    }
+
     #[test]
     fn while_a_log_filter_is_typed_letters_are_text_not_commands() {
         let mut app = App::new(AppOptions::default());

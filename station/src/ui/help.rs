@@ -135,7 +135,8 @@ fn wrapped(keys: &[(&'static str, &'static str)], width: usize) -> Vec<Line<'sta
         .map(|(k, _)| k.chars().count())
         .max()
         .unwrap_or(0);
-    let room = width.saturating_sub(key_w + 2).max(10);
+    // A column of margin before the border.
+    let room = width.saturating_sub(key_w + 3).max(10);
     let mut out = Vec::new();
     for (k, what) in keys {
         let mut first = true;
@@ -243,6 +244,6 @@ mod tests {
     fn descriptions_wrap_under_themselves_not_under_the_keys() {
         let lines = wrapped(&[("k", "one two three four five")], 12);
         let text: Vec<String> = lines.iter().map(ToString::to_string).collect();
-        assert_eq!(text, ["k  one two", "   three", "   four five"]);
+        assert_eq!(text, ["k  one two", "   three four", "   five"]);
     }
 }

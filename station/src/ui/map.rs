@@ -92,28 +92,38 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     let inner = Block::bordered().inner(area);
     let (xb, yb) = view_bounds(app, inner);
     let title = format!(" Map — {name} ");
-    // The scale after the name, when it fits; the status gets what is left.
     let title_w = title.chars().count() as u16;
-    let scale = scale_bar(xb[1] - xb[0], inner.width)
-        .filter(|s| title_w + s.chars().count() as u16 + 4 <= area.width);
-    let scale_w = scale.as_ref().map_or(0, |s| s.chars().count() as u16);
+    // The title row holds the name, the scale and a status. The plan panel, when drawn, says
+    // the status; else it goes where it fits: foraging's progress and a plan's outcome before
+    // the scale, the scale before the hint of how to plan.
+    let room = area.width.saturating_sub(title_w + 4);
+    let scale = scale_bar(xb[1] - xb[0], inner.width);
+    let scale_w = |s: &Option<String>| s.as_ref().map_or(0, |s| s.chars().count() as u16);
+    let status = |room: u16| {
+        super::forage::status(app)
+            .filter(|l| l.width() <= usize::from(room))
+            .or_else(|| map_layers::status(app, room))
+    };
+    let news = super::forage::status(app).is_some()
+        || app.map.plan.error.is_some()
+        || app.map.plan.result.is_some();
+    let (scale, status) = match side {
+        Some(_) => (scale.filter(|s| scale_w(&Some(s.clone())) <= room), None),
+        None if news => {
+            let st = status(room);
+            let left = room.saturating_sub(st.as_ref().map_or(0, |l| l.width() as u16));
+            (scale.filter(|s| s.chars().count() as u16 <= left), st)
+        }
+        None => {
+            let scale = scale.filter(|s| s.chars().count() as u16 <= room);
+            let left = room.saturating_sub(scale_w(&scale));
+            (scale, status(left))
+        }
+    };
     let block = Block::bordered()
         .title(title)
         .title(TLine::from(scale.unwrap_or_default().white()))
-        .title_top(
-            // The plan panel, when drawn, says it all; else a status that fits the title row.
-            side.map_or_else(
-                || {
-                    let room = area.width.saturating_sub(title_w + scale_w + 10);
-                    super::forage::status(app)
-                        .filter(|l| l.width() <= usize::from(room))
-                        .or_else(|| map_layers::status(app, room))
-                },
-                |_| None,
-            )
-            .unwrap_or_default()
-            .right_aligned(),
-        )
+        .title_top(status.unwrap_or_default().right_aligned())
         .title_bottom(legend(app, area.width.saturating_sub(2)));
     let view = MapView {
         x: xb,
@@ -638,5 +648,61 @@ impl MapLayer for CursorLayer {
             let (x, y) = app.map.cursor;
             ctx.print(x, y, "+".green().bold());
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::action::Action;
+    use crate::app::AppOptions;
+    use crate::link::LinkEvent;
+
+    fn at(app: &mut App, x_mm: i32, y_mm: i32) {
+        app.update(Action::Link(LinkEvent::Telemetry(protocol::Telemetry {
+            pose: protocol::Pose {
+                x_mm,
+                y_mm,
+                heading_mrad: 0,
+            },
+            ..protocol::Telemetry::default()
+        })));
+    }
+
+    fn centre(app: &App, inner: Rect) -> (f64, f64) {
+        let ([x0, x1], [y0, y1]) = view_bounds(app, inner);
+        ((x0 + x1) / 2.0, (y0 + y1) / 2.0)
+    }
+
+    #[test]
+    fn following_keeps_the_robot_in_the_middle_and_stopping_keeps_the_view() {
+        let mut app = App::new(AppOptions::default());
+        let inner = Rect::new(0, 0, 40, 20);
+        at(&mut app, 500, 500);
+        at(&mut app, 4000, 3000);
+        app.update(Action::MapFollow {
+            keep: pan_of_view(&app, inner),
+        });
+        assert!(app.map.follow && app.map.zoom() > 1.0);
+        let c = centre(&app, inner);
+        assert!((c.0 - 4.0).abs() < 1e-9 && (c.1 - 3.0).abs() < 1e-9, "{c:?}");
+        at(&mut app, 4500, 2500);
+        let c = centre(&app, inner);
+        assert!((c.0 - 4.5).abs() < 1e-9 && (c.1 - 2.5).abs() < 1e-9, "{c:?}");
+        // F again: the view stays where it is, the robot may then leave it.
+        let keep = pan_of_view(&app, inner);
+        app.update(Action::MapFollow { keep });
+        assert!(!app.map.follow);
+        let c2 = centre(&app, inner);
+        assert!((c2.0 - c.0).abs() < 1e-6 && (c2.1 - c.1).abs() < 1e-6, "{c2:?}");
+    }
+
+    #[test]
+    fn the_scale_bar_names_a_round_length_as_long_as_its_columns() {
+        // 5 m over 40 columns: 0.125 m a column; 1 m is 8 columns.
+        assert_eq!(scale_bar(5.0, 40).as_deref(), Some(" ┝━━━━━━┥ 1 m "));
+        // 0.4 m over 40 columns: 1 cm a column; 0.1 m is 10 columns.
+        assert_eq!(scale_bar(0.4, 40).as_deref(), Some(" ┝━━━━━━━━┥ 0.1 m "));
+        assert_eq!(scale_bar(0.0, 40), None);
     }
 }
