@@ -1050,7 +1050,6 @@ impl App {
                 } else {
                     format!("recording to {file}")
                 };
-                self.hal_trace_on();
                 (Level::Info, format!("{what} (R stops)"))
             }
             RecordingNote::Stopped {
@@ -1072,6 +1071,8 @@ impl App {
             }
         };
         self.note(level, Source::Link, text);
+        // After the line that says where the recording goes: the trace is in it.
+        self.hal_trace_on();
     }
 
     /// A recording started (or its robot came back): with `record_hal_trace`, the robot

@@ -11,7 +11,10 @@ use ratatui::Frame;
 /// (keys, what they do), in the order shown.
 pub const KEYS: &[(&str, &str)] = &[
     ("q  Ctrl-C", "quit (stops the robot if driving)"),
-    ("?  Esc", "help / close"),
+    (
+        "?  Esc",
+        "help / close; in the help ↑↓ PgUp PgDn Home End scroll, Esc ? q close",
+    ),
     (
         "Tab  F1-F7",
         "views: dashboard sensors charts map link log params",
@@ -25,13 +28,17 @@ pub const KEYS: &[(&str, &str)] = &[
     ),
     (
         "g ←↑↓→ Enter",
-        "go-to with a cursor on the map (shift: 5x step), or click; Esc clears the marker",
+        "go-to: a cursor on the map (shift: 5x step; a click puts it there), Enter sends the \
+         robot; Esc clears the marker",
     ),
     (
-        "z Z hjkl",
-        "map: zoom in / out (or the wheel; all of it recentres) / pan",
+        "z Z hjkl F",
+        "map: zoom in / out (or the wheel; all of it recentres) / pan / follow the robot",
     ),
-    ("p", "parameters: ↑↓ select, r read, R read all, Enter edit"),
+    (
+        "p  /",
+        "parameters: ↑↓ select, / search names and descriptions, r read, R read all, Enter edit",
+    ),
     (
         "+  -  c",
         "telemetry rate (0 1 2 5 10 20 50 Hz) / next chart",
@@ -74,7 +81,8 @@ pub const KEYS: &[(&str, &str)] = &[
     ),
     (
         "R",
-        "record the link (a fleet: every robot's) to a file here; R again saves it",
+        "record the link (a fleet: every robot's) into the recordings directory (--record-dir; \
+         the log says where); R again saves it",
     ),
 ];
 
