@@ -96,9 +96,9 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     // The title row holds the name, the scale and a status. The plan panel, when drawn, says
     // the status; else it goes where it fits: foraging's progress and a plan's outcome before
     // the scale, the scale before the hint of how to plan.
-    let room = area.width.saturating_sub(title_w + 4);
-    let scale = scale_bar(xb[1] - xb[0], inner.width);
-    let scale_w = |s: &Option<String>| s.as_ref().map_or(0, |s| s.chars().count() as u16);
+    // The corners and a border column between each title.
+    let room = area.width.saturating_sub(title_w + 3);
+    let scale = |room: u16| scale_bar(xb[1] - xb[0], inner.width, room);
     let status = |room: u16| {
         super::forage::status(app)
             .filter(|l| l.width() <= usize::from(room))
@@ -108,16 +108,16 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         || app.map.plan.error.is_some()
         || app.map.plan.result.is_some();
     let (scale, status) = match side {
-        Some(_) => (scale.filter(|s| scale_w(&Some(s.clone())) <= room), None),
+        Some(_) => (scale(room), None),
         None if news => {
             let st = status(room);
-            let left = room.saturating_sub(st.as_ref().map_or(0, |l| l.width() as u16));
-            (scale.filter(|s| s.chars().count() as u16 <= left), st)
+            let left = room.saturating_sub(st.as_ref().map_or(0, |l| l.width() as u16 + 1));
+            (scale(left), st)
         }
         None => {
-            let scale = scale.filter(|s| s.chars().count() as u16 <= room);
-            let left = room.saturating_sub(scale_w(&scale));
-            (scale, status(left))
+            let sc = scale(room);
+            let left = room.saturating_sub(sc.as_ref().map_or(0, |s| s.chars().count() as u16 + 1));
+            (sc, status(left))
         }
     };
     let block = Block::bordered()
@@ -154,14 +154,25 @@ const SCALE_STEPS: [f64; 3] = [1.0, 2.0, 5.0];
 /// Most columns a scale bar takes, its ends included.
 const SCALE_MAX_COLS: f64 = 10.0;
 
-/// A scale bar for a view `span_m` wide over `cols` columns: `┝━━━┥ 0.5 m`, the bar as many
-/// columns as the length it names (the longest 1-2-5 length of at most `SCALE_MAX_COLS`).
-/// Drawn in the title row, heavy on the light border, so it never covers the map.
-pub fn scale_bar(span_m: f64, cols: u16) -> Option<String> {
+/// A scale bar for a view `span_m` wide over `cols` columns, in at most `room` columns:
+/// `┝━━━┥ 0.5 m`, the bar as many columns as the length it names (the longest 1-2-5 length
+/// of 3 to `SCALE_MAX_COLS` columns that fits). Drawn in the title row, heavy on the light
+/// border, so it never covers the map.
+pub fn scale_bar(span_m: f64, cols: u16, room: u16) -> Option<String> {
     let per_col = span_m / f64::from(cols.max(1));
     if !(per_col.is_finite() && per_col > 0.0) {
         return None;
     }
+    let text = |len: f64, n: usize| {
+        let label = if len >= 1.0 {
+            format!("{len:.0} m")
+        } else if len >= 0.1 {
+            format!("{len:.1} m")
+        } else {
+            format!("{:.0} cm", len * 100.0)
+        };
+        format!(" ┝{}┥ {label} ", "━".repeat(n.saturating_sub(2)))
+    };
     let mut best = None;
     let mut decade = 10f64.powi(per_col.log10().floor() as i32);
     for _ in 0..3 {
@@ -169,20 +180,15 @@ pub fn scale_bar(span_m: f64, cols: u16) -> Option<String> {
             let len = step * decade;
             let n = (len / per_col).round();
             if (3.0..=SCALE_MAX_COLS).contains(&n) {
-                best = Some((len, n as usize));
+                let t = text(len, n as usize);
+                if t.chars().count() <= usize::from(room) {
+                    best = Some(t);
+                }
             }
         }
         decade *= 10.0;
     }
-    let (len, n) = best?;
-    let label = if len >= 1.0 {
-        format!("{len:.0} m")
-    } else if len >= 0.1 {
-        format!("{len:.1} m")
-    } else {
-        format!("{:.0} cm", len * 100.0)
-    };
-    Some(format!(" ┝{}┥ {label} ", "━".repeat(n - 2)))
+    best
 }
 
 /// One mark of the legend: its text, a shorter one for a narrow map, and how much it matters
@@ -700,9 +706,12 @@ mod tests {
     #[test]
     fn the_scale_bar_names_a_round_length_as_long_as_its_columns() {
         // 5 m over 40 columns: 0.125 m a column; 1 m is 8 columns.
-        assert_eq!(scale_bar(5.0, 40).as_deref(), Some(" ┝━━━━━━┥ 1 m "));
+        assert_eq!(scale_bar(5.0, 40, 80).as_deref(), Some(" ┝━━━━━━┥ 1 m "));
+        // Less room: a shorter length.
+        assert_eq!(scale_bar(5.0, 40, 12).as_deref(), Some(" ┝━━┥ 0.5 m "));
         // 0.4 m over 40 columns: 1 cm a column; 0.1 m is 10 columns.
-        assert_eq!(scale_bar(0.4, 40).as_deref(), Some(" ┝━━━━━━━━┥ 0.1 m "));
-        assert_eq!(scale_bar(0.0, 40), None);
+        assert_eq!(scale_bar(0.4, 40, 80).as_deref(), Some(" ┝━━━━━━━━┥ 0.1 m "));
+        assert_eq!(scale_bar(0.0, 40, 80), None);
+        assert_eq!(scale_bar(5.0, 40, 5), None);
     }
 }
