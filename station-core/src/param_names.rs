@@ -27,7 +27,10 @@ pub fn unknown(name: &str) -> String {
     if close.is_empty() {
         format!("unknown parameter {shown:?} (`station params --port P list` lists them)")
     } else {
-        format!("unknown parameter {shown:?}; did you mean {}?", close.join(", "))
+        format!(
+            "unknown parameter {shown:?}; did you mean {}?",
+            close.join(", ")
+        )
     }
 }
 

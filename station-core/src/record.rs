@@ -650,11 +650,12 @@ pub fn default_recordings_dir() -> Result<PathBuf, String> {
     } else {
         env("XDG_DATA_HOME").or_else(|| env("HOME").map(|h| h.join(".local").join("share")))
     };
-    base.map(|b| b.join("station").join("recordings")).ok_or_else(|| {
-        "no data directory to record into (neither $XDG_DATA_HOME nor $HOME is set): \
+    base.map(|b| b.join("station").join("recordings"))
+        .ok_or_else(|| {
+            "no data directory to record into (neither $XDG_DATA_HOME nor $HOME is set): \
          give one with --record-dir"
-            .to_string()
-    })
+                .to_string()
+        })
 }
 
 /// Creates `dir` (and what is missing above it) readable by its owner alone: recordings hold

@@ -591,12 +591,21 @@ mod tests {
     fn a_mistyped_parameter_suggests_the_real_name_wherever_one_is_named() {
         for args in [
             &["retrace", "run.rec", "--param", "wheel_distance_mm=53"][..],
-            &["replay", "run.rec", "--retrace", "--param", "wheel_distance_mm=53"][..],
+            &[
+                "replay",
+                "run.rec",
+                "--retrace",
+                "--param",
+                "wheel_distance_mm=53",
+            ][..],
             &["send", "--port", "p", "param", "get", "wheel_distance_mm"][..],
             &["params", "--port", "p", "set", "wheel_distance_mm", "53"][..],
         ] {
             let e = parse(args).unwrap_err().to_string();
-            assert!(e.contains("did you mean odo_wheel_distance_mm?"), "{args:?}: {e}");
+            assert!(
+                e.contains("did you mean odo_wheel_distance_mm?"),
+                "{args:?}: {e}"
+            );
         }
     }
 

@@ -127,7 +127,14 @@ fn the_log_coalesces_repeats_filters_and_the_map_zooms_with_a_legend_in_glyphs()
         .find(|r| r.contains("└ ● "))
         .cloned()
         .unwrap_or_default();
-    for mark in ["○ true", "░ unexplored", "█ wall", "◎ plan", "G goal", "B beacon"] {
+    for mark in [
+        "○ true",
+        "░ unexplored",
+        "█ wall",
+        "◎ plan",
+        "G goal",
+        "B beacon",
+    ] {
         assert!(legend.contains(mark), "{mark}: {}", s.join("\n"));
     }
     t.keys(&["z"]);

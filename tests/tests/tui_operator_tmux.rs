@@ -44,7 +44,14 @@ fn the_help_scrolls_at_80x24_and_no_key_in_it_drives_the_robot() {
     let link = d.join("robot");
     let mut emu = emulator_on(&link, &["--seed", "3"]);
     let port = link.display().to_string();
-    let t = Tmux::start("help", 80, 24, &d, &workspace_bin("station"), &["--port", &port]);
+    let t = Tmux::start(
+        "help",
+        80,
+        24,
+        &d,
+        &workspace_bin("station"),
+        &["--port", &port],
+    );
     t.wait_text("mode Idle", WAIT);
     t.keys(&["?"]);
     let s = t.wait_text(" of ", WAIT);
@@ -58,7 +65,9 @@ fn the_help_scrolls_at_80x24_and_no_key_in_it_drives_the_robot() {
     // drove the robot backwards.
     t.keys(&["PageDown", "PageDown"]);
     t.wait_text("record the link", WAIT);
-    t.keys(&["PageUp", "Down", "Down", "Up", "Left", "w", "s", "space", "4", "g", "Enter"]);
+    t.keys(&[
+        "PageUp", "Down", "Down", "Up", "Left", "w", "s", "space", "4", "g", "Enter",
+    ]);
     let s = t.screen();
     assert!(s.iter().any(|r| r.contains("┌ Keys")), "{}", joined(&s));
     // q closes the help; the station goes on.
@@ -74,7 +83,11 @@ fn the_help_scrolls_at_80x24_and_no_key_in_it_drives_the_robot() {
         wheels(&s2),
         joined(&s)
     );
-    assert!(s2.iter().any(|r| r.contains("mode Idle")), "{}", joined(&s2));
+    assert!(
+        s2.iter().any(|r| r.contains("mode Idle")),
+        "{}",
+        joined(&s2)
+    );
     t.keys(&["C-c"]);
     let _ = emu.kill();
     let _ = emu.wait();
@@ -114,7 +127,9 @@ fn a_click_places_the_cursor_the_map_shows_its_scale_follows_and_names_unexplore
     t.keys(&["F"]);
     t.wait_text("⊙ follow", WAIT);
     t.keys(&["F"]);
-    t.wait_for("following off", WAIT, |s| !s.iter().any(|r| r.contains("⊙ follow")));
+    t.wait_for("following off", WAIT, |s| {
+        !s.iter().any(|r| r.contains("⊙ follow"))
+    });
     // Exploring: the robot's map, its unknown cells a shade (not a wall's block), named.
     t.keys(&["Z", "Z", "E"]);
     let s = t.wait_text("░ unexplored", WAIT);
@@ -139,8 +154,16 @@ fn the_parameter_search_filters_names_and_descriptions_as_you_type() {
     t.keys(&["/"]);
     t.type_text("wheel");
     let s = t.wait_text("/ wheel", WAIT);
-    assert!(s.iter().any(|r| r.contains("odo_wheel_distance_mm")), "{}", joined(&s));
-    assert!(!s.iter().any(|r| r.contains("failsafe_ms")), "{}", joined(&s));
+    assert!(
+        s.iter().any(|r| r.contains("odo_wheel_distance_mm")),
+        "{}",
+        joined(&s)
+    );
+    assert!(
+        !s.iter().any(|r| r.contains("failsafe_ms")),
+        "{}",
+        joined(&s)
+    );
     // Letters in the box are text: `q` did not quit, `w` did not drive.
     t.type_text("q");
     let s = t.wait_text("no parameter matches", WAIT);
@@ -168,20 +191,30 @@ fn r_records_into_the_record_dir_with_the_hardware_trace_and_puts_it_back() {
         24,
         &d,
         &station,
-        &["--port", &port, "--record-dir", &recs_arg, "--record-hal-trace"],
+        &[
+            "--port",
+            &port,
+            "--record-dir",
+            &recs_arg,
+            "--record-hal-trace",
+        ],
     );
     t.wait_text("mode Idle", WAIT);
     t.keys(&["F6", "R"]);
     // The log says where, in full (wrapped over its rows).
     let want = format!("recordingto{}", recs.join("station-").display());
-    t.wait_for("the recording's path in the log", WAIT, |s| flat(s).contains(&want));
+    t.wait_for("the recording's path in the log", WAIT, |s| {
+        flat(s).contains(&want)
+    });
     t.wait_text("param set hal_trace 1", WAIT);
     std::thread::sleep(Duration::from_secs(2));
     t.keys(&["R"]);
     t.wait_text("recording saved", WAIT);
     t.wait_text("param set hal_trace 0", WAIT);
     t.keys(&["q"]);
-    t.wait_for("the station quit", WAIT, |s| !s.iter().any(|r| r.contains("mode Idle")));
+    t.wait_for("the station quit", WAIT, |s| {
+        !s.iter().any(|r| r.contains("mode Idle"))
+    });
     assert_private(&recs);
     let files: Vec<_> = std::fs::read_dir(&recs)
         .unwrap()
@@ -203,7 +236,11 @@ fn r_records_into_the_record_dir_with_the_hardware_trace_and_puts_it_back() {
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("retraced"), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        text.contains("retraced"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(text.contains("began after power-up"), "{text}");
     // hal_trace is off again on the robot.
     let out = Command::new(&station)
@@ -211,7 +248,11 @@ fn r_records_into_the_record_dir_with_the_hardware_trace_and_puts_it_back() {
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("hal_trace = 0"), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        text.contains("hal_trace = 0"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let _ = emu.kill();
     let _ = emu.wait();
 }

@@ -111,9 +111,11 @@ fn keys(fleet: bool) -> Vec<(&'static str, &'static str)> {
 fn layout(screen: Rect, fleet: bool) -> (Rect, Vec<Line<'static>>) {
     let width = screen.width.min(80);
     let lines = wrapped(&keys(fleet), usize::from(width.saturating_sub(2)));
-    let height = screen
-        .height
-        .min(u16::try_from(lines.len()).unwrap_or(u16::MAX).saturating_add(2));
+    let height = screen.height.min(
+        u16::try_from(lines.len())
+            .unwrap_or(u16::MAX)
+            .saturating_add(2),
+    );
     let [row] = Layout::vertical([Constraint::Length(height)])
         .flex(Flex::Center)
         .areas(screen);

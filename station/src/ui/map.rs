@@ -291,7 +291,13 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
     let width = |marks: &[Mark], short: bool| -> usize {
         marks
             .iter()
-            .map(|m| if short { m.short.width() } else { m.full.width() })
+            .map(|m| {
+                if short {
+                    m.short.width()
+                } else {
+                    m.full.width()
+                }
+            })
             .sum()
     };
     let short = width(&marks, false) > room;
@@ -324,7 +330,7 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
     };
     let mut used: usize = items.iter().map(|s| s.width()).sum();
     for e in extra {
-        if used + e.width() <= usize::from(room) + state_w {
+        if used + e.width() <= room + state_w {
             used += e.width();
             items.push(e);
         }
@@ -691,16 +697,25 @@ mod tests {
         });
         assert!(app.map.follow && app.map.zoom() > 1.0);
         let c = centre(&app, inner);
-        assert!((c.0 - 4.0).abs() < 1e-9 && (c.1 - 3.0).abs() < 1e-9, "{c:?}");
+        assert!(
+            (c.0 - 4.0).abs() < 1e-9 && (c.1 - 3.0).abs() < 1e-9,
+            "{c:?}"
+        );
         at(&mut app, 4500, 2500);
         let c = centre(&app, inner);
-        assert!((c.0 - 4.5).abs() < 1e-9 && (c.1 - 2.5).abs() < 1e-9, "{c:?}");
+        assert!(
+            (c.0 - 4.5).abs() < 1e-9 && (c.1 - 2.5).abs() < 1e-9,
+            "{c:?}"
+        );
         // F again: the view stays where it is, the robot may then leave it.
         let keep = pan_of_view(&app, inner);
         app.update(Action::MapFollow { keep });
         assert!(!app.map.follow);
         let c2 = centre(&app, inner);
-        assert!((c2.0 - c.0).abs() < 1e-6 && (c2.1 - c.1).abs() < 1e-6, "{c2:?}");
+        assert!(
+            (c2.0 - c.0).abs() < 1e-6 && (c2.1 - c.1).abs() < 1e-6,
+            "{c2:?}"
+        );
     }
 
     #[test]
@@ -710,7 +725,10 @@ mod tests {
         // Less room: a shorter length.
         assert_eq!(scale_bar(5.0, 40, 12).as_deref(), Some(" ┝━━┥ 0.5 m "));
         // 0.4 m over 40 columns: 1 cm a column; 0.1 m is 10 columns.
-        assert_eq!(scale_bar(0.4, 40, 80).as_deref(), Some(" ┝━━━━━━━━┥ 0.1 m "));
+        assert_eq!(
+            scale_bar(0.4, 40, 80).as_deref(),
+            Some(" ┝━━━━━━━━┥ 0.1 m ")
+        );
         assert_eq!(scale_bar(0.0, 40, 80), None);
         assert_eq!(scale_bar(5.0, 40, 5), None);
     }
