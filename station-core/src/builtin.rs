@@ -69,11 +69,7 @@ pub fn start_builtin_emulator(
 pub fn start_builtin_emulator_traced(
     key: Option<&[u8; protocol::sign::KEY_LEN]>,
 ) -> Result<BuiltinEmulator, BuiltinError> {
-    let dir = runtime_dir()?;
-    let link = dir.join("robot");
-    let mut opts = EmulatorOptions::builtin_default();
-    opts.serve.link = Some(link.clone());
-    opts.serve.key = key.copied();
+    let (dir, link, mut opts) = served_options(key)?;
     choose_world(&mut opts, None, None);
     let a = emulator::builtin::load(&opts.arena, &opts.load)
         .map_err(|e| BuiltinError::Spawn(e.to_string()))?;
@@ -112,11 +108,7 @@ pub fn start_builtin_emulator_with(
     key: Option<&[u8; protocol::sign::KEY_LEN]>,
     start: Option<[f64; 3]>,
 ) -> Result<BuiltinEmulator, BuiltinError> {
-    let dir = runtime_dir()?;
-    let link = dir.join("robot");
-    let mut opts = EmulatorOptions::builtin_default();
-    opts.serve.link = Some(link.clone());
-    opts.serve.key = key.copied();
+    let (dir, link, mut opts) = served_options(key)?;
     if let Some([x, y, deg]) = start {
         opts.sim.start = Some(emulator::arena::Pose {
             x,
@@ -135,6 +127,19 @@ pub fn start_builtin_emulator_with(
         dir,
         arena,
     })
+}
+
+/// The built-in default's options, served through a symlink `robot` in a fresh runtime
+/// directory (returned with the link), with `key` if any.
+fn served_options(
+    key: Option<&[u8; protocol::sign::KEY_LEN]>,
+) -> Result<(PathBuf, PathBuf, EmulatorOptions), BuiltinError> {
+    let dir = runtime_dir()?;
+    let link = dir.join("robot");
+    let mut opts = EmulatorOptions::builtin_default();
+    opts.serve.link = Some(link.clone());
+    opts.serve.key = key.copied();
+    Ok((dir, link, opts))
 }
 
 /// The per-process directory the built-in emulator's ptys live in: `$XDG_RUNTIME_DIR` when it
