@@ -62,6 +62,41 @@ pub fn start_builtin_emulator(
     start_builtin_emulator_with(None, None, key, None)
 }
 
+/// Starts the built-in emulator (the default world and robot) streaming its hardware trace
+/// from power-up, as `robot-emulator --hal-trace` does: the robot is held at power-up until
+/// the station's first byte, so the whole trace reaches the station and a recording of it
+/// retraces exactly (`station record --hal-trace`).
+pub fn start_builtin_emulator_traced(
+    key: Option<&[u8; protocol::sign::KEY_LEN]>,
+) -> Result<BuiltinEmulator, BuiltinError> {
+    let (dir, link, mut opts) = served_options(key)?;
+    choose_world(&mut opts, None, None);
+    let a = emulator::builtin::load(&opts.arena, &opts.load)
+        .map_err(|e| BuiltinError::Spawn(e.to_string()))?;
+    let arena = Some(ArenaOverlay::from_arena(&a));
+    let mut sim =
+        emulator::sim::Sim::new(a, opts.sim).map_err(|e| BuiltinError::Spawn(e.to_string()))?;
+    // As the station would set it, before the first pass of the main loop.
+    sim.robot_mut().apply(
+        protocol::Command::SetParam {
+            id: protocol::ParamId(robot_firmware::params::id::HAL_TRACE),
+            value: 1.0,
+        },
+        0,
+    );
+    let running = emulator::link::spawn_device(
+        move || Ok(emulator::power_on::PoweredByStation::new(sim)),
+        opts.serve,
+    )
+    .map_err(|e| BuiltinError::Spawn(e.to_string()))?;
+    Ok(BuiltinEmulator {
+        running: Some(running),
+        link,
+        dir,
+        arena,
+    })
+}
+
 /// Starts the built-in emulator in `arena` (a built-in name or a file; default Micro-Rato'99)
 /// with `profile` (default micro-rato, or khepera in `builtin:forage`, the robot with a
 /// gripper). With `key` the robot signs its frames and accepts only frames signed with it
@@ -73,11 +108,7 @@ pub fn start_builtin_emulator_with(
     key: Option<&[u8; protocol::sign::KEY_LEN]>,
     start: Option<[f64; 3]>,
 ) -> Result<BuiltinEmulator, BuiltinError> {
-    let dir = runtime_dir()?;
-    let link = dir.join("robot");
-    let mut opts = EmulatorOptions::builtin_default();
-    opts.serve.link = Some(link.clone());
-    opts.serve.key = key.copied();
+    let (dir, link, mut opts) = served_options(key)?;
     if let Some([x, y, deg]) = start {
         opts.sim.start = Some(emulator::arena::Pose {
             x,
@@ -96,6 +127,19 @@ pub fn start_builtin_emulator_with(
         dir,
         arena,
     })
+}
+
+/// The built-in default's options, served through a symlink `robot` in a fresh runtime
+/// directory (returned with the link), with `key` if any.
+fn served_options(
+    key: Option<&[u8; protocol::sign::KEY_LEN]>,
+) -> Result<(PathBuf, PathBuf, EmulatorOptions), BuiltinError> {
+    let dir = runtime_dir()?;
+    let link = dir.join("robot");
+    let mut opts = EmulatorOptions::builtin_default();
+    opts.serve.link = Some(link.clone());
+    opts.serve.key = key.copied();
+    Ok((dir, link, opts))
 }
 
 /// The per-process directory the built-in emulator's ptys live in: `$XDG_RUNTIME_DIR` when it

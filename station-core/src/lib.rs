@@ -12,7 +12,8 @@
 //! - `plan`: planning on the station with the robot's own nav code.
 //! - `retrace`: re-running a recorded run through the firmware's code over its hardware trace.
 //! - `calibrate`: the Khepera's light -> angle map, trained from a recording.
-//! - `param_file`: parameter files; `format`: values, modes, parameters and objects in words.
+//! - `param_file`: parameter files; `param_names`: parameters as users name them, with the
+//!   closest names for a typo; `format`: values, modes, parameters and objects in words.
 //! - `arena`: what the map draws of an arena; `qt_state`: ALICE's world model as the station
 //!   runs it; `builtin`: the built-in emulator the station starts without `--port`.
 //! - `watch`: the robot as JSON lines for scripts (`station watch`, `status`) and when a link
@@ -32,6 +33,7 @@ pub use emulator::{input_file, json_text, output_file, terminal_text};
 pub mod link;
 pub mod pace;
 pub mod param_file;
+pub mod param_names;
 pub mod plan;
 pub mod qt_feed;
 pub mod qt_state;

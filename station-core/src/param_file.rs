@@ -73,12 +73,8 @@ pub fn parse(label: &str, bytes: &[u8]) -> Result<Vec<Entry>, String> {
                 "a parameter name is missing before `=`".into(),
             ));
         }
-        let info = by_name(name_t).ok_or_else(|| {
-            at(
-                col(name.trim_start()),
-                format!("unknown parameter {name_t:?} (`station params --port P list` lists them)"),
-            )
-        })?;
+        let info = by_name(name_t)
+            .ok_or_else(|| at(col(name.trim_start()), crate::param_names::unknown(name_t)))?;
         let value_t = value.trim();
         let vcol = if value_t.is_empty() {
             col(value)

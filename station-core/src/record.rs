@@ -635,6 +635,42 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>, RecordError> {
     })
 }
 
+/// Where the TUI's `R` key records without `--record-dir`: the platform's data directory
+/// (`$XDG_DATA_HOME`, else `~/.local/share`; on macOS `~/Library/Application Support`) plus
+/// `station/recordings`. Err when neither is known: the caller asks for `--record-dir` rather
+/// than writing into whatever the current directory happens to be.
+pub fn default_recordings_dir() -> Result<PathBuf, String> {
+    let env = |name: &str| {
+        std::env::var_os(name)
+            .map(PathBuf::from)
+            .filter(|p| p.is_absolute())
+    };
+    let base = if cfg!(target_os = "macos") {
+        env("HOME").map(|h| h.join("Library").join("Application Support"))
+    } else {
+        env("XDG_DATA_HOME").or_else(|| env("HOME").map(|h| h.join(".local").join("share")))
+    };
+    base.map(|b| b.join("station").join("recordings"))
+        .ok_or_else(|| {
+            "no data directory to record into (neither $XDG_DATA_HOME nor $HOME is set): \
+         give one with --record-dir"
+                .to_string()
+        })
+}
+
+/// Creates `dir` (and what is missing above it) readable by its owner alone: recordings hold
+/// everything the robot and the station said. An existing directory is left as it is.
+pub fn create_private_dir(dir: &Path) -> std::io::Result<()> {
+    if dir.is_dir() {
+        return Ok(());
+    }
+    let mut b = std::fs::DirBuilder::new();
+    b.recursive(true);
+    #[cfg(unix)]
+    std::os::unix::fs::DirBuilderExt::mode(&mut b, 0o700);
+    b.create(dir)
+}
+
 /// `FILE.partial` for `FILE`.
 pub fn partial_path(path: &Path) -> PathBuf {
     let mut s = path.as_os_str().to_os_string();

@@ -35,19 +35,7 @@ pub fn parse_param(s: &str) -> Result<(u16, f32), String> {
     let (name, value) = s
         .split_once('=')
         .ok_or_else(|| format!("--param {s:?}: expected NAME=VALUE"))?;
-    let info = robot_firmware::params::by_name(name.trim())
-        .or_else(|| {
-            name.trim()
-                .parse::<u16>()
-                .ok()
-                .and_then(robot_firmware::params::info)
-        })
-        .ok_or_else(|| {
-            format!(
-                "--param {}: no such parameter (station params lists them)",
-                crate::terminal_text::printable(name)
-            )
-        })?;
+    let info = crate::param_names::find(name).map_err(|e| format!("--param: {e}"))?;
     let v: f32 = value
         .trim()
         .parse()

@@ -99,6 +99,7 @@ fn driven_app(seconds: u32, hz: u32, size: (u16, u16)) -> App {
     let mut app = App::new(AppOptions {
         port_label: "bench".into(),
         arena,
+        ..AppOptions::default()
     });
     app.update(Action::Resize {
         width: size.0,

@@ -26,6 +26,8 @@ pub enum Action {
     Link(LinkEvent),
     Quit,
     ToggleHelp,
+    /// Scroll the help to this line (`input` clamps it to the help's length on screen).
+    HelpScroll(u16),
     /// Close the topmost overlay or mode (help, go-to cursor, parameter edit).
     Back,
     NextView,
@@ -48,8 +50,14 @@ pub enum Action {
     },
     /// Send `GoTo` to the cursor.
     GoToCursor,
-    /// Send `GoTo` to a point (a mouse click on the map), metres.
+    /// Send `GoTo` to a point (a mouse click on the map with `--click-goes`), metres.
     GoToPoint {
+        x_m: f64,
+        y_m: f64,
+    },
+    /// Put the go-to cursor at a point (a mouse click on the map), metres: `Enter` then
+    /// sends the robot there, so a stray click moves nothing.
+    CursorAt {
         x_m: f64,
         y_m: f64,
     },
@@ -65,6 +73,12 @@ pub enum Action {
     ParamBackspace,
     /// `SetParam` the typed value.
     ParamCommit,
+    /// Start typing the parameter search (`/` in the parameter view).
+    ParamSearchStart,
+    ParamSearchInput(char),
+    ParamSearchBackspace,
+    /// Keep the search and go back to the list's keys (`Enter`).
+    ParamSearchDone,
     /// Step the telemetry rate through 0, 1, 2, 5, 10, 20, 50 Hz.
     RateStep(i32),
     /// Show the next set of chart series.
@@ -92,6 +106,11 @@ pub enum Action {
     MapPan {
         dx: i8,
         dy: i8,
+    },
+    /// Follow the robot with the map, or stop following (`F`); `keep` is the pan that shows
+    /// the view as it is now, kept when following stops.
+    MapFollow {
+        keep: (f64, f64),
     },
     /// Show or hide a map layer by name.
     ToggleLayer(&'static str),

@@ -104,6 +104,8 @@ pub struct MapState {
     pub hidden: Vec<&'static str>,
     /// Planning on the station: the map's grid and regions, the last plan.
     pub plan: crate::plan::PlanState,
+    /// The view follows the robot (`F`): its centre is the robot, `pan` an offset from it.
+    pub follow: bool,
     /// See `zoom()`; 0 (the default) is 1.
     zoom: f64,
     /// See `pan()`.
@@ -151,6 +153,20 @@ impl MapState {
         );
     }
 
+    /// Starts following the robot (zoomed in at least to `FOLLOW_ZOOM`: at the whole arena
+    /// there is nothing to recentre), or stops, leaving the view at `keep` (the pan that shows
+    /// what is shown now), so that it does not jump.
+    pub fn toggle_follow(&mut self, keep: (f64, f64)) {
+        if self.follow {
+            self.follow = false;
+            self.set_pan(keep.0, keep.1);
+        } else {
+            self.follow = true;
+            self.pan = (0.0, 0.0);
+            self.zoom = self.zoom().max(FOLLOW_ZOOM);
+        }
+    }
+
     fn set_pan(&mut self, x: f64, y: f64) {
         // The centre stays over the arena: the view never wanders off into nothing.
         self.pan = (x.clamp(-0.5, 0.5), y.clamp(-0.5, 0.5));
@@ -163,6 +179,8 @@ pub const MAX_ZOOM: f64 = 64.0;
 pub const PAN_STEP: f64 = 0.25;
 /// One zoom step (a key press or a wheel notch).
 pub const ZOOM_STEP: f64 = 1.5;
+/// The least magnification while following the robot: two zoom steps.
+pub const FOLLOW_ZOOM: f64 = ZOOM_STEP * ZOOM_STEP;
 
 /// How the app starts.
 #[derive(Clone, Debug, Default)]
@@ -170,6 +188,12 @@ pub struct AppOptions {
     /// What the header says the link is ("/dev/ttyUSB0", "built-in emulator on /dev/pts/3").
     pub port_label: String,
     pub arena: Option<ArenaOverlay>,
+    /// A click on the map sends the robot at once (`--click-goes`) instead of placing the
+    /// go-to cursor for `Enter` to confirm.
+    pub click_goes: bool,
+    /// While recording (`R`), the robot streams its hardware trace: hal_trace is set to 1 when
+    /// the recording starts and put back when it ends (`--record-hal-trace`).
+    pub record_hal_trace: bool,
 }
 
 /// The station's whole UI state.
@@ -182,8 +206,12 @@ pub struct App {
     pub size: (u16, u16),
     pub view: View,
     pub help: bool,
+    /// The help's first line shown (`Action::HelpScroll`).
+    pub help_scroll: u16,
     pub quit: bool,
     pub port_label: String,
+    /// See `AppOptions::click_goes`.
+    pub click_goes: bool,
     pub connection: Connection,
     pub peer: Option<PeerInfo>,
     pub telemetry: Option<Telemetry>,
@@ -209,6 +237,10 @@ pub struct App {
     pub chart: usize,
     /// The recording in progress (`R`): file name and station time it started.
     pub recording: Option<(String, u64)>,
+    /// See `AppOptions::record_hal_trace`.
+    pub record_hal_trace: bool,
+    /// While recording with the hardware trace on: the hal_trace value to put back after.
+    hal_trace_before: Option<f32>,
     /// While recording, the lines the station logged (not the robot's: its log lines are in
     /// its frames) waiting for the loop to record them (`take_station_lines`).
     station_lines: Vec<StationLine>,
@@ -258,8 +290,10 @@ impl App {
             size: (80, 24),
             view: View::Dashboard,
             help: false,
+            help_scroll: 0,
             quit: false,
             port_label: opts.port_label,
+            click_goes: opts.click_goes,
             connection: Connection::Closed {
                 reason: "starting".into(),
             },
@@ -284,6 +318,8 @@ impl App {
             rate_hz: None,
             chart: 0,
             recording: None,
+            record_hal_trace: opts.record_hal_trace,
+            hal_trace_before: None,
             station_lines: Vec::new(),
             transfers: transfers::Transfers::default(),
             localization: localization::LocalizationState::default(),
@@ -361,7 +397,11 @@ impl App {
                 }
                 self.quit = true;
             }
-            Action::ToggleHelp => self.help = !self.help,
+            Action::ToggleHelp => {
+                self.help = !self.help;
+                self.help_scroll = 0;
+            }
+            Action::HelpScroll(line) => self.help_scroll = line,
             Action::Back => self.back(),
             Action::NextView => self.step_view(1),
             Action::PrevView => self.step_view(-1),
@@ -395,6 +435,10 @@ impl App {
                 self.map.cursor_mode = false;
                 self.go_to(x_m, y_m);
             }
+            Action::CursorAt { x_m, y_m } => {
+                self.map.cursor = (x_m, y_m);
+                self.map.cursor_mode = true;
+            }
             Action::ParamSelect(d) => self.params.select(d),
             Action::ParamRead => {
                 if let Some(p) = self.params.selected_info() {
@@ -403,9 +447,26 @@ impl App {
             }
             Action::ParamReadAll => self.fetch_params(),
             Action::ParamEdit => {
-                self.params.input = Some(String::new());
-                self.params.input_error = None;
+                if self.params.selected_info().is_some() {
+                    self.params.searching = false;
+                    self.params.input = Some(String::new());
+                    self.params.input_error = None;
+                }
             }
+            Action::ParamSearchStart => self.params.searching = true,
+            Action::ParamSearchInput(c) => {
+                let mut text = self.params.search.clone();
+                if text.chars().count() < log::FILTER_MAX && !c.is_control() {
+                    text.push(c);
+                }
+                self.params.set_search(text);
+            }
+            Action::ParamSearchBackspace => {
+                let mut text = self.params.search.clone();
+                text.pop();
+                self.params.set_search(text);
+            }
+            Action::ParamSearchDone => self.params.searching = false,
             Action::ParamInput(c) => {
                 self.params.input_error = None;
                 if let Some(s) = &mut self.params.input {
@@ -457,6 +518,15 @@ impl App {
             }
             Action::MapZoom { factor, at } => self.map.zoom_by(factor, at),
             Action::MapPan { dx, dy } => self.map.pan_by(dx, dy),
+            Action::MapFollow { keep } => {
+                self.map.toggle_follow(keep);
+                let text = if self.map.follow {
+                    "map follows the robot (F stops; hjkl look around it)"
+                } else {
+                    "map stays put (F follows the robot)"
+                };
+                self.note(Level::Info, Source::Command, text.into());
+            }
             Action::ToggleLayer(name) => {
                 if let Some(i) = self.map.hidden.iter().position(|h| *h == name) {
                     self.map.hidden.remove(i);
@@ -502,6 +572,12 @@ impl App {
             self.help = false;
         } else if self.params.input.is_some() {
             self.params.input = None;
+        } else if self.params.searching
+            || (self.view == View::Params && !self.params.search.is_empty())
+        {
+            // Esc drops the search: every parameter again.
+            self.params.searching = false;
+            self.params.set_search(String::new());
         } else if self.log.filter_input.is_some() {
             // Esc while typing a filter drops the filter too: the way back to everything.
             self.log.filter_input = None;
@@ -745,6 +821,10 @@ impl App {
         // a replay has no robot to ask (its recorded replies fill the editor).
         if connected && !self.replaying {
             self.fetch_params();
+            // A robot that restarted has its trace off again.
+            if self.hal_trace_before.is_some() {
+                self.hal_trace_on();
+            }
         }
     }
 
@@ -978,6 +1058,7 @@ impl App {
                 bytes,
             } => {
                 self.recording = None;
+                self.hal_trace_back();
                 (
                     Level::Info,
                     format!("recording saved: {file} ({seconds:.1} s, {bytes} bytes)"),
@@ -985,10 +1066,52 @@ impl App {
             }
             RecordingNote::Failed { why } => {
                 self.recording = None;
+                self.hal_trace_back();
                 (Level::Error, format!("recording: {why}"))
             }
         };
         self.note(level, Source::Link, text);
+        // After the line that says where the recording goes: the trace is in it.
+        self.hal_trace_on();
+    }
+
+    /// A recording started (or its robot came back): with `record_hal_trace`, the robot
+    /// streams its hardware trace into it, so `station retrace` can re-run it.
+    fn hal_trace_on(&mut self) {
+        use robot_firmware::params::id::HAL_TRACE;
+        if !self.record_hal_trace || self.replaying || self.recording.is_none() {
+            return;
+        }
+        let now = self.params.value_of(HAL_TRACE);
+        if self.hal_trace_before.is_none() {
+            // Unknown (not read yet): off, the firmware's default.
+            self.hal_trace_before = Some(now.unwrap_or(0.0));
+        }
+        if now == Some(1.0) {
+            return;
+        }
+        self.note(
+            Level::Info,
+            Source::Command,
+            "hardware trace on while recording (hal_trace = 1, put back after)".into(),
+        );
+        self.send(Command::SetParam {
+            id: protocol::ParamId(HAL_TRACE),
+            value: 1.0,
+        });
+    }
+
+    /// The recording ended: hal_trace as it was before it.
+    fn hal_trace_back(&mut self) {
+        let Some(before) = self.hal_trace_before.take() else {
+            return;
+        };
+        if before != 1.0 {
+            self.send(Command::SetParam {
+                id: protocol::ParamId(robot_firmware::params::id::HAL_TRACE),
+                value: before,
+            });
+        }
     }
 
     /// Logs a line of the station's own about the link (what the TUI's start-up set up).

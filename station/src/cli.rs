@@ -53,6 +53,37 @@ pub struct Cli {
     #[arg(long, value_name = "X,Y[,DEG]", value_parser = emulator::cli::parse_pose,
           allow_negative_numbers = true, conflicts_with = "port")]
     pub start: Option<[f64; 3]>,
+    #[command(flatten)]
+    pub tui: TuiArgs,
+}
+
+/// How the TUI behaves (not its subcommands).
+#[derive(Debug, Args, Clone, Default)]
+pub struct TuiArgs {
+    /// A click on the map sends the robot there at once. Without it a click places the go-to
+    /// cursor and Enter sends the robot (as `g` does).
+    #[arg(long)]
+    pub click_goes: bool,
+    /// Where `R` writes its recordings [default: $XDG_DATA_HOME/station/recordings, else
+    /// ~/.local/share/station/recordings]. Created, readable by you alone, when `R` first
+    /// records; the log says each file's full path.
+    #[arg(long, value_name = "DIR")]
+    pub record_dir: Option<PathBuf>,
+    /// While `R` records, the robot streams its hardware trace (parameter 34 hal_trace set to
+    /// 1, and put back when the recording ends), so `station retrace` can re-run the
+    /// recording through the firmware's code.
+    #[arg(long)]
+    pub record_hal_trace: bool,
+}
+
+impl TuiArgs {
+    /// Where `R` records: `--record-dir`, else the data directory, else why there is none.
+    pub fn record_dir(&self) -> Result<PathBuf, String> {
+        match &self.record_dir {
+            Some(d) => Ok(d.clone()),
+            None => crate::record::default_recordings_dir(),
+        }
+    }
 }
 
 /// Which port to use.
@@ -480,6 +511,101 @@ mod tests {
                     assert_eq!(e.exit_code(), 2, "{args:?}");
                 }
             }
+        }
+    }
+
+    /// `words` split as `sh` would: whitespace, with '...' and "..." quoting.
+    fn shell_words(line: &str) -> Vec<String> {
+        let (mut words, mut word, mut quote, mut any) = (Vec::new(), String::new(), None, false);
+        for c in line.chars() {
+            match (quote, c) {
+                (Some(q), c) if c == q => quote = None,
+                (Some(_), c) => word.push(c),
+                (None, '\'' | '"') => {
+                    quote = Some(c);
+                    any = true;
+                }
+                (None, c) if c.is_whitespace() => {
+                    if any || !word.is_empty() {
+                        words.push(std::mem::take(&mut word));
+                    }
+                    any = false;
+                }
+                (None, c) => word.push(c),
+            }
+        }
+        if any || !word.is_empty() {
+            words.push(word);
+        }
+        words
+    }
+
+    /// Every `station ...` line of every help text, as typed: without the comment in
+    /// parentheses after it or what it is piped into.
+    fn help_examples(cmd: &clap::Command, out: &mut Vec<String>) {
+        let texts = [
+            cmd.get_long_about(),
+            cmd.get_about(),
+            cmd.get_after_help(),
+            cmd.get_after_long_help(),
+            cmd.get_before_help(),
+        ];
+        for text in texts.into_iter().flatten() {
+            for line in text.to_string().lines() {
+                let line = line.trim();
+                if !line.starts_with("station ") && line != "station" {
+                    continue;
+                }
+                let line = line.split(" | ").next().unwrap_or(line);
+                let line = match line.find("  (") {
+                    Some(i) => &line[..i],
+                    None => line,
+                };
+                out.push(line.trim().to_string());
+            }
+        }
+        for sub in cmd.get_subcommands() {
+            help_examples(sub, out);
+        }
+    }
+
+    #[test]
+    fn every_example_in_the_help_parses_as_written() {
+        use clap::CommandFactory;
+        let mut examples = Vec::new();
+        help_examples(&Cli::command(), &mut examples);
+        assert!(examples.len() > 40, "{examples:?}");
+        for ex in &examples {
+            let words = shell_words(ex);
+            if let Err(e) = Cli::try_parse_from(&words) {
+                panic!("the example `{ex}` does not parse:\n{e}");
+            }
+        }
+        // The examples that name parameters name real ones.
+        assert!(examples
+            .iter()
+            .any(|e| e.contains("--param odo_wheel_distance_mm=")));
+    }
+
+    #[test]
+    fn a_mistyped_parameter_suggests_the_real_name_wherever_one_is_named() {
+        for args in [
+            &["retrace", "run.rec", "--param", "wheel_distance_mm=53"][..],
+            &[
+                "replay",
+                "run.rec",
+                "--retrace",
+                "--param",
+                "wheel_distance_mm=53",
+            ][..],
+            &["send", "--port", "p", "param", "get", "wheel_distance_mm"][..],
+            &["params", "--port", "p", "set", "wheel_distance_mm", "53"][..],
+        ] {
+            let e = parse(args).unwrap_err().to_string();
+            assert!(
+                e.contains("did you mean odo_wheel_distance_mm?"),
+                "{args:?}: {e}"
+            );
         }
     }
 

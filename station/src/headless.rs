@@ -42,6 +42,7 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     cli.arena.as_deref(),
                     cli.profile.map(|p| p.profile()),
                     key,
+                    &cli.tui,
                 )
                 .await;
             }
@@ -52,6 +53,7 @@ pub async fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 cli.profile.map(|p| p.profile()),
                 key,
                 cli.start,
+                &cli.tui,
             )
             .await
         }
@@ -106,6 +108,7 @@ async fn interactive(
     profile: Option<&'static robot_firmware::Profile>,
     key: Option<[u8; protocol::sign::KEY_LEN]>,
     start: Option<[f64; 3]>,
+    tui: &crate::cli::TuiArgs,
 ) -> anyhow::Result<ExitCode> {
     if !std::io::stdout().is_terminal() {
         bail!("the TUI needs a terminal; for scripts use `station send` or `station stats`");
@@ -184,10 +187,13 @@ async fn interactive(
             ..LinkOptions::default()
         },
     );
-    let recorder = crate::record::live::TuiRecorder::new(taps, epoch, meta);
+    let recorder =
+        crate::record::live::TuiRecorder::new(taps, epoch, meta).in_dir_or(tui.record_dir());
     let mut app = App::new(AppOptions {
         port_label: label,
         arena,
+        click_goes: tui.click_goes,
+        record_hal_trace: tui.record_hal_trace,
     });
     app.map.plan = plan;
     // The squares are busy on a small map panel: `r` shows them.

@@ -3,7 +3,7 @@
 //! Layer: the first step of the one-way flow. It reads the app (which mode the keys are in,
 //! where the map is drawn) but changes nothing. Key bindings depend on the context, innermost
 //! first: help open, typing a path in the upload prompt, typing a log filter, typing a
-//! parameter value, the go-to cursor, the parameter view, the map's zoom and pan keys (while
+//! parameter value, typing a parameter search, the go-to cursor, the parameter view, the map's zoom and pan keys (while
 //! the map is shown), then the global keys. Key release events (kitty protocol terminals) are
 //! ignored.
 
@@ -29,6 +29,12 @@ pub fn action_for(app: &App, ev: &Event) -> Option<Action> {
             height: *h,
         }),
         Event::Key(k) if k.kind != KeyEventKind::Release => key(app, k),
+        // Under the help nothing is clicked: the wheel scrolls it.
+        Event::Mouse(m) if app.help => match m.kind {
+            MouseEventKind::ScrollUp => help_scroll(app, -3),
+            MouseEventKind::ScrollDown => help_scroll(app, 3),
+            _ => None,
+        },
         Event::Mouse(m) => {
             let screen = Rect::new(0, 0, app.size.0, app.size.1);
             let areas = ui::areas(screen, app);
@@ -37,7 +43,13 @@ pub fn action_for(app: &App, ev: &Event) -> Option<Action> {
                     let map = areas.find(Panel::Map)?;
                     let inner = inner_of(ui::map::map_area(app, map));
                     let (x_m, y_m) = ui::map::to_world(app, inner, m.column, m.row)?;
-                    Some(Action::GoToPoint { x_m, y_m })
+                    // A click only places the cursor unless the operator asked for clicks
+                    // that send (`--click-goes`): one stray click must not drive the robot.
+                    Some(if app.click_goes {
+                        Action::GoToPoint { x_m, y_m }
+                    } else {
+                        Action::CursorAt { x_m, y_m }
+                    })
                 }
                 MouseEventKind::ScrollUp | MouseEventKind::ScrollDown => {
                     let up = matches!(m.kind, MouseEventKind::ScrollUp);
@@ -60,6 +72,14 @@ pub fn action_for(app: &App, ev: &Event) -> Option<Action> {
         }
         _ => None,
     }
+}
+
+/// The help scrolled by `d` lines, within what it holds on this screen.
+fn help_scroll(app: &App, d: i32) -> Option<Action> {
+    let screen = Rect::new(0, 0, app.size.0, app.size.1);
+    let max = i32::from(ui::help::max_scroll(screen, app.in_fleet()));
+    let to = (i32::from(app.help_scroll) + d).clamp(0, max);
+    Some(Action::HelpScroll(u16::try_from(to).unwrap_or(0)))
 }
 
 /// Where `col`, `row` is in `inner`, as fractions of its span from its centre (x right, y
@@ -88,10 +108,20 @@ fn key(app: &App, k: &KeyEvent) -> Option<Action> {
         return Some(Action::Quit);
     }
     if app.help {
-        return Some(match k.code {
-            KeyCode::Char('q') => Action::Quit,
-            _ => Action::ToggleHelp,
-        });
+        // Every key stops here: one that closed the help and then drove (an arrow after
+        // PgUp) would move the robot from a screen that showed no robot.
+        let screen = Rect::new(0, 0, app.size.0, app.size.1);
+        let page = i32::from(ui::help::page(screen, app.in_fleet()));
+        return match k.code {
+            KeyCode::Esc | KeyCode::Char('?' | 'q') => Some(Action::ToggleHelp),
+            KeyCode::Up | KeyCode::Char('k') => help_scroll(app, -1),
+            KeyCode::Down | KeyCode::Char('j') => help_scroll(app, 1),
+            KeyCode::PageUp => help_scroll(app, -page),
+            KeyCode::PageDown | KeyCode::Char(' ') => help_scroll(app, page),
+            KeyCode::Home => help_scroll(app, -i32::from(u16::MAX)),
+            KeyCode::End => help_scroll(app, i32::from(u16::MAX)),
+            _ => None,
+        };
     }
     if app.transfers.prompt.is_some() {
         return match k.code {
@@ -128,6 +158,18 @@ fn key(app: &App, k: &KeyEvent) -> Option<Action> {
             _ => None,
         };
     }
+    if app.params.searching {
+        return match k.code {
+            KeyCode::Char(_) if ctrl => None,
+            KeyCode::Char(c) => Some(Action::ParamSearchInput(c)),
+            KeyCode::Backspace => Some(Action::ParamSearchBackspace),
+            KeyCode::Up => Some(Action::ParamSelect(-1)),
+            KeyCode::Down => Some(Action::ParamSelect(1)),
+            KeyCode::Enter => Some(Action::ParamSearchDone),
+            KeyCode::Esc => Some(Action::Back),
+            _ => None,
+        };
+    }
     if app.map.cursor_mode {
         let step = if k.modifiers.contains(KeyModifiers::SHIFT) {
             5.0 * CURSOR_STEP_M
@@ -154,6 +196,7 @@ fn key(app: &App, k: &KeyEvent) -> Option<Action> {
             KeyCode::Char('r') => return Some(Action::ParamRead),
             KeyCode::Char('R') => return Some(Action::ParamReadAll),
             KeyCode::Enter | KeyCode::Char('e') => return Some(Action::ParamEdit),
+            KeyCode::Char('/') => return Some(Action::ParamSearchStart),
             // No driving from the table: arrows select there, so WASD would surprise.
             KeyCode::Char('w' | 'a' | 's' | 'd') | KeyCode::Left | KeyCode::Right => return None,
             _ => {}
@@ -174,6 +217,14 @@ fn key(app: &App, k: &KeyEvent) -> Option<Action> {
             KeyCode::Char('j') => return pan(0, -1),
             KeyCode::Char('z') => return zoom(ZOOM_STEP),
             KeyCode::Char('Z') => return zoom(1.0 / ZOOM_STEP),
+            KeyCode::Char('F') => {
+                let screen = Rect::new(0, 0, app.size.0, app.size.1);
+                let keep = ui::areas(screen, app)
+                    .find(Panel::Map)
+                    .map(|r| inner_of(ui::map::map_area(app, r)))
+                    .map_or(app.map.pan(), |inner| ui::map::pan_of_view(app, inner));
+                return Some(Action::MapFollow { keep });
+            }
             _ => {}
         }
     }
@@ -289,6 +340,98 @@ mod tests {
             wheel(&app, true, log.x + 2, log.y + 2),
             Some(Action::LogScroll(3))
         );
+    }
+
+    fn key_event(code: KeyCode) -> Event {
+        Event::Key(KeyEvent::new(code, KeyModifiers::NONE))
+    }
+
+    #[test]
+    fn no_key_or_click_in_the_help_reaches_the_robot() {
+        let mut app = App::new(AppOptions::default());
+        app.update(Action::ToggleHelp);
+        let robot = |a: &Option<Action>| {
+            matches!(
+                a,
+                Some(
+                    Action::Drive { .. }
+                        | Action::StopDriving
+                        | Action::SetMode(_)
+                        | Action::GoToCursorStart
+                        | Action::GoToCursor
+                        | Action::GoToPoint { .. }
+                        | Action::CursorAt { .. }
+                        | Action::Transfer(_)
+                        | Action::ToggleRecording
+                        | Action::Quit
+                )
+            )
+        };
+        let mut codes = vec![
+            KeyCode::Up,
+            KeyCode::Down,
+            KeyCode::Left,
+            KeyCode::Right,
+            KeyCode::PageUp,
+            KeyCode::PageDown,
+            KeyCode::Home,
+            KeyCode::End,
+            KeyCode::Enter,
+            KeyCode::Tab,
+            KeyCode::F(4),
+        ];
+        codes.extend("wasd 0123456789gREXOM".chars().map(KeyCode::Char));
+        for code in codes {
+            let a = action_for(&app, &key_event(code));
+            assert!(!robot(&a), "{code:?} in the help gave {a:?}");
+            assert_ne!(a, Some(Action::ToggleHelp), "{code:?} closed the help");
+        }
+        // PgUp then an arrow: the help is still open and the arrow scrolls it.
+        app.update(Action::HelpScroll(3));
+        let page_up = action_for(&app, &key_event(KeyCode::PageUp));
+        assert_eq!(page_up, Some(Action::HelpScroll(0)));
+        for close in [KeyCode::Esc, KeyCode::Char('?'), KeyCode::Char('q')] {
+            assert_eq!(
+                action_for(&app, &key_event(close)),
+                Some(Action::ToggleHelp)
+            );
+        }
+        let click = Event::Mouse(MouseEvent {
+            kind: MouseEventKind::Down(MouseButton::Left),
+            column: 40,
+            row: 10,
+            modifiers: KeyModifiers::NONE,
+        });
+        assert_eq!(action_for(&app, &click), None);
+    }
+
+    #[test]
+    fn a_click_on_the_map_places_the_cursor_unless_clicks_go() {
+        for goes in [false, true] {
+            let mut app = App::new(AppOptions {
+                click_goes: goes,
+                ..AppOptions::default()
+            });
+            app.update(Action::Resize {
+                width: 80,
+                height: 24,
+            });
+            let screen = Rect::new(0, 0, 80, 24);
+            let map = ui::areas(screen, &app).find(Panel::Map).unwrap();
+            let inner = inner_of(ui::map::map_area(&app, map));
+            let click = Event::Mouse(MouseEvent {
+                kind: MouseEventKind::Down(MouseButton::Left),
+                column: inner.x + inner.width / 2,
+                row: inner.y + inner.height / 2,
+                modifiers: KeyModifiers::NONE,
+            });
+            let a = action_for(&app, &click);
+            if goes {
+                assert!(matches!(a, Some(Action::GoToPoint { .. })), "{a:?}");
+            } else {
+                assert!(matches!(a, Some(Action::CursorAt { .. })), "{a:?}");
+            }
+        }
     }
 
     #[test]

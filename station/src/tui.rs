@@ -94,6 +94,13 @@ pub async fn run_fleet(
     if let Some(note) = recorder.stop() {
         fleet.update(Action::Recording(note));
     }
+    // What the end of the recording asks the robots (hal_trace put back) goes before the
+    // links close; a request submitted before the shutdown is written before it.
+    for (m, link) in fleet.members.iter_mut().zip(links.iter()) {
+        for (id, command, when) in m.app.take_outbox_timed() {
+            link.handle.submit_when(id, command, when);
+        }
+    }
     // Let every link send a final Stop and close its port.
     for link in &links {
         link.handle.shutdown();

@@ -68,6 +68,7 @@ fn replayed(sits: &[AliceSituation]) -> App {
         arena: Some(ArenaOverlay::from_arena(
             &emulator::builtin::load("builtin:alice", &Default::default()).unwrap(),
         )),
+        ..AppOptions::default()
     });
     let mut feed = ReplayFeed::new("memory");
     let mut actions = Vec::new();

@@ -37,6 +37,7 @@ fn app() -> App {
     let mut app = App::new(AppOptions {
         port_label: "built-in emulator".into(),
         arena: Some(ArenaOverlay::from_arena(&a)),
+        ..AppOptions::default()
     });
     app.map.plan = PlanState::for_arena(&a, emulator::builtin::MICRO_RATO_99);
     app.update(Action::Link(LinkEvent::Connection(Connection::Connected(

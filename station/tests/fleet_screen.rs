@@ -58,6 +58,7 @@ fn fleet() -> Fleet {
             app: App::new(AppOptions {
                 port_label: format!("/dev/ttyUSB{}", k - 1),
                 arena: Some(arena()),
+                ..AppOptions::default()
             }),
             port: format!("/dev/ttyUSB{}", k - 1),
         })

@@ -53,6 +53,7 @@ fn story() -> App {
     let mut app = App::new(AppOptions {
         port_label: "built-in emulator".into(),
         arena: Some(forage_arena()),
+        ..AppOptions::default()
     });
     let link = |app: &mut App, e| app.update(Action::Link(e));
     app.update(Action::Tick { now_ms: 100 });

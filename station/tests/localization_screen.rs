@@ -25,6 +25,7 @@ fn surveyed() -> App {
     let mut app = App::new(AppOptions {
         port_label: "built-in emulator".into(),
         arena: Some(ArenaOverlay::from_arena(&arena)),
+        ..AppOptions::default()
     });
     let cfg = SimConfig {
         seed: 3,

@@ -61,6 +61,7 @@ fn planned() -> App {
     let mut app = App::new(AppOptions {
         port_label: "/dev/ttyUSB0".into(),
         arena: Some(overlay),
+        ..AppOptions::default()
     });
     app.map.plan = PlanState::for_arena(&a, emulator::builtin::MICRO_RATO_99);
     connect(&mut app);
@@ -136,8 +137,8 @@ fn a_click_lands_where_the_map_is_drawn_beside_the_plan_panel() {
         row: map.y + map.height / 2,
         modifiers: KeyModifiers::NONE,
     });
-    let Some(Action::GoToPoint { x_m, y_m }) = station::input::action_for(&app, &click) else {
-        panic!("a click on the map is a go-to");
+    let Some(Action::CursorAt { x_m, y_m }) = station::input::action_for(&app, &click) else {
+        panic!("a click on the map places the go-to cursor");
     };
     // The middle of the drawn map is the middle of the 5 m arena.
     assert!(

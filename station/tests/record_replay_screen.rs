@@ -19,6 +19,7 @@ fn session() -> ReplaySession {
         AppOptions {
             port_label: "replay demo.rec".into(),
             arena: None,
+            ..AppOptions::default()
         },
         1.0,
     );

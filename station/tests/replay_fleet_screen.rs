@@ -86,6 +86,7 @@ fn replay_of_three_robots_shows_the_fleet_at_150x40() {
         AppOptions {
             port_label: "replay fleet.rec".into(),
             arena: Some(arena()),
+            ..AppOptions::default()
         },
         1.0,
     );

@@ -43,6 +43,7 @@ fn a_replayed_download_leaves_no_answers_behind() {
         AppOptions {
             port_label: "replay".into(),
             arena: None,
+            ..AppOptions::default()
         },
         1.0,
     );

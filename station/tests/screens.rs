@@ -108,6 +108,7 @@ fn story() -> App {
     let mut app = App::new(AppOptions {
         port_label: "/dev/ttyUSB0".into(),
         arena: Some(arena()),
+        ..AppOptions::default()
     });
     let link = |app: &mut App, e| app.update(Action::Link(e));
     app.update(Action::Tick { now_ms: 100 });
@@ -309,6 +310,7 @@ fn a_busy_port_is_explained_in_the_header_and_link_panel() {
     let mut app = App::new(AppOptions {
         port_label: "/dev/ttyUSB0".into(),
         arena: None,
+        ..AppOptions::default()
     });
     app.update(Action::Link(LinkEvent::Connection(Connection::Closed {
         reason: "/dev/ttyUSB0 is in use by pid 4242 (minicom)".into(),
@@ -329,7 +331,7 @@ fn a_schema_mismatch_names_both_builds() {
 }
 
 #[test]
-fn a_click_on_the_map_becomes_a_go_to_at_that_point() {
+fn a_click_on_the_map_places_the_go_to_cursor_at_that_point() {
     use ratatui::crossterm::event::{
         Event as TEvent, KeyModifiers, MouseButton, MouseEvent, MouseEventKind,
     };
@@ -348,8 +350,8 @@ fn a_click_on_the_map_becomes_a_go_to_at_that_point() {
         row: map.y + map.height / 2,
         modifiers: KeyModifiers::NONE,
     });
-    let Some(Action::GoToPoint { x_m, y_m }) = station::input::action_for(&app, &click) else {
-        panic!("a click on the map is a go-to");
+    let Some(Action::CursorAt { x_m, y_m }) = station::input::action_for(&app, &click) else {
+        panic!("a click on the map places the go-to cursor");
     };
     let [x0, y0, x1, y1] = arena().bounds;
     assert!((x_m - (x0 + x1) / 2.0).abs() < 0.2, "{x_m}");

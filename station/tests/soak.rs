@@ -46,6 +46,7 @@ impl Soak {
             app: App::new(AppOptions {
                 port_label: "soak".into(),
                 arena: None,
+                ..AppOptions::default()
             }),
             now_ms: 0,
             telemetry: 0,

@@ -33,6 +33,7 @@ fn app() -> App {
     let mut app = App::new(AppOptions {
         port_label: "/dev/ttyUSB0".into(),
         arena: Some(ArenaOverlay::from_arena(&a)),
+        ..AppOptions::default()
     });
     app.map.plan = PlanState::for_arena(&a, emulator::builtin::MICRO_RATO_99);
     app.map.hidden.push(station::ui::map_layers::REGIONS);

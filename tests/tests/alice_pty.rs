@@ -59,6 +59,7 @@ fn replayed(rec: &Recording, until_us: u64) -> App {
     let mut app = App::new(AppOptions {
         port_label: "replay".into(),
         arena: None,
+        ..AppOptions::default()
     });
     let mut feed = ReplayFeed::new("memory");
     let mut actions = Vec::new();

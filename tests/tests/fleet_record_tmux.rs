@@ -43,7 +43,15 @@ fn r_records_every_robot_of_the_fleet_and_the_replay_shows_all_three() {
     }
     let d = dir("rec");
     let station = workspace_bin("station");
-    let t = Tmux::start("rec", 150, 40, &d, &station, &["--robots", "3"]);
+    let dir = d.display().to_string();
+    let t = Tmux::start(
+        "rec",
+        150,
+        40,
+        &d,
+        &station,
+        &["--robots", "3", "--record-dir", &dir],
+    );
     t.wait_for("three robots connected", WAIT, all_connected);
     // Every robot exploring, so each one's track is its own.
     t.keys(&["E", "Tab", "E", "Tab", "E", "Tab"]);

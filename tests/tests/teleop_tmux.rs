@@ -64,7 +64,7 @@ fn teleop_repeats_keep_their_rate_and_a_key_press_goes_at_once() {
         40,
         &d,
         &workspace_bin("station"),
-        &["--port", &port],
+        &["--port", &port, "--record-dir", &d.display().to_string()],
     );
     t.wait_text("● ", WAIT);
     // 50 Hz telemetry: the robot's line is a third busy, so repeats are held most.

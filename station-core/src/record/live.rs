@@ -317,7 +317,8 @@ pub enum RecordingNote {
 pub struct TuiRecorder {
     links: Vec<TapLink>,
     meta: Meta,
-    dir: std::path::PathBuf,
+    /// Where recordings go, or why there is nowhere.
+    dir: Result<std::path::PathBuf, String>,
     active: Option<LiveRecorder>,
 }
 
@@ -357,7 +358,7 @@ impl TuiRecorder {
                 })
                 .collect(),
             meta,
-            dir: std::path::PathBuf::from("."),
+            dir: Ok(std::path::PathBuf::from(".")),
             active: None,
         }
     }
@@ -367,10 +368,17 @@ impl TuiRecorder {
         TuiRecorder::new_links(Vec::new(), Meta::default())
     }
 
-    /// Records into `dir` instead of the current directory.
+    /// Records into `dir` instead of the current directory; `dir` is created (owner only)
+    /// when a recording starts.
     pub fn in_dir(mut self, dir: &Path) -> TuiRecorder {
-        self.dir = dir.to_path_buf();
+        self.dir = Ok(dir.to_path_buf());
         self
+    }
+
+    /// Records into `dir`, or, with no directory to record into, refuses each `R` saying
+    /// `why` (`record::default_recordings_dir`).
+    pub fn in_dir_or(self, dir: Result<std::path::PathBuf, String>) -> TuiRecorder {
+        TuiRecorder { dir, ..self }
     }
 
     pub fn recording(&self) -> bool {
@@ -458,10 +466,23 @@ impl TuiRecorder {
                 why: "this link has no tap to record".into(),
             };
         }
+        let dir = match &self.dir {
+            Ok(d) => d.clone(),
+            Err(why) => {
+                return RecordingNote::Failed {
+                    why: format!("cannot record: {why}"),
+                }
+            }
+        };
+        if let Err(e) = super::create_private_dir(&dir) {
+            return RecordingNote::Failed {
+                why: format!("cannot record: cannot create {}: {e}", dir.display()),
+            };
+        }
         let mut meta = self.meta.clone();
         let now = Meta::now(&meta.port, meta.baud);
         meta.created_unix_ms = now.created_unix_ms;
-        let path = free_name(&self.dir, meta.created_unix_ms);
+        let path = free_name(&dir, meta.created_unix_ms);
         let links: Vec<(Instant, Connection)> = self
             .links
             .iter()

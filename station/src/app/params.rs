@@ -42,6 +42,10 @@ pub struct ParamEditor {
     pub input_error: Option<String>,
     /// A fetch of every parameter in progress: reads left, values read, reads that failed.
     fetch: Option<(usize, usize, usize)>,
+    /// The search (`/`): only parameters whose name or description contains it are listed.
+    pub search: String,
+    /// The search is being typed.
+    pub searching: bool,
 }
 
 impl Default for ParamEditor {
@@ -52,6 +56,8 @@ impl Default for ParamEditor {
             input: None,
             input_error: None,
             fetch: None,
+            search: String::new(),
+            searching: false,
         }
     }
 }
@@ -61,16 +67,45 @@ impl ParamEditor {
         &PARAMS
     }
 
+    /// The selected parameter, if it is listed (a search may hide every one).
     pub fn selected_info(&self) -> Option<&'static ParamInfo> {
-        PARAMS.get(self.selected)
+        PARAMS
+            .get(self.selected)
+            .filter(|p| matches(p, &self.search))
     }
 
+    /// The indices (into the table) of the parameters listed: those the search finds.
+    pub fn shown(&self) -> Vec<usize> {
+        PARAMS
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| matches(p, &self.search))
+            .map(|(i, _)| i)
+            .collect()
+    }
+
+    /// Moves the selection `delta` rows through the listed parameters, wrapping around.
     pub fn select(&mut self, delta: i32) {
-        let n = PARAMS.len() as i64;
+        let shown = self.shown();
+        let n = shown.len() as i64;
         if n == 0 {
             return;
         }
-        self.selected = (self.selected as i64 + i64::from(delta)).rem_euclid(n) as usize;
+        let at = shown.iter().position(|&i| i >= self.selected).unwrap_or(0) as i64;
+        let to = (at + i64::from(delta)).rem_euclid(n) as usize;
+        self.selected = shown.get(to).copied().unwrap_or(0);
+        self.input = None;
+    }
+
+    /// Changes the search; the selection moves to the first match if it no longer is one.
+    pub fn set_search(&mut self, text: String) {
+        self.search = text;
+        let shown = self.shown();
+        if !shown.contains(&self.selected) {
+            if let Some(&first) = shown.first() {
+                self.selected = first;
+            }
+        }
         self.input = None;
     }
 
@@ -160,6 +195,15 @@ impl ParamEditor {
     }
 }
 
+/// Whether a parameter's name or description contains `search` (any case); an empty search
+/// finds every parameter.
+pub fn matches(p: &ParamInfo, search: &str) -> bool {
+    let needle = search.trim().to_lowercase();
+    needle.is_empty()
+        || p.name.to_lowercase().contains(&needle)
+        || p.desc.to_lowercase().contains(&needle)
+}
+
 /// A short text for a parameter's status column.
 pub fn status_text(info: &ParamInfo, s: &ParamStatus) -> String {
     match s {
@@ -222,6 +266,34 @@ mod tests {
         assert_eq!(format_param(&mm, 0.08), "0.080");
         assert_eq!(range_text(&mm), "0.001 .. 10.000");
         assert_eq!(format_param(&PARAMS[0], 300.0), "300");
+    }
+
+    #[test]
+    fn a_search_lists_the_matching_parameters_and_selects_among_them() {
+        let mut p = ParamEditor::default();
+        p.set_search("WHEEL".into());
+        let names: Vec<&str> = p.shown().iter().map(|&i| PARAMS[i].name).collect();
+        assert!(names.contains(&"odo_wheel_distance_mm"), "{names:?}");
+        assert!(names.iter().all(|n| {
+            let i = PARAMS.iter().position(|q| q.name == *n).unwrap();
+            matches(&PARAMS[i], "wheel")
+        }));
+        assert!(names.len() < PARAMS.len());
+        // The selection jumped to the first match and steps among the matches only.
+        assert_eq!(p.selected_info().map(|i| i.name), names.first().copied());
+        p.select(1);
+        assert_eq!(p.selected_info().map(|i| i.name), names.get(1).copied());
+        p.select(-2);
+        assert_eq!(p.selected_info().map(|i| i.name), names.last().copied());
+        // Found by its description too.
+        p.set_search("failsafe".into());
+        assert!(p.shown().iter().any(|&i| PARAMS[i].name == "failsafe_ms"));
+        // Nothing found: nothing selected to edit.
+        p.set_search("no such words".into());
+        assert!(p.shown().is_empty());
+        assert_eq!(p.selected_info(), None);
+        p.set_search(String::new());
+        assert_eq!(p.shown().len(), PARAMS.len());
     }
 
     #[test]

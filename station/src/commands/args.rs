@@ -131,27 +131,8 @@ pub fn parse_value(s: &str) -> Result<f32, String> {
     }
 }
 
-/// A parameter by name or id.
+/// A parameter by name or id; an unknown name gets the closest names
+/// (`station_core::param_names`).
 pub fn parse_param(s: &str) -> Result<u16, String> {
-    use robot_firmware::params::{by_name, info, PARAMS};
-    if let Some(p) = by_name(s) {
-        return Ok(p.id);
-    }
-    if let Some(p) = s.parse::<u16>().ok().and_then(info) {
-        return Ok(p.id);
-    }
-    let close: Vec<&str> = PARAMS
-        .iter()
-        .map(|p| p.name)
-        .filter(|n| n.contains(s) || s.contains(n.split('_').next().unwrap_or(n)))
-        .collect();
-    let all: Vec<&str> = PARAMS.iter().map(|p| p.name).collect();
-    Err(if close.is_empty() {
-        format!("unknown parameter {s:?}; known: {}", all.join(", "))
-    } else {
-        format!(
-            "unknown parameter {s:?}; did you mean {}?",
-            close.join(", ")
-        )
-    })
+    station_core::param_names::find(s).map(|p| p.id)
 }

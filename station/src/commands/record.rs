@@ -16,6 +16,7 @@ use std::time::Duration;
 use anyhow::{bail, Context as _};
 use clap::Args;
 use protocol::{Command, LogLevel};
+use robot_firmware::params::id::HAL_TRACE;
 use serde_json::json;
 use tokio::sync::mpsc;
 use tokio::time::Instant;
@@ -55,6 +56,14 @@ pub struct RecordArgs {
     /// "param set hal_trace 1") once the robot first answers; repeat for several, sent in order.
     #[arg(long = "send", value_name = "CMD")]
     pub send: Vec<String>,
+    /// Record the robot's hardware trace (parameter 34 hal_trace), so that `station retrace`
+    /// can re-run the recording through the firmware's code. The built-in emulator then
+    /// streams it from power-up (an exact retrace); a robot on --port is set hal_trace = 1
+    /// once it answers and put back as it was when the recording ends (its state before the
+    /// trace began is not in it: a retrace with --param compares, but cannot match bit for
+    /// bit).
+    #[arg(long)]
+    pub hal_trace: bool,
     /// Overwrite FILE if it exists (a device, FIFO or directory is never replaced).
     #[arg(long)]
     pub force: bool,
@@ -99,8 +108,15 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
         drop(open_exclusive(p, args.baud)?);
         ports.push((p.clone(), p.display().to_string()));
     }
+    // Robots on ports get the trace switched on when they answer; the built-in one has it
+    // from power-up.
+    let switch_trace = args.hal_trace && !ports.is_empty();
     if ports.is_empty() {
-        let mut emu = start_builtin_emulator(raw_key.as_ref())?;
+        let mut emu = if args.hal_trace {
+            crate::builtin::start_builtin_emulator_traced(raw_key.as_ref())?
+        } else {
+            start_builtin_emulator(raw_key.as_ref())?
+        };
         let label = format!("built-in emulator on {}", emu.pty_path().display());
         ports.push((emu.path().to_path_buf(), label));
         builtin = Some(emu);
@@ -164,12 +180,17 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
     let epoch = Instant::now();
     if !args.json {
         eprintln!(
-            "recording {} to {} ({})",
+            "recording {} to {} ({}{})",
             label,
             rec.path().display(),
             match args.seconds {
                 Some(s) => format!("{s} s"),
                 None => "Ctrl-C stops".into(),
+            },
+            match (args.hal_trace, switch_trace) {
+                (false, _) => "",
+                (true, false) => "; hardware trace from power-up",
+                (true, true) => "; hardware trace on, hal_trace put back at the end",
             }
         );
     }
@@ -183,6 +204,8 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
     let mut ids: Vec<Option<u8>> = vec![None; links.len()];
     let mut warned = Vec::new();
     let mut sent = vec![false; links.len()];
+    // Each robot's hal_trace before the recording switched it on, to put back at the end.
+    let mut trace_before: Vec<Option<f32>> = vec![None; links.len()];
     let reason = loop {
         let until = async {
             match deadline {
@@ -205,6 +228,17 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
                         }
                         warn_duplicates(&labels, &ids, &mut warned);
                     }
+                    if let (true, Connection::Connected(_), Some(l)) =
+                        (switch_trace, &c, links.get(usize::from(id)))
+                    {
+                        // At every handshake: a robot that restarted has it off again. The
+                        // read first, answered before the switch, says what to put back.
+                        l.handle.submit(Command::GetParam { id: protocol::ParamId(HAL_TRACE) });
+                        l.handle.submit(Command::SetParam {
+                            id: protocol::ParamId(HAL_TRACE),
+                            value: 1.0,
+                        });
+                    }
                     if matches!(c, Connection::Connected(_)) {
                         // `--send`: once per link, on its first handshake.
                         let first = sent.get_mut(usize::from(id)).is_some_and(|s| !std::mem::replace(s, true));
@@ -216,10 +250,17 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
                     }
                     rec.on_link_connection(id, &c)
                 }
-                FromLink::Event(id, e) => match station_line(&e) {
-                    Some(line) => rec.on_station_log(id, &line),
-                    None => Ok(()),
-                },
+                FromLink::Event(id, e) => {
+                    if let Some(v) = trace_value(&e) {
+                        if let Some(slot) = trace_before.get_mut(usize::from(id)) {
+                            slot.get_or_insert(v);
+                        }
+                    }
+                    match station_line(&e) {
+                        Some(line) => rec.on_station_log(id, &line),
+                        None => Ok(()),
+                    }
+                }
             },
             _ = flush.tick() => rec.tick(Instant::now()),
             () = until => break "time limit",
@@ -230,6 +271,19 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
             break "write failed";
         }
     };
+    // The trace as it was before the recording (off when its read went unanswered): sent
+    // before the shutdown, which writes what was submitted before it.
+    if switch_trace {
+        for (l, before) in links.iter().zip(&trace_before) {
+            let before = before.unwrap_or(0.0);
+            if before != 1.0 {
+                l.handle.submit(Command::SetParam {
+                    id: protocol::ParamId(HAL_TRACE),
+                    value: before,
+                });
+            }
+        }
+    }
     // Stop the links, keeping the bytes of their last moments (their final writes to the
     // ports): each task ends, its tap closes, its forwarder passes on what was left.
     for l in &links {
@@ -274,6 +328,22 @@ pub async fn run(args: &RecordArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The hal_trace value a robot reported, from the answer to a read of it.
+fn trace_value(e: &LinkEvent) -> Option<f32> {
+    match e {
+        LinkEvent::CommandDone {
+            command: Command::GetParam { .. },
+            outcome:
+                CommandOutcome::Acked {
+                    info: protocol::AckInfo::Param { id, value },
+                    ..
+                },
+            ..
+        } if id.0 == HAL_TRACE => Some(*value),
+        _ => None,
+    }
 }
 
 /// What the station says of a link event, for the recording's log as the TUI's log says it:

@@ -45,8 +45,9 @@ pub struct ReplayArgs {
     /// With --retrace: retrace with this parameter changed (NAME=VALUE; repeat for several).
     /// The sensor data stay the recorded ones: a changed algorithm would have moved the robot
     /// elsewhere.
-    #[arg(long = "param", value_name = "NAME=VALUE", requires = "retrace")]
-    pub params: Vec<String>,
+    #[arg(long = "param", value_name = "NAME=VALUE", requires = "retrace",
+          value_parser = crate::retrace::parse_param)]
+    pub params: Vec<(u16, f32)>,
 }
 
 fn parse_speed(s: &str) -> Result<f64, String> {
@@ -116,12 +117,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         .map_or(file.clone(), |n| n.to_string_lossy().into_owned());
     let label = format!("replay {name}");
     let retrace = if args.retrace {
-        let params = args
-            .params
-            .iter()
-            .map(|s| crate::retrace::parse_param(s))
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(anyhow::Error::msg)?;
+        let params = args.params.clone();
         let bytes = crate::record::read_file(&args.file)?;
         let o = crate::retrace::overlay::overlay(&bytes, &params)
             .map_err(|e| anyhow::anyhow!("cannot retrace: {file}: {e}"))?;
@@ -135,6 +131,7 @@ pub async fn run(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
         AppOptions {
             port_label: label.clone(),
             arena,
+            ..AppOptions::default()
         },
         args.speed,
     )

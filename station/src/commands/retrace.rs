@@ -17,8 +17,8 @@ pub struct RetraceArgs {
     pub recording: PathBuf,
     /// Retrace with this parameter changed (a name from `station params`, or an id); repeat
     /// for several. Without it, the retrace checks that the firmware does what it did.
-    #[arg(long = "param", value_name = "NAME=VALUE")]
-    pub params: Vec<String>,
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_param)]
+    pub params: Vec<(u16, f32)>,
     /// Retrace up to this robot time, milliseconds.
     #[arg(long, value_name = "MS")]
     pub until_ms: Option<u32>,
@@ -30,12 +30,7 @@ pub struct RetraceArgs {
 /// Runs `station retrace`.
 pub fn run(args: &RetraceArgs) -> anyhow::Result<ExitCode> {
     let name = args.recording.display().to_string();
-    let params = args
-        .params
-        .iter()
-        .map(|s| parse_param(s))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(anyhow::Error::msg)?;
+    let params = args.params.clone();
     let bytes = station_core::record::read_file(&args.recording)?;
     let report =
         retrace::report(&name, &bytes, &params, args.until_ms).map_err(anyhow::Error::msg)?;

@@ -28,7 +28,8 @@ pub fn fleet_action_for(app: &App, ev: &Event) -> Option<Option<Action>> {
             let typing = app.help
                 || app.transfers.prompt.is_some()
                 || app.log.filter_input.is_some()
-                || app.params.input.is_some();
+                || app.params.input.is_some()
+                || app.params.searching;
             if typing {
                 return None;
             }
@@ -48,7 +49,8 @@ pub fn fleet_action_for(app: &App, ev: &Event) -> Option<Option<Action>> {
                 _ => None,
             }
         }
-        Event::Mouse(m) if m.kind == MouseEventKind::Down(MouseButton::Left) => {
+        // Under the help a click picks nothing (`crate::input`).
+        Event::Mouse(m) if m.kind == MouseEventKind::Down(MouseButton::Left) && !app.help => {
             let screen = Rect::new(0, 0, app.size.0, app.size.1);
             let areas = ui::areas(screen, app);
             if let Some(panel) = areas.find(Panel::Fleet) {

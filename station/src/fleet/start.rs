@@ -30,6 +30,7 @@ pub async fn interactive(
     arena: Option<&Path>,
     profile: Option<&'static robot_firmware::Profile>,
     key: Option<[u8; protocol::sign::KEY_LEN]>,
+    tui: &crate::cli::TuiArgs,
 ) -> anyhow::Result<ExitCode> {
     // Before the terminal check: a wrong command line is said as such, anywhere.
     if ports.len() > MAX_ROBOTS {
@@ -130,6 +131,8 @@ pub async fn interactive(
         let mut app = App::new(AppOptions {
             port_label: label.clone(),
             arena: overlay.clone(),
+            click_goes: tui.click_goes,
+            record_hal_trace: tui.record_hal_trace,
         });
         app.map.plan = plan.clone();
         app.map.hidden.push(crate::ui::map_layers::REGIONS);
@@ -141,7 +144,8 @@ pub async fn interactive(
             port: path.display().to_string(),
         });
     }
-    let recorder = crate::record::live::TuiRecorder::new_links(taps, meta);
+    let recorder =
+        crate::record::live::TuiRecorder::new_links(taps, meta).in_dir_or(tui.record_dir());
     crate::tui::run_fleet(Fleet::new(members), links, recorder).await?;
     drop(shares);
     drop(builtin);

@@ -336,8 +336,8 @@ mod keys_and_clicks {
             action_for(app, &click(best.1, best.2)),
             Some(Action::SelectRobot(1))
         );
-        // Far from any robot: the selected robot's go-to.
+        // Far from any robot: the selected robot's go-to cursor (Enter sends it).
         let far = action_for(app, &click(inner.x + 1, inner.y + 1));
-        assert!(matches!(far, Some(Action::GoToPoint { .. })), "{far:?}");
+        assert!(matches!(far, Some(Action::CursorAt { .. })), "{far:?}");
     }
 }

@@ -402,6 +402,7 @@ mod tests {
         let opts = AppOptions {
             port_label: "replay".into(),
             arena: None,
+            ..AppOptions::default()
         };
         ReplaySession::new(rec, "two.rec", opts, 1.0)
     }
@@ -475,6 +476,7 @@ mod tests {
         let opts = AppOptions {
             port_label: "replay".into(),
             arena: None,
+            ..AppOptions::default()
         };
         let mut s = ReplaySession::new(rec, "one.rec", opts, 1.0);
         s.sync(1_000_000);

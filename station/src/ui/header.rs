@@ -146,8 +146,13 @@ fn header_line(app: &App, d: Detail) -> Line<'static> {
 }
 
 pub fn render_footer(app: &App, frame: &mut Frame, area: Rect) {
+    let goto;
     let hints: &[(&str, &str)] = if app.help {
-        &[("Esc", "close help"), ("q", "quit")]
+        &[
+            ("↑↓ PgUp PgDn", "scroll"),
+            ("Esc ? q", "close help"),
+            ("Ctrl-C", "quit"),
+        ]
     } else if app.transfers.prompt.is_some() {
         &[
             ("path", "map file or map/plan object"),
@@ -162,17 +167,26 @@ pub fn render_footer(app: &App, frame: &mut Frame, area: Rect) {
         ]
     } else if app.params.input.is_some() {
         &[("0-9 . - e", "type"), ("Enter", "send"), ("Esc", "cancel")]
-    } else if app.map.cursor_mode {
+    } else if app.params.searching {
         &[
-            ("arrows/hjkl", "move 0.1 m"),
-            ("shift", "×5"),
-            ("Enter", "go"),
-            ("O/P", "plan to cursor"),
+            ("text", "name or description"),
+            ("↑↓", "select"),
+            ("Enter", "keep"),
+            ("Esc", "clear"),
+        ]
+    } else if app.map.cursor_mode {
+        let (x, y) = app.map.cursor;
+        goto = format!("send the robot to ({x:.2}, {y:.2}) m");
+        &[
+            ("Enter", goto.as_str()),
             ("Esc", "cancel"),
+            ("←↑↓→", "move (shift ×5)"),
+            ("O/P", "plan there"),
         ]
     } else if app.view == View::Params {
         &[
             ("↑↓", "select"),
+            ("/", "search"),
             ("r", "read"),
             ("R", "read all"),
             ("Enter", "edit"),
@@ -235,7 +249,8 @@ fn fleet_hints(app: &App, hints: &mut Vec<(&str, &str)>) {
     let typing = app.help
         || app.transfers.prompt.is_some()
         || app.log.filter_input.is_some()
-        || app.params.input.is_some();
+        || app.params.input.is_some()
+        || app.params.searching;
     if typing {
         return;
     }

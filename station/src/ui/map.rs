@@ -26,11 +26,15 @@ pub struct ArenaLayer;
 pub struct TruthLayer;
 /// The pose and track the robot believes.
 pub struct BelievedLayer;
-/// The go-to goal and the cursor.
+/// The go-to goal and the plan's target.
 pub struct GoalLayer;
+/// The go-to cursor.
+pub struct CursorLayer;
 
-/// Layers in drawing order: the planner's grid and squares under the arena, plans above it.
-pub static LAYERS: [&dyn MapLayer; 18] = [
+/// Layers in drawing order: the planner's grid and squares under the arena, plans above it,
+/// the markers of places (start, goal, targets) under the robots, so that a robot standing on
+/// its start or its goal shows itself; the cursor the operator is moving over everything.
+pub static LAYERS: [&dyn MapLayer; 19] = [
     &map_layers::GridLayer,
     &map_layers::RegionsLayer,
     &super::localization::FloorLayer,
@@ -41,6 +45,8 @@ pub static LAYERS: [&dyn MapLayer; 18] = [
     &super::transfer::RobotPlanLayer,
     &super::localization::OdometryLayer,
     &super::qt_map::QtLayer,
+    &GoalLayer,
+    &map_layers::EndsLayer,
     &TruthLayer,
     &super::fleet::FleetLayer,
     &BelievedLayer,
@@ -48,8 +54,7 @@ pub static LAYERS: [&dyn MapLayer; 18] = [
     &super::retrace_layer::RetraceLayer,
     &super::localization::LinesLayer,
     &super::localization::PpdLayer,
-    &GoalLayer,
-    &map_layers::EndsLayer,
+    &CursorLayer,
 ];
 
 /// Extra margin around what is shown, metres.
@@ -84,25 +89,42 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         .map(|a| a.name.clone())
         .or_else(|| app.map.plan.map().map(|m| m.name.clone()))
         .unwrap_or_else(|| "no arena".to_string());
-    let block = Block::bordered()
-        .title(format!(" Map — {name} "))
-        .title_top(
-            // The plan panel, when drawn, says it all; else a status that fits the title row.
-            side.map_or_else(
-                || {
-                    let room = area.width.saturating_sub(name.chars().count() as u16 + 12);
-                    super::forage::status(app)
-                        .filter(|l| l.width() <= usize::from(room))
-                        .or_else(|| map_layers::status(app, room))
-                },
-                |_| None,
-            )
-            .unwrap_or_default()
-            .right_aligned(),
-        )
-        .title_bottom(legend(app, area.width.saturating_sub(2)));
-    let inner = block.inner(area);
+    let inner = Block::bordered().inner(area);
     let (xb, yb) = view_bounds(app, inner);
+    let title = format!(" Map — {name} ");
+    let title_w = title.chars().count() as u16;
+    // The title row holds the name, the scale and a status. The plan panel, when drawn, says
+    // the status; else it goes where it fits: foraging's progress and a plan's outcome before
+    // the scale, the scale before the hint of how to plan.
+    // The corners and a border column between each title.
+    let room = area.width.saturating_sub(title_w + 3);
+    let scale = |room: u16| scale_bar(xb[1] - xb[0], inner.width, room);
+    let status = |room: u16| {
+        super::forage::status(app)
+            .filter(|l| l.width() <= usize::from(room))
+            .or_else(|| map_layers::status(app, room))
+    };
+    let news = super::forage::status(app).is_some()
+        || app.map.plan.error.is_some()
+        || app.map.plan.result.is_some();
+    let (scale, status) = match side {
+        Some(_) => (scale(room), None),
+        None if news => {
+            let st = status(room);
+            let left = room.saturating_sub(st.as_ref().map_or(0, |l| l.width() as u16 + 1));
+            (scale(left), st)
+        }
+        None => {
+            let sc = scale(room);
+            let left = room.saturating_sub(sc.as_ref().map_or(0, |s| s.chars().count() as u16 + 1));
+            (sc, status(left))
+        }
+    };
+    let block = Block::bordered()
+        .title(title)
+        .title(TLine::from(scale.unwrap_or_default().white()))
+        .title_top(status.unwrap_or_default().right_aligned())
+        .title_bottom(legend(app, area.width.saturating_sub(2)));
     let view = MapView {
         x: xb,
         y: yb,
@@ -127,36 +149,117 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
     frame.render_widget(canvas, area);
 }
 
-/// The legend in at most `room` columns: each mark with the glyph drawn on the map, so it
-/// reads without colour; then the keys that work, as far as they fit.
-fn legend(app: &App, room: u16) -> TLine<'static> {
-    let mut items: Vec<ratatui::text::Span<'static>> = match &app.fleet {
-        // In a fleet the robots are their numbers (`ui::fleet`), the selected one reversed.
-        Some(f) if app.in_fleet() => vec![
-            format!(" 1-{} robots ", f.robots.len()).white(),
-            "○ true ".magenta(),
-        ],
-        _ => vec![" ● believed ".cyan(), "○ true ".magenta()],
-    };
-    // A replay sends nothing: no go-to marker to explain.
-    if !app.replaying {
-        items.push("× go-to ".yellow());
+/// Nice lengths a scale bar shows, metres: 1, 2 and 5 times powers of ten.
+const SCALE_STEPS: [f64; 3] = [1.0, 2.0, 5.0];
+/// Most columns a scale bar takes, its ends included.
+const SCALE_MAX_COLS: f64 = 10.0;
+
+/// A scale bar for a view `span_m` wide over `cols` columns, in at most `room` columns:
+/// `┝━━━┥ 0.5 m`, the bar as many columns as the length it names (the longest 1-2-5 length
+/// of 3 to `SCALE_MAX_COLS` columns that fits). Drawn in the title row, heavy on the light
+/// border, so it never covers the map.
+pub fn scale_bar(span_m: f64, cols: u16, room: u16) -> Option<String> {
+    let per_col = span_m / f64::from(cols.max(1));
+    if !(per_col.is_finite() && per_col > 0.0) {
+        return None;
     }
-    // The zoom factor is state, not a hint: room is kept for it before the longer label.
-    let zoom = app.map.zoom();
-    let zoom_room = if zoom > 1.0 && !app.map.cursor_mode {
-        6
-    } else {
-        0
+    let text = |len: f64, n: usize| {
+        let label = if len >= 1.0 {
+            format!("{len:.0} m")
+        } else if len >= 0.1 {
+            format!("{len:.1} m")
+        } else {
+            format!("{:.0} cm", len * 100.0)
+        };
+        format!(" ┝{}┥ {label} ", "━".repeat(n.saturating_sub(2)))
     };
-    items.push(if room < 58 + zoom_room {
-        "◎ plan ".light_red()
-    } else {
-        "◎ plan target ".light_red()
-    });
+    let mut best = None;
+    let mut decade = 10f64.powi(per_col.log10().floor() as i32);
+    for _ in 0..3 {
+        for step in SCALE_STEPS {
+            let len = step * decade;
+            let n = (len / per_col).round();
+            if (3.0..=SCALE_MAX_COLS).contains(&n) {
+                let t = text(len, n as usize);
+                if t.chars().count() <= usize::from(room) {
+                    best = Some(t);
+                }
+            }
+        }
+        decade *= 10.0;
+    }
+    best
+}
+
+/// One mark of the legend: its text, a shorter one for a narrow map, and how much it matters
+/// (0 most): what does not fit goes, least important first.
+struct Mark {
+    full: ratatui::text::Span<'static>,
+    short: ratatui::text::Span<'static>,
+    rank: u8,
+}
+
+fn mark(full: ratatui::text::Span<'static>, short: &'static str, rank: u8) -> Mark {
+    let style = full.style;
+    Mark {
+        short: ratatui::text::Span::styled(short, style),
+        full,
+        rank,
+    }
+}
+
+/// The legend in at most `room` columns: the marks on the map now, each with the glyph drawn,
+/// so it reads without colour (short names on a narrow map, the least important left out when
+/// even those do not fit); the map's state (cursor, zoom, following); then the keys that
+/// work, as far as they fit.
+fn legend(app: &App, room: u16) -> TLine<'static> {
+    let mut marks = Vec::new();
+    // In a fleet the robots are their numbers (`ui::fleet`), the selected one reversed.
+    match &app.fleet {
+        Some(f) if app.in_fleet() => marks.push(mark(
+            format!(" 1-{} robots ", f.robots.len()).white(),
+            " 1-9 robots ",
+            0,
+        )),
+        _ => marks.push(mark(" ● believed ".cyan(), " ● robot ", 0)),
+    }
+    if app.truth.is_some() {
+        marks.push(mark("○ true ".magenta(), "○ true ", 1));
+    }
+    // A go-to cursor's coordinates: where Enter would send the robot.
+    if app.map.cursor_mode {
+        let (x, y) = app.map.cursor;
+        let at = format!("+ {x:.2}, {y:.2} m ");
+        marks.push(Mark {
+            short: at.clone().green(),
+            full: at.green(),
+            rank: 0,
+        });
+    }
+    let (wall, unknown) = map_layers::grid_glyphs(app);
+    if unknown {
+        marks.push(mark(
+            format!("{} ", map_layers::UNKNOWN_LABEL).dark_gray(),
+            "░ unexplored ",
+            1,
+        ));
+    }
+    if wall {
+        marks.push(mark(
+            format!("{} ", map_layers::WALL_LABEL).dark_gray(),
+            "█ wall ",
+            2,
+        ));
+    }
+    if app.map.goal.is_some() && !app.replaying {
+        marks.push(mark("× go-to ".yellow(), "× go-to ", 2));
+    }
+    if app.plan_target().point().is_some() {
+        marks.push(mark("◎ plan target ".light_red(), "◎ plan ", 3));
+    }
     // The map's goal letter (`map_layers`), when one is drawn.
     if app.map.plan.result.is_some() || app.map.plan.map().is_some_and(|m| m.goal.is_some()) {
-        items.push("G goal ".light_red());
+        marks.push(mark("G goal ".light_red(), "G goal ", 3));
     }
     if app
         .map
@@ -164,28 +267,70 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
         .as_ref()
         .is_some_and(|a| !a.beacons.is_empty())
     {
-        items.push("B beacon ".yellow());
+        marks.push(mark("B beacon ".yellow(), "B beacon ", 4));
     }
     // The QT world model (seed 001), once it has cells and while its layer is shown.
     if let Some(label) = super::qt_map::legend(app) {
-        items.push(label);
+        marks.push(Mark {
+            short: label.clone(),
+            full: label,
+            rank: 3,
+        });
     }
+    // The map's state: room is kept for it before the hints.
+    let zoom = app.map.zoom();
+    let mut state = Vec::new();
+    if app.map.follow {
+        state.push("⊙ follow ".white());
+    }
+    if zoom > 1.0 && !app.map.cursor_mode {
+        state.push(format!("×{zoom:.1} ").white());
+    }
+    let state_w: usize = state.iter().map(|s| s.width()).sum();
+    let room = usize::from(room).saturating_sub(state_w);
+    let width = |marks: &[Mark], short: bool| -> usize {
+        marks
+            .iter()
+            .map(|m| {
+                if short {
+                    m.short.width()
+                } else {
+                    m.full.width()
+                }
+            })
+            .sum()
+    };
+    let short = width(&marks, false) > room;
+    while width(&marks, short) > room {
+        let Some(i) = marks
+            .iter()
+            .enumerate()
+            .max_by_key(|(_, m)| m.rank)
+            .map(|(i, _)| i)
+            .filter(|_| marks.len() > 1)
+        else {
+            break;
+        };
+        marks.remove(i);
+    }
+    let mut items: Vec<ratatui::text::Span<'static>> = marks
+        .into_iter()
+        .map(|m| if short { m.short } else { m.full })
+        .collect();
+    items.extend(state);
     let extra: Vec<ratatui::text::Span<'static>> = if app.map.cursor_mode {
-        vec!["+ cursor ".green()]
+        vec!["Enter: go ".dark_gray()]
     } else {
         let mut v = Vec::new();
-        if zoom > 1.0 {
-            v.push(format!("×{zoom:.1} ").white());
-        }
         if !app.replaying {
             v.push("g/click: go-to ".dark_gray());
         }
-        v.push("z/Z/wheel: zoom hjkl: pan ".dark_gray());
+        v.push("z/Z/wheel: zoom hjkl: pan F: follow ".dark_gray());
         v
     };
     let mut used: usize = items.iter().map(|s| s.width()).sum();
     for e in extra {
-        if used + e.width() <= usize::from(room) {
+        if used + e.width() <= room + state_w {
             used += e.width();
             items.push(e);
         }
@@ -233,6 +378,33 @@ pub fn split_beside(
 
 /// The world rectangle shown in `inner` (x bounds, y bounds), with square braille dots.
 pub fn view_bounds(app: &App, inner: Rect) -> ([f64; 2], [f64; 2]) {
+    let ((bx, by), (xs, ys)) = whole_view(app, inner);
+    let (zoom, (px, py)) = (app.map.zoom(), app.map.pan());
+    // Zoomed: a 1/zoom part of that, centred where the operator panned to, or, following the
+    // robot, on the robot (the pan then an offset from it).
+    let (ox, oy) = match app.pose() {
+        Some((x, y, _)) if app.map.follow => (x, y),
+        _ => (bx, by),
+    };
+    let (cx, cy) = (ox + px * xs, oy + py * ys);
+    let (hx, hy) = (xs / (2.0 * zoom), ys / (2.0 * zoom));
+    ([cx - hx, cx + hx], [cy - hy, cy + hy])
+}
+
+/// The pan (`MapState::pan`, not following) that shows the view shown now in `inner`: where
+/// the view stays when following stops.
+pub fn pan_of_view(app: &App, inner: Rect) -> (f64, f64) {
+    let ((bx, by), (xs, ys)) = whole_view(app, inner);
+    let ([x0, x1], [y0, y1]) = view_bounds(app, inner);
+    (
+        ((x0 + x1) / 2.0 - bx) / xs.max(1e-12),
+        ((y0 + y1) / 2.0 - by) / ys.max(1e-12),
+    )
+}
+
+/// The whole map's view in `inner` at zoom 1: its centre and its spans, metres, the arena
+/// (or what there is to show) grown to square braille dots.
+fn whole_view(app: &App, inner: Rect) -> ((f64, f64), (f64, f64)) {
     let [mut x0, mut y0, mut x1, mut y1] = match &app.map.arena {
         Some(a) => a.bounds,
         None => app
@@ -249,7 +421,6 @@ pub fn view_bounds(app: &App, inner: Rect) -> ([f64; 2], [f64; 2]) {
         f64::from(inner.width.max(1)),
         f64::from(inner.height.max(1)),
     );
-    let (zoom, (px, py)) = (app.map.zoom(), app.map.pan());
     // A braille cell is 2 x 4 dots and about 1 x 2 in shape: world span per dot equal in x and y.
     let want = w / (2.0 * h); // x span / y span
     let (xs, ys) = (x1 - x0, y1 - y0);
@@ -262,11 +433,7 @@ pub fn view_bounds(app: &App, inner: Rect) -> ([f64; 2], [f64; 2]) {
         y0 -= grow;
         y1 += grow;
     }
-    // Zoomed: a 1/zoom part of that, centred where the operator panned to.
-    let (xs, ys) = (x1 - x0, y1 - y0);
-    let (cx, cy) = ((x0 + x1) / 2.0 + px * xs, (y0 + y1) / 2.0 + py * ys);
-    let (hx, hy) = (xs / (2.0 * zoom), ys / (2.0 * zoom));
-    ([cx - hx, cx + hx], [cy - hy, cy + hy])
+    (((x0 + x1) / 2.0, (y0 + y1) / 2.0), (x1 - x0, y1 - y0))
 }
 
 /// The cell at `col`, `row` of the terminal as a world point, if it is inside the map.
@@ -476,9 +643,93 @@ impl MapLayer for GoalLayer {
         if let Some((x, y)) = app.plan_target().point() {
             ctx.print(x, y, "◎".light_red().bold());
         }
+    }
+}
+
+impl MapLayer for CursorLayer {
+    fn name(&self) -> &'static str {
+        "cursor"
+    }
+
+    fn dots(&self, _app: &App) -> bool {
+        false
+    }
+
+    fn paint(&self, app: &App, _view: &MapView, ctx: &mut Context<'_>) {
         if app.map.cursor_mode {
             let (x, y) = app.map.cursor;
             ctx.print(x, y, "+".green().bold());
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::action::Action;
+    use crate::app::AppOptions;
+    use crate::link::LinkEvent;
+
+    fn at(app: &mut App, x_mm: i32, y_mm: i32) {
+        app.update(Action::Link(LinkEvent::Telemetry(protocol::Telemetry {
+            pose: protocol::Pose {
+                x_mm,
+                y_mm,
+                heading_mrad: 0,
+            },
+            ..protocol::Telemetry::default()
+        })));
+    }
+
+    fn centre(app: &App, inner: Rect) -> (f64, f64) {
+        let ([x0, x1], [y0, y1]) = view_bounds(app, inner);
+        ((x0 + x1) / 2.0, (y0 + y1) / 2.0)
+    }
+
+    #[test]
+    fn following_keeps_the_robot_in_the_middle_and_stopping_keeps_the_view() {
+        let mut app = App::new(AppOptions::default());
+        let inner = Rect::new(0, 0, 40, 20);
+        at(&mut app, 500, 500);
+        at(&mut app, 4000, 3000);
+        app.update(Action::MapFollow {
+            keep: pan_of_view(&app, inner),
+        });
+        assert!(app.map.follow && app.map.zoom() > 1.0);
+        let c = centre(&app, inner);
+        assert!(
+            (c.0 - 4.0).abs() < 1e-9 && (c.1 - 3.0).abs() < 1e-9,
+            "{c:?}"
+        );
+        at(&mut app, 4500, 2500);
+        let c = centre(&app, inner);
+        assert!(
+            (c.0 - 4.5).abs() < 1e-9 && (c.1 - 2.5).abs() < 1e-9,
+            "{c:?}"
+        );
+        // F again: the view stays where it is, the robot may then leave it.
+        let keep = pan_of_view(&app, inner);
+        app.update(Action::MapFollow { keep });
+        assert!(!app.map.follow);
+        let c2 = centre(&app, inner);
+        assert!(
+            (c2.0 - c.0).abs() < 1e-6 && (c2.1 - c.1).abs() < 1e-6,
+            "{c2:?}"
+        );
+    }
+
+    #[test]
+    fn the_scale_bar_names_a_round_length_as_long_as_its_columns() {
+        // 5 m over 40 columns: 0.125 m a column; 1 m is 8 columns.
+        assert_eq!(scale_bar(5.0, 40, 80).as_deref(), Some(" ┝━━━━━━┥ 1 m "));
+        // Less room: a shorter length.
+        assert_eq!(scale_bar(5.0, 40, 12).as_deref(), Some(" ┝━━┥ 0.5 m "));
+        // 0.4 m over 40 columns: 1 cm a column; 0.1 m is 10 columns.
+        assert_eq!(
+            scale_bar(0.4, 40, 80).as_deref(),
+            Some(" ┝━━━━━━━━┥ 0.1 m ")
+        );
+        assert_eq!(scale_bar(0.0, 40, 80), None);
+        assert_eq!(scale_bar(5.0, 40, 5), None);
     }
 }

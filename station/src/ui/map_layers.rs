@@ -25,7 +25,13 @@ use crate::plan::NavMap;
 /// Obstacle cells.
 pub const OBSTACLE: Color = Color::DarkGray;
 /// Unknown cells (treated as obstacles by the planner).
-pub const UNKNOWN: Color = Color::Indexed(236);
+pub const UNKNOWN: Color = Color::Indexed(240);
+/// The glyph of an unknown (unexplored) cell: a shade, where an obstacle is a solid block, so
+/// the two read apart without colour.
+pub const UNKNOWN_GLYPH: char = '░';
+/// The legend's names of the grid's glyphs.
+pub const WALL_LABEL: &str = "█ wall";
+pub const UNKNOWN_LABEL: &str = "░ unexplored";
 /// Square outlines.
 pub const REGION: Color = Color::Blue;
 /// The raw plan through region centres.
@@ -68,32 +74,15 @@ impl MapLayer for GridLayer {
 
     fn paint(&self, app: &App, view: &MapView, ctx: &mut Context<'_>) {
         let Some(m) = map(app) else { return };
-        ctx.marker(Marker::HalfBlock);
-        let (w, h) = (usize::from(view.cols), usize::from(view.rows) * 2);
-        let (xs, ys) = (view.x[1] - view.x[0], view.y[1] - view.y[0]);
-        // The canvas maps x to pixel round((x - left) * (w - 1) / xs): pixel i is centred on
-        // left + i * xs / (w - 1) (likewise y, from the top).
-        let px = |i: usize| view.x[0] + i as f64 * xs / (w.max(2) - 1) as f64;
-        let py = |j: usize| view.y[1] - j as f64 * ys / (h.max(2) - 1) as f64;
-        let (mut solid, mut unknown) = (Vec::new(), Vec::new());
-        for j in 0..h {
-            let y = py(j).clamp(view.y[0], view.y[1]);
-            for i in 0..w {
-                let x = px(i).clamp(view.x[0], view.x[1]);
-                let Some((cx, cy)) = m.cell_of((x, y)) else {
-                    continue;
-                };
-                match m.grid.get(cx.into(), cy.into()) {
-                    Cell::Obstacle => solid.push((x, y)),
-                    Cell::Unknown => unknown.push((x, y)),
-                    Cell::Free => {}
-                }
-            }
-        }
+        // Unknown cells one shade glyph per terminal cell, obstacles in half blocks over them.
+        ctx.marker(Marker::Custom(UNKNOWN_GLYPH));
+        let unknown = pixels_of(m, view, 1, Cell::Unknown);
         ctx.draw(&Points {
             coords: &unknown,
             color: UNKNOWN,
         });
+        ctx.marker(Marker::HalfBlock);
+        let solid = pixels_of(m, view, 2, Cell::Obstacle);
         ctx.draw(&Points {
             coords: &solid,
             color: OBSTACLE,
@@ -101,6 +90,40 @@ impl MapLayer for GridLayer {
         // Back to braille for the layers above (this saves the half-block layer).
         ctx.marker(Marker::Braille);
     }
+}
+
+/// The centres of the canvas pixels whose grid cell is `kind`, on a grid of `per_row` pixels
+/// down each terminal cell (one across).
+fn pixels_of(m: &NavMap, view: &MapView, per_row: usize, kind: Cell) -> Vec<(f64, f64)> {
+    let (w, h) = (usize::from(view.cols), usize::from(view.rows) * per_row);
+    let (xs, ys) = (view.x[1] - view.x[0], view.y[1] - view.y[0]);
+    // The canvas maps x to pixel round((x - left) * (w - 1) / xs): pixel i is centred on
+    // left + i * xs / (w - 1) (likewise y, from the top).
+    let px = |i: usize| view.x[0] + i as f64 * xs / (w.max(2) - 1) as f64;
+    let py = |j: usize| view.y[1] - j as f64 * ys / (h.max(2) - 1) as f64;
+    let mut out = Vec::new();
+    for j in 0..h {
+        let y = py(j).clamp(view.y[0], view.y[1]);
+        for i in 0..w {
+            let x = px(i).clamp(view.x[0], view.x[1]);
+            let Some((cx, cy)) = m.cell_of((x, y)) else {
+                continue;
+            };
+            if m.grid.get(cx.into(), cy.into()) == kind {
+                out.push((x, y));
+            }
+        }
+    }
+    out
+}
+
+/// Which of the grid's glyphs the map shows now: (walls, unexplored cells).
+pub fn grid_glyphs(app: &App) -> (bool, bool) {
+    let Some(m) = map(app).filter(|_| app.map.visible(GRID)) else {
+        return (false, false);
+    };
+    let (_, obstacle, unknown) = m.counts();
+    (obstacle > 0, unknown > 0)
 }
 
 impl MapLayer for RegionsLayer {

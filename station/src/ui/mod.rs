@@ -53,7 +53,7 @@ pub fn render(app: &App, frame: &mut Frame) {
         transfer::render(app, frame, main);
     }
     if app.help {
-        help::render_keys(frame, frame.area(), app.in_fleet());
+        help::render_keys(frame, frame.area(), app.in_fleet(), app.help_scroll);
     }
 }
 

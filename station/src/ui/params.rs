@@ -14,7 +14,7 @@ use crate::app::params::{range_text, status_text, ParamStatus};
 use crate::app::App;
 
 pub fn render(app: &App, frame: &mut Frame, area: Rect) {
-    let block = Block::bordered().title(" Parameters (r read, R read all, Enter edit) ");
+    let block = Block::bordered().title(" Parameters (/ search, r read, R read all, Enter edit) ");
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let [table_area, desc_area, edit_area] = Layout::vertical([
@@ -23,11 +23,11 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
         Constraint::Length(1),
     ])
     .areas(inner);
-    let rows: Vec<Row> = app
-        .params
-        .params()
+    let shown = app.params.shown();
+    let params = app.params.params();
+    let rows: Vec<Row> = shown
         .iter()
-        .zip(&app.params.status)
+        .filter_map(|&i| Some((params.get(i)?, app.params.status.get(i)?)))
         .map(|(p, s)| {
             let color = match s {
                 ParamStatus::Refused { .. } | ParamStatus::Failed(_) => Color::Red,
@@ -59,9 +59,41 @@ pub fn render(app: &App, frame: &mut Frame, area: Rect) {
             .style(Style::new().add_modifier(Modifier::BOLD)),
     )
     .row_highlight_style(Style::new().add_modifier(Modifier::REVERSED));
-    let mut state = TableState::default().with_selected(Some(app.params.selected));
+    let selected = shown.iter().position(|&i| i == app.params.selected);
+    let mut state = TableState::default().with_selected(selected);
     frame.render_stateful_widget(table, table_area, &mut state);
+    let search = &app.params.search;
     let edit = match (&app.params.input, app.params.selected_info()) {
+        // The search box: what is typed, and what it finds.
+        (None, _) if app.params.searching || !search.is_empty() => {
+            let found = match shown.len() {
+                0 => "no parameter matches".to_string(),
+                n if n == params.len() => format!("all {n}"),
+                n => format!("{n} of {}", params.len()),
+            };
+            let hint = if app.params.searching {
+                "  (Enter keeps it, Esc clears)"
+            } else {
+                "  (/ changes it, Esc clears)"
+            };
+            let mut spans = vec![
+                Span::styled("/ ", Style::new().fg(Color::Yellow)),
+                Span::raw(search.clone()),
+            ];
+            if app.params.searching {
+                spans.push(Span::styled("▏", Style::new().fg(Color::Yellow)));
+            }
+            spans.push(Span::styled(
+                format!("  {found}"),
+                Style::new().fg(if shown.is_empty() {
+                    Color::Red
+                } else {
+                    Color::Reset
+                }),
+            ));
+            spans.push(Span::styled(hint, Style::new().fg(Color::DarkGray)));
+            Line::from(spans)
+        }
         (Some(text), Some(p)) => Line::from(vec![
             Span::styled(format!("{} = ", p.name), Style::new().fg(Color::Yellow)),
             Span::raw(text.clone()),
