@@ -30,12 +30,12 @@ use protocol::{
     TransferData,
 };
 
+use crate::light_calibration::LightCalibration;
 use crate::nav::{
     grid_bytes, Geometry, Grid, GridError, GridPoint, IdStore, Nav64, Plan, PlanError, Regions,
     Route, SegmentError, Smoothed, WaveRoute,
 };
 use crate::odometry::Point;
-use crate::robot::LightCalibration;
 use crate::MAP_CAPACITY;
 
 /// Bytes of the robot's grid storage (64 x 64 cells, 2 bits each).

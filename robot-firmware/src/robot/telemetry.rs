@@ -9,8 +9,8 @@ use protocol::{
     Wheels,
 };
 
+use super::{Core, Kit};
 use crate::behaviour::units;
-use crate::robot::{Core, Kit};
 
 /// The telemetry frame for the robot's current state.
 pub fn build<K: Kit>(core: &Core<K>, now_ms: u32) -> Telemetry {
