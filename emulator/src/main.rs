@@ -44,7 +44,7 @@ fn arena(args: &emulator::cli::ArenaArgs) -> Result<(), String> {
 }
 
 /// `hil`: the world for a board running the firmware itself (emulator::hil).
-fn hil(args: &emulator::hil::args::HilArgs) -> Result<(), String> {
+fn hil(args: &emulator::cli::HilArgs) -> Result<(), String> {
     let port = args.port()?;
     let when = args.stop_when()?;
     let key = args

@@ -4,8 +4,9 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use super::serve::{Port, StopWhen};
-use crate::cli::WorldArgs;
+use super::parse::parse_stall;
+use super::world::WorldArgs;
+use crate::hil::serve::{Port, StopWhen};
 
 /// Serve the world to a board running the firmware itself (hardware in the loop): its
 /// sensors in and its motors out over a serial port, one control period per exchange
@@ -69,7 +70,7 @@ pub struct HilArgs {
     #[arg(long, value_name = "P", default_value_t = 0.0)]
     pub flip_rate: f64,
     /// Stall the station link every PERIOD seconds for DURATION seconds.
-    #[arg(long, value_name = "PERIOD,DURATION", value_parser = crate::cli::parse_stall)]
+    #[arg(long, value_name = "PERIOD,DURATION", value_parser = parse_stall)]
     pub stall: Option<crate::fault::Stall>,
     /// The station link's line rate, baud (QEMU's UART is not paced: bytes go as fast as
     /// written); the link then runs through the world.
@@ -107,7 +108,7 @@ impl HilArgs {
         if self.line_baud.is_some_and(|b| b == 0 || b > 4_000_000) {
             return Err("--line-baud must be 1..=4000000".into());
         }
-        let relay = super::relay::RelayOptions {
+        let relay = crate::hil::relay::RelayOptions {
             to_robot: fault,
             from_robot: fault,
             baud: self.line_baud,
@@ -115,7 +116,7 @@ impl HilArgs {
         };
         match (&self.image, &self.port) {
             (Some(image), None) => Ok(Port::Qemu(
-                super::qemu::QemuOptions {
+                crate::hil::qemu::QemuOptions {
                     binary: self.qemu.clone(),
                     image: image.clone(),
                     icount_shift: self.icount,
