@@ -13,8 +13,8 @@
 //! (positive: the estimate lies farther from the obstacle than the robot), and the mean
 //! distance between estimate and truth.
 
-use emulator::alice::arena::alice;
 use emulator::alice::scenario::{run_with, RunOptions};
+use emulator::builtin::alice::alice;
 use emulator::geometry::Point;
 use world_model::Params;
 

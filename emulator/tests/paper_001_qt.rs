@@ -507,10 +507,10 @@ fn the_navigator_reaches_its_target_in_most_legs() {
 /// 1.5 degrees at the spot; at least 2 degrees in the mean 10 cm away, every seed.
 #[test]
 fn the_light_ring_reads_a_turn_at_the_cells_spot_and_a_parallax_beside_it() {
-    use emulator::alice::arena::alice;
-    use emulator::alice::sensors::Sensors;
+    use emulator::builtin::alice::alice;
     use emulator::geometry::Point;
     use emulator::rng::SimRng;
+    use emulator::sensors::alice::Sensors;
     use world_model::situation::{ring_shift, rotate_to_world};
     let arena = alice();
     let walls = arena.segment_set();

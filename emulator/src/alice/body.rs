@@ -17,8 +17,8 @@
 use crate::geometry::{Point, SegmentSet};
 use crate::rng::SimRng;
 
-use super::sensors::BODY_RADIUS_M;
 use super::wrap;
+use crate::sensors::alice::BODY_RADIUS_M;
 
 /// Driving speed, m/s (§3.1: 25 cm/s, nearly constant).
 pub const SPEED_M_S: f64 = 0.25;

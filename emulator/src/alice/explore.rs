@@ -7,7 +7,7 @@
 
 use crate::rng::SimRng;
 
-use super::sensors::COUNT;
+use crate::sensors::alice::COUNT;
 
 /// Chance per sample of a stochastic turn (ours).
 pub const RANDOM_TURN_P: f64 = 0.03;

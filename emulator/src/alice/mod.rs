@@ -8,15 +8,17 @@
 //! `Sim`: the firmware's `Robot` has no ALICE profile with 24 + 24 sensors), like the seed 003
 //! scenario's. The model sees only the sensors and the drifting odometry; the truth is used for
 //! the report only. Sampling as the thesis: 3 situations per second at 25 cm/s.
+//!
+//! The thesis's scenes are built-in arenas (`builtin::alice`) and ALICE's whiskers and
+//! photoresistors a sensor model of the world (`sensors::alice`): the served ALICE
+//! (`robot-emulator --profile alice`) reads the same ones.
 
-pub mod arena;
 pub mod body;
 pub mod experiments;
 pub mod explore;
 pub mod metrics;
 pub mod navigation;
 pub mod scenario;
-pub mod sensors;
 pub mod stream;
 
 /// Angle wrapped to (-pi, pi].

@@ -44,14 +44,14 @@ use world_model::execute::Executor;
 use world_model::navigate::Planner;
 use world_model::{Params, Pose, QtModel, Sample, Stats};
 
-use super::arena::{alice, navigation_scene, CORRIDOR_TARGET};
 use super::body::{Body, SPEED_M_S, SUBSTEPS, TURN_RAD_S};
 use super::explore::{decide, Follower, Move};
 use super::scenario::SAMPLES_PER_S;
-use super::sensors::{Sensors, BODY_RADIUS_M, COUNT};
 use crate::arena::Arena;
+use crate::builtin::alice::{alice, navigation_scene, CORRIDOR_TARGET};
 use crate::geometry::{Point, SegmentSet, Vector};
 use crate::rng::SimRng;
+use crate::sensors::alice::{Sensors, BODY_RADIUS_M, COUNT};
 
 /// Wins while exploring a cell needs to be the corridor scene's target (ours).
 pub const CORRIDOR_TARGET_WINS: u32 = 20;

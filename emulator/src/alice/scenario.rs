@@ -7,16 +7,16 @@ use std::time::Instant;
 use serde::Serialize;
 use world_model::{Params, Pose, QtModel, Sample, Stats};
 
-use super::arena::{alice, gap_wall, PILLAR_CENTRE, PILLAR_RADIUS_M};
 use super::body::{Body, SPEED_M_S, SUBSTEPS, TURN_RAD_S};
 use super::explore::{decide, Move};
 use super::metrics::{
     crossings_per_edge, edges_across, place_spread, two_sided_cells, unreachable_fraction, Rigid,
     TakenAt,
 };
-use super::sensors::Sensors;
+use crate::builtin::alice::{alice, gap_wall, PILLAR_CENTRE, PILLAR_RADIUS_M};
 use crate::geometry::{Point, Segment};
 use crate::rng::SimRng;
+use crate::sensors::alice::Sensors;
 
 /// One sample's true, internal and odometry positions, and the winner with the true position
 /// of the situation it won (taken `l` samples earlier).

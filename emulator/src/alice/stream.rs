@@ -8,14 +8,14 @@
 
 use protocol::{AliceSituation, ALICE_SENSORS};
 
-use super::arena::alice;
 use super::body::{Body, SPEED_M_S, SUBSTEPS, TURN_RAD_S};
 use super::explore::{decide, Move};
 use super::scenario::SAMPLES_PER_S;
-use super::sensors::Sensors;
 use crate::arena::Light;
+use crate::builtin::alice::alice;
 use crate::geometry::{Point, SegmentSet};
 use crate::rng::SimRng;
+use crate::sensors::alice::Sensors;
 
 /// A simulated ALICE wandering in `builtin:alice`, with the drifting odometry the thesis gives.
 pub struct AliceStream {
@@ -99,8 +99,8 @@ pub fn situation(
     robot_firmware::alice::situation::situation(
         seq,
         time_ms,
-        super::sensors::whisker_bits(touch),
-        super::sensors::light_bytes(light),
+        crate::sensors::alice::whisker_bits(touch),
+        crate::sensors::alice::light_bytes(light),
         robot_firmware::odometry::Pose::new(odo.0 as f32, odo.1 as f32, odo.2 as f32),
     )
 }

@@ -87,7 +87,7 @@ impl WorldArgs {
     /// with its own scene, `builtin:alice` (seed 001 §4.5), as foraging does with its own.
     pub fn arena(&self) -> &str {
         if self.profile == ProfileArg::Alice && self.arena == crate::builtin::MICRO_RATO_99 {
-            crate::alice::arena::BUILTIN_ALICE
+            crate::builtin::alice::BUILTIN_ALICE
         } else {
             &self.arena
         }

@@ -137,7 +137,7 @@ pub struct LightMapReport {
 }
 
 fn open_box() -> Arena {
-    crate::builtin::walled_box("Khepera box 75 x 60 cm", "builtin", BOX_M.0, BOX_M.1)
+    crate::arena::walled_box("Khepera box 75 x 60 cm", "builtin", BOX_M.0, BOX_M.1)
 }
 
 fn apply(sim: &mut Sim, cmd: Command, what: &'static str) -> Result<(), ScenarioError> {

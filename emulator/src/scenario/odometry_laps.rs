@@ -202,7 +202,7 @@ impl Station {
 }
 
 fn open_box() -> Arena {
-    crate::builtin::walled_box("Khepera box 75 x 60 cm", "builtin", BOX_M.0, BOX_M.1)
+    crate::arena::walled_box("Khepera box 75 x 60 cm", "builtin", BOX_M.0, BOX_M.1)
 }
 
 /// Runs the laps once and re-integrates the recorded counts for both tables.

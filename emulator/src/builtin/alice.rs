@@ -34,7 +34,7 @@ pub fn alice() -> Arena {
             .collect(),
         height_m: None,
     };
-    let mut a = crate::builtin::walled_box(
+    let mut a = crate::arena::walled_box(
         "ALICE test scene (Zimmer §4.5)",
         BUILTIN_ALICE,
         SIDE_M,
@@ -97,7 +97,7 @@ pub fn builtin(name: &str) -> Option<Arena> {
 /// strong one low on the bottom wall (the open space), one in the pocket's corner shining
 /// along the corridor, one in the upper right behind the obstacles.
 pub fn navigation_scene() -> Arena {
-    let mut a = crate::builtin::walled_box(
+    let mut a = crate::arena::walled_box(
         "ALICE navigation scene (Zimmer §5.3)",
         BUILTIN_ALICE_NAVIGATION,
         NAV_SCENE_M.0,
@@ -184,7 +184,7 @@ fn thick(a: Point, b: Point) -> Wall {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::alice::sensors::BODY_RADIUS_M;
+    use crate::sensors::alice::BODY_RADIUS_M;
 
     /// Grid cells (5 cm) where the 40 cm body fits, reachable from the start.
     fn reachable(a: &Arena) -> Vec<Point> {

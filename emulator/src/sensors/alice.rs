@@ -96,7 +96,7 @@ impl Sensors {
             let bearing = d.y.atan2(d.x);
             for (i, v) in raw.iter_mut().enumerate() {
                 let axis = heading + i as f64 * std::f64::consts::TAU / COUNT as f64;
-                let off = crate::alice::wrap(bearing - axis);
+                let off = world_model::model::wrap(bearing - axis);
                 *v += l.intensity / r2
                     * (-(off * off) / (2.0 * LIGHT_LOBE_RAD * LIGHT_LOBE_RAD)).exp();
             }
