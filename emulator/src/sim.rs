@@ -2,7 +2,7 @@
 //! against a `Hal` implemented over the world, the physics, the sensor models and the UART.
 //!
 //! Layer: std, the top of the emulator's core; the pty front end, the headless scenario
-//! runner (`scenario`) and the station's built-in emulator drive a [`Sim`]. One
+//! runners (`scenarios`) and the station's built-in emulator drive a [`Sim`]. One
 //! [`Sim::step`] is one millisecond: `Robot::step` with the clock at `t` (it runs its control
 //! cycle itself when due and reads the sensors then; skipped while the robot says it has
 //! nothing to do before a later time, `Robot::idle_until_us`, and no byte comes), then the physics from `t` to `t + 1 ms`

@@ -18,7 +18,7 @@
 //! are printed, not compared. Run with `--nocapture` for the table.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use emulator::scenario::odometry_laps::{run_odometry_laps, OdometryLapsOptions};
+use emulator::scenarios::odometry_laps::{run_odometry_laps, OdometryLapsOptions};
 
 const SEEDS: std::ops::RangeInclusive<u64> = 1..=12;
 

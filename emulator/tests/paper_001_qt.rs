@@ -5,10 +5,12 @@
 //! defaults'; where a comment gives figures "before `pos_sigma`" (the position estimate's
 //! weights as wide as d_acc), `--qt-param pos_sigma=0.8` reproduces them exactly.
 
-use emulator::alice::experiments::{
+use emulator::scenarios::alice::experiments::{
     correlation, dynamic, dynamic_with, eps_o, eps_o_continued, equilibrium, ExperimentReport,
 };
-use emulator::alice::navigation::{navigation, Drift, NavOptions, NavReport, Scene, TestRun};
+use emulator::scenarios::alice::navigation::{
+    navigation, Drift, NavOptions, NavReport, Scene, TestRun,
+};
 use world_model::Params;
 
 const SEEDS: [u64; 4] = [1, 2, 3, 4];

@@ -13,7 +13,7 @@
 //! times and more often than without. Run with `--nocapture` for the table.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use emulator::scenario::lightmap::{run_light_map, LightMapOptions};
+use emulator::scenarios::lightmap::{run_light_map, LightMapOptions};
 
 const SEEDS: std::ops::RangeInclusive<u64> = 1..=10;
 

@@ -12,7 +12,7 @@ use crate::sensors::Noise;
 pub struct BenchArgs {
     /// The task every run does.
     #[arg(long, value_enum)]
-    pub task: crate::bench::BenchTask,
+    pub task: crate::scenarios::bench::BenchTask,
     /// Arenas: `generated:N` (N generated arenas, seeds 1..N, of --kind), a directory of
     /// arena files, arena files, or built-in names; several may be given.
     #[arg(long, num_args = 1.., default_value = "generated:200", value_name = "SPEC")]
@@ -66,8 +66,8 @@ pub const MAX_BENCH_JOBS: usize = 1024;
 
 impl BenchArgs {
     /// The benchmark these arguments describe.
-    pub fn options(&self) -> Result<crate::bench::BenchOptions, String> {
-        use crate::bench::BenchTask;
+    pub fn options(&self) -> Result<crate::scenarios::bench::BenchOptions, String> {
+        use crate::scenarios::bench::BenchTask;
         if !(1..=MAX_BENCH_SEEDS).contains(&self.seeds) {
             return Err(format!(
                 "--seeds {}: must be 1..={MAX_BENCH_SEEDS}",
@@ -127,8 +127,8 @@ impl BenchArgs {
             );
         }
         let kind = self.kind.unwrap_or_else(|| self.task.default_kind());
-        let arenas = crate::bench::resolve_arenas(&self.arenas, kind)?;
-        Ok(crate::bench::BenchOptions {
+        let arenas = crate::scenarios::bench::resolve_arenas(&self.arenas, kind)?;
+        Ok(crate::scenarios::bench::BenchOptions {
             task: self.task,
             profile,
             arenas,

@@ -6,8 +6,8 @@ use robot_firmware::KHEPERA;
 use super::fleet::FleetArgs;
 use super::parse::parse_point;
 use super::world::WorldArgs;
-use crate::alice::navigation::{Drift, Scene, StepBase, TestMap};
-use crate::scenario::{GoalPoint, ScenarioOptions, Task};
+use crate::scenarios::alice::navigation::{Drift, Scene, StepBase, TestMap};
+use crate::scenarios::task::{GoalPoint, ScenarioOptions, Task};
 
 /// `run` options.
 #[derive(Debug, Clone, Args)]
@@ -176,10 +176,10 @@ impl RunArgs {
             }
             TaskArg::Forage => Task::Forage,
             TaskArg::OdometryLaps => {
-                return Err("--task odometry-laps is run by `scenario::odometry_laps`".to_string())
+                return Err("--task odometry-laps is run by `scenarios::odometry_laps`".to_string())
             }
             TaskArg::LightMap => {
-                return Err("--task light-map is run by `scenario::lightmap`".to_string())
+                return Err("--task light-map is run by `scenarios::lightmap`".to_string())
             }
             TaskArg::UnsupervisedPlaces => {
                 return Err(
@@ -242,7 +242,7 @@ impl RunArgs {
     /// The contest `--robots N` / `--robot` ask for (`None`: one robot, `options`).
     pub fn contest_options(
         &self,
-    ) -> Result<Option<crate::scenario::contest::ContestOptions>, String> {
+    ) -> Result<Option<crate::scenarios::contest::ContestOptions>, String> {
         let Some(robots) = self.fleet.specs(&self.world)? else {
             return Ok(None);
         };
@@ -259,7 +259,7 @@ impl RunArgs {
             return Err("--goal is for --task go-to; the contest heads for the beacon".into());
         }
         self.world.check()?;
-        Ok(Some(crate::scenario::contest::ContestOptions {
+        Ok(Some(crate::scenarios::contest::ContestOptions {
             robots,
             seed: self.world.seed,
             timeout_s: self.timeout_s(DEFAULT_TIMEOUT_S)?,
@@ -271,19 +271,19 @@ impl RunArgs {
     /// arena kind, `--seed` its seed, `--timeout` the run length.
     pub fn unsupervised_places_options(
         &self,
-    ) -> Result<crate::unsupervised_places::PlacesOptions, String> {
-        use crate::unsupervised_places::{ArenaKind, PlacesOptions};
+    ) -> Result<crate::scenarios::unsupervised_places::PlacesOptions, String> {
+        use crate::scenarios::unsupervised_places::{ArenaKind, PlacesOptions};
         if self.goal.is_some() {
             return Err("--goal is for --task go-to; unsupervised-places wanders".to_string());
         }
         let kind = ArenaKind::parse(&self.world.arena)?;
         let mut o = PlacesOptions::new(kind, self.world.seed);
         o.duration_s = self.timeout_s(o.duration_s)?;
-        if o.duration_s > crate::unsupervised_places::MAX_DURATION_S {
+        if o.duration_s > crate::scenarios::unsupervised_places::MAX_DURATION_S {
             return Err(format!(
                 "--timeout {}: unsupervised-places runs at most {} s (its report keeps a series)",
                 o.duration_s,
-                crate::unsupervised_places::MAX_DURATION_S
+                crate::scenarios::unsupervised_places::MAX_DURATION_S
             ));
         }
         o.noise = self.world.noise()?;
@@ -291,7 +291,9 @@ impl RunArgs {
     }
 
     /// The line-correction run these arguments describe (`--task line-correct`).
-    pub fn line_correct_options(&self) -> Result<crate::line_correct::LineCorrectOptions, String> {
+    pub fn line_correct_options(
+        &self,
+    ) -> Result<crate::scenarios::line_correct::LineCorrectOptions, String> {
         self.world.check()?;
         if self.goal.is_some() {
             return Err("--goal is for --task go-to; line-correct surveys the grid".to_string());
@@ -304,7 +306,8 @@ impl RunArgs {
         }
         // A 40 m survey at 0.1 m/s takes 400 s: the go-to default (300 s) would cut it.
         let timeout_s = self.timeout_s(self.distance / 0.1 * 1.5)?;
-        let mut o = crate::line_correct::LineCorrectOptions::new(self.world.profile.profile());
+        let mut o =
+            crate::scenarios::line_correct::LineCorrectOptions::new(self.world.profile.profile());
         o.seed = self.world.seed;
         o.distance_m = self.distance;
         o.timeout_s = timeout_s;

@@ -2,7 +2,7 @@ use robot_firmware::{KHEPERA, MICRO_RATO};
 
 use super::*;
 use crate::link::Speed;
-use crate::scenario::{GoalPoint, Task};
+use crate::scenarios::task::{GoalPoint, Task};
 
 fn parse(args: &[&str]) -> Result<Cli, clap::Error> {
     Cli::try_parse_from(std::iter::once("robot-emulator").chain(args.iter().copied()))

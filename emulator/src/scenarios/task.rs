@@ -43,12 +43,6 @@ use crate::arena::{Arena, Pose};
 use crate::sensors::Noise;
 use crate::sim::{Sim, SimConfig, SimError};
 
-pub mod calibrate_odometry;
-pub mod contest;
-pub mod forage;
-pub mod lightmap;
-pub mod odometry_laps;
-
 /// Settle time after the firmware reports arrival, ms (a few motor time constants).
 pub const SETTLE_MS: u64 = 500;
 /// Khepera go-to tolerance, metres. seed 000 §4.4 / Fig. 17: 5 cm.
@@ -82,8 +76,9 @@ pub enum Task {
     /// built and plans from the start to where it found the goal; it is carried back to the
     /// start and run 2 executes the plan.
     ExploreThenPlan,
-    /// Seed 000 §7 foraging: objects from lit sources to the home base ([`forage::run_forage`],
-    /// which has its own report; [`run_scenario`] refuses it).
+    /// Seed 000 §7 foraging: objects from lit sources to the home base
+    /// ([`run_forage`](super::forage::run_forage), which has its own report; [`run_scenario`]
+    /// refuses it).
     Forage,
 }
 
@@ -288,7 +283,7 @@ pub enum ScenarioError {
         y0: f64,
         y1: f64,
     },
-    /// The task has its own runner (foraging: [`forage::run_forage`]).
+    /// The task has its own runner (foraging: [`run_forage`](super::forage::run_forage)).
     #[error("task {0:?} has its own runner")]
     OtherRunner(Task),
     /// Foraging in an arena with no room for a light source.

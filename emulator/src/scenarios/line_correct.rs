@@ -2,7 +2,7 @@
 //! estimates (line-corrected, plain odometry, nearest-line baseline) are judged against the
 //! truth (`robot-emulator run --task line-correct`).
 //!
-//! Layer: std, on top of [`Sim`], beside `scenario`. The firmware is told only what a
+//! Layer: std, on top of [`Sim`], beside `task`. The firmware is told only what a
 //! station would tell it: `SetMode(Survey)`. It knows the grid's pitch and that a line passes
 //! through the origin (its `GridGeometry` default); the emulator's grid starts at the arena's
 //! lower-left corner, so the arena must put that corner on a line ([`LineCorrectError`]

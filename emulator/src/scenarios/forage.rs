@@ -17,7 +17,7 @@ use std::time::Instant;
 use protocol::{Command, Mode};
 use serde::Serialize;
 
-use super::{apply, ScenarioError, ScenarioOptions, SETTLE_MS};
+use super::task::{apply, ScenarioError, ScenarioOptions, SETTLE_MS};
 use crate::arena::Arena;
 use crate::forage::ForageSite;
 use crate::geometry::Point;

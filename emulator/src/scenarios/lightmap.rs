@@ -40,7 +40,7 @@ use robot_firmware::odometry::{wrap_angle, Point as FwPoint};
 use robot_firmware::KHEPERA;
 use serde::Serialize;
 
-use super::ScenarioError;
+use super::task::ScenarioError;
 use crate::arena::{Arena, Light, Pose};
 use crate::geometry::Point;
 use crate::rng::SimRng;

@@ -29,7 +29,7 @@ use protocol::Command;
 use serde::Serialize;
 use thiserror::Error;
 
-use super::{apply, set_arrival, PoseReport, ScenarioError, SETTLE_MS, STUCK_WINDOW_S};
+use super::task::{apply, set_arrival, PoseReport, ScenarioError, SETTLE_MS, STUCK_WINDOW_S};
 use crate::arena::Arena;
 use crate::fleet::{robot_seed, Fleet, FleetError, RobotSpec};
 use crate::geometry::Point;

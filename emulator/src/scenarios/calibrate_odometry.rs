@@ -22,7 +22,7 @@ use robot_firmware::odometry_manoeuvre::{Manoeuvre, Observation, STOP};
 use robot_firmware::params::id as param;
 use serde::Serialize;
 
-use super::{apply, ScenarioError, ScenarioOptions};
+use super::task::{apply, ScenarioError, ScenarioOptions};
 use crate::arena::Arena;
 use crate::sim::Sim;
 

@@ -39,7 +39,7 @@ use robot_firmware::odometry::{Odometry, OdometryParams, Pose as FwPose};
 use robot_firmware::KHEPERA;
 use serde::Serialize;
 
-use super::ScenarioError;
+use super::task::ScenarioError;
 use crate::arena::{Arena, Pose};
 use crate::physics::wrap_pi;
 use crate::sim::{Sim, SimConfig};

@@ -1,9 +1,9 @@
 //! The contest benchmark (issue 17): over many arenas, each robot of a Micro-Rato contest
 //! against the same robot alone.
 //!
-//! Layer: std, on top of [`crate::scenario::contest`] and [`crate::scenario::run_scenario`],
-//! sharing [`crate::bench`]'s arenas and worker pool; `robot-emulator bench --robots N` only
-//! parses and prints.
+//! Layer: std, on top of [`contest`](super::contest) and
+//! [`run_scenario`](super::task::run_scenario), sharing [`bench`](super::bench)'s arenas and
+//! worker pool; `robot-emulator bench --robots N` only parses and prints.
 //!
 //! One job per (arena, seed): the contest of N micro-rato robots (reach-beacon, starts by the
 //! fleet's rule), then each robot alone from the start it had in the contest, with the seed it
@@ -20,10 +20,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bench::{run_parallel, ArenaSource, BenchOptions, Spread};
 use crate::fleet::RobotSpec;
-use crate::scenario::contest::{run_contest, ContestOptions};
-use crate::scenario::{run_scenario, ScenarioOptions, Task};
+use crate::scenarios::bench::{run_parallel, ArenaSource, BenchOptions, Spread};
+use crate::scenarios::contest::{run_contest, ContestOptions};
+use crate::scenarios::task::{run_scenario, ScenarioOptions, Task};
 
 /// One robot in one (arena, seed) job.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -128,10 +128,11 @@ pub struct FleetBenchReport {
 /// Runs the contest benchmark.
 pub fn run(opts: &BenchOptions) -> FleetBenchReport {
     // The same seeds as the one-robot bench, so robot 1 alone is exactly its run.
-    let jobs: Vec<(usize, u64)> = crate::bench::run_list(opts.arenas.len(), opts.seed, opts.seeds)
-        .into_iter()
-        .map(|(a, _, seed)| (a, seed))
-        .collect();
+    let jobs: Vec<(usize, u64)> =
+        crate::scenarios::bench::run_list(opts.arenas.len(), opts.seed, opts.seeds)
+            .into_iter()
+            .map(|(a, _, seed)| (a, seed))
+            .collect();
     let started = Instant::now();
     let workers = opts.jobs.clamp(1, jobs.len().max(1));
     let rows = run_parallel(jobs.len(), workers, opts.progress, |i| {
@@ -243,7 +244,7 @@ fn summarise(
         .collect();
     let mean = |v: u64, n: usize| if n == 0 { 0.0 } else { v as f64 / n as f64 };
     let robot_contacts: u64 = all.iter().map(|r| u64::from(r.robot_collisions)).sum();
-    let spread = |v: Vec<f64>| crate::bench::spread_of(v);
+    let spread = |v: Vec<f64>| crate::scenarios::bench::spread_of(v);
     FleetBenchReport {
         task: "reach-beacon",
         robots: opts.robots,

@@ -1,7 +1,7 @@
 //! The generalisation benchmark (issue 14): one task over many arenas and seeds, each run
-//! headless through the scenario runners ([`crate::scenario::run_scenario`],
-//! [`crate::scenario::forage::run_forage`]), in parallel, summarised as success rate, times,
-//! collisions, final error and failures by cause.
+//! headless through the scenario runners ([`run_scenario`](super::task::run_scenario),
+//! [`run_forage`](super::forage::run_forage)), in parallel, summarised as success
+//! rate, times, collisions, final error and failures by cause.
 //!
 //! Layer: std, on top of the scenario runners and [`crate::arena_gen`]; the command line
 //! (`robot-emulator bench`) only parses arguments and prints.
@@ -14,7 +14,8 @@
 //! - failures, one cause each: `started_inside_target` (the start pose is already within the
 //!   tolerance of the goal: nothing was shown, whatever the report says), `wrong_arrival` (the
 //!   firmware reported arrival but the true pose is not in the target), `stuck` (no arrival,
-//!   and in the run's last [`crate::scenario::STUCK_WINDOW_S`] the robot stayed within one body diameter),
+//!   and in the run's last [`STUCK_WINDOW_S`](super::task::STUCK_WINDOW_S) the robot
+//!   stayed within one body diameter),
 //!   `timeout` (no arrival, still moving), `import_error` (the arena could not be loaded or
 //!   generated), `no_path_on_explored_map` (explore-then-plan: the robot refused to plan
 //!   run 2 because its own explored map does not connect start and goal), `setup_error` (the runner refused: start in a wall, a refused command, no
@@ -44,7 +45,7 @@ use crate::arena::{Arena, LoadOptions};
 use crate::arena_gen::{self, Kind};
 use crate::geometry::Point;
 use crate::rng::SimRng;
-use crate::scenario::{ScenarioOptions, ScenarioReport, Task};
+use crate::scenarios::task::{ScenarioOptions, ScenarioReport, Task};
 use crate::sensors::Noise;
 
 pub mod breakdown;
@@ -260,11 +261,12 @@ pub struct BenchOptions {
     pub noise: Noise,
     /// Draw a progress bar on stderr (only when it is a terminal).
     pub progress: bool,
-    /// Robots per contest; above 1 the benchmark is `crate::fleet_bench`'s.
+    /// Robots per contest; above 1 the benchmark is `fleet_bench`'s.
     pub robots: usize,
     /// Go-to: before each run, the same robot (same seed) calibrates its odometry in the same
-    /// arena ([`crate::scenario::calibrate_odometry`]) and the go-to run starts with the
-    /// result set, as an operator who calibrated once and loads the parameter file.
+    /// arena ([`calibrate_odometry`](super::calibrate_odometry)) and the go-to run
+    /// starts with the result set, as an operator who calibrated once and loads the parameter
+    /// file.
     pub calibrate_odometry: bool,
     /// Parameters set before every run (id, value), as a station loading a parameter file
     /// (e.g. `--search`'s `search_mode`).
@@ -373,7 +375,7 @@ pub struct Row {
     /// The error of an import or setup failure, or a panic's message.
     pub error: Option<String>,
     /// The odometry calibration before the run (`--calibrate-odometry`).
-    pub calibration: Option<crate::scenario::calibrate_odometry::CalibrationReport>,
+    pub calibration: Option<crate::scenarios::calibrate_odometry::CalibrationReport>,
     /// Shortest free path from the start to the goal area for this robot, metres
     /// ([`crate::arena::free_path`]).
     pub free_path_m: Option<f64>,
@@ -671,16 +673,16 @@ fn run_checked(
     so.timeout_s = opts.timeout_s;
     so.noise = opts.noise;
     so.params.extend(opts.params.iter().copied());
-    let setup = |e: crate::scenario::ScenarioError| (Cause::SetupError, e.to_string());
+    let setup = |e: crate::scenarios::task::ScenarioError| (Cause::SetupError, e.to_string());
     let mut row = Row::failed(source.label(), seed, Cause::Timeout, String::new(), 0.0);
     row.error = None;
     if opts.calibrate_odometry {
-        let c = crate::scenario::calibrate_odometry::calibrate_before(&arena, &mut so)
+        let c = crate::scenarios::calibrate_odometry::calibrate_before(&arena, &mut so)
             .map_err(setup)?;
         row.calibration = Some(c);
     }
     if opts.task == BenchTask::Forage {
-        let r = crate::scenario::forage::run_forage(arena, so).map_err(setup)?;
+        let r = crate::scenarios::forage::run_forage(arena, so).map_err(setup)?;
         row.success = r.all_delivered;
         row.cause = (!r.all_delivered).then_some(Cause::Timeout);
         row.sim_s = Some(r.sim_s);
@@ -693,7 +695,7 @@ fn run_checked(
     }
     let start = start_point(&arena, opts.profile).map_err(|e| (Cause::SetupError, e))?;
     let measured = arena.clone();
-    let r = crate::scenario::run_scenario(arena, so).map_err(setup)?;
+    let r = crate::scenarios::task::run_scenario(arena, so).map_err(setup)?;
     let (to_goal, ended) = routes(&measured, start, &r, opts.profile);
     let diameter = f64::from(opts.profile.body_diameter_m);
     row.features = breakdown::features_of(&measured, to_goal.as_ref(), &declared, diameter);
@@ -813,7 +815,7 @@ pub fn summarise(task: BenchTask, rows: &[Row]) -> Summary {
             run2_faster_rate: ratio(faster, both.len()),
         }
     });
-    let cals: Vec<&crate::scenario::calibrate_odometry::CalibrationReport> =
+    let cals: Vec<&crate::scenarios::calibrate_odometry::CalibrationReport> =
         rows.iter().filter_map(|r| r.calibration.as_ref()).collect();
     let calibration = (!cals.is_empty()).then(|| {
         let ok: Vec<_> = cals
