@@ -1,5 +1,5 @@
 //! Seed 000 §6.1 in the emulator: light-source mapping with and without local correction
-//! (emulator/src/scenario/lightmap.rs). Paper (one real run each, 75 x 60 cm box, one
+//! (emulator/src/scenarios/lightmap.rs). Paper (one real run each, 75 x 60 cm box, one
 //! source): without correction the source was recognised 5 times; with correction the run
 //! was stopped after 24 recognitions.
 //!

@@ -9,8 +9,9 @@
 //! it names; a module the crate root re-exports (`pub use a::b;`) resolves to where it lives.
 //! Parent/child `mod` declarations are not imports.
 //!
-//! Run outside cargo for a report of every circle: `rustc --edition 2021 module_layers.rs`,
-//! then `./module_layers CRATE_DIR...` from the workspace (the layer checks always run).
+//! Run outside cargo, from the workspace, it reports every circle of any size in the crates
+//! named and every upward import: `CARGO_MANIFEST_DIR=$PWD/tests rustc --edition 2021 -O
+//! tests/tests/module_layers.rs -o /tmp/ml && /tmp/ml protocol robot-firmware emulator`.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::collections::{BTreeMap, BTreeSet};
