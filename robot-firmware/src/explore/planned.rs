@@ -37,7 +37,9 @@ const WALL_DEPTH_M: f32 = 0.05;
 /// Cells within this of the robot's centre are ones it stands in, m (half its radius: the
 /// body's own cell and a neighbour it reaches well into).
 const BODY_M: f32 = 0.1;
-/// Half the aperture of an IR obstacle sensor's beam (CiberRato's see 60 degrees).
+/// Half the aperture of an IR obstacle sensor's beam (CiberRato's see 60 degrees), to four
+/// places as the search's figures were measured with (`FRAC_PI_6` is another `f32`).
+#[allow(clippy::approx_constant)]
 const BEAM_HALF_RAD: f32 = 0.5236;
 
 /// The planned search's map: the cells the robot stands in are free, and stay free (its
