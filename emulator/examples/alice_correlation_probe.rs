@@ -8,7 +8,7 @@
 //! and the late aligned heading error (degrees) with both correlations, without the position
 //! one and without the orientation one, and the plain odometry's position error.
 
-use emulator::alice::experiments::correlation_with;
+use emulator::scenarios::alice::experiments::correlation_with;
 use world_model::Params;
 
 fn main() {

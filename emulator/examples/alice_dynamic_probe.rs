@@ -7,7 +7,7 @@
 //! both of its sides, and when the gap closed (-1: never), and how many seeds meet the
 //! thesis's "clear gap, closed within about 1500" (at most 1 edge across, closed by 1500).
 
-use emulator::alice::experiments::dynamic_with;
+use emulator::scenarios::alice::experiments::dynamic_with;
 use world_model::Params;
 
 fn main() {

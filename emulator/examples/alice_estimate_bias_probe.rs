@@ -13,9 +13,9 @@
 //! (positive: the estimate lies farther from the obstacle than the robot), and the mean
 //! distance between estimate and truth.
 
-use emulator::alice::arena::alice;
-use emulator::alice::scenario::{run_with, RunOptions};
+use emulator::builtin::alice::alice;
 use emulator::geometry::Point;
+use emulator::scenarios::alice::scenario::{run_with, RunOptions};
 use world_model::Params;
 
 /// Clearance bins, 0.2 m wide; the last takes everything beyond.

@@ -11,9 +11,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use emulator::arena_gen::{generate, Kind};
-use emulator::bench::run_seed;
-use emulator::scenario::calibrate_odometry::{run_calibration, DEFAULT_TIMEOUT_S};
-use emulator::scenario::{ScenarioOptions, Task};
+use emulator::scenarios::bench::run_seed;
+use emulator::scenarios::calibrate_odometry::{run_calibration, DEFAULT_TIMEOUT_S};
+use emulator::scenarios::task::{ScenarioOptions, Task};
 
 fn main() {
     if let Some(b) = std::env::var("TRACE").ok().and_then(|v| v.parse().ok()) {

@@ -6,7 +6,7 @@
 //! real robot's 3.3 cm IR curve instead of the thesis's 5 cm).
 #![allow(clippy::unwrap_used)]
 
-use emulator::unsupervised_places::{run, ArenaKind, PlacesOptions};
+use emulator::scenarios::unsupervised_places::{run, ArenaKind, PlacesOptions};
 
 fn main() {
     let a: Vec<String> = std::env::args().collect();
@@ -32,9 +32,9 @@ fn main() {
         }
         if let Ok(v) = std::env::var("HEADING") {
             o.heading_reset = match v.as_str() {
-                "compass" => emulator::unsupervised_places::HeadingReset::Compass,
-                "keep" => emulator::unsupervised_places::HeadingReset::Keep,
-                _ => emulator::unsupervised_places::HeadingReset::Stored,
+                "compass" => emulator::scenarios::unsupervised_places::HeadingReset::Compass,
+                "keep" => emulator::scenarios::unsupervised_places::HeadingReset::Keep,
+                _ => emulator::scenarios::unsupervised_places::HeadingReset::Stored,
             };
         }
         if let Ok(v) = std::env::var("COMPASS_DEG") {

@@ -7,7 +7,7 @@
 
 use emulator::arena::{rasterise, Cell};
 use emulator::arena_gen::{generate, Kind};
-use emulator::scenario::{apply, set_arrival, ScenarioOptions, Task};
+use emulator::scenarios::task::{apply, set_arrival, ScenarioOptions, Task};
 use emulator::sim::Sim;
 use protocol::{Command, ParamId};
 use robot_firmware::explore::SearchMode;
@@ -22,7 +22,7 @@ fn main() {
     let seed: u64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1);
     let mut run_seed: u64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(0);
     if run_seed == 0 {
-        run_seed = emulator::bench::run_seed(1, seed as usize - 1, 1);
+        run_seed = emulator::scenarios::bench::run_seed(1, seed as usize - 1, 1);
     }
     let mode = match args.get(4).map(String::as_str) {
         Some("reactive") => SearchMode::Reactive,

@@ -2,12 +2,14 @@
 //!
 //! The Micro-Rato'99 labyrinth of seed 004 (Dom Dinis) is CiberRato's `wallsMicRato99.xml`;
 //! the lab file has no grid file, so the start pose beside it is the emulator's own choice
-//! (documented in the XML comment).
+//! (documented in the XML comment). ALICE's scenes (seed 001) are `alice`.
 
 use std::path::Path;
 
 use crate::arena::{ciberrato, Arena, ArenaError, LoadOptions};
-use crate::geometry::{Aabb, Point};
+use crate::geometry::Point;
+
+pub mod alice;
 
 /// Name of the built-in floor-grid arena (seed 003): an empty walled square over a floor grid.
 pub const FLOOR_GRID: &str = "builtin:floor-grid";
@@ -50,28 +52,7 @@ pub fn floor_grid() -> Arena {
             y: side / 2.0 + 0.04,
             heading: 0.4,
         }],
-        ..walled_box("Floor grid (line correction)", FLOOR_GRID, side, side)
-    }
-}
-
-/// An empty walled box `width_m` x `height_m` with its lower-left corner at the origin: no
-/// obstacles, lights, targets or starts.
-pub fn walled_box(name: &str, source: &str, width_m: f64, height_m: f64) -> Arena {
-    Arena {
-        name: name.to_string(),
-        source: Path::new(source).to_path_buf(),
-        format: crate::arena::ArenaFormat::AsciiGrid,
-        bounds: Aabb::from_corners(Point::new(0.0, 0.0), Point::new(width_m, height_m)),
-        enclosed: true,
-        walls: Vec::new(),
-        raster: None,
-        beacons: Vec::new(),
-        targets: Vec::new(),
-        lights: Vec::new(),
-        starts: Vec::new(),
-        goal: None,
-        unit_m: 0.01,
-        warnings: Vec::new(),
+        ..crate::arena::walled_box("Floor grid (line correction)", FLOOR_GRID, side, side)
     }
 }
 
@@ -146,7 +127,7 @@ pub fn load(name: &str, opts: &LoadOptions) -> Result<Arena, ArenaError> {
         Ok(floor_grid())
     } else if name == crate::forage::BUILTIN_FORAGE {
         forage()
-    } else if let Some(a) = crate::alice::arena::builtin(name) {
+    } else if let Some(a) = alice::builtin(name) {
         Ok(a)
     } else {
         crate::arena::load(Path::new(name), opts)

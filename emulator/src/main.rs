@@ -44,7 +44,7 @@ fn arena(args: &emulator::cli::ArenaArgs) -> Result<(), String> {
 }
 
 /// `hil`: the world for a board running the firmware itself (emulator::hil).
-fn hil(args: &emulator::hil::args::HilArgs) -> Result<(), String> {
+fn hil(args: &emulator::cli::HilArgs) -> Result<(), String> {
     let port = args.port()?;
     let when = args.stop_when()?;
     let key = args
@@ -102,25 +102,25 @@ fn hil(args: &emulator::hil::args::HilArgs) -> Result<(), String> {
 fn bench(args: &emulator::cli::BenchArgs) -> Result<(), String> {
     let opts = args.options()?;
     if opts.robots > 1 {
-        let report = emulator::fleet_bench::run(&opts);
+        let report = emulator::scenarios::fleet_bench::run(&opts);
         if args.json {
             println!(
                 "{}",
                 emulator::json_text::compact(&report).map_err(|e| e.to_string())?
             );
         } else {
-            print!("{}", emulator::fleet_bench::render(&report));
+            print!("{}", emulator::scenarios::fleet_bench::render(&report));
         }
         return Ok(());
     }
-    let report = emulator::bench::run(&opts);
+    let report = emulator::scenarios::bench::run(&opts);
     if args.json {
         println!(
             "{}",
             emulator::json_text::compact(&report).map_err(|e| e.to_string())?
         );
     } else {
-        print!("{}", emulator::bench::render(&report));
+        print!("{}", emulator::scenarios::bench::render(&report));
     }
     Ok(())
 }
@@ -250,14 +250,14 @@ fn run(args: &RunArgs) -> Result<(), String> {
         let arena = load_arena(args.world.arena(), &args.world.load_options())
             .map_err(|e| e.to_string())?;
         let report =
-            emulator::scenario::contest::run_contest(arena, &opts).map_err(|e| e.to_string())?;
+            emulator::scenarios::contest::run_contest(arena, &opts).map_err(|e| e.to_string())?;
         if args.json {
             println!(
                 "{}",
                 emulator::json_text::compact(&report).map_err(|e| e.to_string())?
             );
         } else {
-            print!("{}", emulator::scenario::contest::render(&report));
+            print!("{}", emulator::scenarios::contest::render(&report));
         }
         return Ok(());
     }
@@ -286,13 +286,13 @@ fn run(args: &RunArgs) -> Result<(), String> {
     let arena =
         load_arena(args.world.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
     let calibration = if args.calibrate_odometry {
-        let c = emulator::scenario::calibrate_odometry::calibrate_before(&arena, &mut opts)
+        let c = emulator::scenarios::calibrate_odometry::calibrate_before(&arena, &mut opts)
             .map_err(|e| e.to_string())?;
         Some(c)
     } else {
         None
     };
-    let report = emulator::scenario::run_scenario(arena, opts).map_err(|e| e.to_string())?;
+    let report = emulator::scenarios::task::run_scenario(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
         let mut v = serde_json::to_value(&report).map_err(|e| e.to_string())?;
         if let (Some(obj), Some(c)) = (v.as_object_mut(), &calibration) {
@@ -339,7 +339,7 @@ fn run(args: &RunArgs) -> Result<(), String> {
 fn forage(args: &RunArgs) -> Result<(), String> {
     let opts = args.options()?;
     let arena = load_arena(args.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
-    let r = emulator::scenario::forage::run_forage(arena, opts).map_err(|e| e.to_string())?;
+    let r = emulator::scenarios::forage::run_forage(arena, opts).map_err(|e| e.to_string())?;
     if args.json {
         println!("{}", run_json(&r)?);
         return Ok(());
@@ -368,13 +368,15 @@ fn forage(args: &RunArgs) -> Result<(), String> {
     Ok(())
 }
 
-type AliceRun =
-    fn(u64, &world_model::Params) -> Result<emulator::alice::experiments::ExperimentReport, String>;
+type AliceRun = fn(
+    u64,
+    &world_model::Params,
+) -> Result<emulator::scenarios::alice::experiments::ExperimentReport, String>;
 
 /// The ALICE experiment a task names.
 fn alice_experiment(task: emulator::cli::TaskArg) -> Option<AliceRun> {
-    use emulator::alice::experiments as x;
     use emulator::cli::TaskArg;
+    use emulator::scenarios::alice::experiments as x;
     match task {
         TaskArg::AliceEquilibrium => Some(x::equilibrium),
         TaskArg::AliceEpsO => Some(x::eps_o),
@@ -395,7 +397,7 @@ fn qt_params(args: &RunArgs) -> Result<world_model::Params, String> {
 }
 
 fn alice_navigation(args: &RunArgs) -> Result<(), String> {
-    use emulator::alice::navigation::{navigation, NavOptions};
+    use emulator::scenarios::alice::navigation::{navigation, NavOptions};
     let mut options = NavOptions::new(args.world.seed, qt_params(args)?);
     if let Some(d) = args.static_drift {
         if !(d.is_finite() && d.abs() <= 45.0) {
@@ -407,7 +409,7 @@ fn alice_navigation(args: &RunArgs) -> Result<(), String> {
     }
     options.learn = !args.no_learning;
     options.test_map = if args.adapting_map {
-        emulator::alice::navigation::TestMap::Adapting
+        emulator::scenarios::alice::navigation::TestMap::Adapting
     } else {
         args.test_map
     };
@@ -510,7 +512,7 @@ fn alice(args: &RunArgs, run: AliceRun) -> Result<(), String> {
 
 fn unsupervised_places(args: &RunArgs) -> Result<(), String> {
     let opts = args.unsupervised_places_options()?;
-    let r = emulator::unsupervised_places::run(&opts);
+    let r = emulator::scenarios::unsupervised_places::run(&opts);
     if args.json {
         println!(
             "{}",
@@ -556,7 +558,8 @@ fn line_correct(args: &RunArgs) -> Result<(), String> {
     let opts = args.line_correct_options()?;
     let arena =
         load_arena(args.world.arena(), &args.world.load_options()).map_err(|e| e.to_string())?;
-    let r = emulator::line_correct::run_line_correct(arena, &opts).map_err(|e| e.to_string())?;
+    let r = emulator::scenarios::line_correct::run_line_correct(arena, &opts)
+        .map_err(|e| e.to_string())?;
     if args.json {
         println!("{}", run_json(&r)?);
     } else {
@@ -606,7 +609,7 @@ fn load_arena(
 
 /// `--task light-map`: seed 000 §6.1 without and with local correction, same seed.
 fn light_map(args: &RunArgs) -> Result<(), String> {
-    use emulator::scenario::lightmap::{run_light_map, LightMapOptions};
+    use emulator::scenarios::lightmap::{run_light_map, LightMapOptions};
     let seed = args.world.seed;
     let without = run_light_map(&LightMapOptions::new(seed, false)).map_err(|e| e.to_string())?;
     let with = run_light_map(&LightMapOptions::new(seed, true)).map_err(|e| e.to_string())?;
@@ -632,7 +635,7 @@ fn light_map(args: &RunArgs) -> Result<(), String> {
 
 /// `--task odometry-laps`: seed 000 §3.3 Tables 1-2 from the counts the robot sends.
 fn odometry_laps(args: &RunArgs) -> Result<(), String> {
-    use emulator::scenario::odometry_laps::{run_odometry_laps, OdometryLapsOptions};
+    use emulator::scenarios::odometry_laps::{run_odometry_laps, OdometryLapsOptions};
     let r =
         run_odometry_laps(&OdometryLapsOptions::new(args.world.seed)).map_err(|e| e.to_string())?;
     if args.json {

@@ -30,7 +30,7 @@ pub mod stream {
     pub const BATTERY: u64 = 8;
     /// The firmware's own seed (behaviour threshold jitter).
     pub const FIRMWARE: u64 = 9;
-    /// ALICE's whiskers and photoresistors (seed 001: `alice::sensors`).
+    /// ALICE's whiskers and photoresistors (seed 001: `sensors::alice`).
     pub const ALICE: u64 = 10;
 }
 

@@ -15,8 +15,8 @@
 
 use std::collections::VecDeque;
 
-/// Bits of one byte on the wire (8N1); the spacing of a run.
-const BITS_PER_BYTE: u64 = crate::uart::BITS_PER_BYTE;
+/// Bits on the wire per byte: start + 8 data + stop (8N1); the spacing of a run.
+pub const BITS_PER_BYTE: u64 = 10;
 
 /// Sent bytes with their completion times (bit-clock positions).
 #[derive(Debug, Default)]

@@ -2,7 +2,7 @@
 //! against a `Hal` implemented over the world, the physics, the sensor models and the UART.
 //!
 //! Layer: std, the top of the emulator's core; the pty front end, the headless scenario
-//! runner (`scenario`) and the station's built-in emulator drive a [`Sim`]. One
+//! runners (`scenarios`) and the station's built-in emulator drive a [`Sim`]. One
 //! [`Sim::step`] is one millisecond: `Robot::step` with the clock at `t` (it runs its control
 //! cycle itself when due and reads the sensors then; skipped while the robot says it has
 //! nothing to do before a later time, `Robot::idle_until_us`, and no byte comes), then the physics from `t` to `t + 1 ms`
@@ -191,7 +191,7 @@ pub struct SimHal {
     others: Vec<Disc>,
     robot_contacts: RobotContacts,
     /// ALICE's whiskers and photoresistors (seed 001), on the ALICE profile only.
-    alice: Option<crate::alice::sensors::Sensors>,
+    alice: Option<crate::sensors::alice::Sensors>,
 }
 
 impl Hal for SimHal {
@@ -261,7 +261,7 @@ impl Hal for SimHal {
             self.alice
                 .as_mut()?
                 .whiskers(self.world.walls(), Point::new(p.x, p.y), p.heading);
-        Some(crate::alice::sensors::whisker_bits(&touch))
+        Some(crate::sensors::alice::whisker_bits(&touch))
     }
 
     fn photoresistors(&mut self) -> Option<[u8; robot_firmware::alice::SENSORS]> {
@@ -271,7 +271,7 @@ impl Hal for SimHal {
             .alice
             .as_mut()?
             .light(walls, lights, Point::new(p.x, p.y), p.heading);
-        Some(crate::alice::sensors::light_bytes(&light))
+        Some(crate::sensors::alice::light_bytes(&light))
     }
 
     fn serial_read(&mut self, buf: &mut [u8]) -> usize {
@@ -487,9 +487,9 @@ impl Sim {
             neighbours: Vec::new(),
             others: Vec::new(),
             robot_contacts: RobotContacts::default(),
-            // Seed 001's sensor models, the scenarios' own (one place: `alice::sensors`).
+            // Seed 001's sensor models, the same as the ALICE scenarios' (`sensors::alice`).
             alice: (profile.id == protocol::ProfileId::Alice)
-                .then(|| crate::alice::sensors::Sensors::new(SimRng::new(seed, stream::ALICE))),
+                .then(|| crate::sensors::alice::Sensors::new(SimRng::new(seed, stream::ALICE))),
         };
         let robot = build_robot(profile, seed, start, &hal.world);
         let mut sim = Sim {

@@ -41,12 +41,10 @@ use protocol::{encode, EmuTruth, Feed, FrameDecoder, Message, Pose as WirePose, 
 use thiserror::Error;
 
 use crate::arena::Pose;
-use crate::sent_bytes::SentBytes;
+use crate::sent_bytes::{SentBytes, BITS_PER_BYTE};
 
 /// Default line rate.
 pub const DEFAULT_BAUD: u32 = 115_200;
-/// Bits on the wire per byte: start + 8 data + stop (8N1).
-pub const BITS_PER_BYTE: u64 = 10;
 /// Transmit FIFO of the robot's UART, bytes.
 pub const TX_FIFO: usize = 64;
 /// Receive FIFO of the robot's UART, bytes.

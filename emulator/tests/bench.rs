@@ -2,7 +2,7 @@
 //! one row per (arena, seed) in order, and its counts add up. No timings are asserted.
 
 use emulator::arena_gen::Kind;
-use emulator::bench::{self, ArenaSource, BenchOptions, BenchTask};
+use emulator::scenarios::bench::{self, ArenaSource, BenchOptions, BenchTask};
 use emulator::sensors::Noise;
 
 fn options(task: BenchTask, arenas: Vec<ArenaSource>, seeds: u64) -> BenchOptions {
@@ -167,7 +167,7 @@ fn a_small_contest_bench_compares_each_robot_with_itself_alone() {
         .collect();
     let mut o = options(BenchTask::ReachBeacon, arenas.clone(), 1);
     o.robots = 3;
-    let fleet = emulator::fleet_bench::run(&o);
+    let fleet = emulator::scenarios::fleet_bench::run(&o);
     let single = bench::run(&options(BenchTask::ReachBeacon, arenas, 1));
     assert_eq!((fleet.completed, fleet.errors), (3, 0));
     assert_eq!(fleet.rows.len(), 3);
@@ -182,7 +182,7 @@ fn a_small_contest_bench_compares_each_robot_with_itself_alone() {
         ranks.sort_unstable();
         assert_eq!(ranks, vec![1, 2, 3]);
     }
-    let sum = |g: fn(&emulator::fleet_bench::RobotSummary) -> usize| -> usize {
+    let sum = |g: fn(&emulator::scenarios::fleet_bench::RobotSummary) -> usize| -> usize {
         fleet.per_robot.iter().map(g).sum()
     };
     assert_eq!(sum(|p| p.solo_reached), fleet.solo_reached);
@@ -250,7 +250,7 @@ fn calibrated_odometry_reaches_more_boxes_than_uncalibrated() {
 /// counted as a setup error.
 #[test]
 fn a_plan_refused_on_the_explored_map_is_the_robots_failure_not_a_setup_error() {
-    use emulator::scenario::{run_scenario, ScenarioOptions, Task};
+    use emulator::scenarios::task::{run_scenario, ScenarioOptions, Task};
     for arena_seed in [77u64, 109] {
         let g = emulator::arena_gen::generate(Kind::MicroRato, arena_seed).expect("generates");
         let task = BenchTask::ExploreThenPlan;

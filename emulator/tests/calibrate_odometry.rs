@@ -7,11 +7,11 @@
 //! walls (seed 000's edge follower, laps only), these ten boxes gave 3 under 500 ppm.
 
 use emulator::arena_gen::{generate, Kind};
-use emulator::bench::run_seed;
-use emulator::scenario::calibrate_odometry::{
+use emulator::scenarios::bench::run_seed;
+use emulator::scenarios::calibrate_odometry::{
     run_calibration, CalibrationReport, DEFAULT_TIMEOUT_S,
 };
-use emulator::scenario::{ScenarioOptions, Task};
+use emulator::scenarios::task::{ScenarioOptions, Task};
 
 /// Box `b`'s calibration with its bench seed: the report and the ratio error, ppm.
 fn calibrate(b: u64) -> (CalibrationReport, Option<f64>) {

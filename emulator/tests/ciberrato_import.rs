@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use emulator::arena::ciberrato::{find_grid, parse_lab, row_walls, MAX_WARNINGS};
 use emulator::arena::{load, LoadOptions, CIBERRATO_UNIT_M};
 use emulator::geometry::Point;
-use emulator::scenario::{run_scenario, GoalPoint, ScenarioOptions, Task};
+use emulator::scenarios::task::{run_scenario, GoalPoint, ScenarioOptions, Task};
 use emulator::world::World;
 use robot_firmware::MICRO_RATO;
 

@@ -11,7 +11,7 @@ use emulator::fleet::{robot_seed, Fleet, RobotSpec};
 use emulator::geometry::{Aabb, Disc, Point, SegmentSet};
 use emulator::physics::{Body, PhysicsParams};
 use emulator::rng::SimRng;
-use emulator::scenario::contest::{run_contest, ContestOptions};
+use emulator::scenarios::contest::{run_contest, ContestOptions};
 use emulator::sensors::Noise;
 use emulator::sim::{Sim, SimConfig};
 use emulator::world::World;
@@ -320,7 +320,7 @@ fn the_same_seed_gives_the_same_three_robot_contest_and_each_robot_its_own_noise
         timeout_s: 60.0,
         noise: Noise::default(),
     };
-    let strip = |mut r: emulator::scenario::contest::ContestReport| {
+    let strip = |mut r: emulator::scenarios::contest::ContestReport| {
         r.wall_s = 0.0;
         r
     };

@@ -3,8 +3,8 @@
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use emulator::builtin;
-use emulator::scenario::forage::run_forage;
-use emulator::scenario::{ScenarioOptions, Task};
+use emulator::scenarios::forage::run_forage;
+use emulator::scenarios::task::{ScenarioOptions, Task};
 use robot_firmware::KHEPERA;
 
 /// Seeds run; each with the papers' noise (IR, light, wheel bias drawn from the seed).
@@ -130,7 +130,7 @@ fn on_an_arena_whose_target_is_elsewhere_the_home_base_is_the_start() {
 #[test]
 fn the_firmware_counts_only_drops_it_has_confirmed_at_home() {
     let mut o = ScenarioOptions::new(&KHEPERA, Task::Forage);
-    o.seed = emulator::bench::run_seed(1, 0, 8);
+    o.seed = emulator::scenarios::bench::run_seed(1, 0, 8);
     o.timeout_s = TIMEOUT_S;
     let r = run_forage(builtin::forage().unwrap(), o).unwrap();
     assert_eq!(

@@ -11,8 +11,8 @@
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use emulator::arena_gen::{self, Kind};
-use emulator::bench;
-use emulator::scenario::{run_scenario, ScenarioOptions, Task, KHEPERA_TOLERANCE_M};
+use emulator::scenarios::bench;
+use emulator::scenarios::task::{run_scenario, ScenarioOptions, Task, KHEPERA_TOLERANCE_M};
 use emulator::sensors::Noise;
 use robot_firmware::KHEPERA;
 

@@ -11,7 +11,7 @@
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use emulator::builtin::floor_grid;
-use emulator::line_correct::{run_line_correct, LineCorrectOptions, LineCorrectReport};
+use emulator::scenarios::line_correct::{run_line_correct, LineCorrectOptions, LineCorrectReport};
 use robot_firmware::KHEPERA;
 
 /// Half a grid square, mm: the thesis's bound on the corrected error.

@@ -23,7 +23,9 @@ use std::path::PathBuf;
 
 use emulator::arena::{Arena, ArenaFormat, Pose, Wall};
 use emulator::geometry::{Aabb, Point};
-use emulator::scenario::{run_scenario, GoalPoint, ScenarioOptions, Task, KHEPERA_TOLERANCE_M};
+use emulator::scenarios::task::{
+    run_scenario, GoalPoint, ScenarioOptions, Task, KHEPERA_TOLERANCE_M,
+};
 use robot_firmware::KHEPERA;
 
 /// Wall rectangle from centimetre corners.
@@ -120,7 +122,7 @@ fn fig17_a_to_b_through_two_successive_dead_ends() {
 }
 
 /// The same A-to-B run by a robot whose owner calibrated its odometry first, in the same box
-/// (`station calibrate odometry`; here `scenario::calibrate_odometry`, as `robot-emulator bench
+/// (`station calibrate odometry`; here `scenarios::calibrate_odometry`, as `robot-emulator bench
 /// --calibrate-odometry` does): the navigation is unchanged, only parameters 5 and 50 are the
 /// calibration's. Paper: one run, 2.2 cm from B (dx 2, dy 1 cm), tolerance 5 cm. Project,
 /// seeds 1-10: calibrated in 10 of 10 (ratio within 8-48 ppm of the truth), within 5 cm of B
@@ -129,7 +131,7 @@ fn fig17_a_to_b_through_two_successive_dead_ends() {
 /// the paper's 5 cm of B, where the uncalibrated robot above reaches it in 2 of 10.
 #[test]
 fn fig17_with_calibrated_odometry() {
-    use emulator::scenario::calibrate_odometry::{run_calibration, DEFAULT_TIMEOUT_S};
+    use emulator::scenarios::calibrate_odometry::{run_calibration, DEFAULT_TIMEOUT_S};
     const SEEDS: u64 = 10;
     let (mut calibrated, mut reached) = (0, 0);
     let mut errors = Vec::new();

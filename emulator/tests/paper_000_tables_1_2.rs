@@ -1,4 +1,4 @@
-//! Seed 000 §3.3, Tables 1-2, end to end (emulator/src/scenario/odometry_laps.rs): a Khepera
+//! Seed 000 §3.3, Tables 1-2, end to end (emulator/src/scenarios/odometry_laps.rs): a Khepera
 //! whose wheels are truly 53.3 mm apart (the firmware keeps the nominal 52 mm) follows the wall
 //! on its left for two laps of the 75 x 60 cm box; the runner, as a station, records the
 //! encoder counts the robot sends in its Telemetry (u16 on the wire, unwrapped); the counts are
@@ -18,7 +18,7 @@
 //! are printed, not compared. Run with `--nocapture` for the table.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use emulator::scenario::odometry_laps::{run_odometry_laps, OdometryLapsOptions};
+use emulator::scenarios::odometry_laps::{run_odometry_laps, OdometryLapsOptions};
 
 const SEEDS: std::ops::RangeInclusive<u64> = 1..=12;
 

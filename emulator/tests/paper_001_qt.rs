@@ -5,10 +5,12 @@
 //! defaults'; where a comment gives figures "before `pos_sigma`" (the position estimate's
 //! weights as wide as d_acc), `--qt-param pos_sigma=0.8` reproduces them exactly.
 
-use emulator::alice::experiments::{
+use emulator::scenarios::alice::experiments::{
     correlation, dynamic, dynamic_with, eps_o, eps_o_continued, equilibrium, ExperimentReport,
 };
-use emulator::alice::navigation::{navigation, Drift, NavOptions, NavReport, Scene, TestRun};
+use emulator::scenarios::alice::navigation::{
+    navigation, Drift, NavOptions, NavReport, Scene, TestRun,
+};
 use world_model::Params;
 
 const SEEDS: [u64; 4] = [1, 2, 3, 4];
@@ -507,10 +509,10 @@ fn the_navigator_reaches_its_target_in_most_legs() {
 /// 1.5 degrees at the spot; at least 2 degrees in the mean 10 cm away, every seed.
 #[test]
 fn the_light_ring_reads_a_turn_at_the_cells_spot_and_a_parallax_beside_it() {
-    use emulator::alice::arena::alice;
-    use emulator::alice::sensors::Sensors;
+    use emulator::builtin::alice::alice;
     use emulator::geometry::Point;
     use emulator::rng::SimRng;
+    use emulator::sensors::alice::Sensors;
     use world_model::situation::{ring_shift, rotate_to_world};
     let arena = alice();
     let walls = arena.segment_set();

@@ -16,7 +16,7 @@
 
 use std::sync::OnceLock;
 
-use emulator::unsupervised_places::{run, ArenaKind, PlacesOptions, PlacesReport};
+use emulator::scenarios::unsupervised_places::{run, ArenaKind, PlacesOptions, PlacesReport};
 
 const SEEDS: std::ops::RangeInclusive<u64> = 1..=10;
 

@@ -1,11 +1,11 @@
 //! The live ALICE (seed 001) in the emulator's `Sim`: the firmware's ALICE composition with the
-//! scenarios' whisker and photoresistor models (`alice::sensors`) in `builtin:alice`. Over its
+//! scenarios' whisker and photoresistor models (`sensors::alice`) in `builtin:alice`. Over its
 //! serial port it sends a situation (kind 16) three times a second built from what its sensors
 //! and odometry gave it; wandering, it touches walls and turns away, and sees the lamps; the
 //! same seed gives the same bytes.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use emulator::alice::arena::alice;
+use emulator::builtin::alice::alice;
 use emulator::sim::{Sim, SimConfig};
 use protocol::{
     encode, AliceSituation, Command, Feed, FrameDecoder, Hello, Message, Mode, FINGERPRINT,

@@ -41,7 +41,7 @@ fn lamp() -> Point {
 }
 
 fn open_box() -> Arena {
-    emulator::builtin::walled_box("open box", "test", 0.75, 0.6)
+    emulator::arena::walled_box("open box", "test", 0.75, 0.6)
 }
 
 /// The robot's centre with the lamp `gap` from its rim, due west of the lamp.

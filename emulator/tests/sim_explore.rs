@@ -5,7 +5,9 @@
 
 use emulator::arena::LoadOptions;
 use emulator::builtin;
-use emulator::scenario::{run_scenario, ScenarioError, ScenarioOptions, ScenarioReport, Task};
+use emulator::scenarios::task::{
+    run_scenario, ScenarioError, ScenarioOptions, ScenarioReport, Task,
+};
 use robot_firmware::MICRO_RATO;
 
 fn run(task: Task, seed: u64) -> ScenarioReport {

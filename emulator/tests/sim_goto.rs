@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use emulator::arena::{load, Arena, ArenaFormat, LoadOptions, Pose, Wall};
 use emulator::geometry::{Aabb, Point};
-use emulator::scenario::{run_scenario, GoalPoint, ScenarioOptions, Task};
+use emulator::scenarios::task::{run_scenario, GoalPoint, ScenarioOptions, Task};
 use emulator::sim::{Sim, SimConfig};
 use protocol::{encode, Command, Hello, Message, FINGERPRINT, MAX_FRAME, PROTOCOL_VERSION};
 use robot_firmware::{KHEPERA, MICRO_RATO};

@@ -1,5 +1,5 @@
 //! Seed 000 §6.1 in the emulator: light-source mapping with and without local correction
-//! (emulator/src/scenario/lightmap.rs). Paper (one real run each, 75 x 60 cm box, one
+//! (emulator/src/scenarios/lightmap.rs). Paper (one real run each, 75 x 60 cm box, one
 //! source): without correction the source was recognised 5 times; with correction the run
 //! was stopped after 24 recognitions.
 //!
@@ -13,7 +13,7 @@
 //! times and more often than without. Run with `--nocapture` for the table.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use emulator::scenario::lightmap::{run_light_map, LightMapOptions};
+use emulator::scenarios::lightmap::{run_light_map, LightMapOptions};
 
 const SEEDS: std::ops::RangeInclusive<u64> = 1..=10;
 

@@ -9,9 +9,9 @@ use std::path::PathBuf;
 
 use emulator::arena::ciberrato::find_grid;
 use emulator::arena::{load, Arena, LoadOptions, CIBERRATO_UNIT_M};
-use emulator::bench::{resolve_arenas, ArenaSource};
 use emulator::geometry::Point;
-use emulator::scenario::{run_scenario, ScenarioOptions, Task};
+use emulator::scenarios::bench::{resolve_arenas, ArenaSource};
+use emulator::scenarios::task::{run_scenario, ScenarioOptions, Task};
 use emulator::sim::{start_pose, SimError};
 use emulator::world::World;
 use robot_firmware::MICRO_RATO;

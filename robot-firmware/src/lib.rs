@@ -9,7 +9,7 @@
 //! - `hal`, `profile`: the hardware boundary and the three robots of the papers.
 //! - `alice`: seed 001's ALICE: its situations (kind 16) and its wandering.
 //! - `hal_trace`: the hardware trace, recorded at that boundary, for retracing a run.
-//! - `link`, `telemetry`, `params`: the robot's side of the protocol.
+//! - `link`, `params`, `robot::telemetry`: the robot's side of the protocol.
 //! - `transfer`: the robot's map, plan and regions objects, their uploads and downloads.
 //! - `odometry`, `deadreckon`: position (seed 000 §3; seed 004 §4).
 //! - `behaviour`, `guided`: reflexive behaviours (seed 000 §4) and guided motion (seed 004 §7).
@@ -27,8 +27,10 @@ pub mod guided;
 pub mod hal;
 pub mod hal_trace;
 pub mod landmarks;
+pub mod light_calibration;
 pub mod link;
 pub mod localize;
+pub mod motion_progress;
 pub mod nav;
 pub mod odometry;
 pub mod odometry_calibration;
@@ -39,7 +41,6 @@ pub mod profile;
 pub mod robot;
 pub mod scripted;
 pub mod som;
-pub mod telemetry;
 pub mod transfer;
 pub mod unsupervised;
 pub mod wall_holder;

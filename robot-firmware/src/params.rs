@@ -12,8 +12,8 @@ use crate::behaviour::ArbiterParams;
 use crate::deadreckon::DeadReckonParams;
 use crate::explore::{ExploreParams, SearchMode};
 use crate::guided::GuidedParams;
+use crate::motion_progress::ProgressParams;
 use crate::odometry::OdometryParams;
-use crate::robot::ProgressParams;
 
 /// Robot-level settings that belong to no algorithm.
 #[derive(Clone, Copy, Debug, PartialEq)]

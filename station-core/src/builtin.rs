@@ -178,7 +178,7 @@ fn choose_world(
 fn alice_arena(profile: Option<&'static robot_firmware::Profile>) -> Option<&'static str> {
     profile
         .filter(|p| p.id == protocol::ProfileId::Alice)
-        .map(|_| emulator::alice::arena::BUILTIN_ALICE)
+        .map(|_| emulator::builtin::alice::BUILTIN_ALICE)
 }
 
 /// The built-in emulator with several robots in one world (`station --robots N`): one pty

@@ -1,5 +1,5 @@
 //! An ALICE's situations (message kind 16) reach the station's QT world model: the emulator's
-//! simulated ALICE (`emulator::alice::stream`) recorded frame by frame with the real encoder,
+//! simulated ALICE (`emulator::scenarios::alice::stream`) recorded frame by frame with the real encoder,
 //! then replayed through the station's link machine (`ReplayFeed`, the path a live link's
 //! bytes take) into the app; the map's `qt` layer on screen and hidden by `T`; and the model
 //! in the MCAP export (`/qt_model`), its counts those of a model fed the same situations.
@@ -8,7 +8,7 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-use emulator::alice::stream::AliceStream;
+use emulator::scenarios::alice::stream::AliceStream;
 use protocol::{AliceSituation, Message, PROTOCOL_VERSION};
 use ratatui::backend::TestBackend;
 use ratatui::crossterm::event::{Event, KeyCode, KeyEvent, KeyModifiers};

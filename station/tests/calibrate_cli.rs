@@ -38,7 +38,7 @@ fn station(args: &[&str], cwd: &Path) -> Output {
 }
 
 fn open_box() -> Arena {
-    emulator::builtin::walled_box("open box", "test", 0.75, 0.6)
+    emulator::arena::walled_box("open box", "test", 0.75, 0.6)
 }
 
 fn spot(gap: f64) -> Point {

@@ -8,7 +8,7 @@
 //!   divergence.
 //! - Seed 000 Tables 1-2 re-integrated from a recording by changing the odometry's d and dl
 //!   (`--param`): the Khepera follows the wall of the paper's 75 x 60 cm box with its wheels
-//!   truly 53.3 mm apart (as in emulator/src/scenario/odometry_laps.rs); the retrace stops
+//!   truly 53.3 mm apart (as in emulator/src/scenarios/odometry_laps.rs); the retrace stops
 //!   where the true position has gone twice round the box; each entry is the true rotation
 //!   minus the retraced one, compared with robot_firmware::odometry::paper_000.
 #![allow(clippy::unwrap_used, clippy::panic)]

@@ -386,6 +386,27 @@ impl LoadOptions {
     }
 }
 
+/// An empty walled box `width_m` x `height_m` with its lower-left corner at the origin: no
+/// obstacles, lights, targets or starts.
+pub fn walled_box(name: &str, source: &str, width_m: f64, height_m: f64) -> Arena {
+    Arena {
+        name: name.to_string(),
+        source: Path::new(source).to_path_buf(),
+        format: ArenaFormat::AsciiGrid,
+        bounds: Aabb::from_corners(Point::new(0.0, 0.0), Point::new(width_m, height_m)),
+        enclosed: true,
+        walls: Vec::new(),
+        raster: None,
+        beacons: Vec::new(),
+        targets: Vec::new(),
+        lights: Vec::new(),
+        starts: Vec::new(),
+        goal: None,
+        unit_m: 0.01,
+        warnings: Vec::new(),
+    }
+}
+
 /// Loads an arena, choosing the importer by extension and content: `.xml` CiberRato lab,
 /// `.yaml`/`.yml` ROS map, `.txt` micromouse maze when its first line starts with a post (`o`),
 /// else an ASCII grid; `.pgm` alone is refused with a pointer to its YAML. Other extensions are

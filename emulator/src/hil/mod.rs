@@ -4,12 +4,12 @@
 //!   physics, noise and faults as `serve`, advanced one control period per `Motors` (lockstep).
 //! - `serve`: the port it runs on (a tty such as QEMU's `-serial pty`, or a socket to a QEMU
 //!   it starts itself, `qemu`), and the summary a run prints.
-//! - `args`: the `robot-emulator hil` command line.
 //! - `relay`: the station's link through the world, with the emulator's link faults and a
 //!   line rate (optional).
 //! - `qemu`: starting `qemu-system-arm -M mps2-an386` with the board image.
+//!
+//! Its command line is `cli::HilArgs`.
 
-pub mod args;
 pub mod qemu;
 pub mod relay;
 pub mod serve;

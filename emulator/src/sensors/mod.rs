@@ -9,6 +9,7 @@
 //! - [`light`]: Khepera passive ambient light, inverted (seed 000 §5.2, §6.1).
 //! - [`line`]: a downward floor-line sensor over the floor grid (seed 003 §2.2.3).
 //! - [`rato`]: the micro-rato's compass, beacon sensor, ground sensor and the battery.
+//! - [`alice`]: ALICE's whiskers and photoresistors (seed 001 §3.1).
 //!
 //! Noise levels are fields of [`Noise`], named after CiberRato's simulator parameters where it
 //! has one (CompassNoise, BeaconNoise, ObstacleNoise, MotorsNoise). Every model draws from its
@@ -16,6 +17,7 @@
 //! not depend on how often another is read. Nothing here can fail; readings are clamped to
 //! their hardware ranges.
 
+pub mod alice;
 pub mod ir;
 pub mod light;
 pub mod line;

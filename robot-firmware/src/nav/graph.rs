@@ -16,7 +16,7 @@
 
 use core::fmt;
 
-use super::astar::dist_ceil;
+use super::dist::dist_ceil;
 use super::grid::GridPoint;
 use super::ids::IdStore;
 use super::segment::Regions;

@@ -56,6 +56,7 @@
 //! ```
 
 pub mod astar;
+mod dist;
 pub mod fixed;
 pub mod graph;
 pub mod grid;

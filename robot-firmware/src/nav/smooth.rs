@@ -24,7 +24,8 @@
 //!
 //! What can fail: the output store is too small for the points. Never a panic.
 
-use super::astar::{dist_ceil, Plan, PlanError};
+use super::astar::{Plan, PlanError};
+use super::dist::dist_ceil;
 use super::grid::{GridPoint, UNITS_PER_CELL};
 use super::ids::IdStore;
 use super::segment::{Regions, Square};

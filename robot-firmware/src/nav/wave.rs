@@ -34,7 +34,8 @@
 //! What can fail (typed [`PlanError`], never a panic): start or goal not in a passable cell,
 //! goal unreachable, scratch smaller than [`wave_bytes`].
 
-use super::astar::{dist_ceil, PlanError};
+use super::astar::PlanError;
+use super::dist::dist_ceil;
 use super::grid::{Grid, GridPoint};
 use super::segment::Passable;
 use super::smooth::line_of_sight_by;

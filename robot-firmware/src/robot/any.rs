@@ -85,7 +85,7 @@ impl AnyRobot {
 
     /// The telemetry frame the robot would send at `now_ms` (`telemetry::build`).
     pub fn telemetry(&self, now_ms: u32) -> protocol::Telemetry {
-        each!(self, r => crate::telemetry::build(&r.core, now_ms))
+        each!(self, r => super::telemetry::build(&r.core, now_ms))
     }
 
     /// One pass of the main loop (`Robot::step`).

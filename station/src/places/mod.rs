@@ -21,7 +21,9 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context as _};
 use clap::Args;
-use emulator::unsupervised_places::{generate, run, ArenaKind, PlacesOptions, MAX_DURATION_S};
+use emulator::scenarios::unsupervised_places::{
+    generate, run, ArenaKind, PlacesOptions, MAX_DURATION_S,
+};
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind};
 
 use view::PlacesView;

@@ -21,7 +21,7 @@ use ratatui::widgets::canvas::{Canvas, Line, Points};
 use ratatui::widgets::{Axis, Block, Chart, Dataset, GraphType, Paragraph};
 use ratatui::Frame;
 
-use emulator::unsupervised_places::{PlacesReport, World, DIAMETER_M, WRONG_OFFSET};
+use emulator::scenarios::unsupervised_places::{PlacesReport, World, DIAMETER_M, WRONG_OFFSET};
 
 /// Colour of each class stream (ART-1, growing K-means, Fuzzy ART).
 pub const STREAM_COLOURS: [Color; 3] = [Color::Yellow, Color::Cyan, Color::Magenta];
@@ -222,15 +222,16 @@ fn render_map(f: &mut Frame, view: &PlacesView, area: Rect) {
                 ctx.draw(&Line::new(w[0], w[1], w[2], w[3], Color::DarkGray));
             }
             ctx.layer();
-            let track = |pick: fn(&emulator::unsupervised_places::SeriesPoint) -> [f64; 2]| {
-                r.series[..n]
-                    .iter()
-                    .map(|p| {
-                        let q = pick(p);
-                        (q[0], q[1])
-                    })
-                    .collect::<Vec<_>>()
-            };
+            let track =
+                |pick: fn(&emulator::scenarios::unsupervised_places::SeriesPoint) -> [f64; 2]| {
+                    r.series[..n]
+                        .iter()
+                        .map(|p| {
+                            let q = pick(p);
+                            (q[0], q[1])
+                        })
+                        .collect::<Vec<_>>()
+                };
             let plain = track(|p| p.plain);
             let corrected = track(|p| p.corrected);
             let compass = track(|p| p.compass);
@@ -397,7 +398,7 @@ fn render_matches(f: &mut Frame, view: &PlacesView, area: Rect) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use emulator::unsupervised_places::{generate, run, ArenaKind, PlacesOptions};
+    use emulator::scenarios::unsupervised_places::{generate, run, ArenaKind, PlacesOptions};
     use ratatui::backend::TestBackend;
     use ratatui::Terminal;
 
