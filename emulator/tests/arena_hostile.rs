@@ -2,7 +2,7 @@
 //! keys or marks, huge values and names, maps larger than the caller's grid. Each must be
 //! refused (or accepted) with a short, positioned message, in time linear in its size: these
 //! files took minutes, or gigabytes, before. Timings are not asserted (see the benchmarks and
-//! the README's figures); a quadratic importer makes these tests take minutes instead.
+//! docs/reliability.md's figures); a quadratic importer makes these tests take minutes instead.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::path::{Path, PathBuf};

@@ -3,7 +3,7 @@
 //! Stop commands come at pseudo-random moments 20-60 ms apart, as
 //! `tests/tools/min_client_rtt.py` sends them. A Stop finding the line free is answered in
 //! its own and its Ack's bytes' time (the robot acts on it the moment its last bit arrives);
-//! one finding a frame on the line waits for it. The README's "minimal client" row cites the
+//! one finding a frame on the line waits for it. docs/performance.md's "minimal client" row cites the
 //! share. Simulated time only: the wall-clock figure is the client's benchmark.
 #![allow(clippy::unwrap_used, clippy::panic)]
 

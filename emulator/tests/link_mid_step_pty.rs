@@ -6,8 +6,8 @@
 //! writes Stop frames at random moments (so their last bits land anywhere within a step). A
 //! wrapper around the simulation notes, in SIMULATED time, when each command's last bit
 //! reached the robot and when the first bit of its answer left. Judged in simulated time only:
-//! the wall-clock round trip is the benchmark's (`tests/tools/min_client_rtt.py`, README
-//! "Performance").
+//! the wall-clock round trip is the benchmark's (`tests/tools/min_client_rtt.py`,
+//! docs/performance.md).
 //!
 //! No handshake: the robot is then quiet and answers every command (`Nack NoHandshake`)
 //! through the same receive path as an Ack, so the line is idle whenever a command arrives

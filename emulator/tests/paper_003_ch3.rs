@@ -232,7 +232,7 @@ fn structured_arena_gives_fewer_landmarks_and_corrections() {
 /// 397-6573 s), so no drift rate would keep the contrast in long runs.
 /// Asserted (with --ignored): peak > 1 on at least 8 of 10.
 #[test]
-#[ignore = "not reproduced: the compass-heading odometry drifts too slowly to outrun even the structured arena's few corrections (README)"]
+#[ignore = "not reproduced: the compass-heading odometry drifts too slowly to outrun even the structured arena's few corrections (docs/reproductions.md)"]
 fn structured_arena_gets_lost() {
     let lost = reports(ArenaKind::Structured)
         .iter()

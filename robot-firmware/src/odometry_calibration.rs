@@ -30,7 +30,7 @@
 //! UMBmark's reason for running both) solve for `a` and `c`: wheel ratio `a / c`, effective
 //! wheel distance `2 / (a + c)`. Laps of one direction only give the ratio with the mean
 //! wheel factor taken as nominal. With three laps or more the ratio is the median of the laps'
-//! own ratios, so one bad closure is an outlier, not a shift. Measured limit (README,
+//! own ratios, so one bad closure is an outlier, not a shift. Measured limit (docs/reproductions.md,
 //! "Odometry calibration"): in the emulator's boxes the seed 000 edge follower rarely closes
 //! a lap the second way round, so the mean factor stays nominal, and each lap's own ratio
 //! then carries the wheels' common speed error (up to 1 %) into its turning term.

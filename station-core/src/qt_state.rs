@@ -1,6 +1,6 @@
 //! The station's QT world model (seed 001 ch. 4-5, `world_model`): it runs here, not on the
-//! robot, because it needs a heap and far more memory than a 32 KB robot (README, "QT world
-//! model"). Fed one situation at a time (light ring, whiskers, odometry pose); the map's
+//! robot, because it needs a heap and far more memory than a 32 KB robot (docs/reproductions.md,
+//! the ALICE rows). Fed one situation at a time (light ring, whiskers, odometry pose); the map's
 //! `qt` layer draws it.
 //!
 //! Layer: state only, no I/O. The feed from the wire (message kind 16, the robot's

@@ -176,8 +176,8 @@ async fn interactive(
     };
     let epoch = tokio::time::Instant::now();
     // Paced: the TUI shows the link at most 10 times a second, so reading it every 25 ms on
-    // the TUI's own timer grid costs nobody anything and saves most wake-ups (README
-    // "Performance").
+    // the TUI's own timer grid costs nobody anything and saves most wake-ups
+    // (docs/performance.md, the TUI CPU rows).
     let link = spawn_link(
         SerialConnector::new(&path, baud).paced(true),
         LinkOptions {

@@ -58,7 +58,7 @@ pub struct Params {
     /// cells whose readings match best carry the estimate. Chosen by the localisation of the
     /// continued base run (eps_o 0.03, 20000 situations, samples 8000-20000, seeds 11-20,
     /// held out from the tests' 1-10), mean absolute position / aligned heading error: 0.8
-    /// 1.01 m / 7.8 degrees, 0.024 0.54 / 5.3, 0.04 0.50 / 5.2, 0.06 0.51 / 5.8. See README,
+    /// 1.01 m / 7.8 degrees, 0.024 0.54 / 5.3, 0.04 0.50 / 5.2, 0.06 0.51 / 5.8. See docs/reproductions.md,
     /// QT world model.
     pub pos_sigma: f64,
     /// Orientation correlation rate (eps_or; ours 0.1). 0 turns it off.

@@ -8,7 +8,7 @@
 //! `robot_firmware::unsupervised` (classifiers, landmark store, places) and
 //! `robot_firmware::odometry`; it sees only its sensors and encoders. The truth is used for
 //! the report only. The world is its own small kinematic model (no `Sim`: the firmware's
-//! `Robot` does not run this yet, see README):
+//! `Robot` does not run this yet, see docs/reproductions.md):
 //! - arena: [`generate`], seeded; unstructured = jittered outer wall, irregular polygon
 //!   obstacles and walls of random reflectance; structured = square walls, axis-aligned
 //!   rectangles (right-angle corners), one reflectance. Both get the same number of lamps;
@@ -125,7 +125,7 @@ impl ArenaKind {
 }
 
 /// Run options; [`PlacesOptions::new`] gives the defaults (each a choice where the thesis is
-/// silent, named in README).
+/// silent, named in docs/reproductions.md).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PlacesOptions {
     /// Arena kind.
@@ -142,7 +142,7 @@ pub struct PlacesOptions {
     /// Noise levels (IR, light, compass, wheel bias).
     pub noise: Noise,
     /// What a landmark match does to the heading when the heading comes from the wheels
-    /// (`compass_heading` false; the stored heading measured worse, README).
+    /// (`compass_heading` false; the stored heading measured worse, docs/reproductions.md).
     pub heading_reset: HeadingReset,
     /// The corrected estimate takes its heading from the compass at every step (default
     /// true: the usual fusion of odometry with a continuous sensor, thesis ch. 1); false: from

@@ -32,7 +32,7 @@ pub trait PrototypeMetric {
     fn distance(&self, stream: usize, a: u8, b: u8) -> f32;
 }
 
-/// Tunable limits the thesis leaves open (all are choices, named in the README).
+/// Tunable limits the thesis leaves open (all are choices, named in docs/reproductions.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LandmarkParams {
     /// A class must have started this many runs before it can be a kernel.
@@ -91,7 +91,7 @@ pub struct Landmark {
     /// Variance (per axis, metres squared) of the position when it was made: the robot's
     /// own estimate of how far off it was then ([`super::fusion`]). A landmark keeps the
     /// position it was made with (the thesis; learning from later matches measured no
-    /// better, README).
+    /// better, docs/reproductions.md).
     pub var: f32,
     /// Times it was matched.
     pub matches: u16,
@@ -430,7 +430,7 @@ fn wrap_pi(a: f32) -> f32 {
     }
 }
 
-/// Bytes of one stored landmark and of the whole store (for the memory budget in README).
+/// Bytes of one stored landmark and of the whole store (for the memory budget in docs/reproductions.md).
 pub const LANDMARK_BYTES: usize = core::mem::size_of::<Landmark>();
 /// See [`LANDMARK_BYTES`].
 pub const STORE_BYTES: usize = core::mem::size_of::<LandmarkStore>();
@@ -598,7 +598,7 @@ mod tests {
 
     #[test]
     fn store_size_is_stated() {
-        // README states these numbers; the test keeps them honest.
+        // docs/reproductions.md states these numbers; the test keeps them honest.
         let (one, all) = (LANDMARK_BYTES, STORE_BYTES);
         assert!(one <= 116, "{one}");
         assert!(all <= 40 * 1024, "{all}");

@@ -6,7 +6,7 @@
 //! Layer: pure computation, no I/O, no clock, `no_std` and heap-free; every store has a fixed
 //! capacity given by a constant below, and a full store refuses (never overwrites, never
 //! panics). Not wired into `Robot` yet: a profile composes it from [`classify`], [`landmarks`]
-//! and [`places`] (see README, "Unsupervised landmarks").
+//! and [`places`] (docs/reproductions.md, the unsupervised places rows).
 //!
 //! - [`classify`]: growing K-means, ART-1, simplified Fuzzy ART (vigilance-tuned, §3.4).
 //! - [`levenshtein`]: weighted Levenshtein distance over class labels (§3.7).
@@ -44,7 +44,7 @@ pub const MAX_SEQUENCE: usize = 24;
 mod tests {
     extern crate std;
 
-    /// Prints the module's memory (README "Unsupervised landmarks" quotes it) and keeps the
+    /// Prints the module's memory (docs/reproductions.md quotes it) and keeps the
     /// whole inside the 128 KB budget stated there.
     #[test]
     fn memory_budget() {

@@ -1,5 +1,5 @@
 //! `station calibrate odometry --port P`: the Khepera's odometry calibration run on a real
-//! robot over the link (`robot_firmware::odometry_calibration`, README "Odometry
+//! robot over the link (`robot_firmware::odometry_calibration`, docs/station.md "Odometry
 //! calibration"). The robot follows the wall one way until it closes a lap, turns round,
 //! follows it the other way; the wheel ratio and the effective wheel distance come out and
 //! are set as `odo_wheel_ratio_ppm` and `odo_wheel_distance_mm` (`params set` semantics: the

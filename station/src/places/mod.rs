@@ -5,7 +5,7 @@
 //! they happen, plain odometry, wheels plus compass heading and compass plus landmarks (the
 //! corrected estimate) against the truth, and the error over time.
 //!
-//! Why on the station: no robot profile carries this capability (README, "Unsupervised
+//! Why on the station: no robot profile carries this capability (docs/reproductions.md, "Unsupervised
 //! landmarks"): the Khepera firmware has neither the thesis's line camera nor a compass, and
 //! the module's state (about 100 KB) is three times the Dom Dinis board's whole RAM. The code
 //! is the same `no_std` code either way.
