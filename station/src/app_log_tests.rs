@@ -3,7 +3,8 @@
 //! map's zoom and pan.
 
 use super::*;
-use protocol::{MapCapacity, ParamId, ProfileId};
+use crate::link::{CommandOutcome, LinkEvent};
+use protocol::{AckInfo, Event, EventCode, MapCapacity, Mode, ParamId, ProfileId};
 
 fn peer() -> PeerInfo {
     PeerInfo {

@@ -2,7 +2,8 @@
 
 use super::*;
 use crate::link::api::CommandFailure;
-use protocol::{MapCapacity, NackReason, ParamId, ProfileId};
+use crate::link::{CommandOutcome, LinkEvent};
+use protocol::{AckInfo, MapCapacity, Mode, NackReason, ParamId, ProfileId};
 
 fn peer() -> PeerInfo {
     PeerInfo {
