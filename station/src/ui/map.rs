@@ -216,11 +216,14 @@ fn legend(app: &App, room: u16) -> TLine<'static> {
     let mut marks = Vec::new();
     // In a fleet the robots are their numbers (`ui::fleet`), the selected one reversed.
     match &app.fleet {
-        Some(f) if app.in_fleet() => marks.push(mark(
-            format!(" 1-{} robots ", f.robots.len()).white(),
-            " 1-9 robots ",
-            0,
-        )),
+        Some(f) if app.in_fleet() => {
+            let text = format!(" 1-{} robots ", f.robots.len());
+            marks.push(Mark {
+                short: text.clone().white(),
+                full: text.white(),
+                rank: 0,
+            })
+        }
         _ => marks.push(mark(" ● believed ".cyan(), " ● robot ", 0)),
     }
     if app.truth.is_some() {
