@@ -37,6 +37,9 @@ pub const FIRST_CLIENT_COMMAND: CommandId = 1 << 62;
 
 /// Answers remembered per client, for a retry of a command already answered.
 const ANSWERS_KEPT: usize = 16;
+/// Commands one client may have in flight; more are refused `Busy` (a client cannot grow the
+/// holder's queue without bound).
+const IN_FLIGHT_MAX: usize = 32;
 
 /// What the hub asks the server to do.
 #[derive(Clone, Debug, PartialEq)]
@@ -207,6 +210,10 @@ impl Hub {
         }
         if self.pending.values().any(|(o, s, _)| *o == c && *s == seq) {
             return Vec::new();
+        }
+        let in_flight = self.pending.values().filter(|(o, _, _)| *o == c).count();
+        if in_flight >= IN_FLIGHT_MAX {
+            return self.answer(c, seq, Err(NackReason::Busy));
         }
         if matches!(cmd, Command::Download { .. }) {
             // The object would come to the holder's transfers, not to this client.
@@ -537,6 +544,30 @@ mod tests {
             },
         });
         assert!(hub.client_gone(b).is_empty(), "a go-to goes on");
+    }
+
+    #[test]
+    fn a_client_cannot_queue_commands_without_bound() {
+        let mut hub = connected_hub();
+        let a = hub.add_client();
+        from_client(&mut hub, a, &hello(1));
+        for seq in 0..IN_FLIGHT_MAX as u16 {
+            let out = from_client(
+                &mut hub,
+                a,
+                &frame_of(seq, &Message::Command(Command::Stop)),
+            );
+            assert!(matches!(out.as_slice(), [HubOut::Submit(..)]), "{out:?}");
+        }
+        let out = from_client(
+            &mut hub,
+            a,
+            &frame_of(999, &Message::Command(Command::Stop)),
+        );
+        let [HubOut::Send(_, bytes)] = out.as_slice() else {
+            panic!("{out:?}")
+        };
+        assert!(decode(bytes).1.contains("Busy"));
     }
 
     #[test]

@@ -184,13 +184,12 @@ async fn serve_client(
     let mut decoder = FrameDecoder::new();
     let mut buf = vec![0u8; 4096];
     loop {
-        let n = tokio::select! {
-            r = reader.read(&mut buf) => match r {
-                Ok(0) | Err(_) => break,
-                Ok(n) => n,
-            },
-            // The hub closed this client (its writer is gone): stop reading too.
-            _ = closed(&writers, id) => break,
+        // When the hub closes this client its writer ends and shuts the socket's write half;
+        // the client then closes its end and this read ends. Frames a closed client still
+        // sends are ignored by the hub.
+        let n = match reader.read(&mut buf).await {
+            Ok(0) | Err(_) => break,
+            Ok(n) => n,
         };
         let mut input = buf.get(..n).unwrap_or(&[]);
         loop {
@@ -214,17 +213,6 @@ async fn serve_client(
         w.remove(&id);
     }
     let _ = write.await;
-}
-
-/// Resolves when client `id` no longer has a writer (the hub closed it).
-async fn closed(writers: &Writers, id: ClientId) {
-    loop {
-        let gone = writers.lock().map_or(true, |w| !w.contains_key(&id));
-        if gone {
-            return;
-        }
-        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
-    }
 }
 
 fn apply(outs: Vec<HubOut>, writers: &Writers, handle: &LinkHandle) {
